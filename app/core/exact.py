@@ -1,0 +1,104 @@
+"""Exact arithmetic on doubles, rounded once.
+
+Every finite double is an integer times a power of two, so a group of doubles can be held
+as Python integers over one common scale 2**-k (k is at most 1074, the exponent of the
+smallest subnormal). Differences of such integers are exact, their products are exact
+multiples of 2**-2k, and a sum of squares of those is an exact multiple of 2**-4k.
+Rounding to a double happens once, at the end, through Python's correctly rounded
+``int / int`` division.
+"""
+
+from __future__ import annotations
+
+from math import isqrt
+
+#: Extra bits kept below a double's 53 when rounding a square root (plus a sticky bit).
+_GUARD_BITS = 64
+
+
+class OutOfRange(Exception):
+    """An exact value is nonzero but rounds to zero, or is beyond the largest double."""
+
+    def __init__(self, kind: str) -> None:
+        super().__init__(kind)
+        self.kind = kind  # "overflow" or "underflow"
+
+
+def to_fixed(values: list[float]) -> tuple[list[int], int]:
+    """Return integers ``X`` and the smallest ``k >= 0`` with ``X[i] * 2**-k == values[i]``.
+
+    The values must be finite.
+    """
+    ratios = [x.as_integer_ratio() for x in values]
+    shifts = [den.bit_length() - 1 for _, den in ratios]
+    scale = max(shifts)
+    return [num << (scale - shift) for (num, _), shift in zip(ratios, shifts, strict=True)], scale
+
+
+def round_scaled(value: int, exponent: int) -> float:
+    """Round ``value * 2**-exponent`` to the nearest double, ties to even.
+
+    Raises
+    ------
+    OutOfRange
+        ``"overflow"`` when the result is beyond the double range, ``"underflow"`` when
+        ``value`` is nonzero but the result rounds to zero.
+    """
+    if value == 0:
+        return 0.0
+    try:
+        result = value / (1 << exponent)
+    except OverflowError:
+        raise OutOfRange("overflow") from None
+    if result == 0.0:
+        raise OutOfRange("underflow")
+    return result
+
+
+def _sqrt_with_sticky(numerator: int, denominator: int, shift: int) -> int:
+    """Return ``floor(sqrt(numerator / denominator) * 2**shift)`` with a sticky low bit.
+
+    The result carries one extra low bit that is set when the true value lies strictly
+    between two representable integers, so that rounding it once more to fewer bits
+    rounds the exact value correctly.
+    """
+    quotient, remainder = divmod(numerator << (2 * shift), denominator)
+    root = isqrt(quotient)
+    inexact = remainder != 0 or root * root != quotient
+    return (root << 1) | int(inexact)
+
+
+def sqrt_scaled(square: int, exponent: int) -> float:
+    """Correctly rounded ``sqrt(square) * 2**-exponent`` for an integer ``square >= 0``.
+
+    Raises
+    ------
+    OutOfRange
+        As :func:`round_scaled`.
+    """
+    if square == 0:
+        return 0.0
+    # Keep at least 53 + _GUARD_BITS significant bits in the integer root.
+    shift = max(0, 53 + _GUARD_BITS - square.bit_length() // 2)
+    root = _sqrt_with_sticky(square, 1, shift)
+    return round_scaled(root, exponent + shift + 1)
+
+
+def ratio_sqrt(part: int, whole: int) -> float:
+    """Correctly rounded ``sqrt(part / whole)`` for integers ``0 <= part <= whole``, ``whole > 0``.
+
+    Used for a unit-vector component ``|n_i| / |n|`` = ``sqrt(n_i**2 / sum(n_j**2))``.
+    """
+    if part == 0:
+        return 0.0
+    # The ratio is in (0, 1]; its square root is at least sqrt(part / whole). Enough bits
+    # so that the root has 53 + guard significant bits even for a tiny ratio.
+    deficit = max(0, whole.bit_length() - part.bit_length())
+    shift = 53 + _GUARD_BITS + deficit // 2 + 1
+    root = _sqrt_with_sticky(part, whole, shift)
+    try:
+        return round_scaled(root, shift + 1)
+    except OutOfRange:
+        # A unit-vector component below the smallest double: zero is its nearest double,
+        # and an absolute error under 2**-1074 on a length-1 vector is no loss.
+        return 0.0
