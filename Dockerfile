@@ -1,0 +1,64 @@
+# Mesh Normal Calculator: `uvicorn app.main:app` on 0.0.0.0:8000, as a non-root user.
+#
+#   docker build -t mesh-normal-calculator .
+#   docker run --rm -p 8000:8000 mesh-normal-calculator
+#
+# Two stages: the builder installs the locked runtime dependencies (uv.lock, without the `test`
+# extra) into /opt/venv; the final image gets that venv plus app/, templates/ and static/ in /app.
+
+FROM python:3.11-slim AS builder
+
+# Behind an intercepting HTTPS proxy, pass the CA bundle (these are plain env vars in RUN steps):
+#   --build-arg SSL_CERT_FILE=... --build-arg PIP_CERT=... --build-arg UV_NATIVE_TLS=1
+ARG SSL_CERT_FILE
+ARG PIP_CERT
+ARG UV_NATIVE_TLS
+ARG UV_VERSION=0.13.9
+
+ENV PIP_DISABLE_PIP_VERSION_CHECK=1 \
+    UV_PYTHON_DOWNLOADS=never \
+    UV_PROJECT_ENVIRONMENT=/opt/venv \
+    UV_COMPILE_BYTECODE=1 \
+    UV_LINK_MODE=copy \
+    UV_NO_CACHE=1
+
+# uv only lives in the builder stage.
+RUN python -m venv /opt/uv \
+    && /opt/uv/bin/pip install --no-cache-dir "uv==${UV_VERSION}"
+
+WORKDIR /app
+
+# Dependencies first, from the lock file alone: this layer stays cached until
+# pyproject.toml or uv.lock change. --frozen: exactly the locked versions;
+# no extras, so the `test` extra (pytest, playwright, ...) is not installed.
+COPY pyproject.toml uv.lock ./
+RUN /opt/uv/bin/uv sync --frozen --no-dev --no-install-project --python python3
+
+
+FROM python:3.11-slim
+
+ENV PATH=/opt/venv/bin:$PATH \
+    PYTHONDONTWRITEBYTECODE=1 \
+    PYTHONUNBUFFERED=1
+
+RUN groupadd --system --gid 10001 app \
+    && useradd --system --no-log-init --uid 10001 --gid app --no-create-home \
+       --home-dir /nonexistent --shell /usr/sbin/nologin app
+
+COPY --from=builder /opt/venv /opt/venv
+
+# The app reads templates/ and static/ next to the package (Path(__file__).parent.parent),
+# so it runs from the source folder; uvicorn puts the working directory on sys.path.
+WORKDIR /app
+COPY app ./app
+COPY templates ./templates
+COPY static ./static
+
+USER 10001:10001
+
+EXPOSE 8000
+
+HEALTHCHECK --interval=30s --timeout=5s --start-period=10s --retries=3 \
+    CMD ["python", "-c", "import urllib.request; urllib.request.urlopen('http://127.0.0.1:8000/', timeout=4)"]
+
+CMD ["uvicorn", "app.main:app", "--host", "0.0.0.0", "--port", "8000"]

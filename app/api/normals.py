@@ -1,0 +1,65 @@
+"""JSON API: one triangle, a batch, and the chart figure."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+import numpy as np
+from fastapi import APIRouter, Query, Request
+from fastapi.concurrency import run_in_threadpool
+from fastapi.responses import JSONResponse
+
+from app.charts import bar_figure
+from app.core.batch import triangle_normals
+from app.core.triangle import triangle_normal
+from app.errors import ERROR_RESPONSES
+from app.params import TriangleParams, read_triangle
+from app.payloads import batch_payload, normal_payload
+from app.schemas import BatchRequest, BatchResult, Figure, NormalRequest, NormalResult
+
+router = APIRouter(prefix="/api", tags=["normals"], responses=ERROR_RESPONSES)
+
+
+def query_payload(request: Request) -> dict[str, Any]:
+    """The result for the page's query parameters, or the first error as an ApiError."""
+    parsed = read_triangle(request.query_params)
+    if parsed.errors:
+        raise parsed.first_error()
+    a, b, c = parsed.points()
+    return normal_payload(triangle_normal(a, b, c, swap_winding=parsed.swap))
+
+
+@router.post("/normal", response_model=NormalResult)
+async def post_normal(body: NormalRequest) -> JSONResponse:
+    """The normal of one triangle given as JSON."""
+    result = triangle_normal(body.a, body.b, body.c, swap_winding=body.swap_winding)
+    return JSONResponse(normal_payload(result))
+
+
+@router.get("/normal", response_model=NormalResult)
+async def get_normal(request: Request, params: Annotated[TriangleParams, Query()]) -> JSONResponse:
+    """The normal for the calculator page's query parameters: the JSON twin of a result page."""
+    return JSONResponse(query_payload(request))
+
+
+@router.post("/normals", response_model=BatchResult)
+async def post_normals(body: BatchRequest) -> JSONResponse:
+    """Normals of up to 100,000 triangles, in input order."""
+    payload = await run_in_threadpool(_batch, body)
+    return JSONResponse(payload)
+
+
+def _batch(body: BatchRequest) -> dict[str, Any]:
+    triangles = np.array(body.triangles, dtype=np.float64).reshape(-1, 3, 3)
+    batch = triangle_normals(triangles, swap_winding=body.swap_winding)
+    exact_rows = {
+        int(row): triangle_normal(*triangles[row].tolist(), swap_winding=body.swap_winding)
+        for row in np.flatnonzero(batch.out_of_range)
+    }
+    return batch_payload(batch, exact_rows)
+
+
+@router.get("/chart", response_model=Figure)
+async def get_chart(request: Request, params: Annotated[TriangleParams, Query()]) -> JSONResponse:
+    """The Plotly figure of the bar chart for the page's query parameters."""
+    return JSONResponse(bar_figure(query_payload(request)))

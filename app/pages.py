@@ -1,0 +1,87 @@
+"""HTML pages: the calculator, the embeddable chart, the API docs and the error page."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+from urllib.parse import urlencode
+
+from fastapi import APIRouter, Request
+from fastapi.responses import HTMLResponse
+from fastapi.templating import Jinja2Templates
+from markupsafe import Markup
+
+from app.charts import bar_figure
+from app.config import COORDINATE_FIELDS, EXAMPLE
+from app.core.triangle import triangle_normal
+from app.errors import ApiError
+from app.formatting import js_number
+from app.params import read_triangle
+from app.payloads import normal_payload
+from app.static import static_url
+
+TEMPLATES_DIR = Path(__file__).resolve().parent.parent / "templates"
+templates = Jinja2Templates(directory=TEMPLATES_DIR)
+templates.env.globals["static_url"] = static_url
+templates.env.filters["num"] = lambda x: "out of range" if x is None else js_number(x)
+
+router = APIRouter(include_in_schema=False)
+
+
+def json_script(value: Any) -> Markup:
+    """JSON that is safe inside ``<script type="application/json">``."""
+    text = json.dumps(value, separators=(",", ":"))
+    return Markup(text.replace("<", "\\u003c").replace(">", "\\u003e").replace("&", "\\u0026"))
+
+
+templates.env.filters["json_script"] = json_script
+
+
+def _calculation(request: Request) -> dict[str, Any]:
+    """Everything a page shows for its query: typed values, errors, payload and figure."""
+    query = request.query_params
+    given = any(name in query for name in COORDINATE_FIELDS)
+    parsed = read_triangle(query if given else {**EXAMPLE, **query})
+    context: dict[str, Any] = {"typed": parsed.typed, "swap": parsed.swap,
+                               "errors": parsed.errors, "payload": None, "figure": None}
+    params = {**parsed.typed, **({"swap": "on"} if parsed.swap else {})}
+    context["query"] = urlencode(params)
+    if not parsed.errors:
+        a, b, c = parsed.points()
+        payload = normal_payload(triangle_normal(a, b, c, swap_winding=parsed.swap))
+        context["payload"] = payload
+        context["figure"] = bar_figure(payload)
+    return context
+
+
+def _status(context: dict[str, Any]) -> int:
+    return 422 if context["errors"] else 200
+
+
+@router.get("/", response_class=HTMLResponse)
+def calculator(request: Request) -> HTMLResponse:
+    context = _calculation(request)
+    response = templates.TemplateResponse(request, "index.html", context,
+                                          status_code=_status(context))
+    response.headers["link"] = f'</api/normal?{context["query"]}>; rel="alternate"; ' \
+                               'type="application/json"'
+    return response
+
+
+@router.get("/embed", response_class=HTMLResponse)
+def embed(request: Request) -> HTMLResponse:
+    context = _calculation(request)
+    return templates.TemplateResponse(request, "embed.html", context,
+                                      status_code=_status(context))
+
+
+@router.get("/docs", response_class=HTMLResponse)
+def docs(request: Request) -> HTMLResponse:
+    """Swagger UI from our own files, started by an external script (no inline script)."""
+    return templates.TemplateResponse(request, "docs.html", {"openapi_url": "/openapi.json"})
+
+
+def error_page(request: Request, error: ApiError) -> HTMLResponse:
+    return templates.TemplateResponse(request, "error.html", {"error": error},
+                                      status_code=error.status_code)

@@ -1,0 +1,56 @@
+"""The one payload of a result: the JSON API returns it, the page renders it."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from app.core.batch import BatchNormals
+from app.core.triangle import TriangleNormal
+
+
+def normal_payload(result: TriangleNormal) -> dict[str, Any]:
+    """A triangle's result with the API's field names; ``message`` only when there is one."""
+    payload: dict[str, Any] = {
+        "a": list(result.a),
+        "b": list(result.b),
+        "c": list(result.c),
+        "order": result.order,
+        "u": list(result.u),
+        "v": list(result.v),
+        "normal": list(result.normal),
+        "magnitude": result.magnitude,
+        "unit_normal": None if result.unit_normal is None else list(result.unit_normal),
+        "area": result.area,
+        "degenerate": result.degenerate,
+    }
+    if result.message is not None:
+        payload["message"] = result.message
+    return payload
+
+
+def batch_payload(batch: BatchNormals, exact_rows: dict[int, TriangleNormal]) -> dict[str, Any]:
+    """The batch answer, in input order; rows out of range come from their exact result."""
+    normals = batch.normal.tolist()
+    units = batch.unit_normal.tolist()
+    magnitudes = batch.magnitude.tolist()
+    areas = batch.area.tolist()
+    degenerate = batch.degenerate.tolist()
+    results: list[dict[str, Any]] = []
+    for row in range(len(batch)):
+        exact = exact_rows.get(row)
+        if exact is not None:
+            results.append(_batch_item(normal_payload(exact)))
+            continue
+        results.append({
+            "normal": normals[row],
+            "unit_normal": None if degenerate[row] else units[row],
+            "magnitude": magnitudes[row],
+            "area": areas[row],
+            "degenerate": degenerate[row],
+        })
+    return {"results": results}
+
+
+def _batch_item(payload: dict[str, Any]) -> dict[str, Any]:
+    keys = ("normal", "unit_normal", "magnitude", "area", "degenerate")
+    return {key: payload[key] for key in keys}
