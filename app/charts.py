@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from app.formatting import js_number
+
 LABELS = ["n<sub>x</sub>", "n<sub>y</sub>", "n<sub>z</sub>", "|n|", "area"]
 COLORS = ["#e4572e", "#29a36a", "#2e86de", "#6c5ce7", "#f2a541"]
 
@@ -15,7 +17,7 @@ def bar_figure(payload: dict[str, Any]) -> dict[str, Any]:
     text says so.
     """
     values = [*payload["normal"], payload["magnitude"], payload["area"]]
-    hover = ["out of double range" if value is None else repr(value) for value in values]
+    hover = ["out of double range" if value is None else js_number(value) for value in values]
     return {
         "data": [{
             "type": "bar",
@@ -23,6 +25,7 @@ def bar_figure(payload: dict[str, Any]) -> dict[str, Any]:
             "y": values,
             "marker": {"color": COLORS},
             "text": hover,
+            "textposition": "outside",
             "hovertemplate": "%{x}: %{text}<extra></extra>",
             "cliponaxis": False,
         }],

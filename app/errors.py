@@ -92,8 +92,13 @@ def from_validation(errors: Sequence[Any]) -> ApiError:
     context = first.get("ctx") or {}
     if kind == "json_invalid":
         reason = context.get("error", "it cannot be parsed")
-        return ApiError(400, f"The request body is not valid JSON: {reason}.")
+        where = location[-1] if location and isinstance(location[-1], int) else None
+        at = f" at character {where}" if where is not None else ""
+        return ApiError(400, f"The request body is not valid JSON: {reason}{at}.")
     if field is None:
+        if isinstance(given, bytes | bytearray):
+            return ApiError(422, "The request body must be a JSON object sent with "
+                                 "Content-Type: application/json.")
         if kind == "missing":
             return ApiError(422, "The request body is missing; send a JSON object.")
         return ApiError(422, f"The request body must be a JSON object, not {describe(given)}.")
