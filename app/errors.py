@@ -119,7 +119,8 @@ def _sentence(kind: str, field: str, given: Any, context: dict[str, Any]) -> str
         return (f"{field} must be a finite number within the double range (about ±1.8e308); "
                 "NaN, Infinity and larger numbers are not accepted.")
     if kind in ("too_short", "too_long"):
-        size = "3 points" if field.startswith("triangles[") and field.count("[") == 1 else "3 numbers"
+        is_triangle = field.startswith("triangles[") and field.count("[") == 1
+        size = "3 points" if is_triangle else "3 numbers"
         actual = context.get("actual_length")
         return f"{field} must hold exactly {size}, not {actual}."
     if kind in ("list_type", "tuple_type"):

@@ -110,7 +110,8 @@ def _size_text(size: int) -> str:
 
 async def _too_large(send: Send, limit: int) -> None:
     body = json.dumps({
-        "error": f"The request body is larger than {_size_text(limit)}, the limit for this address.",
+        "error": f"The request body is larger than {_size_text(limit)}, "
+                 "the limit for this address.",
         "field": None,
     }).encode()
     await send({"type": "http.response.start", "status": 413, "headers": [

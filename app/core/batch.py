@@ -124,7 +124,8 @@ def triangle_normals(triangles: ArrayLike, *, swap_winding: bool = False) -> Bat
         magnitude = np.ldexp(length, n_exp + 2 * scale_exp)
         area = np.ldexp(length, n_exp + 2 * scale_exp - 1)
     values = np.column_stack([normal, magnitude, area])
-    unrepresentable = ~np.isfinite(values) | ((values != 0) & (np.abs(values) < np.finfo(float).tiny))
+    tiny = np.finfo(np.float64).tiny
+    unrepresentable = ~np.isfinite(values) | ((values != 0) & (np.abs(values) < tiny))
     unrepresentable[:, :3] |= (n != 0) & (normal == 0)
     keep &= ~unrepresentable.any(axis=1)
 
