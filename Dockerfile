@@ -41,8 +41,8 @@ ENV PATH=/opt/venv/bin:$PATH \
     PYTHONDONTWRITEBYTECODE=1 \
     PYTHONUNBUFFERED=1
 
-RUN groupadd --system --gid 10001 app \
-    && useradd --system --no-log-init --uid 10001 --gid app --no-create-home \
+RUN groupadd --gid 10001 app \
+    && useradd --no-log-init --uid 10001 --gid app --no-create-home \
        --home-dir /nonexistent --shell /usr/sbin/nologin app
 
 COPY --from=builder /opt/venv /opt/venv
@@ -53,6 +53,7 @@ WORKDIR /app
 COPY app ./app
 COPY templates ./templates
 COPY static ./static
+RUN python -m compileall -q app
 
 USER 10001:10001
 
