@@ -1,0 +1,1 @@
+"""Speed comparisons, run with `make bench`; never collected by pytest."""
