@@ -7,17 +7,18 @@ from typing import Annotated, Any
 import numpy as np
 from fastapi import APIRouter, Query, Request
 from fastapi.concurrency import run_in_threadpool
-from fastapi.responses import JSONResponse
 
+from app.api.jsonio import FastJSONResponse, parse_body, read_body, request_body_spec
 from app.charts import bar_figure
 from app.core.batch import triangle_normals
 from app.core.triangle import triangle_normal
-from app.errors import ERROR_RESPONSES
+from app.errors import ERROR_RESPONSES, ApiError
 from app.params import TriangleParams, read_triangle
 from app.payloads import batch_payload, normal_payload
 from app.schemas import BatchRequest, BatchResult, Figure, NormalRequest, NormalResult
 
-router = APIRouter(prefix="/api", tags=["normals"], responses=ERROR_RESPONSES)
+router = APIRouter(prefix="/api", tags=["normals"], responses=ERROR_RESPONSES,
+                   default_response_class=FastJSONResponse)
 
 
 def query_payload(request: Request) -> dict[str, Any]:
@@ -29,27 +30,36 @@ def query_payload(request: Request) -> dict[str, Any]:
     return normal_payload(triangle_normal(a, b, c, swap_winding=parsed.swap))
 
 
-@router.post("/normal", response_model=NormalResult)
-async def post_normal(body: NormalRequest) -> JSONResponse:
+@router.post("/normal", response_model=NormalResult,
+             openapi_extra=request_body_spec(NormalRequest))
+async def post_normal(request: Request) -> FastJSONResponse:
     """The normal of one triangle given as JSON."""
+    body = await read_body(request, NormalRequest)
     result = triangle_normal(body.a, body.b, body.c, swap_winding=body.swap_winding)
-    return JSONResponse(normal_payload(result))
+    return FastJSONResponse(normal_payload(result))
 
 
 @router.get("/normal", response_model=NormalResult)
-async def get_normal(request: Request, params: Annotated[TriangleParams, Query()]) -> JSONResponse:
+async def get_normal(request: Request,
+                     params: Annotated[TriangleParams, Query()]) -> FastJSONResponse:
     """The normal for the calculator page's query parameters: the JSON twin of a result page."""
-    return JSONResponse(query_payload(request))
+    return FastJSONResponse(query_payload(request))
 
 
-@router.post("/normals", response_model=BatchResult)
-async def post_normals(body: BatchRequest) -> JSONResponse:
+@router.post("/normals", response_model=BatchResult,
+             openapi_extra=request_body_spec(BatchRequest))
+async def post_normals(request: Request) -> FastJSONResponse:
     """Normals of up to 100,000 triangles, in input order."""
-    payload = await run_in_threadpool(_batch, body)
-    return JSONResponse(payload)
+    raw = await request.body()
+    if not raw.strip():
+        raise ApiError(422, "The request body is empty; send a JSON object.")
+    # Parsing and computing a full batch takes a while: keep the event loop free meanwhile.
+    content = await run_in_threadpool(_batch, raw)
+    return FastJSONResponse(content)
 
 
-def _batch(body: BatchRequest) -> dict[str, Any]:
+def _batch(raw: bytes) -> dict[str, Any]:
+    body = parse_body(raw, BatchRequest)
     triangles = np.array(body.triangles, dtype=np.float64).reshape(-1, 3, 3)
     batch = triangle_normals(triangles, swap_winding=body.swap_winding)
     exact_rows = {
@@ -60,6 +70,7 @@ def _batch(body: BatchRequest) -> dict[str, Any]:
 
 
 @router.get("/chart", response_model=Figure)
-async def get_chart(request: Request, params: Annotated[TriangleParams, Query()]) -> JSONResponse:
+async def get_chart(request: Request,
+                    params: Annotated[TriangleParams, Query()]) -> FastJSONResponse:
     """The Plotly figure of the bar chart for the page's query parameters."""
-    return JSONResponse(bar_figure(query_payload(request)))
+    return FastJSONResponse(bar_figure(query_payload(request)))
