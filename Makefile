@@ -6,7 +6,7 @@ UV := $(shell command -v uv 2>/dev/null || echo .tools/bin/uv)
 HOST ?= 127.0.0.1
 PORT ?= 8000
 
-.PHONY: run test lint bench env clean
+.PHONY: run test lint bench env clean vendor
 
 # uv itself comes from PyPI when the machine does not have it yet.
 .tools/bin/uv:
@@ -31,3 +31,16 @@ bench: env
 
 clean:
 	rm -rf .venv .tools .pytest_cache .hypothesis
+
+# Refresh the vendored front-end files from the npm registry (see static/vendor/README.md).
+PLOTLY_VERSION := 4.1.1
+SWAGGER_UI_VERSION := 5.35.0
+vendor:
+	rm -rf .vendor-tmp && mkdir .vendor-tmp
+	cd .vendor-tmp && npm pack --silent plotly.js-basic-dist-min@$(PLOTLY_VERSION) swagger-ui-dist@$(SWAGGER_UI_VERSION)
+	tar -xzf .vendor-tmp/plotly.js-basic-dist-min-$(PLOTLY_VERSION).tgz -C .vendor-tmp
+	cp .vendor-tmp/package/plotly-basic.min.js .vendor-tmp/package/LICENSE static/vendor/plotly/
+	rm -rf .vendor-tmp/package
+	tar -xzf .vendor-tmp/swagger-ui-dist-$(SWAGGER_UI_VERSION).tgz -C .vendor-tmp
+	cd .vendor-tmp/package && cp swagger-ui-bundle.js swagger-ui.css LICENSE NOTICE favicon-32x32.png ../../static/vendor/swagger-ui/
+	rm -rf .vendor-tmp
