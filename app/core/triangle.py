@@ -17,6 +17,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from decimal import Decimal, localcontext
 from math import isfinite
+from numbers import Real
 
 from app.core.exact import OutOfRange, ratio_sqrt, round_scaled, sqrt_scaled, to_fixed
 from app.core.tolerances import LARGEST_DOUBLE_TEXT
@@ -55,7 +56,7 @@ def _as_point(name: str, point: Sequence[float]) -> Vector:
     if len(values) != 3:
         raise ValueError(f"Point {name} must have 3 coordinates, not {len(values)}.")
     for axis, value in zip(AXES, values, strict=True):
-        if isinstance(value, bool) or not isinstance(value, int | float):
+        if isinstance(value, bool) or not isinstance(value, Real):
             raise ValueError(f"{name.lower()}{axis} must be a number.")
         if not isfinite(value):
             raise ValueError(f"{name.lower()}{axis} must be a finite number.")
