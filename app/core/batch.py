@@ -7,13 +7,16 @@ How this differs from :func:`app.core.triangle.triangle_normal` (exact, rounded 
 - u, v and n = u x v are then computed in float64. Each component of n is within
   ``DETERMINANT_ERROR * (|u_j v_k| + |u_k v_j|)`` of the exact value (Shewchuk's bound).
 - A row keeps that float result only when |n| is larger than ``BATCH_MARGIN`` times its
-  error bound; every other row (degenerate and near-degenerate slivers, rows whose scaled
-  coordinates would be subnormal, and rows with a value outside the double range) is
-  recomputed by the exact single-triangle path.
+  error bound and the sign of each component is certain (it exceeds its own bound, or it is
+  exactly zero because each of its products has a zero factor). Every other row (degenerate
+  and near-degenerate slivers, components lost in rounding, rows whose scaled coordinates
+  would be subnormal, and rows with a value outside the double range) is recomputed by the
+  exact single-triangle path.
 
-So the ``degenerate`` mask, every sign and every row marked ``exact`` are identical to the
-exact path; other rows may differ from it in the last bits, and their unit normal points
-within about 3e-8 radians of the exact direction (in practice within a few ulps).
+So the ``degenerate`` mask, the sign of every component (zeros included) and every row
+marked ``exact`` are identical to the exact path; other rows may differ from it in the last
+bits, and their unit normal points within about 3e-8 radians of the exact direction (in
+practice within a few ulps).
 """
 
 from __future__ import annotations
@@ -106,17 +109,23 @@ def triangle_normals(triangles: ArrayLike, *, swap_winding: bool = False) -> Bat
 
     u = scaled[:, 1] - scaled[:, 0]
     v = scaled[:, 2] - scaled[:, 0]
-    left = u[:, [1, 2, 0]] * v[:, [2, 0, 1]]
-    right = u[:, [2, 0, 1]] * v[:, [1, 2, 0]]
-    n = left - right
-    bound = (DETERMINANT_ERROR * (np.abs(left) + np.abs(right)) + BATCH_TINY).max(axis=1)
+    u1, v2, u2, v1 = u[:, [1, 2, 0]], v[:, [2, 0, 1]], u[:, [2, 0, 1]], v[:, [1, 2, 0]]
+    left = u1 * v2
+    right = u2 * v1
+    n = (left - right) + 0.0  # + 0.0 turns -0.0 into 0.0, as the exact path has it
+    component_bound = DETERMINANT_ERROR * (np.abs(left) + np.abs(right)) + BATCH_TINY
+    bound = component_bound.max(axis=1)
+    # A component's sign is certain when it exceeds its error bound, or when both of its
+    # products have an exactly zero factor (so it is exactly zero).
+    exactly_zero = ((u1 == 0) | (v2 == 0)) & ((u2 == 0) | (v1 == 0))
+    certain = ((np.abs(n) > component_bound) | exactly_zero).all(axis=1)
 
     # Normalise with a second power-of-two scale, so that squares neither under- nor overflow.
     largest_n = np.abs(n).max(axis=1)
     _, n_exp = np.frexp(largest_n)
     n_scaled = np.ldexp(n, -n_exp[:, None])
     length = np.sqrt((n_scaled * n_scaled).sum(axis=1))
-    keep = (largest_n > BATCH_MARGIN * bound) & ~lossy
+    keep = (largest_n > BATCH_MARGIN * bound) & certain & ~lossy
 
     with np.errstate(over="ignore", under="ignore", divide="ignore", invalid="ignore"):
         unit = np.where(keep[:, None], n_scaled / np.where(keep, length, 1.0)[:, None], 0.0)

@@ -52,16 +52,25 @@ class TriangleNormal:
 
 def _as_point(name: str, point: Sequence[float]) -> Vector:
     """Check one point up front, the way trimesh checks its inputs."""
-    values = tuple(point)
+    try:
+        values = tuple(point)
+    except TypeError:
+        raise ValueError(f"Point {name} must be a sequence of 3 numbers.") from None
     if len(values) != 3:
         raise ValueError(f"Point {name} must have 3 coordinates, not {len(values)}.")
+    floats = []
     for axis, value in zip(AXES, values, strict=True):
         if isinstance(value, bool) or not isinstance(value, Real):
             raise ValueError(f"{name.lower()}{axis} must be a number.")
-        if not isfinite(value):
-            raise ValueError(f"{name.lower()}{axis} must be a finite number.")
-    x, y, z = (float(value) for value in values)
-    return (x, y, z)
+        try:
+            number = float(value)
+        except OverflowError:
+            number = float("inf")
+        if not isfinite(number):
+            raise ValueError(f"{name.lower()}{axis} must be a finite number within the "
+                             "double range.")
+        floats.append(number)
+    return (floats[0], floats[1], floats[2])
 
 
 def _approx(value: Decimal) -> str:
@@ -96,8 +105,9 @@ class _Rounder:
         )
         return (x, y, z)
 
-    def message(self) -> str | None:
-        sentences = []
+    def message(self, lead: str | None = None) -> str | None:
+        """The sentences about out-of-range values, after ``lead`` when given."""
+        sentences = [lead] if lead else []
         if self.overflow:
             sentences.append(
                 f"{_listing(self.overflow)} {_verb(self.overflow)} beyond the largest double "
@@ -108,9 +118,9 @@ class _Rounder:
                 f"{_listing(self.underflow)} {_verb(self.underflow)} nonzero but smaller than "
                 f"the smallest double (4.9e-324), so {_pronoun(self.underflow)} null."
             )
-        if not sentences:
-            return None
-        return " ".join(sentences) + " The unit normal is exact all the same."
+        if (self.overflow or self.underflow) and not lead:
+            sentences.append("The unit normal is exact all the same.")
+        return " ".join(sentences) or None
 
 
 def _listing(items: list[tuple[str, str]]) -> str:
@@ -186,7 +196,7 @@ def triangle_normal(
     degenerate = square == 0
     if degenerate:
         return TriangleNormal(pa, pb, pc, order, u, v, (0.0, 0.0, 0.0), 0.0, None, 0.0,
-                              True, _degenerate_message(p, q, r, order))
+                              True, rounder.message(_degenerate_message(p, q, r, order)))
 
     normal = rounder.vector("n", n, 2 * k)
     magnitude = rounder.value("magnitude", square, 2 * k, root=True)

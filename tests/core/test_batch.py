@@ -338,8 +338,9 @@ def test_non_finite_input_raises_value_error_naming_the_row(bad: float) -> None:
 
 # --- found problems ---------------------------------------------------------------------
 
-#: A kept (float64) row whose tiny x component has the wrong sign. Exact: n_x = -1.78e-17;
-#: float64 gives +1.1e-16 (rounding in u and v). The direction is still within the bound.
+#: A row whose tiny x component float64 gets with the wrong sign. Exact: n_x = -1.78e-17;
+#: float64 gives +1.1e-16 (rounding in u and v): the component is below its error bound, so
+#: the batch must hand the row to the exact path.
 SIGN_FLIP = [
     [-0.06639807266134024, -0.03412108803529845, -0.8363174473966897],
     [0.6328461840557804, 0.7784402355013502, -0.010298543686718854],
@@ -347,17 +348,12 @@ SIGN_FLIP = [
 ]
 
 
-def test_sign_flip_row_is_still_within_the_documented_angle() -> None:
+def test_sign_flip_row_goes_to_the_exact_path() -> None:
     r, exact = compare_with_exact(np.array([SIGN_FLIP]), tolerance=DOCUMENTED_ANGLE)
-    assert not r.exact[0]
+    assert r.exact[0]
     assert exact[0].unit_normal is not None and exact[0].unit_normal[0] < 0
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG: app.core.batch docstring says 'every sign ... identical to the exact path', "
-    "but a kept float64 row can give a tiny normal component the opposite sign",
-)
 def test_every_sign_matches_the_exact_path() -> None:
     r = triangle_normals(np.array([SIGN_FLIP]))
     e = triangle_normal(*SIGN_FLIP)
@@ -366,11 +362,6 @@ def test_every_sign_matches_the_exact_path() -> None:
     assert np.array_equal(np.sign(r.normal[0]), np.sign(np.array(e.normal, dtype=float)))
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG (minor): a kept float64 row can hold -0.0 where the exact path gives +0.0 "
-    "(u = (1, -1, 0), v = (0, 5, 0): n_x = -1*0 - 0*5 = -0.0 in float64)",
-)
 def test_zero_components_have_the_exact_paths_sign() -> None:
     row = [[0.0, 0.0, 0.0], [1.0, -1.0, 0.0], [0.0, 5.0, 0.0]]
     r = triangle_normals(np.array([row]))

@@ -302,15 +302,15 @@ def test_subnormal_coordinates() -> None:
 # --- degenerate triangles ---------------------------------------------------------------
 
 
-def assert_degenerate(r: TriangleNormal) -> str:
+def assert_degenerate(r: TriangleNormal, sentences: int = 1) -> str:
     assert r.degenerate is True
     assert r.normal == (0.0, 0.0, 0.0)
     assert r.magnitude == 0.0
     assert r.area == 0.0
     assert r.unit_normal is None
     assert r.message is not None
-    # One sentence.
-    assert r.message.endswith(".") and r.message.count(".") == 1
+    # One sentence explains; a second one only where a value is out of range.
+    assert r.message.endswith(".") and r.message.count(".") == sentences
     assert r.message[0].isupper()
     return r.message
 
@@ -370,16 +370,11 @@ def test_all_points_equal(swap: bool) -> None:
 
 def test_degenerate_with_huge_coordinates_has_no_infinity() -> None:
     r = triangle_normal((-1e308, 0, 0), (1e308, 0, 0), (0, 0, 0))
-    assert_degenerate(r)
+    assert_degenerate(r, sentences=3)  # "about 2e+308" and "1.8e308" hold two more dots
     assert r.u == (None, 0.0, 0.0)  # 2e308 does not fit a double
     assert_finite(r)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG: a degenerate triangle drops the out-of-range note; u_x is None but the "
-    "message does not say so (TriangleNormal: 'None ... message then says which and why')",
-)
 def test_degenerate_message_explains_a_missing_edge_value() -> None:
     r = triangle_normal((-1e308, 0, 0), (1e308, 0, 0), (0, 0, 0))
     assert r.u[0] is None
@@ -533,11 +528,6 @@ def test_invalid_input_raises_value_error(a, b, c, match: str, swap: bool) -> No
         triangle_normal(a, b, c, swap_winding=swap)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG: an int too large for a double (10**400) raises OverflowError from "
-    "math.isfinite in _as_point instead of ValueError",
-)
 def test_integer_too_large_for_a_double_raises_value_error() -> None:
     with pytest.raises(ValueError):
         triangle_normal((10**400, 0, 0), (1, 0, 0), (0, 1, 0))
