@@ -1,0 +1,80 @@
+"""Schemathesis 4.x over the app's own OpenAPI schema (/openapi.json): it finds nothing.
+
+Every operation is exercised with schema-valid and schema-breaking data (Schemathesis' coverage
+and fuzzing phases) and every default check runs on every response, with two exclusions, each
+explained where it is made.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from collections.abc import Iterator
+
+import pytest
+import schemathesis
+from hypothesis import HealthCheck, settings
+
+from app.main import create_app
+
+schema = schemathesis.openapi.from_asgi("/openapi.json", create_app())
+
+OPERATIONS = {"POST /api/normal", "GET /api/normal", "POST /api/normals", "GET /api/chart"}
+
+#: The query-string operations, whose coordinates are decimal *text*.
+QUERY_OPERATIONS = {"GET /api/normal", "GET /api/chart"}
+
+#: The smallest number of requests an operation must see for the run to count.
+MIN_CALLS = 25
+
+
+def test_the_schema_lists_every_api_operation() -> None:
+    labels = {operation.ok().label for operation in schema.get_all_operations()}
+    assert labels == OPERATIONS
+
+
+def excluded_checks(label: str) -> list:
+    excluded = [
+        # App bug, pinned by test_api_errors.py::test_405_allow_header_lists_every_method (xfail):
+        # OPTIONS /api/normal answers 405 with `Allow: POST` though the path also takes GET,
+        # because Starlette stops at the first route matching the path.
+        schemathesis.checks.allow_header_conformance,
+    ]
+    if label in QUERY_OPERATIONS:
+        # The coordinates are documented as `type: string` with no pattern, so Schemathesis
+        # counts "" or "abc" as valid and expects a 2xx; the app rightly says 422 (field ax).
+        # Schema fix: give ax..cz `pattern: ^\s*[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)
+        # (?:[eE][+-]?[0-9]+)?\s*$` and `maxLength`, and swap an enum (on/true/1/off/false/0/"").
+        # Even then "1e999" fits the pattern and is (rightly) refused as beyond the double
+        # range, which no pattern can express, so the check stays off for these two.
+        excluded.append(schemathesis.checks.positive_data_acceptance)
+    return excluded
+
+
+@pytest.fixture
+def statuses(request: pytest.FixtureRequest) -> Iterator[Counter[int]]:
+    """The status codes one operation's run produced; it must have run, and both ways."""
+    seen: Counter[int] = Counter()
+    yield seen
+    total = sum(seen.values())
+    assert total >= MIN_CALLS, (request.node.name, seen)
+    assert any(200 <= code < 300 for code in seen), ("no request was accepted", seen)
+    assert any(400 <= code < 500 for code in seen), ("no request was refused", seen)
+    assert not any(code >= 500 for code in seen), seen
+
+
+@schema.parametrize()
+@settings(
+    max_examples=60,
+    deadline=None,
+    # The function-scoped `statuses` fixture deliberately spans all examples of one operation.
+    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow,
+                           HealthCheck.filter_too_much, HealthCheck.data_too_large],
+)
+def test_api(case, statuses: Counter[int]) -> None:  # type: ignore[no-untyped-def]
+    label = case.operation.label
+    assert label in OPERATIONS
+    response = case.call_and_validate(excluded_checks=excluded_checks(label))
+    statuses[response.status_code] += 1
+    if response.status_code >= 400:
+        body = response.json()
+        assert set(body) == {"error", "field"}, body
