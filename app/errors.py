@@ -15,8 +15,10 @@ from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse, Response
 from starlette.exceptions import HTTPException as StarletteHTTPException
+from starlette.routing import Match
 
 from app.config import BATCH_LIMIT
+from app.middleware import security_headers
 
 logger = logging.getLogger(__name__)
 
@@ -50,6 +52,7 @@ ERROR_RESPONSES: dict[int | str, dict[str, Any]] = {
     for status, text in (
         (400, "The body is not valid JSON."),
         (413, "The body or the batch is too large."),
+        (415, "The body is not sent as application/json."),
         (422, "An input is missing or not a finite number, or a vector has the wrong length."),
     )
 }
@@ -57,7 +60,9 @@ ERROR_RESPONSES: dict[int | str, dict[str, Any]] = {
 
 def field_name(location: Sequence[str | int]) -> str | None:
     """Name an input as the user wrote it: ``ax``, ``a[0]``, ``triangles[4][1][2]``."""
-    parts = [part for part in location if part not in ("body", "query", "path")]
+    parts = list(location)
+    if parts and parts[0] in ("body", "query", "path"):
+        parts = parts[1:]
     if not parts:
         return None
     name = str(parts[0])
@@ -154,6 +159,14 @@ _HTTP_SENTENCES = {
 }
 
 
+def _allowed_methods(request: Request) -> list[str]:
+    """Every method some route takes at this path (Starlette names only the first route's)."""
+    routes = request.app.router.routes
+    return [method for method in ("GET", "HEAD", "POST", "PUT", "PATCH", "DELETE")
+            if any(route.matches({**request.scope, "method": method})[0] == Match.FULL
+                   for route in routes)]
+
+
 def install(app: FastAPI) -> None:
     """Register the one set of handlers that turns every failure into an ApiError."""
 
@@ -170,11 +183,16 @@ def install(app: FastAPI) -> None:
         sentence = _HTTP_SENTENCES.get(exc.status_code) or str(exc.detail)
         response = await _render(request, ApiError(exc.status_code, sentence))
         response.headers.update(exc.headers or {})
+        if exc.status_code == 405:
+            response.headers["allow"] = ", ".join(_allowed_methods(request))
         return response
 
     async def on_crash(request: Request, exc: Exception) -> Response:
         logger.exception("unhandled error on %s", request.url.path)
-        return await _render(request, ApiError(500, "Something went wrong on our side."))
+        response = await _render(request, ApiError(500, "Something went wrong on our side."))
+        # Starlette answers a crash outside every middleware, so the headers come from here.
+        response.headers.update(security_headers(request.url.path))
+        return response
 
     app.add_exception_handler(ApiError, on_api_error)
     app.add_exception_handler(RequestValidationError, on_validation)

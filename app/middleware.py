@@ -29,6 +29,12 @@ _UNFRAMED = [
 ]
 
 
+def security_headers(path: str) -> dict[str, str]:
+    """The headers SecurityHeaders adds for ``path``, as a dict."""
+    chosen = _FRAMED if path in FRAMEABLE else _UNFRAMED
+    return {key.decode(): value.decode() for key, value in chosen}
+
+
 class SecurityHeaders:
     """Adds CSP (no inline scripts), nosniff, a referrer policy and the framing rules."""
 

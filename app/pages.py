@@ -45,7 +45,8 @@ def _calculation(request: Request) -> dict[str, Any]:
     parsed = read_triangle(query if given else {**EXAMPLE, **query})
     context: dict[str, Any] = {"typed": parsed.typed, "swap": parsed.swap,
                                "errors": parsed.errors, "payload": None, "figure": None}
-    params = {**parsed.typed, **({"swap": "on"} if parsed.swap else {})}
+    swap_text = "on" if parsed.swap else query.get("swap") if "swap" in parsed.errors else None
+    params = {**parsed.typed, **({"swap": swap_text} if swap_text else {})}
     context["query"] = urlencode(params)
     if not parsed.errors:
         a, b, c = parsed.points()

@@ -17,13 +17,16 @@ from pydantic import BaseModel, Field
 from app.config import COORDINATE_FIELDS
 from app.errors import ApiError
 
-DECIMAL = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?")
+DECIMAL = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
 MAX_TEXT = 64
 SWAP_ON = frozenset({"on", "true", "1"})
 SWAP_OFF = frozenset({"", "off", "false", "0"})
 
+#: What the OpenAPI schema says of a coordinate (documentation only: read_triangle checks).
 Text = Annotated[str, Field(description="A decimal number, such as 1.5 or -2e3.",
-                            examples=["1.5"])]
+                            examples=["1.5"],
+                            json_schema_extra={"pattern": r"^\s*" + DECIMAL.pattern + r"\s*$",
+                                               "maxLength": MAX_TEXT})]
 
 
 class TriangleParams(BaseModel):
@@ -38,7 +41,8 @@ class TriangleParams(BaseModel):
     cx: Text
     cy: Text
     cz: Text
-    swap: str | None = Field(None, description="`on`, `true` or `1` uses the order A, C, B.")
+    swap: str | None = Field(None, description="`on`, `true` or `1` uses the order A, C, B.",
+                             json_schema_extra={"enum": sorted(SWAP_ON | SWAP_OFF)})
 
 
 Point = tuple[float, float, float]

@@ -81,8 +81,6 @@ def test_missing_point(client, point: str) -> None:  # type: ignore[no-untyped-d
     assert_error(client.post("/api/normal", json=body), 422, point, "missing")
 
 
-@pytest.mark.xfail(strict=True, reason="errors.field_name drops 'body'/'query'/'path' at any "
-                   "depth, so an unknown field with one of those names is not named")
 @pytest.mark.parametrize("name", ["query", "body", "path"])
 def test_unknown_field_named_like_a_location(client, name: str) -> None:  # type: ignore[no-untyped-def]
     response = client.post("/api/normal", json={**VALID, name: 1})
@@ -113,13 +111,6 @@ def test_body_that_is_not_an_object(client, text: bytes, words: list[str]) -> No
     assert_error(response, 422, None, *words)
 
 
-CONTENT_TYPE_REASON = (
-    "app/api/jsonio.py read_body/parse_body validate the raw bytes whatever the Content-Type "
-    "(since 84b9dd7), so a JSON body sent without Content-Type or as text/plain is accepted (200)"
-)
-
-
-@pytest.mark.xfail(strict=True, reason=CONTENT_TYPE_REASON)
 @pytest.mark.parametrize("content_type", [None, "text/plain", "application/x-www-form-urlencoded"])
 @pytest.mark.parametrize("route", ["/api/normal", "/api/normals"])
 def test_body_without_json_content_type(client, content_type: str | None, route: str) -> None:  # type: ignore[no-untyped-def]
@@ -127,12 +118,14 @@ def test_body_without_json_content_type(client, content_type: str | None, route:
     headers = {} if content_type is None else {"content-type": content_type}
     response = client.post(route, content=json.dumps(body).encode(), headers=headers)
     assert response.request.headers.get("content-type") == content_type
-    assert_error(response, 422, None, "Content-Type: application/json")
+    assert_error(response, 415, None, "Content-Type: application/json")
 
 
 @pytest.mark.parametrize("route", ["/api/normal", "/api/normals"])
 def test_no_body_at_all(client, route: str) -> None:  # type: ignore[no-untyped-def]
-    assert_error(client.post(route), 422, None, "JSON object")
+    assert_error(client.post(route), 415, None, "Content-Type: application/json")
+    empty = client.post(route, content=b"", headers={"content-type": "application/json"})
+    assert_error(empty, 422, None, "JSON object")
 
 
 # --- Oversized bodies (413, before anything is parsed) --------------------------------------------
@@ -270,8 +263,6 @@ def test_bad_query_value(client, route: str, text: str, word: str, name: str) ->
     assert len(body["error"]) < 200  # a long value is not echoed whole
 
 
-@pytest.mark.xfail(strict=True, reason="params.DECIMAL uses \\d, which in Python matches any "
-                   "Unicode digit, while calculator.js's /\\d/ is ASCII only")
 @pytest.mark.parametrize("text", ["\uff11", "\u0661\u0662", "\u0967.5"])
 def test_non_ascii_digits_are_refused(client, text: str) -> None:  # type: ignore[no-untyped-def]
     response = client.get("/api/normal", params={**EXAMPLE_QUERY, "ax": text})
@@ -316,8 +307,6 @@ def test_wrong_method_is_json_405(client, method: str, path: str) -> None:  # ty
     assert response.headers["allow"]
 
 
-@pytest.mark.xfail(strict=True, reason="Starlette answers 405 from the first route matching the "
-                   "path, so Allow lists only POST for /api/normal though GET works too")
 @pytest.mark.parametrize("method", ["DELETE", "OPTIONS"])
 def test_405_allow_header_lists_every_method(client, method: str) -> None:  # type: ignore[no-untyped-def]
     response = client.request(method, "/api/normal")

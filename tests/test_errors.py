@@ -33,8 +33,6 @@ def test_field_name(location, name: str | None) -> None:  # type: ignore[no-unty
     assert field_name(location) == name
 
 
-@pytest.mark.xfail(strict=True, reason="field_name drops 'body', 'query' and 'path' wherever "
-                   "they appear, not only as the leading location marker")
 @pytest.mark.parametrize(
     ("location", "name"),
     [(("body", "query"), "query"), (("body", "path"), "path"), (("body", "body"), "body"),

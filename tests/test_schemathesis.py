@@ -33,19 +33,10 @@ def test_the_schema_lists_every_api_operation() -> None:
 
 
 def excluded_checks(label: str) -> list:
-    excluded = [
-        # App bug, pinned by test_api_errors.py::test_405_allow_header_lists_every_method (xfail):
-        # OPTIONS /api/normal answers 405 with `Allow: POST` though the path also takes GET,
-        # because Starlette stops at the first route matching the path.
-        schemathesis.checks.allow_header_conformance,
-    ]
+    excluded = []
     if label in QUERY_OPERATIONS:
-        # The coordinates are documented as `type: string` with no pattern, so Schemathesis
-        # counts "" or "abc" as valid and expects a 2xx; the app rightly says 422 (field ax).
-        # Schema fix: give ax..cz `pattern: ^\s*[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)
-        # (?:[eE][+-]?[0-9]+)?\s*$` and `maxLength`, and swap an enum (on/true/1/off/false/0/"").
-        # Even then "1e999" fits the pattern and is (rightly) refused as beyond the double
-        # range, which no pattern can express, so the check stays off for these two.
+        # The coordinates are documented with the decimal pattern, but "1e999" fits it and is
+        # (rightly) refused as beyond the double range, which no pattern can express.
         excluded.append(schemathesis.checks.positive_data_acceptance)
     return excluded
 

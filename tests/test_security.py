@@ -141,8 +141,6 @@ def test_a_crash_is_one_sentence_and_no_traceback(crashing_client, path: str) ->
         assert "Something went wrong on our side." in response.text
 
 
-@pytest.mark.xfail(strict=True, reason="the 500 handler runs in Starlette's ServerErrorMiddleware, "
-                   "outside SecurityHeaders, so a 500 has no CSP, nosniff or framing headers")
 @pytest.mark.parametrize("path", ["/api/boom", "/boom"])
 def test_a_crash_has_security_headers_too(crashing_client, path: str) -> None:  # type: ignore[no-untyped-def]
     response = crashing_client.get(path)

@@ -31,16 +31,28 @@ def request_body_spec(model: type[BaseModel]) -> dict[str, Any]:
                             "content": {"application/json": {"schema": schema}}}}
 
 
-async def read_body(request: Request, model: type[Model]) -> Model:
-    """Validate the request body as ``model``; every failure becomes one ApiError."""
+async def raw_json_body(request: Request) -> bytes:
+    """The body of a JSON request; refuses other content types and an empty body."""
+    content_type = request.headers.get("content-type", "")
+    media_type = content_type.split(";", 1)[0].strip().lower()
+    if media_type != "application/json" and not media_type.endswith("+json"):
+        raise ApiError(415, "The request body must be JSON sent with "
+                            "Content-Type: application/json.")
     raw = await request.body()
     if not raw.strip():
         raise ApiError(422, "The request body is empty; send a JSON object.")
-    return parse_body(raw, model)
+    return raw
+
+
+async def read_body(request: Request, model: type[Model]) -> Model:
+    """Validate the request body as ``model``; every failure becomes one ApiError."""
+    return parse_body(await raw_json_body(request), model)
 
 
 def parse_body(raw: bytes, model: type[Model]) -> Model:
     try:
         return model.model_validate_json(raw)
     except ValidationError as error:
-        raise from_validation(error.errors(include_url=False)) from None
+        errors = [{**item, "loc": ("body", *item["loc"])}
+                  for item in error.errors(include_url=False)]
+        raise from_validation(errors) from None

@@ -8,11 +8,17 @@ import numpy as np
 from fastapi import APIRouter, Query, Request
 from fastapi.concurrency import run_in_threadpool
 
-from app.api.jsonio import FastJSONResponse, parse_body, read_body, request_body_spec
+from app.api.jsonio import (
+    FastJSONResponse,
+    parse_body,
+    raw_json_body,
+    read_body,
+    request_body_spec,
+)
 from app.charts import bar_figure
 from app.core.batch import triangle_normals
 from app.core.triangle import triangle_normal
-from app.errors import ERROR_RESPONSES, ApiError
+from app.errors import ERROR_RESPONSES
 from app.params import TriangleParams, read_triangle
 from app.payloads import batch_payload, normal_payload
 from app.schemas import BatchRequest, BatchResult, Figure, NormalRequest, NormalResult
@@ -50,9 +56,7 @@ async def get_normal(request: Request,
              openapi_extra=request_body_spec(BatchRequest))
 async def post_normals(request: Request) -> FastJSONResponse:
     """Normals of up to 100,000 triangles, in input order."""
-    raw = await request.body()
-    if not raw.strip():
-        raise ApiError(422, "The request body is empty; send a JSON object.")
+    raw = await raw_json_body(request)
     # Parsing and computing a full batch takes a while: keep the event loop free meanwhile.
     content = await run_in_threadpool(_batch, raw)
     return FastJSONResponse(content)

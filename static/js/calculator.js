@@ -5,7 +5,7 @@
 (function () {
   const FIELDS = ["ax", "ay", "az", "bx", "by", "bz", "cx", "cy", "cz"];
   // The same rule as the server's (app/params.py), so a mistake shows before any request.
-  const DECIMAL = /^[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?$/;
+  const DECIMAL = /^[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?$/;
   const DELAY_MS = 120;
 
   const form = document.getElementById("calculator");
