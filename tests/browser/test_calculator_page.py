@@ -1,0 +1,280 @@
+"""The calculator page in Chromium: live results, chart, permalink, swap, typing mistakes."""
+
+from __future__ import annotations
+
+import html
+import re
+
+import pytest
+from playwright.sync_api import Page, expect
+
+from tests.browser.conftest import ConsoleWatch, NewPage
+from tests.browser.helpers import (
+    COLLINEAR,
+    FETCH_GATE,
+    FIELDS,
+    RIGHT,
+    cell,
+    fill_triangle,
+    query_pattern,
+    triangle_query,
+    wait_for_chart_y,
+)
+
+pytestmark = pytest.mark.browser
+
+
+def open_calculator(page: Page, query: str = "") -> None:
+    response = page.goto("/" + (f"?{query}" if query else ""))
+    assert response is not None and response.status == 200, response and response.status
+    wait_for_chart_y_drawn(page)
+
+
+def wait_for_chart_y_drawn(page: Page) -> None:
+    page.locator("#chart[data-drawn] .main-svg").first.wait_for()
+
+
+def test_page_loads_without_console_errors(page: Page) -> None:
+    open_calculator(page)
+    expect(page).to_have_title(re.compile("Triangle normal calculator"))
+    for name in FIELDS:
+        expect(page.locator(f"#{name}")).to_be_editable()
+    # The example triangle is rendered, and Plotly drew it once the page was ready.
+    expect(cell(page, "normal")).to_have_text("(6, 3, 2)")
+    assert page.evaluate("typeof window.__chartDrawnAt") == "number"
+    expect(page.locator("#json-link")).to_have_attribute("href", re.compile(r"^/api/normal\?ax="))
+
+
+def test_typing_a_triangle_updates_result_chart_and_address(page: Page) -> None:
+    open_calculator(page)
+    fill_triangle(page, *RIGHT)
+
+    wait_for_chart_y(page, [0, 0, 1, 1, 0.5])  # the page fills the table before the chart
+    expect(cell(page, "normal")).to_have_text("(0, 0, 1)")
+    expect(cell(page, "unit_normal")).to_have_text("(0, 0, 1)")
+    expect(cell(page, "area")).to_have_text("0.5")
+    expect(cell(page, "magnitude")).to_have_text("1")
+    expect(cell(page, "u")).to_have_text("(1, 0, 0)")
+    expect(cell(page, "v")).to_have_text("(0, 1, 0)")
+    expect(cell(page, "order")).to_have_text("order A, B, C")
+    expect(cell(page, "message")).to_be_hidden()
+
+    query = triangle_query(*RIGHT)
+    expect(page).to_have_url(query_pattern(*RIGHT))
+    expect(page.locator("#json-link")).to_have_attribute("href", f"/api/normal?{query}")
+    expect(page.locator("#embed-code")).to_have_value(re.compile(re.escape(f"/embed?{query}\"")))
+
+    # The address is a permalink: loading it renders the same result on the server.
+    response = page.reload()
+    assert response is not None and response.status == 200
+    html = response.text()
+    assert 'data-key="normal">(0, 0, 1)<' in html
+    assert 'data-key="unit_normal">(0, 0, 1)<' in html
+    assert 'data-key="area">0.5<' in html
+    expect(cell(page, "normal")).to_have_text("(0, 0, 1)")
+    for name, value in zip(FIELDS, [*RIGHT[0], *RIGHT[1], *RIGHT[2]], strict=True):
+        expect(page.locator(f"#{name}")).to_have_value(value)
+    wait_for_chart_y(page, [0, 0, 1, 1, 0.5])
+
+
+def test_swap_winding_flips_the_normal_and_back(page: Page) -> None:
+    open_calculator(page, triangle_query(*RIGHT))
+    swap = page.locator("#swap")
+    expect(swap).not_to_be_checked()
+
+    page.locator("label.switch").click()  # the checkbox itself is visually hidden
+    expect(swap).to_be_checked()
+    wait_for_chart_y(page, [0, 0, -1, 1, 0.5])
+    expect(cell(page, "normal")).to_have_text("(0, 0, -1)")
+    expect(cell(page, "unit_normal")).to_have_text("(0, 0, -1)")
+    expect(cell(page, "order")).to_have_text("order A, C, B")
+    expect(cell(page, "u-from")).to_have_text("C")
+    expect(cell(page, "v-from")).to_have_text("B")
+    expect(cell(page, "area")).to_have_text("0.5")
+    expect(page).to_have_url(re.compile(r"[?&]swap=on(&|$)"))
+
+    # The permalink keeps the swap: the server renders it checked and flipped.
+    response = page.reload()
+    assert response is not None and response.status == 200
+    assert 'data-key="normal">(0, 0, -1)<' in response.text()
+    expect(swap).to_be_checked()
+    wait_for_chart_y(page, [0, 0, -1, 1, 0.5])
+
+    # And back, from the keyboard this time: Tab from the last field, then Space.
+    page.locator("#cz").focus()
+    page.keyboard.press("Tab")
+    expect(swap).to_be_focused()
+    page.keyboard.press("Space")
+    expect(page.get_by_role("switch", name=re.compile("Swap winding"))).not_to_be_checked()
+    wait_for_chart_y(page, [0, 0, 1, 1, 0.5])
+    expect(cell(page, "normal")).to_have_text("(0, 0, 1)")
+    expect(cell(page, "order")).to_have_text("order A, B, C")
+    expect(page).not_to_have_url(re.compile("swap="))
+
+
+def test_typing_mistake_is_named_beside_the_field_and_clears_when_fixed(page: Page) -> None:
+    open_calculator(page, triangle_query(*RIGHT))
+    bx = page.locator("#bx")
+    error = page.locator('[data-error-for="bx"]')
+    expect(error).to_be_hidden()
+    expect(bx).to_have_attribute("aria-describedby", "bx-error")
+    expect(error).to_have_attribute("id", "bx-error")
+
+    bx.fill("")
+    bx.press_sequentially("1..2")
+    expect(error).to_have_text("bx must be a decimal number such as 1.5 or -2e3, not '1..2'.")
+    expect(error).to_be_visible()
+    expect(bx).to_have_attribute("aria-invalid", "true")
+    expect(bx).to_have_value("1..2")
+    expect(cell(page, "invalid")).to_be_visible()
+    expect(cell(page, "invalid")).to_have_text("Fix the highlighted field to see the normal.")
+    expect(page.locator("#result")).to_have_class(re.compile(r"\bstale\b"))
+    for name in FIELDS:  # only bx is blamed
+        if name != "bx":
+            expect(page.locator(f"#{name}")).not_to_have_attribute("aria-invalid", "true")
+    # What was typed stays in the permalink, so a reload shows the same mistake.
+    expect(page).to_have_url(re.compile(r"[?&]bx=1\.\.2(&|$)"))
+
+    # A second mistake: an empty field; the notice counts both.
+    page.locator("#cz").fill("")
+    expect(page.locator('[data-error-for="cz"]')).to_have_text(
+        "cz is empty; enter a decimal number such as 1.5.")
+    expect(page.locator("#cz")).to_have_attribute("aria-invalid", "true")
+    expect(cell(page, "invalid")).to_have_text("Fix the highlighted fields to see the normal.")
+
+    page.locator("#cz").fill("0")
+    bx.fill("2")
+    wait_for_chart_y(page, [0, 0, 2, 2, 1])
+    expect(error).to_be_hidden()
+    expect(error).to_have_text("")
+    expect(bx).not_to_have_attribute("aria-invalid", "true")
+    expect(page.locator("#cz")).not_to_have_attribute("aria-invalid", "true")
+    expect(cell(page, "invalid")).to_be_hidden()
+    expect(page.locator("#result")).not_to_have_class(re.compile(r"\bstale\b"))
+    expect(cell(page, "normal")).to_have_text("(0, 0, 2)")
+    expect(cell(page, "area")).to_have_text("1")
+
+
+def test_degenerate_triangle_says_so(page: Page) -> None:
+    open_calculator(page)
+    fill_triangle(page, *COLLINEAR)
+    wait_for_chart_y(page, [0, 0, 0, 0, 0])
+    expect(cell(page, "normal")).to_have_text("(0, 0, 0)")
+    expect(cell(page, "unit_normal")).to_have_text("none (degenerate triangle)")
+    expect(cell(page, "area")).to_have_text("0")
+    message = cell(page, "message")
+    expect(message).to_be_visible()
+    expect(message).to_have_class(re.compile(r"\bwarn\b"))
+    expect(message).not_to_have_text("")
+
+    # Back to a proper triangle: the warning goes away.
+    fill_triangle(page, *RIGHT)
+    wait_for_chart_y(page, [0, 0, 1, 1, 0.5])
+    expect(cell(page, "unit_normal")).to_have_text("(0, 0, 1)")
+    expect(message).to_be_hidden()
+
+
+def test_copy_button_copies_the_embed_code(new_page: NewPage, base_url: str) -> None:
+    page = new_page(permissions=["clipboard-read", "clipboard-write"])
+    open_calculator(page, triangle_query(*RIGHT))
+    button = page.locator('button[data-copy="embed-code"]')
+    expect(button).to_have_text("Copy")
+    button.click()
+    expect(button).to_have_text("Copied")
+    copied = page.evaluate("navigator.clipboard.readText()")
+    assert copied == page.locator("#embed-code").input_value()
+    assert f'src="{base_url}/embed?{triangle_query(*RIGHT)}"' in copied
+
+
+NUMBER_CASES = {
+    # Tiny, huge and negative values: JavaScript's String(x) exponent layout.
+    "tiny": ((("0", "0", "0"), ("1e-4", "0", "0"), ("0", "1e-4", "0")),
+             {"normal": "(0, 0, 1e-8)", "area": "5e-9", "u": "(0.0001, 0, 0)"}),
+    "huge": ((("0", "0", "0"), ("1e11", "0", "0"), ("0", "-1e11", "0")),
+             {"normal": "(0, 0, -1e+22)", "magnitude": "1e+22", "area": "5e+21"}),
+    "decimals": ((("0.1", "0.2", "0.3"), ("1.5", "-2.25", "3"), ("-1", "0.5", "2e3")),
+                 {"u": "(1.4, -2.45, 2.7)"}),
+    # Beyond the double range: said in words, never Infinity.
+    "out of range": ((("0", "0", "0"), ("1e200", "0", "0"), ("0", "1e200", "0")),
+                     {"normal": "(0, 0, out of range)", "magnitude": "out of range"}),
+}
+RESULT_KEYS = ("order", "u", "v", "normal", "magnitude", "unit_normal", "area", "message")
+
+
+def served_cells(page: Page) -> dict[str, str]:
+    """The result cells as the server renders them for the page's current address."""
+    answer = page.request.get(page.url)
+    assert answer.status == 200, answer.status
+    text = answer.text()
+    cells = {}
+    for key in RESULT_KEYS:
+        found = re.search(rf'data-key="{key}"[^>]*>([^<]*)<', text)
+        assert found, key
+        cells[key] = html.unescape(found.group(1)).strip()
+    return cells
+
+
+def test_live_and_server_rendering_write_numbers_alike(page: Page) -> None:
+    open_calculator(page)
+    for case, ((a, b, c), expected) in NUMBER_CASES.items():
+        fill_triangle(page, a, b, c)
+        expect(page).to_have_url(query_pattern(a, b, c))
+        for key, text in expected.items():
+            expect(cell(page, key), case).to_have_text(text)
+        live = {key: cell(page, key).inner_text().strip() for key in RESULT_KEYS}
+        assert "Infinity" not in str(live) and "NaN" not in str(live), (case, live)
+        assert served_cells(page) == live, case
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="calculator.js update(): on a local typing mistake it returns before aborting the "
+           "request still in flight, so that earlier answer later calls fill(), which hides the "
+           "'Fix the highlighted field' notice and shows a result for the old value",
+)
+def test_a_slow_answer_does_not_overwrite_a_later_typing_mistake(page: Page) -> None:
+    """Type a valid value, then a mistake while the first answer is still on its way."""
+    page.add_init_script(FETCH_GATE)
+    open_calculator(page, triangle_query(*RIGHT))
+    page.evaluate("window.__holdFetches = true")
+
+    page.locator("#bx").fill("5")  # valid: the page asks the API, and the answer is held back
+    page.wait_for_function("() => window.__held >= 2")
+    page.locator("#bx").fill("5..")  # a mistake, caught in the browser without a request
+    expect(page.locator('[data-error-for="bx"]')).to_contain_text("'5..'")
+    expect(cell(page, "invalid")).to_be_visible()
+
+    page.evaluate("window.__openGate()")  # now the answer for bx=5 arrives
+    page.wait_for_function("() => window.__settled >= 2")
+    # The page has handled the late answer; nothing else is pending, so look once.
+    assert page.locator("#bx").input_value() == "5.."
+    assert "'5..'" in page.locator('[data-error-for="bx"]').inner_text()
+    # The result must not claim to be the answer for what is in the form.
+    assert cell(page, "invalid").is_visible(), (
+        "the late answer for bx=5 replaced the 'Fix the highlighted field' notice; the table "
+        f"shows normal {cell(page, 'normal').inner_text()} while bx holds '5..'")
+    assert "stale" in (page.locator("#result").get_attribute("class") or "")
+
+
+def test_permalink_with_a_typo_renders_the_error_and_recovers_live(
+    page: Page, console: ConsoleWatch
+) -> None:
+    # The page answers 422 on purpose; Chromium logs every 4xx document as a console error.
+    console.allow(r"status of 422 \(Unprocessable Entity\) \(http://[^)]*/\?ax=")
+    query = triangle_query(("0", "0", "0"), ("1..2", "0", "0"), ("0", "1", "0"))
+    response = page.goto(f"/?{query}")
+    assert response is not None and response.status == 422
+    expect(page.locator('[data-error-for="bx"]')).to_contain_text("'1..2'")
+    expect(page.locator("#bx")).to_have_value("1..2")
+    expect(page.locator("#bx")).to_have_attribute("aria-invalid", "true")
+    expect(cell(page, "invalid")).to_have_text("Fix the highlighted field to see the normal.")
+    expect(cell(page, "normal")).to_have_text("—")
+    expect(page.locator("#chart .main-svg")).to_have_count(0)  # no figure to draw yet
+
+    page.locator("#bx").fill("1")
+    wait_for_chart_y(page, [0, 0, 1, 1, 0.5])
+    expect(cell(page, "normal")).to_have_text("(0, 0, 1)")
+    expect(cell(page, "order")).to_have_text("order A, B, C")
+    expect(cell(page, "invalid")).to_be_hidden()
+    expect(page.locator("#bx")).not_to_have_attribute("aria-invalid", "true")
+    expect(page).to_have_url(query_pattern(*RIGHT))

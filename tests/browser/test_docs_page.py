@@ -1,0 +1,43 @@
+"""/docs: Swagger UI from the app's own files, under the app's strict CSP."""
+
+from __future__ import annotations
+
+import pytest
+from playwright.sync_api import Page, expect
+
+from tests.browser.helpers import FIELDS
+
+pytestmark = pytest.mark.browser
+
+PATHS = {"/api/normal", "/api/normals", "/api/chart"}
+
+
+def test_docs_show_the_operations_and_try_them(page: Page, base_url: str) -> None:
+    requests: list[str] = []
+    page.on("request", lambda request: requests.append(request.url))
+    response = page.goto("/docs")
+    assert response is not None and response.status == 200
+    csp = response.headers["content-security-policy"]
+    assert "script-src 'self';" in csp and "unsafe-eval" not in csp, csp
+
+    paths = page.locator(".opblock-summary-path")
+    expect(paths.first).to_be_visible()
+    expect(paths).to_have_count(4)  # GET and POST /api/normal, POST /api/normals, GET /api/chart
+    assert {text.strip() for text in paths.all_inner_texts()} == PATHS
+    expect(page.get_by_text("Mesh Normal Calculator").first).to_be_visible()
+    expect(page.get_by_role("link", name="← Back to the calculator")).to_have_attribute("href", "/")
+
+    # "Try it out" works under the CSP: Swagger UI calls the API from the page.
+    operation = page.locator("#operations-normals-get_chart_api_chart_get")
+    operation.locator(".opblock-summary").click()
+    for name in FIELDS:
+        operation.locator(f'tr[data-param-name="{name}"] input').fill(
+            {"bx": "1", "cy": "1"}.get(name, "0"))
+    operation.get_by_role("button", name="Execute").click()
+    expect(operation.locator(".live-responses-table tbody .response-col_status").first) \
+        .to_have_text("200")
+    expect(operation.locator(".live-responses-table .microlight").first).to_contain_text('"bar"')
+
+    # Everything came from the app itself: no CDN, no validator badge, no fonts from elsewhere.
+    outside = [url for url in requests if not url.startswith((base_url, "data:"))]
+    assert not outside, outside
