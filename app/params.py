@@ -72,7 +72,10 @@ def parse_decimal(name: str, text: str) -> float:
     stripped = text.strip()
     if not stripped:
         raise ApiError(422, f"{name} is empty; enter a decimal number such as 1.5.", name)
-    if len(stripped) > MAX_TEXT or not DECIMAL.fullmatch(stripped):
+    if len(stripped) > MAX_TEXT:
+        raise ApiError(422, f"{name} is longer than {MAX_TEXT} characters; "
+                            "shorten it or use an exponent, such as 1.5e-30.", name)
+    if not DECIMAL.fullmatch(stripped):
         shown = stripped if len(stripped) <= 20 else stripped[:17] + "..."
         raise ApiError(422, f"{name} must be a decimal number such as 1.5 or -2e3, "
                             f"not {shown!r}.", name)

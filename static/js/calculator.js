@@ -44,7 +44,9 @@
     FIELDS.forEach(function (name) {
       const text = document.getElementById(name).value.trim();
       if (!text) errors[name] = name + " is empty; enter a decimal number such as 1.5.";
-      else if (!DECIMAL.test(text) || text.length > 64) {
+      else if (text.length > 64) {
+        errors[name] = name + " is longer than 64 characters; shorten it or use an exponent, such as 1.5e-30.";
+      } else if (!DECIMAL.test(text)) {
         const shown = text.length <= 20 ? text : text.slice(0, 17) + "...";
         errors[name] = name + " must be a decimal number such as 1.5 or -2e3, not '" + shown + "'.";
       } else if (!isFinite(Number(text))) {
@@ -106,8 +108,10 @@
     FIELDS.forEach(function (name) { setError(name, errors[name]); });
     setError("swap", "");
     const count = Object.keys(errors).length;
-    if (count) { showInvalid(count); return Promise.resolve(); }
+    // An answer still on its way is for older input: it must not land after this.
     if (inFlight) inFlight.abort();
+    inFlight = null;
+    if (count) { showInvalid(count); return Promise.resolve(); }
     inFlight = new AbortController();
     const signal = inFlight.signal;
     return Promise.all([fetchJson("/api/normal?" + qs, signal), fetchJson("/api/chart?" + qs, signal)])

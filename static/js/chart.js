@@ -2,7 +2,12 @@
 "use strict";
 
 window.NormalChart = (function () {
-  const CONFIG = { displaylogo: false, responsive: true, modeBarButtonsToRemove: ["select2d", "lasso2d"] };
+  const CONFIG = {
+    displaylogo: false, responsive: true,
+    // On a phone the toolbar would cover the title; it is for desktop use.
+    displayModeBar: window.innerWidth < 600 ? false : "hover",
+    modeBarButtonsToRemove: ["select2d", "lasso2d"],
+  };
 
   function themed(layout) {
     const dark = window.matchMedia && window.matchMedia("(prefers-color-scheme: dark)").matches;
@@ -15,6 +20,8 @@ window.NormalChart = (function () {
 
   function draw(element, figure) {
     if (!figure || !window.Plotly) return Promise.resolve();
+    const placeholder = element.querySelector(".chart-placeholder");
+    if (placeholder) placeholder.remove();
     return window.Plotly.react(element, figure.data, themed(figure.layout), CONFIG).then(function () {
       element.dataset.drawn = String(Date.now());
       if (!window.__chartDrawnAt) {

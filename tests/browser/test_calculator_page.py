@@ -226,12 +226,6 @@ def test_live_and_server_rendering_write_numbers_alike(page: Page) -> None:
         assert served_cells(page) == live, case
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="calculator.js update(): on a local typing mistake it returns before aborting the "
-           "request still in flight, so that earlier answer later calls fill(), which hides the "
-           "'Fix the highlighted field' notice and shows a result for the old value",
-)
 def test_a_slow_answer_does_not_overwrite_a_later_typing_mistake(page: Page) -> None:
     """Type a valid value, then a mistake while the first answer is still on its way."""
     page.add_init_script(FETCH_GATE)
