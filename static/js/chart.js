@@ -2,12 +2,15 @@
 "use strict";
 
 window.NormalChart = (function () {
+  // On a phone the toolbar would cover the title; it is for desktop use.
+  const TOOLBAR = window.innerWidth < 600 ? false : "hover";
   const CONFIG = {
-    displaylogo: false, responsive: true,
-    // On a phone the toolbar would cover the title; it is for desktop use.
-    displayModeBar: window.innerWidth < 600 ? false : "hover",
+    displaylogo: false, responsive: true, displayModeBar: TOOLBAR,
     modeBarButtonsToRemove: ["select2d", "lasso2d"],
   };
+  // The first draw leaves the toolbar out (building it costs about a tenth of a second on a
+  // slow machine) and adds it once the page is idle, so the chart shows sooner.
+  const FIRST = Object.assign({}, CONFIG, { displayModeBar: false });
 
   function themed(layout) {
     const dark = window.matchMedia && window.matchMedia("(prefers-color-scheme: dark)").matches;
@@ -18,15 +21,27 @@ window.NormalChart = (function () {
     return copy;
   }
 
+  function whenIdle(callback) {
+    if (window.requestIdleCallback) window.requestIdleCallback(callback, { timeout: 1000 });
+    else setTimeout(callback, 200);
+  }
+
   function draw(element, figure) {
     if (!figure || !window.Plotly) return Promise.resolve();
     const placeholder = element.querySelector(".chart-placeholder");
     if (placeholder) placeholder.remove();
-    return window.Plotly.react(element, figure.data, themed(figure.layout), CONFIG).then(function () {
+    const first = !element.dataset.drawn;
+    const config = first && TOOLBAR ? FIRST : CONFIG;
+    return window.Plotly.react(element, figure.data, themed(figure.layout), config).then(function () {
       element.dataset.drawn = String(Date.now());
       if (!window.__chartDrawnAt) {
         window.__chartDrawnAt = performance.now();
         performance.mark("chart-drawn");
+      }
+      if (config === FIRST) {
+        whenIdle(function () {
+          window.Plotly.react(element, element.data, element.layout, CONFIG);
+        });
       }
     });
   }
