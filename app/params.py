@@ -19,14 +19,19 @@ from app.errors import ApiError
 
 DECIMAL = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
 MAX_TEXT = 64
+#: Spaces a typed coordinate may carry around it (ASCII only, as the schema's pattern says).
+SPACE = " \t\n\r\f\v"
+SPACE_CLASS = r" \t\n\r\f\v"
 SWAP_ON = frozenset({"on", "true", "1"})
 SWAP_OFF = frozenset({"", "off", "false", "0"})
 
 #: What the OpenAPI schema says of a coordinate (documentation only: read_triangle checks).
 Text = Annotated[str, Field(description="A decimal number, such as 1.5 or -2e3.",
                             examples=["1.5"],
-                            json_schema_extra={"pattern": r"^\s*" + DECIMAL.pattern + r"\s*$",
-                                               "maxLength": MAX_TEXT})]
+                            json_schema_extra={
+                                "pattern": rf"^[{SPACE_CLASS}]*{DECIMAL.pattern}[{SPACE_CLASS}]*$",
+                                "maxLength": MAX_TEXT,
+                            })]
 
 
 class TriangleParams(BaseModel):
@@ -69,10 +74,10 @@ class TriangleInput:
 
 def parse_decimal(name: str, text: str) -> float:
     """Read one coordinate; raise :class:`ApiError` naming the field when it is not one."""
-    stripped = text.strip()
+    stripped = text.strip(SPACE)
     if not stripped:
         raise ApiError(422, f"{name} is empty; enter a decimal number such as 1.5.", name)
-    if len(stripped) > MAX_TEXT:
+    if len(text) > MAX_TEXT:
         raise ApiError(422, f"{name} is longer than {MAX_TEXT} characters; "
                             "shorten it or use an exponent, such as 1.5e-30.", name)
     if not DECIMAL.fullmatch(stripped):
@@ -86,9 +91,9 @@ def parse_decimal(name: str, text: str) -> float:
 
 
 def parse_swap(text: str | None) -> bool:
-    if text is None or text.strip().lower() in SWAP_OFF:
+    if text is None or text in SWAP_OFF:
         return False
-    if text.strip().lower() in SWAP_ON:
+    if text in SWAP_ON:
         return True
     raise ApiError(422, "swap must be on, true or 1 (or left out for the order A, B, C).", "swap")
 

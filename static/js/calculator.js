@@ -42,9 +42,10 @@
   function localErrors() {
     const errors = {};
     FIELDS.forEach(function (name) {
-      const text = document.getElementById(name).value.trim();
+      const typed = document.getElementById(name).value;
+      const text = typed.replace(/^[ \t\n\r\f\v]+|[ \t\n\r\f\v]+$/g, "");
       if (!text) errors[name] = name + " is empty; enter a decimal number such as 1.5.";
-      else if (text.length > 64) {
+      else if (typed.length > 64) {
         errors[name] = name + " is longer than 64 characters; shorten it or use an exponent, such as 1.5e-30.";
       } else if (!DECIMAL.test(text)) {
         const shown = text.length <= 20 ? text : text.slice(0, 17) + "...";
