@@ -8,18 +8,20 @@ from typing import Any
 from urllib.parse import urlencode
 
 from fastapi import APIRouter, Request
-from fastapi.responses import HTMLResponse
+from fastapi.responses import HTMLResponse, JSONResponse
 from fastapi.templating import Jinja2Templates
 from markupsafe import Markup
 
 from app.charts import bar_figure
-from app.config import COORDINATE_FIELDS, EXAMPLE
+from app.config import COORDINATE_FIELDS, EXAMPLE, PRESETS
 from app.core.triangle import triangle_normal
 from app.errors import ApiError
 from app.formatting import js_number
 from app.params import read_triangle
 from app.payloads import normal_payload
+from app.snippets import snippets
 from app.static import static_url
+from app.steps import worked_steps
 
 TEMPLATES_DIR = Path(__file__).resolve().parent.parent / "templates"
 templates = Jinja2Templates(directory=TEMPLATES_DIR)
@@ -44,15 +46,19 @@ def _calculation(request: Request) -> dict[str, Any]:
     given = any(name in query for name in COORDINATE_FIELDS)
     parsed = read_triangle(query if given else {**EXAMPLE, **query})
     context: dict[str, Any] = {"typed": parsed.typed, "swap": parsed.swap,
-                               "errors": parsed.errors, "payload": None, "figure": None}
+                               "errors": parsed.errors, "payload": None, "figure": None,
+                               "presets": PRESETS, "snippets": [], "steps": None}
     swap_text = "on" if parsed.swap else query.get("swap") if "swap" in parsed.errors else None
     params = {**parsed.typed, **({"swap": swap_text} if swap_text else {})}
     context["query"] = urlencode(params)
     if not parsed.errors:
         a, b, c = parsed.points()
-        payload = normal_payload(triangle_normal(a, b, c, swap_winding=parsed.swap))
+        result = triangle_normal(a, b, c, swap_winding=parsed.swap)
+        payload = normal_payload(result)
         context["payload"] = payload
+        context["steps"] = worked_steps(result)
         context["figure"] = bar_figure(payload)
+        context["snippets"] = snippets(payload)
     return context
 
 
@@ -68,6 +74,23 @@ def calculator(request: Request) -> HTMLResponse:
     response.headers["link"] = f'</api/normal?{context["query"]}>; rel="alternate"; ' \
                                'type="application/json"'
     return response
+
+
+#: The page's parts that live updates re-render, by element id and template.
+PARTS = {"result": "_result.html", "steps": "_steps.html", "code": "_code.html"}
+
+
+@router.get("/partials")
+def partials(request: Request) -> JSONResponse:
+    """The page's live parts for a query: HTML from the same templates, plus the figures.
+
+    Always 200, so that a typing mistake is data for the page, not a failed request.
+    """
+    context = _calculation(request)
+    html = {element: templates.get_template(name).render({**context, "request": request})
+            for element, name in PARTS.items()}
+    return JSONResponse({"query": context["query"], "errors": context["errors"],
+                         "html": html, "figure": context["figure"]})
 
 
 @router.get("/embed", response_class=HTMLResponse)

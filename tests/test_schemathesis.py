@@ -18,10 +18,11 @@ from app.main import create_app
 
 schema = schemathesis.openapi.from_asgi("/openapi.json", create_app())
 
-OPERATIONS = {"POST /api/normal", "GET /api/normal", "POST /api/normals", "GET /api/chart"}
+OPERATIONS = {"POST /api/normal", "GET /api/normal", "GET /api/normal.csv", "POST /api/normals",
+              "GET /api/chart"}
 
 #: The query-string operations, whose coordinates are decimal *text*.
-QUERY_OPERATIONS = {"GET /api/normal", "GET /api/chart"}
+QUERY_OPERATIONS = {"GET /api/normal", "GET /api/normal.csv", "GET /api/chart"}
 
 #: The smallest number of requests an operation must see for the run to count.
 MIN_CALLS = 25

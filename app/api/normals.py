@@ -7,6 +7,7 @@ from typing import Annotated, Any
 import numpy as np
 from fastapi import APIRouter, Query, Request
 from fastapi.concurrency import run_in_threadpool
+from fastapi.responses import Response
 
 from app.api.jsonio import (
     FastJSONResponse,
@@ -20,7 +21,7 @@ from app.core.batch import triangle_normals
 from app.core.triangle import triangle_normal
 from app.errors import ERROR_RESPONSES
 from app.params import TriangleParams, read_triangle
-from app.payloads import batch_payload, normal_payload
+from app.payloads import batch_payload, normal_payload, payload_csv
 from app.schemas import BatchRequest, BatchResult, Figure, NormalRequest, NormalResult
 
 router = APIRouter(prefix="/api", tags=["normals"], responses=ERROR_RESPONSES,
@@ -50,6 +51,16 @@ async def get_normal(request: Request,
                      params: Annotated[TriangleParams, Query()]) -> FastJSONResponse:
     """The normal for the calculator page's query parameters: the JSON twin of a result page."""
     return FastJSONResponse(query_payload(request))
+
+
+@router.get("/normal.csv", response_class=Response, responses={
+    200: {"description": "One header row and one result row.",
+          "content": {"text/csv": {"schema": {"type": "string"}}}}})
+async def get_normal_csv(request: Request,
+                         params: Annotated[TriangleParams, Query()]) -> Response:
+    """The same result as CSV, for spreadsheets (a download)."""
+    return Response(payload_csv(query_payload(request)), media_type="text/csv",
+                    headers={"content-disposition": 'attachment; filename="triangle-normal.csv"'})
 
 
 @router.post("/normals", response_model=BatchResult,

@@ -1,31 +1,22 @@
 // The calculator page: live results, chart and permalink as you type. Without JavaScript the
-// form still works (GET, rendered by the server); this script only makes it immediate.
+// form still works (GET, rendered by the server); this script only makes it immediate. The
+// server renders every part (GET /partials) from the same templates as the full page.
 "use strict";
 
 (function () {
   const FIELDS = ["ax", "ay", "az", "bx", "by", "bz", "cx", "cy", "cz"];
   // The same rule as the server's (app/params.py), so a mistake shows before any request.
   const DECIMAL = /^[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?$/;
+  const SPACES = /^[ \t\n\r\f\v]+|[ \t\n\r\f\v]+$/g;
   const DELAY_MS = 120;
 
   const form = document.getElementById("calculator");
   const swap = document.getElementById("swap");
   const result = document.getElementById("result");
   const chart = document.getElementById("chart");
+  const precision = document.getElementById("precision");
   let timer = null;
   let inFlight = null;
-
-  function num(x) {
-    return x === null ? "out of range" : String(x);
-  }
-
-  function vec(v) {
-    return v === null ? "none" : "(" + v.map(num).join(", ") + ")";
-  }
-
-  function cell(key) {
-    return result.querySelector('[data-key="' + key + '"]');
-  }
 
   function setError(name, sentence) {
     const slot = form.querySelector('[data-error-for="' + name + '"]');
@@ -39,11 +30,15 @@
     }
   }
 
+  function showErrors(errors) {
+    FIELDS.concat(["swap"]).forEach(function (name) { setError(name, errors[name]); });
+  }
+
   function localErrors() {
     const errors = {};
     FIELDS.forEach(function (name) {
       const typed = document.getElementById(name).value;
-      const text = typed.replace(/^[ \t\n\r\f\v]+|[ \t\n\r\f\v]+$/g, "");
+      const text = typed.replace(SPACES, "");
       if (!text) errors[name] = name + " is empty; enter a decimal number such as 1.5.";
       else if (typed.length > 64) {
         errors[name] = name + " is longer than 64 characters; shorten it or use an exponent, such as 1.5e-30.";
@@ -74,58 +69,66 @@
   }
 
   function showInvalid(count) {
-    const slot = cell("invalid");
+    const slot = result.querySelector('[data-key="invalid"]');
     slot.textContent = "Fix the highlighted " + (count === 1 ? "field" : "fields") + " to see the normal.";
     slot.classList.remove("hidden");
     result.classList.add("stale");
   }
 
-  function fill(p) {
-    cell("invalid").classList.add("hidden");
-    result.classList.remove("stale");
-    cell("order").textContent = "order " + p.order.split("").join(", ");
-    cell("u-from").textContent = p.order[1];
-    cell("v-from").textContent = p.order[2];
-    ["u", "v", "normal"].forEach(function (key) { cell(key).textContent = vec(p[key]); });
-    cell("magnitude").textContent = num(p.magnitude);
-    cell("area").textContent = num(p.area);
-    cell("unit_normal").textContent = p.unit_normal ? vec(p.unit_normal) : "none (degenerate triangle)";
-    const message = cell("message");
-    message.textContent = p.message || "";
-    message.classList.toggle("hidden", !p.message);
-    message.classList.toggle("warn", p.degenerate);
+  // Display precision: the server writes every number in full (data-num); this rewrites the
+  // text only, so copying, JSON and downloads keep every digit.
+  function formatNumber(text, decimals) {
+    const x = Number(text);
+    if (decimals === "full" || x === 0) return text;
+    const digits = Number(decimals);
+    const size = Math.abs(x);
+    if (size >= 1e-4 && size < 1e15) return x.toFixed(digits);
+    return x.toExponential(digits);
   }
 
-  function fetchJson(url, signal) {
-    return fetch(url, { signal: signal, headers: { Accept: "application/json" } }).then(function (r) {
-      return r.json().then(function (body) { return { ok: r.ok, body: body }; });
+  function applyPrecision() {
+    const decimals = precision ? precision.value : "full";
+    document.querySelectorAll(".num[data-num]").forEach(function (el) {
+      el.textContent = formatNumber(el.dataset.num, decimals);
     });
+  }
+
+  function render(parts) {
+    Object.keys(parts.html).forEach(function (id) {
+      const target = document.getElementById(id);
+      if (!target) return;
+      // Keep the reader's open and closed sections as they were.
+      const open = {};
+      target.querySelectorAll("details[id]").forEach(function (d) { open[d.id] = d.open; });
+      target.innerHTML = parts.html[id];
+      target.querySelectorAll("details[id]").forEach(function (d) {
+        if (d.id in open) d.open = open[d.id];
+      });
+    });
+    result.classList.remove("stale");
+    applyPrecision();
+    document.dispatchEvent(new CustomEvent("calculator:rendered", { detail: parts }));
+    return window.NormalChart.draw(chart, parts.figure);
   }
 
   function update() {
     const qs = query();
     updateLinks(qs);
     const errors = localErrors();
-    FIELDS.forEach(function (name) { setError(name, errors[name]); });
-    setError("swap", "");
+    showErrors(errors);
     const count = Object.keys(errors).length;
     // An answer still on its way is for older input: it must not land after this.
     if (inFlight) inFlight.abort();
     inFlight = null;
     if (count) { showInvalid(count); return Promise.resolve(); }
     inFlight = new AbortController();
-    const signal = inFlight.signal;
-    return Promise.all([fetchJson("/api/normal?" + qs, signal), fetchJson("/api/chart?" + qs, signal)])
-      .then(function (answers) {
-        const normal = answers[0];
-        const figure = answers[1];
-        if (!normal.ok) {
-          if (normal.body.field) setError(normal.body.field, normal.body.error);
-          showInvalid(1);
-          return;
-        }
-        fill(normal.body);
-        return window.NormalChart.draw(chart, figure.body);
+    return fetch("/partials?" + qs, { signal: inFlight.signal, headers: { Accept: "application/json" } })
+      .then(function (response) { return response.json(); })
+      .then(function (parts) {
+        const serverErrors = Object.keys(parts.errors).length;
+        showErrors(parts.errors);
+        if (serverErrors) { showInvalid(serverErrors); return; }
+        return render(parts);
       })
       .catch(function (error) {
         if (error.name !== "AbortError") console.warn("update failed:", error.message);
@@ -137,19 +140,32 @@
     timer = setTimeout(update, DELAY_MS);
   }
 
+  function copyText(source) {
+    return source.value !== undefined && source.tagName === "TEXTAREA" ? source.value : source.textContent;
+  }
+
   function copy(button) {
     const source = document.getElementById(button.dataset.copy);
+    const label = button.textContent;
     const done = function () {
       button.textContent = "Copied";
-      setTimeout(function () { button.textContent = "Copy"; }, 1500);
+      setTimeout(function () { button.textContent = label; }, 1500);
     };
     if (navigator.clipboard && window.isSecureContext) {
-      navigator.clipboard.writeText(source.value).then(done, function () { source.select(); });
-    } else {
+      navigator.clipboard.writeText(copyText(source)).then(done, function () {});
+    } else if (source.select) {
       source.select();
       document.execCommand("copy");
       done();
     }
+  }
+
+  function loadPreset(link) {
+    const params = new URL(link.href).searchParams;
+    FIELDS.forEach(function (name) { document.getElementById(name).value = params.get(name) || ""; });
+    swap.checked = params.get("swap") === "on";
+    clearTimeout(timer);
+    return update();
   }
 
   form.addEventListener("input", schedule);
@@ -159,9 +175,25 @@
     clearTimeout(timer);
     update();
   });
-  document.querySelectorAll("button[data-copy]").forEach(function (button) {
-    button.addEventListener("click", function () { copy(button); });
+  // Copy buttons and presets may be re-rendered, so listen on the document.
+  document.addEventListener("click", function (event) {
+    const button = event.target.closest("button[data-copy]");
+    if (button) { copy(button); return; }
+    const preset = event.target.closest("a.preset");
+    if (preset && !event.ctrlKey && !event.metaKey && !event.shiftKey) {
+      event.preventDefault();
+      loadPreset(preset);
+    }
   });
+  if (precision) {
+    const saved = window.localStorage && localStorage.getItem("precision");
+    if (saved && precision.querySelector('option[value="' + saved + '"]')) precision.value = saved;
+    precision.addEventListener("change", function () {
+      if (window.localStorage) localStorage.setItem("precision", precision.value);
+      applyPrecision();
+    });
+    applyPrecision();
+  }
   window.NormalChart.drawFromPage();
   window.calculatorUpdate = update;  // lets browser tests wait for a settled page
 })();
