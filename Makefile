@@ -37,9 +37,13 @@ PLOTLY_VERSION := 4.1.1
 SWAGGER_UI_VERSION := 5.35.0
 vendor:
 	rm -rf .vendor-tmp && mkdir .vendor-tmp
-	cd .vendor-tmp && npm pack --silent plotly.js-basic-dist-min@$(PLOTLY_VERSION) swagger-ui-dist@$(SWAGGER_UI_VERSION)
+	cd .vendor-tmp && npm pack --silent plotly.js-basic-dist-min@$(PLOTLY_VERSION) \
+		plotly.js-gl3d-dist-min@$(PLOTLY_VERSION) swagger-ui-dist@$(SWAGGER_UI_VERSION)
 	tar -xzf .vendor-tmp/plotly.js-basic-dist-min-$(PLOTLY_VERSION).tgz -C .vendor-tmp
 	cp .vendor-tmp/package/plotly-basic.min.js .vendor-tmp/package/LICENSE static/vendor/plotly/
+	rm -rf .vendor-tmp/package
+	tar -xzf .vendor-tmp/plotly.js-gl3d-dist-min-$(PLOTLY_VERSION).tgz -C .vendor-tmp
+	cp .vendor-tmp/package/plotly-gl3d.min.js static/vendor/plotly/
 	rm -rf .vendor-tmp/package
 	tar -xzf .vendor-tmp/swagger-ui-dist-$(SWAGGER_UI_VERSION).tgz -C .vendor-tmp
 	cd .vendor-tmp/package && cp swagger-ui-bundle.js swagger-ui.css LICENSE NOTICE favicon-32x32.png ../../static/vendor/swagger-ui/
