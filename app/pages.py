@@ -22,6 +22,7 @@ from app.payloads import normal_payload
 from app.snippets import snippets
 from app.static import static_url
 from app.steps import worked_steps
+from app.view3d import view3d_figure
 
 TEMPLATES_DIR = Path(__file__).resolve().parent.parent / "templates"
 templates = Jinja2Templates(directory=TEMPLATES_DIR)
@@ -47,7 +48,8 @@ def _calculation(request: Request) -> dict[str, Any]:
     parsed = read_triangle(query if given else {**EXAMPLE, **query})
     context: dict[str, Any] = {"typed": parsed.typed, "swap": parsed.swap,
                                "errors": parsed.errors, "payload": None, "figure": None,
-                               "presets": PRESETS, "snippets": [], "steps": None}
+                               "presets": PRESETS, "snippets": [], "steps": None,
+                               "view3d": None}
     swap_text = "on" if parsed.swap else query.get("swap") if "swap" in parsed.errors else None
     params = {**parsed.typed, **({"swap": swap_text} if swap_text else {})}
     context["query"] = urlencode(params)
@@ -58,6 +60,7 @@ def _calculation(request: Request) -> dict[str, Any]:
         context["payload"] = payload
         context["steps"] = worked_steps(result)
         context["figure"] = bar_figure(payload)
+        context["view3d"] = view3d_figure(payload)
         context["snippets"] = snippets(payload)
     return context
 
@@ -90,7 +93,8 @@ def partials(request: Request) -> JSONResponse:
     html = {element: templates.get_template(name).render({**context, "request": request})
             for element, name in PARTS.items()}
     return JSONResponse({"query": context["query"], "errors": context["errors"],
-                         "html": html, "figure": context["figure"]})
+                         "html": html, "figure": context["figure"],
+                         "view3d": context["view3d"]})
 
 
 @router.get("/embed", response_class=HTMLResponse)

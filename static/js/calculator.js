@@ -15,6 +15,7 @@
   const result = document.getElementById("result");
   const chart = document.getElementById("chart");
   const precision = document.getElementById("precision");
+  const view3d = document.getElementById("view3d");
   let timer = null;
   let inFlight = null;
 
@@ -108,6 +109,7 @@
     result.classList.remove("stale");
     applyPrecision();
     document.dispatchEvent(new CustomEvent("calculator:rendered", { detail: parts }));
+    if (view3d && parts.view3d && window.NormalView3D) window.NormalView3D.update(view3d, parts.view3d);
     return window.NormalChart.draw(chart, parts.figure);
   }
 
@@ -194,6 +196,20 @@
     });
     applyPrecision();
   }
-  window.NormalChart.drawFromPage();
+  // The 3D part of Plotly loads only once the view scrolls into sight and the page is idle,
+  // so the first load stays small and the bar chart draws first.
+  function start3d() {
+    if (!view3d || !window.NormalView3D) return;
+    const initial = JSON.parse(document.getElementById("view3d-data").textContent);
+    const whenIdle = window.requestIdleCallback || function (callback) { setTimeout(callback, 200); };
+    const observer = new IntersectionObserver(function (entries) {
+      if (!entries.some(function (entry) { return entry.isIntersecting; })) return;
+      observer.disconnect();
+      whenIdle(function () { window.NormalView3D.show(view3d, initial); });
+    });
+    observer.observe(view3d);
+  }
+
+  window.NormalChart.drawFromPage().then(start3d);
   window.calculatorUpdate = update;  // lets browser tests wait for a settled page
 })();
