@@ -331,3 +331,32 @@ def test_no_inline_executable_script(client, method: str, path: str, status: int
         assert not [key for key in attrs if key.startswith("on")], (tag, attrs)
         for key in ("href", "src", "action"):
             assert not (attrs.get(key) or "").lower().startswith("javascript:"), (tag, attrs)
+
+
+# --- GET /partials: the live parts of the page ---------------------------------------------
+
+
+def test_partials_render_every_live_part_from_the_page_templates(client) -> None:  # type: ignore[no-untyped-def]
+    query = {**EXAMPLE_QUERY, "swap": "on"}
+    parts = client.get("/partials", params=query).json()
+    assert set(parts) == {"query", "errors", "html", "figure", "view3d"}
+    assert parts["errors"] == {}
+    assert set(parts["html"]) == {"result", "steps", "code"}
+    page = client.get("/", params=query)
+    # Each part is exactly what the full page renders in that place.
+    for html in parts["html"].values():
+        assert html.strip() in page.text
+    assert parts["figure"] == client.get("/api/chart", params=query).json()
+    assert parts["view3d"]["data"] and parts["view3d"]["layout"]
+    assert "order A, C, B" in parts["html"]["result"]
+    assert "(-6, -3, -2)" in parts["html"]["steps"]
+
+
+def test_partials_report_every_bad_field_with_status_200(client) -> None:  # type: ignore[no-untyped-def]
+    query = {**EXAMPLE_QUERY, "ax": "abc", "cz": "", "swap": "maybe"}
+    answer = client.get("/partials", params=query)
+    assert answer.status_code == 200
+    parts = answer.json()
+    assert set(parts["errors"]) == {"ax", "cz", "swap"}
+    assert parts["figure"] is None and parts["view3d"] is None
+    assert "Fix the highlighted fields" in parts["html"]["result"]
