@@ -6,7 +6,17 @@ window.NormalChart = (function () {
   const TOOLBAR = window.innerWidth < 600 ? false : "hover";
   const CONFIG = {
     displaylogo: false, responsive: true, displayModeBar: TOOLBAR,
-    modeBarButtonsToRemove: ["select2d", "lasso2d"],
+    // "Share chart" would post the data to an outside service: this page keeps it here.
+    modeBarButtonsToRemove: ["select2d", "lasso2d", "sendChartToCloud", "sendDataToCloud"],
+    toImageButtonOptions: { format: "png", filename: "triangle-normal", scale: 2 },
+    modeBarButtonsToAdd: [{
+      name: "downloadSvg",
+      title: "Download plot as SVG",
+      icon: { width: 1000, height: 1000, path: "M500 50 L500 650 M280 430 L500 650 L720 430 M150 800 L850 800 L850 950 L150 950 Z", transform: "matrix(1 0 0 1 0 0)" },
+      click: function (gd) {
+        window.Plotly.downloadImage(gd, { format: "svg", filename: "triangle-normal" });
+      },
+    }],
   };
   // The first draw leaves the toolbar out (building it costs about a tenth of a second on a
   // slow machine) and adds it once the page is idle, so the chart shows sooner.

@@ -5,7 +5,12 @@
 "use strict";
 
 window.NormalView3D = (function () {
-  const CONFIG = { displaylogo: false, responsive: true };
+  // "Share chart" would post the data to an outside service: this page keeps it here.
+  const CONFIG = {
+    displaylogo: false, responsive: true,
+    modeBarButtonsToRemove: ["sendChartToCloud", "sendDataToCloud"],
+    toImageButtonOptions: { format: "png", filename: "triangle-3d", scale: 2 },
+  };
   let plotly = null;
   let loading = null;
   let webgl = null;
