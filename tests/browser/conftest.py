@@ -157,6 +157,14 @@ def browser() -> Iterator[Browser]:
         chromium.close()
 
 
+#: Warnings that headless Chromium (software WebGL) prints whenever the 3D view draws; the view
+#: can draw on any calculator page once it scrolls into sight, so every test accepts them.
+WEBGL_WARNINGS = (
+    r"^console\.warning: Canvas2D: Multiple readback operations",
+    r"^console\.warning: .*GL Driver Message .*GPU stall due to ReadPixels",
+)
+
+
 @dataclass
 class ConsoleWatch:
     """Console errors and warnings and uncaught page errors of every page in a test.
@@ -166,7 +174,8 @@ class ConsoleWatch:
     """
 
     messages: list[str] = field(default_factory=list)
-    allowed: list[re.Pattern[str]] = field(default_factory=list)
+    allowed: list[re.Pattern[str]] = field(
+        default_factory=lambda: [re.compile(pattern) for pattern in WEBGL_WARNINGS])
 
     def attach(self, page: Page) -> None:
         page.on("console", self._on_console)
