@@ -1,0 +1,286 @@
+"""Vertex and corner normals of a triangle mesh: weighted averages of its face normals.
+
+Each corner (one vertex of one face) gives its face's unit normal a weight:
+
+- ``"uniform"``: 1, the plain mean of the incident face normals;
+- ``"area"``: the face's area (the sum of the raw cross products);
+- ``"angle"``: the corner's angle (Thuermer and Wuethrich 1998), computed stably as
+  ``atan2(|n|, p . q)`` for the corner's edges p and q, with the face's most accurate |n|;
+- ``"max"``: sin(angle) / (|p| |q|), i.e. |p x q| / (|p|**2 |q|**2) (Nelson Max 1999,
+  "Weights for computing vertex normals from facet normals"), exact when the vertex and
+  its neighbours lie on a sphere.
+
+The weighted sum is normalised once. Degenerate faces (see :mod:`app.core.mesh`) weigh
+nothing. A vertex in no usable face, or whose sum cancels (at most ``MESH_CANCELLED_SUM``
+of its total weight), gets a zero row and ``True`` in the ``missing`` mask; nothing is NaN.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from numbers import Real
+from typing import Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from app.core.mesh import FaceGeometry, check_mesh, face_geometry, take_rows, unit_normals
+from app.core.tolerances import MESH_CANCELLED_SUM, MESH_CREASE_SLACK, MESH_PAIR_CHUNK
+from app.core.topology import VertexCorners, vertex_corners
+
+FloatArray = NDArray[np.float64]
+IndexArray = NDArray[np.intp]
+BoolArray = NDArray[np.bool_]
+Weighting = Literal["uniform", "area", "angle", "max"]
+
+WEIGHTINGS: tuple[Weighting, ...] = ("uniform", "area", "angle", "max")
+
+
+@dataclass(frozen=True, slots=True)
+class VertexNormals:
+    """One normal for each of ``n`` vertices.
+
+    Attributes
+    ----------
+    normals : (n, 3) float64
+        Unit normals; zero rows where ``missing``.
+    missing : (n,) bool
+        The vertex is in no non-degenerate face, or its weighted sum cancels.
+    """
+
+    normals: FloatArray
+    missing: BoolArray
+
+    def __len__(self) -> int:
+        return len(self.missing)
+
+
+@dataclass(frozen=True, slots=True)
+class CornerNormals:
+    """One normal for each corner of each of ``m`` faces.
+
+    Attributes
+    ----------
+    normals : (m, 3, 3) float64
+        ``normals[f, k]`` is the unit normal at corner k (vertex ``faces[f, k]``) of face f;
+        zero rows where ``missing``.
+    missing : (m, 3) bool
+        The face is degenerate, or the weighted sum at that corner cancels.
+    """
+
+    normals: FloatArray
+    missing: BoolArray
+
+    def __len__(self) -> int:
+        return len(self.missing)
+
+
+def corner_weights(geometry: FaceGeometry, weighting: str) -> FloatArray:
+    """The weight of each face's normal at each of its corners.
+
+    Parameters
+    ----------
+    geometry : FaceGeometry
+        From :func:`app.core.mesh.face_geometry`.
+    weighting : {"uniform", "area", "angle", "max"}
+        See the module docstring.
+
+    Returns
+    -------
+    (3, m) float64
+        ``weights[k, f]`` for corner k of face f; zero for degenerate faces.
+    """
+    usable = ~geometry.degenerate
+    length = geometry.length
+    if weighting == "uniform":
+        weights = np.broadcast_to(usable.astype(np.float64), (3, len(length)))
+    elif weighting == "area":
+        weights = np.broadcast_to(length, (3, len(length)))
+    elif weighting == "angle":
+        # Corner k lies between edge k - 1 (arriving) and edge k (leaving).
+        edges = geometry.edges
+        dots = np.stack([-np.einsum("am,am->m", edges[:, k - 1], edges[:, k]) for k in range(3)])
+        weights = np.arctan2(length, dots, out=dots)
+        weights *= usable
+    elif weighting == "max":
+        squares = geometry.squares
+        products = squares[[2, 0, 1]] * squares
+        weights = np.divide(length, products, out=np.zeros_like(products), where=usable)
+    else:
+        raise ValueError(f"weighting must be one of {', '.join(WEIGHTINGS)}, not {weighting!r}.")
+    return np.ascontiguousarray(weights)
+
+
+def _normalised(sums: FloatArray, totals: FloatArray) -> tuple[FloatArray, BoolArray]:
+    """Unit rows of ``sums`` (r, 3), and where a row cancels against its total weight."""
+    square = np.einsum("ij,ij->i", sums, sums)
+    missing = square <= (MESH_CANCELLED_SUM * totals) ** 2
+    length = np.sqrt(square, out=square)
+    length[missing] = np.inf  # x / inf is an exact zero
+    normals = sums / length[:, None]
+    normals += 0.0  # -0.0 becomes 0.0
+    return normals, missing
+
+
+def vertex_normals(
+    vertices: ArrayLike, faces: ArrayLike, weighting: Weighting = "angle"
+) -> VertexNormals:
+    """Return the weighted average of the face normals around each vertex.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64
+        Finite coordinates.
+    faces : (m, 3) int
+        Indices into ``vertices``.
+    weighting : {"uniform", "area", "angle", "max"}
+        How each face's normal counts at a vertex; see the module docstring.
+
+    Returns
+    -------
+    VertexNormals
+        ``normals`` (n, 3) float64 and the ``missing`` (n,) bool mask, for every vertex,
+        used or not.
+    """
+    points, indices = check_mesh(vertices, faces)
+    geometry = face_geometry(points, indices)
+    weights = corner_weights(geometry, weighting)
+    unit = unit_normals(geometry)
+    normals, missing = _normalised(*_vertex_sums(unit, weights, indices, len(points)))
+    return VertexNormals(normals, missing)
+
+
+def _vertex_sums(
+    unit: FloatArray, weights: FloatArray, faces: IndexArray, count: int
+) -> tuple[FloatArray, FloatArray]:
+    """Per vertex: the weighted sum of unit normals (n, 3) and the sum of weights (n,)."""
+    corner_vertex = np.ascontiguousarray(faces.T).ravel()  # in the order of weights.ravel()
+    sums = np.empty((count, 3))
+    for axis in range(3):
+        # One bincount per axis beat np.add.at by about 9x on 871,414 faces.
+        sums[:, axis] = np.bincount(corner_vertex, (weights * unit[axis]).ravel(), count)
+    return sums, np.bincount(corner_vertex, weights.ravel(), count)
+
+
+def _crease_cosine(crease_angle: float) -> float:
+    if isinstance(crease_angle, bool) or not isinstance(crease_angle, Real):
+        raise ValueError("crease_angle must be a number of degrees.")
+    angle = float(crease_angle)
+    if not 0.0 <= angle <= 180.0:  # also rejects NaN
+        raise ValueError(f"crease_angle must be between 0 and 180 degrees, not {crease_angle}.")
+    return math.cos(math.radians(angle)) - MESH_CREASE_SLACK
+
+
+def corner_normals(
+    vertices: ArrayLike,
+    faces: ArrayLike,
+    crease_angle: float = 30.0,
+    weighting: Weighting = "angle",
+) -> CornerNormals:
+    """Return normals per face corner: smooth across gentle edges, sharp across creases.
+
+    The normal at corner k of face f (vertex v = ``faces[f, k]``) is the weighted average
+    of the normals of the faces g around v whose normal is within ``crease_angle`` of f's:
+    ``dot(n_f, n_g) >= cos(crease_angle)`` (f itself always counts). This is a per-vertex
+    rule, like "Auto Smooth" by angle between face normals; Blender's "Smooth by Angle"
+    instead marks edges whose dihedral angle exceeds the crease as sharp and averages over
+    the edge-connected fan of faces between sharp edges. The two agree wherever the faces
+    around a vertex are either all within the crease of each other or split into fans by
+    the sharp edges (a cube, a cylinder's rim), and differ when a face is reached only
+    through a chain of small angles. A crease of 180 gives the vertex normals; 0 gives
+    the face normals (faces with exactly the same normal still join).
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64
+        Finite coordinates.
+    faces : (m, 3) int
+        Indices into ``vertices``.
+    crease_angle : float
+        In degrees, from 0 to 180.
+    weighting : {"uniform", "area", "angle", "max"}
+        As for :func:`vertex_normals`.
+
+    Returns
+    -------
+    CornerNormals
+        ``normals`` (m, 3, 3) float64 and the ``missing`` (m, 3) bool mask; corners of
+        degenerate faces are missing.
+
+    Notes
+    -----
+    A vertex whose faces are all within half the crease of its vertex normal has all of
+    them within the crease of each other, so its corners take the vertex normal at the
+    cost of one dot product each. Only the other vertices compare their corners pair by
+    pair: time there grows with the square of a vertex's corner count, and memory is
+    bounded by ``MESH_PAIR_CHUNK``.
+    """
+    threshold = _crease_cosine(crease_angle)
+    points, indices = check_mesh(vertices, faces)
+    geometry = face_geometry(points, indices)
+    unit = unit_normals(geometry)
+    weights = corner_weights(geometry, weighting)
+    smooth, cancelled = _normalised(*_vertex_sums(unit, weights, indices, len(points)))
+    normals, missing = take_rows(smooth, indices), cancelled[indices]
+    if float(crease_angle) < 180.0:
+        # Faces within half the crease of their vertex normal are all within the crease of
+        # each other (the slack keeps that true after rounding): such a vertex's corners are
+        # its vertex normal. Only the others need their corners compared pair by pair.
+        half = math.cos(math.radians(crease_angle) / 2) + MESH_CREASE_SLACK
+        near = np.einsum("fka,af->fk", normals, unit) >= half
+        near[geometry.degenerate] = True  # weighs nothing either way
+        creased = np.zeros(len(points), dtype=bool)
+        creased[indices[~near]] = True
+        corners = np.flatnonzero(creased[indices].ravel())
+        if len(corners):
+            groups = vertex_corners(indices, len(points), corners)
+            found, lost = _creased(unit, weights.T.ravel(), groups, threshold)
+            _put_rows(normals.reshape(-1, 3), groups.order, found)
+            missing.reshape(-1)[groups.order] = lost
+    normals[geometry.degenerate] = 0.0
+    missing[geometry.degenerate] = True
+    return CornerNormals(normals, missing)
+
+
+def _put_rows(array: FloatArray, index: IndexArray, values: FloatArray) -> None:
+    """``array[index] = values`` for C-contiguous (k, 3) float64 arrays, as in take_rows."""
+    rows = np.dtype((np.void, 24))
+    array.view(rows).reshape(len(array)).put(index, values.view(rows).reshape(len(values)))
+
+
+def _creased(
+    unit: FloatArray, weights: FloatArray, groups: VertexCorners, threshold: float
+) -> tuple[FloatArray, BoolArray]:
+    """Corner normals by comparing every pair of corners around each vertex.
+
+    ``unit`` is (3, m) and ``weights`` (3 m,) by corner id; the results are in the order of
+    ``groups.order``. Vertices with the same number of corners d are done together as
+    (vertices, d, d) blocks of dot products, at most ``MESH_PAIR_CHUNK`` pairs at a time; a
+    vertex with more than that many pairs is done a block of its corners at a time.
+    """
+    order = groups.order
+    normal = take_rows(np.ascontiguousarray(unit.T), order // 3)  # in sorted corner order
+    weight = weights[order]
+    counts = groups.counts
+    sums = np.empty_like(normal)
+    totals = np.empty_like(weight)
+    for size in np.unique(counts[counts > 0]).tolist():
+        firsts = groups.starts[:-1][counts == size]
+        step = MESH_PAIR_CHUNK // (size * size)
+        for chunk in range(0, len(firsts), step) if step else ():
+            at = firsts[chunk:chunk + step, None] + np.arange(size)  # (vertices, d)
+            around = take_rows(normal, at)  # (vertices, d, 3)
+            within = np.matmul(around, around.transpose(0, 2, 1)) >= threshold
+            weight_in = within * weight[at][:, None, :]  # (vertices, d mine, d theirs)
+            _put_rows(sums, at.ravel(), np.matmul(weight_in, around).reshape(-1, 3))
+            totals[at] = weight_in.sum(axis=2)
+        rows = max(1, MESH_PAIR_CHUNK // size)
+        for first in firsts.tolist() if not step else ():
+            around, theirs = normal[first:first + size], weight[first:first + size]
+            for row in range(first, first + size, rows):
+                mine = normal[row:min(row + rows, first + size)]
+                weight_in = (mine @ around.T >= threshold) * theirs  # (rows, d)
+                sums[row:row + len(mine)] = weight_in @ around
+                totals[row:row + len(mine)] = weight_in.sum(axis=1)
+    return _normalised(sums, totals)
