@@ -69,11 +69,25 @@
     code.value = code.value.replace(/embed\?[^"]*/, "embed?" + qs);
   }
 
+  // Parts that show the last valid points while the form holds a mistake: dimmed, and inert
+  // so that nothing (a copy button, say) acts on points that are no longer in the form.
+  const LIVE_PARTS = ["steps", "code"];
+
+  function setStale(stale) {
+    result.classList.toggle("stale", stale);
+    LIVE_PARTS.forEach(function (id) {
+      const part = document.getElementById(id);
+      if (!part) return;
+      part.classList.toggle("stale", stale);
+      part.inert = stale;
+    });
+  }
+
   function showInvalid(count) {
     const slot = result.querySelector('[data-key="invalid"]');
     slot.textContent = "Fix the highlighted " + (count === 1 ? "field" : "fields") + " to see the normal.";
     slot.classList.remove("hidden");
-    result.classList.add("stale");
+    setStale(true);
   }
 
   // Display precision: the server writes every number in full (data-num); this rewrites the
@@ -106,7 +120,7 @@
         if (d.id in open) d.open = open[d.id];
       });
     });
-    result.classList.remove("stale");
+    setStale(false);
     applyPrecision();
     document.dispatchEvent(new CustomEvent("calculator:rendered", { detail: parts }));
     if (view3d && parts.view3d && window.NormalView3D) window.NormalView3D.update(view3d, parts.view3d);

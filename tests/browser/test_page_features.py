@@ -159,10 +159,6 @@ def test_worked_steps_show_the_users_numbers_and_follow_live_edits(page: Page) -
     assert_not_reloaded(page)
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "with a typing mistake the live page keeps the steps and code of the last valid points "
-    "(no stale mark), while the server renders 'The steps appear once every coordinate is a "
-    "number.' for the same address"))
 def test_a_typing_mistake_retires_the_old_steps_and_code(page: Page) -> None:
     open_calculator(page, triangle_query(*RIGHT))
     expect(step(page, "cross")).to_be_visible()
@@ -170,11 +166,13 @@ def test_a_typing_mistake_retires_the_old_steps_and_code(page: Page) -> None:
     expect(cell(page, "invalid")).to_be_visible()
     served = page.request.get(page.url).text()
     assert "The steps appear once every coordinate is a number." in served
-    stale = "#steps.stale, #steps [aria-disabled=true]"
-    assert (page.locator(stale).count() > 0
-            or "The steps appear once" in (page.locator("#steps").text_content() or "")), (
-        "the steps still show the old triangle: "
-        + (step(page, "cross").text_content() or "")[:80])
+    for part in ("#steps", "#code"):  # dimmed and inert until the mistake is fixed
+        expect(page.locator(part)).to_have_class(re.compile(r"\bstale\b"))
+        assert page.locator(part).evaluate("el => el.inert") is True
+    page.locator("#ax").fill("0")
+    for part in ("#steps", "#code"):
+        expect(page.locator(part)).not_to_have_class(re.compile(r"\bstale\b"))
+        assert page.locator(part).evaluate("el => el.inert") is False
 
 
 # --- 3. Code to paste -------------------------------------------------------------------------
