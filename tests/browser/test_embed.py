@@ -69,6 +69,14 @@ def test_the_calculator_page_refuses_to_be_framed(
     src = f"{base_url}/?{triangle_query(*RIGHT)}"
     with page.expect_console_message(lambda message: "frame-ancestors" in message.text):
         page.goto(f"{framing_host}/frame?src={quote(src, safe='')}")
+    # The blocked frame commits an error page a moment after the console message: poll for it.
+    page.wait_for_function(
+        """(base) => { const f = document.getElementById('framed');
+                       let url = null;
+                       try { url = f && f.contentWindow && f.contentWindow.location.href; }
+                       catch (error) { return true; }  // cross-origin: not the calculator
+                       return Boolean(url) && !url.startsWith(base); }""",
+        arg=base_url, timeout=10_000)
     frame = page.frame(name="framed")
     assert frame is not None
     assert not frame.url.startswith(base_url), frame.url  # an error page, not the calculator
