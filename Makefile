@@ -6,7 +6,7 @@ UV := $(shell command -v uv 2>/dev/null || echo .tools/bin/uv)
 HOST ?= 127.0.0.1
 PORT ?= 8000
 
-.PHONY: run test lint bench env clean vendor
+.PHONY: run test lint bench bench-mesh env clean vendor
 
 # uv itself comes from PyPI when the machine does not have it yet.
 .tools/bin/uv:
@@ -28,6 +28,9 @@ test: env
 
 bench: env
 	.venv/bin/python -m benchmarks.run
+
+bench-mesh: env
+	.venv/bin/python -m benchmarks.mesh_kernels
 
 clean:
 	rm -rf .venv .tools .pytest_cache .hypothesis

@@ -1,6 +1,21 @@
 """The geometry core: pure NumPy and the standard library, no web imports."""
 
 from app.core.batch import BatchNormals, triangle_normals
+from app.core.mesh import FaceNormals, check_mesh, face_areas, face_normals
+from app.core.mesh_normals import CornerNormals, VertexNormals, corner_normals, vertex_normals
 from app.core.triangle import TriangleNormal, triangle_normal
 
-__all__ = ["BatchNormals", "TriangleNormal", "triangle_normal", "triangle_normals"]
+__all__ = [
+    "BatchNormals",
+    "CornerNormals",
+    "FaceNormals",
+    "TriangleNormal",
+    "VertexNormals",
+    "check_mesh",
+    "corner_normals",
+    "face_areas",
+    "face_normals",
+    "triangle_normal",
+    "triangle_normals",
+    "vertex_normals",
+]
