@@ -32,6 +32,13 @@ def fill_triangle(page: Page, a: Point, b: Point, c: Point) -> None:
         page.locator(f"#{name}").fill(value)
 
 
+def open_calculator(page: Page, query: str = "") -> None:
+    """Open the calculator (with a query) and wait until its chart is drawn."""
+    response = page.goto("/" + (f"?{query}" if query else ""))
+    assert response is not None and response.status == 200, response and response.status
+    page.locator("#chart[data-drawn] .main-svg").first.wait_for()
+
+
 def cell(page: Page, key: str) -> Locator:
     """A cell of the result table, by its data-key."""
     return page.locator(f'#result [data-key="{key}"]')

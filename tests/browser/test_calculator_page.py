@@ -16,22 +16,13 @@ from tests.browser.helpers import (
     RIGHT,
     cell,
     fill_triangle,
+    open_calculator,
     query_pattern,
     triangle_query,
     wait_for_chart_y,
 )
 
 pytestmark = pytest.mark.browser
-
-
-def open_calculator(page: Page, query: str = "") -> None:
-    response = page.goto("/" + (f"?{query}" if query else ""))
-    assert response is not None and response.status == 200, response and response.status
-    wait_for_chart_y_drawn(page)
-
-
-def wait_for_chart_y_drawn(page: Page) -> None:
-    page.locator("#chart[data-drawn] .main-svg").first.wait_for()
 
 
 def test_page_loads_without_console_errors(page: Page) -> None:

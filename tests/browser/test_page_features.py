@@ -23,6 +23,7 @@ from tests.browser.helpers import (
     RIGHT,
     cell,
     fill_triangle,
+    open_calculator,
     query_pattern,
     triangle_query,
     wait_for_chart_y,
@@ -32,12 +33,6 @@ pytestmark = pytest.mark.browser
 
 CLIPBOARD = {"permissions": ["clipboard-read", "clipboard-write"]}
 EXAMPLE_UNIT = [6 / 7, 3 / 7, 2 / 7]
-
-
-def open_calculator(page: Page, query: str = "") -> None:
-    response = page.goto("/" + (f"?{query}" if query else ""))
-    assert response is not None and response.status == 200, response and response.status
-    page.locator("#chart[data-drawn] .main-svg").first.wait_for()
 
 
 def mark_window(page: Page) -> None:
