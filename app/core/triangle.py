@@ -52,6 +52,11 @@ class TriangleNormal:
 
 def _as_point(name: str, point: Sequence[float]) -> Vector:
     """Check one point up front, the way trimesh checks its inputs."""
+    if type(point) in (list, tuple) and len(point) == 3:  # the common case, quickly
+        x, y, z = point
+        if (type(x) is float and type(y) is float and type(z) is float
+                and isfinite(x) and isfinite(y) and isfinite(z)):
+            return (x, y, z)
     try:
         values = tuple(point)
     except TypeError:
@@ -99,11 +104,20 @@ class _Rounder:
             return None
 
     def vector(self, name: str, values: Sequence[int], exponent: int) -> MaybeVector:
-        x, y, z = (
-            self.value(f"{name}_{axis}", value, exponent)
-            for axis, value in zip(AXES, values, strict=True)
-        )
-        return (x, y, z)
+        # The common case inline (this runs for every API request): one correctly rounded
+        # division each; anything out of range goes through value() for its message.
+        scale = 1 << exponent
+        out: list[float | None] = []
+        for axis, value in zip(AXES, values, strict=True):
+            try:
+                rounded = value / scale
+            except OverflowError:
+                rounded = 0.0
+            if rounded == 0.0 and value != 0:
+                out.append(self.value(f"{name}_{axis}", value, exponent))
+            else:
+                out.append(rounded)
+        return (out[0], out[1], out[2])
 
     def message(self, lead: str | None = None) -> str | None:
         """The sentences about out-of-range values, after ``lead`` when given."""
