@@ -71,6 +71,11 @@ def field_name(location: Sequence[str | int]) -> str | None:
     return name
 
 
+def clip(text: str) -> str:
+    """What the user typed, cut to 20 characters for an error sentence."""
+    return text if len(text) <= 20 else text[:17] + "..."
+
+
 def describe(value: Any) -> str:
     """A few words for what the user sent instead, without echoing a huge value."""
     if value is None:
@@ -78,8 +83,7 @@ def describe(value: Any) -> str:
     if isinstance(value, bool):
         return "a boolean"
     if isinstance(value, str):
-        shown = value if len(value) <= 20 else value[:17] + "..."
-        return f"the string {shown!r}"
+        return f"the string {clip(value)!r}"
     if isinstance(value, list | tuple):
         return f"a list of {len(value)}"
     if isinstance(value, dict):

@@ -42,27 +42,32 @@ templates.env.filters["json_script"] = json_script
 
 
 def _calculation(request: Request) -> dict[str, Any]:
-    """Everything a page shows for its query: typed values, errors, payload and figure."""
+    """What every page shows for its query: typed values, errors, result, payload and chart."""
     query = request.query_params
     given = any(name in query for name in COORDINATE_FIELDS)
     parsed = read_triangle(query if given else {**EXAMPLE, **query})
     context: dict[str, Any] = {"typed": parsed.typed, "swap": parsed.swap,
-                               "errors": parsed.errors, "payload": None, "figure": None,
-                               "presets": PRESETS, "snippets": [], "steps": None,
-                               "view3d": None}
+                               "errors": parsed.errors, "result": None, "payload": None,
+                               "figure": None}
     swap_text = "on" if parsed.swap else query.get("swap") if "swap" in parsed.errors else None
     params = {**parsed.typed, **({"swap": swap_text} if swap_text else {})}
     context["query"] = urlencode(params)
     if not parsed.errors:
         a, b, c = parsed.points()
         result = triangle_normal(a, b, c, swap_winding=parsed.swap)
-        payload = normal_payload(result)
-        context["payload"] = payload
-        context["steps"] = worked_steps(result)
-        context["figure"] = bar_figure(payload)
-        context["view3d"] = view3d_figure(payload)
-        context["snippets"] = snippets(payload)
+        context["result"] = result
+        context["payload"] = normal_payload(result)
+        context["figure"] = bar_figure(context["payload"])
     return context
+
+
+def _with_details(context: dict[str, Any]) -> dict[str, Any]:
+    """Add what only the calculator shows (presets, steps, 3D view, code); /embed skips it."""
+    result, payload = context["result"], context["payload"]
+    return {**context, "presets": PRESETS,
+            "steps": None if result is None else worked_steps(result),
+            "view3d": None if payload is None else view3d_figure(payload),
+            "snippets": [] if payload is None else snippets(payload)}
 
 
 def _status(context: dict[str, Any]) -> int:
@@ -71,7 +76,7 @@ def _status(context: dict[str, Any]) -> int:
 
 @router.get("/", response_class=HTMLResponse)
 def calculator(request: Request) -> HTMLResponse:
-    context = _calculation(request)
+    context = _with_details(_calculation(request))
     response = templates.TemplateResponse(request, "index.html", context,
                                           status_code=_status(context))
     response.headers["link"] = f'</api/normal?{context["query"]}>; rel="alternate"; ' \
@@ -89,7 +94,7 @@ def partials(request: Request) -> JSONResponse:
 
     Always 200, so that a typing mistake is data for the page, not a failed request.
     """
-    context = _calculation(request)
+    context = _with_details(_calculation(request))
     html = {element: templates.get_template(name).render({**context, "request": request})
             for element, name in PARTS.items()}
     return JSONResponse({"query": context["query"], "errors": context["errors"],

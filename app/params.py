@@ -15,7 +15,7 @@ from typing import Annotated
 from pydantic import BaseModel, Field
 
 from app.config import COORDINATE_FIELDS
-from app.errors import ApiError
+from app.errors import ApiError, clip
 
 DECIMAL = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
 MAX_TEXT = 64
@@ -81,9 +81,8 @@ def parse_decimal(name: str, text: str) -> float:
         raise ApiError(422, f"{name} is longer than {MAX_TEXT} characters; "
                             "shorten it or use an exponent, such as 1.5e-30.", name)
     if not DECIMAL.fullmatch(stripped):
-        shown = stripped if len(stripped) <= 20 else stripped[:17] + "..."
         raise ApiError(422, f"{name} must be a decimal number such as 1.5 or -2e3, "
-                            f"not {shown!r}.", name)
+                            f"not {clip(stripped)!r}.", name)
     value = float(stripped)
     if not isfinite(value):
         raise ApiError(422, f"{name} is beyond the double range (about ±1.8e308).", name)
