@@ -30,6 +30,7 @@ bench: env
 	.venv/bin/python -m benchmarks.run
 
 bench-mesh: env
+	$(UV) sync --locked --extra test --extra bench
 	.venv/bin/python -m benchmarks.mesh_kernels
 
 clean:
