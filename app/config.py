@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+
 #: Most triangles one POST /api/normals request may carry.
 BATCH_LIMIT = 100_000
 
@@ -9,6 +11,23 @@ BATCH_LIMIT = 100_000
 #: One triangle needs far less than 64 KB; a full batch at full precision is about 20 MB.
 BODY_LIMITS = {"/api/normals": 48 * 1024 * 1024}
 DEFAULT_BODY_LIMIT = 64 * 1024
+
+#: Paths that take a mesh file. Their bodies are streamed (never buffered whole by the
+#: middleware) and counted against the upload limit as they arrive.
+MESH_PATHS = frozenset({"/api/mesh", "/api/mesh/normals", "/api/mesh/fix", "/mesh"})
+
+#: Environment variable that sets the upload limit, in megabytes (default 200).
+UPLOAD_LIMIT_VARIABLE = "MESH_UPLOAD_LIMIT_MB"
+DEFAULT_UPLOAD_LIMIT_MB = 200
+
+
+def upload_limit() -> int:
+    """The largest mesh upload in bytes: ``$MESH_UPLOAD_LIMIT_MB`` megabytes, default 200."""
+    text = os.environ.get(UPLOAD_LIMIT_VARIABLE, "").strip()
+    megabytes = float(text) if text else DEFAULT_UPLOAD_LIMIT_MB
+    if not megabytes > 0:
+        raise ValueError(f"{UPLOAD_LIMIT_VARIABLE} must be a positive number of megabytes.")
+    return int(megabytes * 1024 * 1024)
 
 #: The example the calculator opens with: a right triangle tilted out of every plane.
 EXAMPLE = {"ax": "1", "ay": "0", "az": "0", "bx": "0", "by": "2", "bz": "0",

@@ -18,7 +18,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.routing import Match
 
 from app.config import BATCH_LIMIT
-from app.middleware import security_headers
+from app.headers import security_headers
 
 logger = logging.getLogger(__name__)
 

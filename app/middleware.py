@@ -6,33 +6,9 @@ import json
 
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from app.config import BODY_LIMITS, DEFAULT_BODY_LIMIT
-
-CSP = (
-    "default-src 'self'; script-src 'self'; style-src 'self' 'unsafe-inline'; "
-    "img-src 'self' data: blob:; font-src 'self'; connect-src 'self'; object-src 'none'; "
-    "base-uri 'none'; form-action 'self'; frame-ancestors {ancestors}"
-)
-#: Paths that any site may frame; every other page refuses framing.
-FRAMEABLE = frozenset({"/embed"})
-
-_COMMON = [
-    (b"x-content-type-options", b"nosniff"),
-    (b"referrer-policy", b"strict-origin-when-cross-origin"),
-    (b"cross-origin-opener-policy", b"same-origin"),
-]
-_FRAMED = [*_COMMON, (b"content-security-policy", CSP.format(ancestors="*").encode())]
-_UNFRAMED = [
-    *_COMMON,
-    (b"content-security-policy", CSP.format(ancestors="'none'").encode()),
-    (b"x-frame-options", b"DENY"),
-]
-
-
-def security_headers(path: str) -> dict[str, str]:
-    """The headers SecurityHeaders adds for ``path``, as a dict."""
-    chosen = _FRAMED if path in FRAMEABLE else _UNFRAMED
-    return {key.decode(): value.decode() for key, value in chosen}
+from app import config
+from app.errors import ApiError
+from app.headers import FRAMEABLE, FRAMED, UNFRAMED
 
 
 class SecurityHeaders:
@@ -45,7 +21,7 @@ class SecurityHeaders:
         if scope["type"] != "http":
             await self.app(scope, receive, send)
             return
-        extra = _FRAMED if scope["path"] in FRAMEABLE else _UNFRAMED
+        extra = FRAMED if scope["path"] in FRAMEABLE else UNFRAMED
 
         async def send_with_headers(message: Message) -> None:
             if message["type"] == "http.response.start":
@@ -56,22 +32,31 @@ class SecurityHeaders:
 
 
 class BodyLimit:
-    """Reads the whole body up front and answers 413 beyond the path's limit.
+    """Answers 413 beyond the path's body limit; nothing is parsed or half-processed then.
 
-    Nothing is parsed or half-processed when the body is too large: the app is never called.
+    Small JSON bodies are read whole up front, so the app is never called for one that is too
+    large. Mesh uploads (``MESH_PATHS``) are streamed instead: a ``Content-Length`` beyond the
+    limit is refused at once, and a body that grows past it mid-way raises ``ApiError(413)``
+    inside the route, which stops parsing and drops what was read.
     """
 
-    def __init__(self, app: ASGIApp) -> None:
+    def __init__(self, app: ASGIApp, upload_limit: int | None = None) -> None:
         self.app = app
+        self.upload_limit = config.upload_limit() if upload_limit is None else upload_limit
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] != "http" or scope["method"] in ("GET", "HEAD", "OPTIONS"):
             await self.app(scope, receive, send)
             return
-        limit = BODY_LIMITS.get(scope["path"], DEFAULT_BODY_LIMIT)
+        streamed = scope["path"] in config.MESH_PATHS
+        limit = (self.upload_limit if streamed
+                 else config.BODY_LIMITS.get(scope["path"], config.DEFAULT_BODY_LIMIT))
         declared = _content_length(scope)
         if declared is not None and declared > limit:
             await _too_large(send, limit)
+            return
+        if streamed:
+            await self.app(scope, _counted(receive, limit), send)
             return
         chunks: list[bytes] = []
         size = 0
@@ -100,6 +85,20 @@ class BodyLimit:
         await self.app(scope, replay, send)
 
 
+def _counted(receive: Receive, limit: int) -> Receive:
+    size = 0
+
+    async def counted() -> Message:
+        nonlocal size
+        message = await receive()
+        size += len(message.get("body", b""))
+        if size > limit:
+            raise ApiError(413, too_large_sentence(limit))
+        return message
+
+    return counted
+
+
 def _content_length(scope: Scope) -> int | None:
     for key, value in scope["headers"]:
         if key == b"content-length":
@@ -111,15 +110,17 @@ def _content_length(scope: Scope) -> int | None:
 
 
 def _size_text(size: int) -> str:
-    return f"{size // (1024 * 1024)} MB" if size >= 1024 * 1024 else f"{size // 1024} KB"
+    if size >= 1024 * 1024:
+        return f"{size / (1024 * 1024):.4g} MB"
+    return f"{size / 1024:.4g} KB"
+
+
+def too_large_sentence(limit: int) -> str:
+    return f"The request body is larger than {_size_text(limit)}, the limit for this address."
 
 
 async def _too_large(send: Send, limit: int) -> None:
-    body = json.dumps({
-        "error": f"The request body is larger than {_size_text(limit)}, "
-                 "the limit for this address.",
-        "field": None,
-    }).encode()
+    body = json.dumps(ApiError(413, too_large_sentence(limit)).body()).encode()
     await send({"type": "http.response.start", "status": 413, "headers": [
         (b"content-type", b"application/json"),
         (b"content-length", str(len(body)).encode()),
