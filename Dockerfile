@@ -37,9 +37,12 @@ RUN /opt/uv/bin/uv sync --frozen --no-dev --no-install-project --python python3
 
 FROM python:3.11-slim
 
+# NUMBA_CACHE_DIR: the mesh kernels are compiled by numba while the image is built and
+# cached there; numba needs the folder writable at run time, so it belongs to the app user.
 ENV PATH=/opt/venv/bin:$PATH \
     PYTHONDONTWRITEBYTECODE=1 \
-    PYTHONUNBUFFERED=1
+    PYTHONUNBUFFERED=1 \
+    NUMBA_CACHE_DIR=/var/cache/numba
 
 RUN groupadd --gid 10001 app \
     && useradd --no-log-init --uid 10001 --gid app --no-create-home \
@@ -53,7 +56,9 @@ WORKDIR /app
 COPY app ./app
 COPY templates ./templates
 COPY static ./static
-RUN python -m compileall -q app
+RUN python -m compileall -q app \
+    && python -c "import app.core.mesh_normals as m; m.compile_kernels()" \
+    && chown -R 10001:10001 /var/cache/numba
 
 USER 10001:10001
 

@@ -10,9 +10,11 @@ Each corner (one vertex of one face) gives its face's unit normal a weight:
   "Weights for computing vertex normals from facet normals"), exact when the vertex and
   its neighbours lie on a sphere.
 
-The weighted sum is normalised once. Degenerate faces (see :mod:`app.core.mesh`) weigh
-nothing. A vertex in no usable face, or whose sum cancels (at most ``MESH_CANCELLED_SUM``
-of its total weight), gets a zero row and ``True`` in the ``missing`` mask; nothing is NaN.
+The sums are one pass over the faces compiled with numba (see :mod:`app.core.mesh`) that
+adds each face's weighted normal into its three vertices; each sum is normalised once.
+Degenerate faces (see :mod:`app.core.mesh`) weigh nothing. A vertex in no usable face, or
+whose sum cancels (at most ``MESH_CANCELLED_SUM`` of its total weight), gets a zero row and
+``True`` in the ``missing`` mask; nothing is NaN.
 """
 
 from __future__ import annotations
@@ -23,9 +25,25 @@ from numbers import Real
 from typing import Literal
 
 import numpy as np
+from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
-from app.core.mesh import FaceGeometry, check_mesh, face_geometry, take_rows, unit_normals
+from app.core.mesh import (
+    _BLOCK,
+    Edges,
+    FaceGeometry,
+    Vector,
+    _dot,
+    check_mesh,
+    face_cross,
+    face_edges,
+    face_geometry,
+    face_normals,
+    gather,
+    scaling,
+    take_rows,
+    unit_normals,
+)
 from app.core.tolerances import MESH_CANCELLED_SUM, MESH_CREASE_SLACK, MESH_PAIR_CHUNK
 from app.core.topology import VertexCorners, vertex_corners
 
@@ -35,6 +53,7 @@ BoolArray = NDArray[np.bool_]
 Weighting = Literal["uniform", "area", "angle", "max"]
 
 WEIGHTINGS: tuple[Weighting, ...] = ("uniform", "area", "angle", "max")
+_CANCELLED = MESH_CANCELLED_SUM
 
 
 @dataclass(frozen=True, slots=True)
@@ -76,6 +95,43 @@ class CornerNormals:
         return len(self.missing)
 
 
+def _weighting_code(weighting: str) -> int:
+    if weighting not in WEIGHTINGS:
+        raise ValueError(f"weighting must be one of {', '.join(WEIGHTINGS)}, not {weighting!r}.")
+    return WEIGHTINGS.index(weighting)
+
+
+@njit(cache=True)
+def _weights(code: int, edges: Edges, length: float) -> Vector:
+    """The weights at corners 0, 1, 2 of a usable face (``code`` indexes ``WEIGHTINGS``).
+
+    Corner k lies between edge k - 1 (arriving) and edge k (leaving).
+    """
+    if code == 0:  # uniform
+        return 1.0, 1.0, 1.0
+    if code == 1:  # area
+        return length, length, length
+    e0, e1, e2 = edges
+    if code == 2:  # angle: atan2(|n|, p . q) for the corner's edges p, q
+        return (math.atan2(length, -_dot(e2, e0)), math.atan2(length, -_dot(e0, e1)),
+                math.atan2(length, -_dot(e1, e2)))
+    s0, s1, s2 = _dot(e0, e0), _dot(e1, e1), _dot(e2, e2)  # max: |n| / (|p|**2 |q|**2)
+    return length / (s2 * s0), length / (s0 * s1), length / (s1 * s2)
+
+
+@njit(cache=True)
+def _weights_kernel(
+    code: int, edges: FloatArray, length: FloatArray, degenerate: BoolArray, weights: FloatArray
+) -> None:
+    for face in range(len(length)):
+        sides = ((edges[0, 0, face], edges[1, 0, face], edges[2, 0, face]),
+                 (edges[0, 1, face], edges[1, 1, face], edges[2, 1, face]),
+                 (edges[0, 2, face], edges[1, 2, face], edges[2, 2, face]))
+        weight = (0.0, 0.0, 0.0) if degenerate[face] else _weights(code, sides, length[face])
+        for k in range(3):
+            weights[k, face] = weight[k]
+
+
 def corner_weights(geometry: FaceGeometry, weighting: str) -> FloatArray:
     """The weight of each face's normal at each of its corners.
 
@@ -91,35 +147,85 @@ def corner_weights(geometry: FaceGeometry, weighting: str) -> FloatArray:
     (3, m) float64
         ``weights[k, f]`` for corner k of face f; zero for degenerate faces.
     """
-    usable = ~geometry.degenerate
-    length = geometry.length
-    if weighting == "uniform":
-        weights = np.broadcast_to(usable.astype(np.float64), (3, len(length)))
-    elif weighting == "area":
-        weights = np.broadcast_to(length, (3, len(length)))
-    elif weighting == "angle":
-        # Corner k lies between edge k - 1 (arriving) and edge k (leaving).
-        edges = geometry.edges
-        dots = np.stack([-np.einsum("am,am->m", edges[:, k - 1], edges[:, k]) for k in range(3)])
-        weights = np.arctan2(length, dots, out=dots)
-        weights *= usable
-    elif weighting == "max":
-        squares = geometry.squares
-        products = squares[[2, 0, 1]] * squares
-        weights = np.divide(length, products, out=np.zeros_like(products), where=usable)
-    else:
-        raise ValueError(f"weighting must be one of {', '.join(WEIGHTINGS)}, not {weighting!r}.")
-    return np.ascontiguousarray(weights)
+    code = _weighting_code(weighting)
+    weights = np.empty((3, len(geometry.length)))
+    _weights_kernel(code, geometry.edges, geometry.length, geometry.degenerate, weights)
+    return weights
+
+
+@njit(cache=True)
+def _vertex_sums_kernel(
+    code: int, points: FloatArray, factor: float, faces: IndexArray, sums: FloatArray
+) -> None:
+    """Add each usable face's weighted unit normal and its weight into its vertices' rows.
+
+    ``sums`` is (n, 4): the sum of weighted normals and the sum of weights side by side,
+    so that each corner updates one cache line.
+    """
+    corners = np.empty((_BLOCK, 9))
+    for start in range(0, len(faces), _BLOCK):
+        for row in range(gather(points, factor, faces, start, corners)):
+            edges = face_edges(corners, row)
+            normal, square, flat = face_cross(edges)
+            if flat:
+                continue
+            length = math.sqrt(square)
+            x, y, z = normal[0] / length, normal[1] / length, normal[2] / length
+            w0, w1, w2 = _weights(code, edges, length)
+            _add(sums[faces[start + row, 0]], w0, x, y, z)
+            _add(sums[faces[start + row, 1]], w1, x, y, z)
+            _add(sums[faces[start + row, 2]], w2, x, y, z)
+
+
+@njit(cache=True)
+def _add(total: FloatArray, weight: float, x: float, y: float, z: float) -> None:
+    total[0] += weight * x
+    total[1] += weight * y
+    total[2] += weight * z
+    total[3] += weight
+
+
+@njit(cache=True)
+def _normalise_kernel(sums: FloatArray, normals: FloatArray, missing: BoolArray) -> None:
+    """Unit rows of ``sums[:, :3]``, or zero where they cancel against ``sums[:, 3]``.
+
+    ``normals`` may share memory with ``sums``: row i is read before rows up to i are
+    written, as (n, 3) is packed more densely than (n, 4).
+    """
+    for row in range(len(sums)):
+        x, y, z, total = sums[row, 0], sums[row, 1], sums[row, 2], sums[row, 3]
+        square = x * x + y * y + z * z
+        cancel = _CANCELLED * total
+        missing[row] = square <= cancel * cancel
+        length = math.inf if missing[row] else math.sqrt(square)  # x / inf is an exact zero
+        normals[row, 0] = x / length + 0.0  # -0.0 becomes 0.0
+        normals[row, 1] = y / length + 0.0
+        normals[row, 2] = z / length + 0.0
 
 
 def _normalised(sums: FloatArray, totals: FloatArray) -> tuple[FloatArray, BoolArray]:
-    """Unit rows of ``sums`` (r, 3), and where a row cancels against its total weight."""
-    square = np.einsum("ij,ij->i", sums, sums)
-    missing = square <= (MESH_CANCELLED_SUM * totals) ** 2
-    length = np.sqrt(square, out=square)
-    length[missing] = np.inf  # x / inf is an exact zero
-    normals = sums / length[:, None]
-    normals += 0.0  # -0.0 becomes 0.0
+    """Unit rows of ``sums`` (r, 3) and where a row cancels against its total ``totals`` (r,)."""
+    both = np.concatenate([sums, totals[:, None]], axis=1)
+    missing = np.empty(len(totals), dtype=bool)
+    _normalise_kernel(both, sums, missing)
+    return sums, missing
+
+
+def _smooth(
+    points: FloatArray, faces: IndexArray, weighting: str
+) -> tuple[FloatArray, BoolArray]:
+    """Vertex normals and their mask for checked arrays.
+
+    The sums are (n, 4) and the normals are packed into the same memory as (n, 3).
+    """
+    code = _weighting_code(weighting)
+    points, factor, _ = scaling(points)
+    count = len(points)
+    sums = np.zeros((count, 4))
+    _vertex_sums_kernel(code, points, factor, faces, sums)
+    normals = sums.reshape(-1)[:3 * count].reshape(count, 3)
+    missing = np.empty(count, dtype=bool)
+    _normalise_kernel(sums, normals, missing)
     return normals, missing
 
 
@@ -144,23 +250,15 @@ def vertex_normals(
         used or not.
     """
     points, indices = check_mesh(vertices, faces)
-    geometry = face_geometry(points, indices)
-    weights = corner_weights(geometry, weighting)
-    unit = unit_normals(geometry)
-    normals, missing = _normalised(*_vertex_sums(unit, weights, indices, len(points)))
-    return VertexNormals(normals, missing)
+    return VertexNormals(*_smooth(points, indices, weighting))
 
 
-def _vertex_sums(
-    unit: FloatArray, weights: FloatArray, faces: IndexArray, count: int
-) -> tuple[FloatArray, FloatArray]:
-    """Per vertex: the weighted sum of unit normals (n, 3) and the sum of weights (n,)."""
-    corner_vertex = np.ascontiguousarray(faces.T).ravel()  # in the order of weights.ravel()
-    sums = np.empty((count, 3))
-    for axis in range(3):
-        # One bincount per axis beat np.add.at by about 9x on 871,414 faces.
-        sums[:, axis] = np.bincount(corner_vertex, (weights * unit[axis]).ravel(), count)
-    return sums, np.bincount(corner_vertex, weights.ravel(), count)
+def compile_kernels() -> None:
+    """Compile every mesh kernel now (into numba's cache), e.g. while building an image."""
+    vertices = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    faces = np.array([[0, 1, 2]])
+    face_normals(vertices, faces)
+    corner_normals(vertices, faces, 30.0)  # vertex normals, face geometry and weights too
 
 
 def _crease_cosine(crease_angle: float) -> float:
@@ -218,10 +316,10 @@ def corner_normals(
     """
     threshold = _crease_cosine(crease_angle)
     points, indices = check_mesh(vertices, faces)
+    smooth, cancelled = _smooth(points, indices, weighting)
     geometry = face_geometry(points, indices)
     unit = unit_normals(geometry)
     weights = corner_weights(geometry, weighting)
-    smooth, cancelled = _normalised(*_vertex_sums(unit, weights, indices, len(points)))
     normals, missing = take_rows(smooth, indices), cancelled[indices]
     if float(crease_angle) < 180.0:
         # Faces within half the crease of their vertex normal are all within the crease of
