@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from fastapi import FastAPI
 
-from app import errors, pages
+from app import errors, mesh_page, pages
 from app.api import normals
 from app.middleware import BodyLimit, SecurityHeaders
 from app.static import STATIC_DIR, CompressedStaticFiles
@@ -30,6 +30,7 @@ def create_app() -> FastAPI:
     errors.install(app)
     app.include_router(normals.router)
     app.include_router(pages.router)
+    app.include_router(mesh_page.router)
     app.mount("/static", CompressedStaticFiles(directory=STATIC_DIR), name="static")
     app.add_middleware(BodyLimit)
     app.add_middleware(SecurityHeaders)

@@ -26,12 +26,13 @@ if TYPE_CHECKING:
 DISPLAY_FACES = 20_000
 #: Of those, at most this many are problem faces (all of them when there are fewer).
 PROBLEM_FACES = 12_000
-#: Most faces that get a normal arrow.
+#: Most faces that get a normal arrow, and the share of the drawn faces that get one.
 ARROW_FACES = 300
+ARROW_SHARE = 8
 #: Most boundary and non-manifold edges drawn (each kind), and degenerate dots.
 EDGE_LINES = 5_000
 #: An arrow's length, as a fraction of the bounding box's diagonal.
-ARROW_LENGTH = 0.06
+ARROW_LENGTH = 0.04
 #: Within these half-extents the view keeps the file's scale.
 TRUE_SCALE = (2.0**-20, 2.0**20)
 #: A mesh whose centre is this many half-extents from the origin is shifted to it.
@@ -182,11 +183,16 @@ def _edge_trace(name: str, points: NDArray[np.float64], edges: NDArray[np.intege
 
 
 def _arrow_faces(shown: IntArray, classes: NDArray[np.int8]) -> IntArray:
-    """Up to ARROW_FACES faces with a normal: flipped ones first (up to a third), then a sample."""
+    """Faces that get an arrow: flipped ones first (up to a third), then a sample.
+
+    One in ARROW_SHARE of the drawn faces, at least 24 and at most ARROW_FACES, so that a
+    small mesh is not a hedgehog.
+    """
     rng = np.random.default_rng(SEED + 1)
     usable = shown[classes[shown] != DEGENERATE]
-    flipped = _sample(usable[classes[usable] == FLIPPED], ARROW_FACES // 3, rng)
-    rest = _sample(np.setdiff1d(usable, flipped), ARROW_FACES - len(flipped), rng)
+    budget = min(ARROW_FACES, max(24, len(shown) // ARROW_SHARE))
+    flipped = _sample(usable[classes[usable] == FLIPPED], budget // 3, rng)
+    rest = _sample(np.setdiff1d(usable, flipped), budget - len(flipped), rng)
     return np.sort(np.concatenate([flipped, rest]))
 
 
@@ -288,22 +294,20 @@ def _problem_edges(vertices: NDArray[np.float64], points: NDArray[np.float64], u
     return traces
 
 
-def _axis(title: str, numbers: bool) -> dict[str, Any]:
-    return {"title": {"text": title}, "showticklabels": numbers, "gridcolor": GRID,
-            "zerolinecolor": GRID, "showbackground": False, "color": "#56607a"}
+def _axis(title: str) -> dict[str, Any]:
+    return {"visible": False, "title": {"text": title}}
 
 
 def _layout(space: ViewSpace) -> dict[str, Any]:
-    numbers = not space.transformed
     return {
         "margin": {"l": 0, "r": 0, "t": 0, "b": 0},
         "height": 460,
         "paper_bgcolor": "rgba(0,0,0,0)",
         "font": FONT,
         "showlegend": False,
-        "scene": {"aspectmode": "data", "xaxis": _axis("x", numbers),
-                  "yaxis": _axis("y", numbers), "zaxis": _axis("z", numbers),
-                  "camera": {"eye": {"x": 1.35, "y": -1.35, "z": 0.95}}},
+        "scene": {"aspectmode": "data", "xaxis": _axis("x"), "yaxis": _axis("y"),
+                  "zaxis": _axis("z"),
+                  "camera": {"eye": {"x": 1.05, "y": -1.05, "z": 0.7}}},
     }
 
 
@@ -313,7 +317,7 @@ def _note(space: ViewSpace) -> str | None:
     centre = ", ".join(f"{x:.6g}" for x in space.centre.tolist())
     scale = f" and scaled by 2^{-space.exponent}" if space.exponent else ""
     return (f"Drawn centred on ({centre}){scale}, so that WebGL's 32-bit floats can show "
-            "it: the axes carry no numbers.")
+            "it; the report's numbers are the file's.")
 
 
 def area_histogram(areas: NDArray[np.float64], degenerate: NDArray[np.bool_],

@@ -1,0 +1,326 @@
+// The mesh page. Without JavaScript the form posts the file and the server answers with the
+// whole page. With it, choosing or dropping a file uploads it at once with a progress bar
+// (POST /mesh?part=report answers with the report alone), the figures are drawn from the
+// report's JSON blocks, and the downloads send the file the page still holds to the JSON
+// API again: the server keeps nothing between requests.
+"use strict";
+
+(function () {
+  const form = document.getElementById("mesh-form");
+  const input = document.getElementById("mesh-file");
+  const dropzone = document.getElementById("mesh-dropzone");
+  const progressRow = document.getElementById("mesh-progress-row");
+  const progress = document.getElementById("mesh-progress");
+  const progressLabel = document.getElementById("mesh-progress-label");
+  const progressText = document.getElementById("mesh-progress-text");
+  const status = document.getElementById("mesh-status");
+  const output = document.getElementById("mesh-output");
+  const limit = Number(form.dataset.limit) || Infinity;
+  const PLOT_CONFIG = {
+    displaylogo: false, responsive: true, displayModeBar: window.innerWidth < 600 ? false : "hover",
+    modeBarButtonsToRemove: ["select2d", "lasso2d", "sendChartToCloud", "sendDataToCloud"],
+    toImageButtonOptions: { format: "png", filename: "mesh-face-areas", scale: 2 },
+  };
+  let file = null;      // the file the page holds, sent again by every download
+  let request = null;   // the upload in flight, if any
+
+  function size(bytes) {
+    if (bytes >= 1048576) return (bytes / 1048576).toFixed(1) + " MB";
+    if (bytes >= 1024) return (bytes / 1024).toFixed(1) + " KB";
+    return bytes + " bytes";
+  }
+
+  function say(text, kind) {
+    status.textContent = text;
+    status.className = "mesh-status" + (kind ? " message " + kind : "");
+  }
+
+  function showProgress(label, fraction) {
+    progressRow.classList.remove("hidden");
+    progressLabel.textContent = label;
+    if (fraction === null) {
+      progress.removeAttribute("value");  // indeterminate: the server is at work
+      progressText.textContent = "";
+    } else {
+      progress.value = Math.round(fraction * 100);
+      progressText.textContent = Math.round(fraction * 100) + "%";
+    }
+  }
+
+  // An error answer may be our HTML fragment, the site's error page or the JSON of the
+  // body limit; each carries one sentence.
+  function errorSentence(xhr) {
+    const type = xhr.getResponseHeader("content-type") || "";
+    try {
+      if (type.indexOf("json") !== -1) return JSON.parse(xhr.responseText).error;
+      const doc = new DOMParser().parseFromString(xhr.responseText, "text/html");
+      const message = doc.querySelector("[data-error], .message.error");
+      if (message) return message.textContent.trim();
+    } catch (error) { /* fall through to the generic sentence */ }
+    return "The server could not read the file (status " + xhr.status + ").";
+  }
+
+  function upload(chosen) {
+    if (!chosen) { say("Choose a mesh file first.", "error"); input.focus(); return; }
+    if (chosen.size > limit) {
+      say(chosen.name + " is " + size(chosen.size) + ", larger than the limit of " +
+          form.dataset.limitText + ".", "error");
+      return;
+    }
+    if (request) request.abort();
+    file = chosen;
+    const body = new FormData();
+    body.append("file", chosen, chosen.name);
+    const xhr = new XMLHttpRequest();
+    request = xhr;
+    xhr.open("POST", "/mesh?part=report");
+    xhr.upload.onprogress = function (event) {
+      if (event.lengthComputable) showProgress("Uploading", event.loaded / event.total);
+    };
+    xhr.upload.onload = function () {
+      showProgress("Analysing", null);
+      say("Analysing " + chosen.name + "…");
+    };
+    xhr.onload = function () {
+      if (request !== xhr) return;
+      request = null;
+      progressRow.classList.add("hidden");
+      if (xhr.status === 200) {
+        render(xhr.responseText);
+      } else {
+        const sentence = errorSentence(xhr);
+        const fragment = (xhr.getResponseHeader("content-type") || "").indexOf("html") !== -1 &&
+          xhr.responseText.indexOf('id="mesh-error"') !== -1 &&
+          xhr.responseText.indexOf("<html") === -1;
+        if (fragment) output.innerHTML = xhr.responseText;
+        say(sentence, "error");
+        file = null;
+      }
+    };
+    xhr.onerror = function () {
+      if (request !== xhr) return;
+      request = null;
+      progressRow.classList.add("hidden");
+      say("The upload of " + chosen.name + " failed; check the connection and try again.", "error");
+    };
+    showProgress("Uploading", 0);
+    say("Uploading " + chosen.name + " (" + size(chosen.size) + ")…");
+    xhr.send(body);
+  }
+
+  function data(id) {
+    const element = document.getElementById(id);
+    return element ? JSON.parse(element.textContent) : null;
+  }
+
+  function themedLayout(layout) {
+    const dark = window.matchMedia && window.matchMedia("(prefers-color-scheme: dark)").matches;
+    if (!dark) return layout;
+    const copy = JSON.parse(JSON.stringify(layout));
+    copy.font = Object.assign({}, copy.font, { color: "#c3cade" });
+    return copy;
+  }
+
+  function drawHistogram() {
+    const element = document.getElementById("mesh-histogram");
+    const figure = data("mesh-histogram-data");
+    if (!element || !figure || !window.Plotly) return Promise.resolve();
+    return window.Plotly.react(element, figure.data, themedLayout(figure.layout), PLOT_CONFIG)
+      .then(function () { element.dataset.drawn = String(Date.now()); });
+  }
+
+  // The 3D bundle (557 KB gzipped) loads only when the view scrolls into sight.
+  function drawView() {
+    const element = document.getElementById("mesh-view");
+    const figure = data("mesh-view-data");
+    if (!element || !figure || !window.NormalView3D) return;
+    const observer = new IntersectionObserver(function (entries) {
+      if (!entries.some(function (entry) { return entry.isIntersecting; })) return;
+      observer.disconnect();
+      window.NormalView3D.show(element, figure);
+    });
+    observer.observe(element);
+  }
+
+  function drawFigures() {
+    drawView();
+    return drawHistogram();
+  }
+
+  function render(html) {
+    output.innerHTML = html;
+    const report = data("mesh-report");
+    const count = report ? report.problems.length : 0;
+    say("Report ready for " + (report && report.file.name || "the file") + ": " +
+        (count ? count + (count === 1 ? " problem" : " problems") + " found." : "no problems found."),
+        "ok");
+    const heading = document.getElementById("mesh-report-title");
+    if (heading) heading.focus({ preventScroll: window.innerWidth >= 900 });
+    syncFields();
+    drawFigures();
+  }
+
+  // --- Downloads: the same file, sent again to the JSON API ---------------------------------
+
+  function downloadStatus(text, kind) {
+    const slot = document.getElementById("mesh-download-status");
+    if (!slot) return;
+    slot.textContent = text;
+    slot.className = "message small" + (kind ? " " + kind : "") + (text ? "" : " hidden");
+  }
+
+  function save(blob, name) {
+    const url = URL.createObjectURL(blob);
+    const link = document.createElement("a");
+    link.href = url;
+    link.download = name;
+    document.body.appendChild(link);
+    link.click();
+    link.remove();
+    setTimeout(function () { URL.revokeObjectURL(url); }, 10000);
+  }
+
+  function filename(response, fallback) {
+    const header = response.headers.get("content-disposition") || "";
+    const match = /filename="([^"]+)"/.exec(header);
+    return match ? match[1] : fallback;
+  }
+
+  function fetchDownload(path, params, fallback, button) {
+    if (!file && input.files.length) file = input.files[0];
+    if (!file) {
+      downloadStatus("Choose the file again: the page no longer holds it.", "error");
+      return Promise.resolve();
+    }
+    const body = new FormData();
+    body.append("file", file, file.name);
+    if (button) button.disabled = true;
+    downloadStatus("Preparing " + fallback + "…", "");
+    return fetch(path + "?" + new URLSearchParams(params).toString(), { method: "POST", body: body })
+      .then(function (response) {
+        if (!response.ok) {
+          return response.json().then(function (answer) {
+            const field = answer.field ? " (" + answer.field + ")" : "";
+            downloadStatus(answer.error + field, "error");
+          }, function () {
+            downloadStatus("The download failed (status " + response.status + ").", "error");
+          });
+        }
+        const name = filename(response, fallback);
+        return response.blob().then(function (blob) {
+          save(blob, name);
+          downloadStatus("Saved " + name + ".", "ok");
+        });
+      })
+      .catch(function () { downloadStatus("The download failed; check the connection.", "error"); })
+      .finally(function () { if (button) button.disabled = false; });
+  }
+
+  function downloadNormals(button) {
+    const params = {
+      kind: document.getElementById("normals-kind").value,
+      weighting: document.getElementById("normals-weighting").value,
+      crease_angle: document.getElementById("normals-crease").value,
+      format: document.getElementById("normals-format").value,
+    };
+    const crease = Number(params.crease_angle);
+    if (params.kind === "corner" && !(params.crease_angle !== "" && crease >= 0 && crease <= 180)) {
+      downloadStatus("The crease angle must be a number of degrees from 0 to 180.", "error");
+      document.getElementById("normals-crease").focus();
+      return Promise.resolve();
+    }
+    if (params.kind !== "corner") delete params.crease_angle;
+    if (params.kind === "face") delete params.weighting;
+    return fetchDownload("/api/mesh/normals", params,
+                         params.kind + "-normals." + params.format, button);
+  }
+
+  function downloadFix(button) {
+    const format = document.getElementById("fix-format").value;
+    return fetchDownload("/api/mesh/fix", { format: format }, "fixed." + format, button);
+  }
+
+  function downloadReport() {
+    const element = document.getElementById("mesh-report");
+    const view = document.getElementById("mesh-report-view");
+    if (!element) return;
+    const stem = view ? view.dataset.stem : "mesh";
+    save(new Blob([element.textContent], { type: "application/json" }), stem + "-report.json");
+  }
+
+  // Weighting means nothing for face normals, the crease angle only for corner normals.
+  function syncFields() {
+    const kind = document.getElementById("normals-kind");
+    if (!kind) return;
+    document.getElementById("normals-weighting").disabled = kind.value === "face";
+    document.getElementById("normals-crease").disabled = kind.value !== "corner";
+  }
+
+  function copy(button) {
+    const source = document.getElementById(button.dataset.copy);
+    if (!source || !navigator.clipboard || !window.isSecureContext) return;
+    const label = button.textContent;
+    navigator.clipboard.writeText(source.textContent).then(function () {
+      button.textContent = "Copied";
+      setTimeout(function () { button.textContent = label; }, 1500);
+    }, function () {});
+  }
+
+  // --- Wiring -------------------------------------------------------------------------------
+
+  input.addEventListener("change", function () { upload(input.files[0]); });
+  form.addEventListener("submit", function (event) {
+    event.preventDefault();
+    upload(input.files[0]);
+  });
+
+  function hasFiles(event) {
+    return event.dataTransfer && Array.prototype.indexOf.call(event.dataTransfer.types || [], "Files") !== -1;
+  }
+  ["dragenter", "dragover"].forEach(function (type) {
+    dropzone.addEventListener(type, function (event) {
+      event.preventDefault();
+      dropzone.classList.add("dragging");
+    });
+  });
+  ["dragleave", "dragend"].forEach(function (type) {
+    dropzone.addEventListener(type, function () { dropzone.classList.remove("dragging"); });
+  });
+  dropzone.addEventListener("drop", function (event) {
+    event.preventDefault();
+    dropzone.classList.remove("dragging");
+    const files = event.dataTransfer && event.dataTransfer.files;
+    if (!files || !files.length) return;
+    try { input.files = files; } catch (error) { /* older browsers: the page still holds it */ }
+    upload(files[0]);
+  });
+  // A file dropped beside the zone must not replace the page with the file itself.
+  ["dragover", "drop"].forEach(function (type) {
+    document.addEventListener(type, function (event) {
+      if (hasFiles(event) && !dropzone.contains(event.target)) event.preventDefault();
+    });
+  });
+
+  document.addEventListener("submit", function (event) {
+    const which = event.target.dataset && event.target.dataset.meshForm;
+    if (!which) return;
+    event.preventDefault();
+    const button = event.target.querySelector("button[type=submit]");
+    if (which === "normals") downloadNormals(button);
+    else downloadFix(button);
+  });
+  document.addEventListener("click", function (event) {
+    const copyButton = event.target.closest("button[data-copy]");
+    if (copyButton) { copy(copyButton); return; }
+    if (event.target.closest("#mesh-report-download")) { downloadReport(); return; }
+    const fixButton = event.target.closest("button[data-mesh-download=fix]");
+    if (fixButton && !fixButton.closest("form")) downloadFix(fixButton);
+  });
+  document.addEventListener("change", function (event) {
+    if (event.target.id === "normals-kind") syncFields();
+  });
+
+  // A report the server rendered (the form posted without this script) is drawn too.
+  if (document.getElementById("mesh-report")) { syncFields(); drawFigures(); }
+  window.meshUpload = upload;  // lets browser tests hand the page a file directly
+})();

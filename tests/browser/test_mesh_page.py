@@ -1,0 +1,179 @@
+"""The mesh page in Chromium: upload with progress, the report, the 3D view and histogram, the
+downloads (the page sends its file again), drag and drop, the phone layout and a screenshot."""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+
+import numpy as np
+import pytest
+from playwright.sync_api import Page, expect
+
+from app.core import vertex_normals
+from app.core.orientation import mesh_topology
+from app.meshio import read_mesh, write_mesh
+from tests.browser.conftest import NewPage
+from tests.test_api_mesh import CUBE_ONE_FLIPPED
+
+pytestmark = pytest.mark.browser
+
+ROOT = Path(__file__).resolve().parents[2]
+DOCS = ROOT / "docs"
+DATA = ROOT / "tests" / "data"
+SCREENSHOT_LIMIT = 400 * 1024
+
+#: Records whether the progress bar showed while the page uploaded (it may be brief).
+WATCH_PROGRESS = """() => {
+    window.__progressShown = false;
+    const row = document.getElementById('mesh-progress-row');
+    new MutationObserver(() => {
+        if (!row.classList.contains('hidden')) window.__progressShown = true;
+    }).observe(row, {attributes: true});
+}"""
+
+DROP = """([name, text]) => {
+    const data = new DataTransfer();
+    data.items.add(new File([text], name, {type: 'text/plain'}));
+    const zone = document.getElementById('mesh-dropzone');
+    for (const type of ['dragenter', 'dragover', 'drop']) {
+        zone.dispatchEvent(new DragEvent(type, {dataTransfer: data, bubbles: true,
+                                                cancelable: true}));
+    }
+}"""
+
+
+def cube_file(name: str = "cube.obj") -> dict[str, object]:
+    return {"name": name, "mimeType": "text/plain", "buffer": CUBE_ONE_FLIPPED.encode()}
+
+
+def open_mesh_page(page: Page) -> None:
+    response = page.goto("/mesh")
+    assert response is not None and response.status == 200
+    page.wait_for_load_state("load")
+    page.evaluate(WATCH_PROGRESS)
+
+
+def wait_for_report(page: Page) -> None:
+    page.locator("#mesh-report-title").wait_for()
+    page.locator("#mesh-histogram[data-drawn] .main-svg").first.wait_for()
+
+
+def wait_for_view(page: Page) -> None:
+    page.locator("#mesh-view").scroll_into_view_if_needed()
+    page.locator("#mesh-view[data-drawn]").wait_for(timeout=20_000)
+    expect(page.locator("#mesh-view canvas").first).to_be_attached()
+
+
+def test_choosing_a_file_uploads_it_and_shows_the_diagnosis(page: Page) -> None:
+    open_mesh_page(page)
+    page.set_input_files("#mesh-file", files=[cube_file()])
+    wait_for_report(page)
+    assert page.evaluate("() => window.__progressShown") is True
+    expect(page.locator("#mesh-progress-row")).to_be_hidden()
+    expect(page.locator("#mesh-status")).to_contain_text("1 problem found")
+    expect(page.locator("#mesh-report-title")).to_be_focused()
+    winding = page.locator("#problem-winding")
+    expect(winding).to_contain_text("Faces are wound against their neighbours")
+    expect(winding.locator(".mesh-indices")).to_have_text("Faces the fix flips (0-based): 0.")
+    expect(page.locator("#mesh-view-caption")).to_contain_text("Showing all 12 faces")
+    wait_for_view(page)
+    colors = page.evaluate("""() => document.getElementById('mesh-view').data
+        .find((t) => t.type === 'mesh3d').facecolor""")
+    assert colors.count("#f76707") == 1 and len(colors) == 12
+
+
+def test_downloads_send_the_file_again(page: Page) -> None:
+    open_mesh_page(page)
+    page.set_input_files("#mesh-file", files=[cube_file()])
+    wait_for_report(page)
+    mesh = read_mesh(CUBE_ONE_FLIPPED.encode(), "cube.obj")
+
+    page.select_option("#normals-kind", "vertex")
+    page.select_option("#normals-format", "npy")
+    with page.expect_download() as info:
+        page.get_by_role("button", name="Download normals").click()
+    download = info.value
+    assert download.suggested_filename == "cube-vertex-normals.npy"
+    normals = np.load(io.BytesIO(Path(download.path()).read_bytes()))
+    expected = vertex_normals(mesh.vertices, mesh.faces, "angle").normals
+    assert normals.shape == (8, 3) and np.array_equal(normals, expected)
+    expect(page.locator("#mesh-download-status")).to_have_text(
+        "Saved cube-vertex-normals.npy.")
+
+    page.select_option("#fix-format", "obj")
+    with page.expect_download() as info:
+        page.locator("#download-fix").click()
+    download = info.value
+    assert download.suggested_filename == "cube-fixed.obj"
+    fixed = read_mesh(Path(download.path()).read_bytes(), "fixed.obj")
+    assert np.array_equal(fixed.vertices, mesh.vertices)
+    assert mesh_topology(fixed.faces, len(fixed.vertices)).winding_consistent
+
+    with page.expect_download() as info:
+        page.locator("#problem-winding button[data-mesh-download=fix]").click()
+    assert info.value.suggested_filename == "cube-fixed.obj"
+
+    with page.expect_download() as info:
+        page.get_by_role("button", name="Download report (JSON)").click()
+    assert info.value.suggested_filename == "cube-report.json"
+
+
+def test_a_bad_crease_angle_and_a_broken_file_are_said_inline(page: Page) -> None:
+    open_mesh_page(page)
+    page.set_input_files("#mesh-file", files=[cube_file()])
+    wait_for_report(page)
+    page.select_option("#normals-kind", "corner")
+    page.fill("#normals-crease", "200")
+    page.get_by_role("button", name="Download normals").click()
+    expect(page.locator("#mesh-download-status")).to_contain_text("from 0 to 180")
+
+    page.set_input_files("#mesh-file", files=[
+        {"name": "broken.obj", "mimeType": "text/plain", "buffer": b"f 1 2 3\n"}])
+    expect(page.locator("#mesh-error [data-error]")).to_be_visible()
+    expect(page.locator("#mesh-status")).to_have_class("mesh-status message error")
+    expect(page.locator("#mesh-report-title")).to_have_count(0)
+
+
+def test_dropping_a_file_uploads_it(page: Page) -> None:
+    open_mesh_page(page)
+    page.evaluate(DROP, ["dropped.obj", CUBE_ONE_FLIPPED])
+    wait_for_report(page)
+    expect(page.locator(".mesh-filename")).to_have_text("dropped.obj")
+    assert page.evaluate("() => document.getElementById('mesh-file').files[0].name") \
+        == "dropped.obj"
+
+
+def problem_mesh() -> bytes:
+    """The ant from tests/data with a patch of faces flipped and a few removed: a hole."""
+    ant = read_mesh((DATA / "ant.ply").read_bytes(), "ant.ply")
+    faces = ant.faces.copy()
+    centroids = ant.vertices[faces].mean(axis=1)
+    distance = np.linalg.norm(centroids - centroids[40], axis=1)
+    order = np.argsort(distance)
+    faces[order[6:40]] = faces[order[6:40], ::-1]
+    keep = np.ones(len(faces), dtype=bool)
+    keep[order[:6]] = False
+    return write_mesh(ant.vertices, faces[keep], "obj")
+
+
+def test_phone_layout_and_desktop_screenshot(new_page: NewPage) -> None:
+    page = new_page(viewport={"width": 360, "height": 740}, is_mobile=True, has_touch=True)
+    open_mesh_page(page)
+    page.set_input_files("#mesh-file", files=[cube_file()])
+    wait_for_report(page)
+    wait_for_view(page)
+    widths = page.evaluate("() => [document.documentElement.scrollWidth, window.innerWidth]")
+    assert widths[0] <= widths[1], widths
+
+    page = new_page(viewport={"width": 1280, "height": 1000})
+    open_mesh_page(page)
+    page.set_input_files("#mesh-file", files=[
+        {"name": "ant.obj", "mimeType": "text/plain", "buffer": problem_mesh()}])
+    wait_for_report(page)
+    wait_for_view(page)
+    page.evaluate("() => window.scrollTo(0, 0)")
+    page.wait_for_timeout(300)
+    path = DOCS / "mesh-page.png"
+    page.screenshot(path=path, animations="disabled", caret="hide", scale="css")
+    assert path.stat().st_size < SCREENSHOT_LIMIT, path.stat().st_size
