@@ -1,19 +1,22 @@
-"""Mesh normal kernels, ours against trimesh, side by side in one run.
+"""Mesh normal kernels, ours against trimesh, libigl and Open3D, side by side in one run.
 
-    .venv/bin/python -m benchmarks.mesh_kernels [--repeats 5] [--sizes 69451 871414]
+    .venv/bin/python -m benchmarks.mesh_kernels [--repeats 5] [--sizes 69451 871414 14000000]
 
-The meshes are synthetic stand-ins with the triangle counts of the Stanford bunny (69,451)
-and dragon (871,414): a torus grid with noise of a tenth of its step on its radius (about
-half as many vertices as faces, valence 6), faces shuffled and cut to the exact count. Each kernel
-runs ``repeats`` times, ours and trimesh's alternately, and the best time is reported.
+The meshes are synthetic stand-ins with the triangle counts of the Stanford bunny (69,451),
+dragon (871,414) and Lucy (14,000,000): a torus grid with noise of a tenth of its step on its
+radius (about half as many vertices as faces, valence 6), faces shuffled and cut to the exact
+count. Each kernel runs ``repeats`` times (at most ``--large-repeats`` above 2 million faces),
+all libraries alternately, and the best time is reported; only ratios within one run count.
 
 trimesh's face normals are ``trimesh.triangles.normals(vertices[faces])`` (the gather is
 included, as it is in ours). Its angle-weighted vertex normals are ``mesh.vertex_normals``
 of a fresh ``Trimesh(process=False)``; it has no area weighting, so the area row uses
-``trimesh.geometry.mean_vertex_normals`` on the raw cross products, the same sum. Both
-build a SciPy sparse matrix: without SciPy, trimesh falls back to a Python loop per
-vertex, and those rows are not measured. Open3D and libigl are not installed and not
-measured.
+``trimesh.geometry.mean_vertex_normals`` on the raw cross products, the same sum (and the
+uniform row on the unit normals). libigl: ``igl.per_face_normals`` and
+``igl.per_vertex_normals`` with each of its weightings. Open3D: ``compute_triangle_normals``
+and ``compute_vertex_normals`` (area-weighted) of a ``TriangleMesh`` built before the clock
+starts. Corner normals have no equivalent. A second table probes what each library returns
+for degenerate and tiny faces, and a third the extra memory of our kernels (tracemalloc).
 """
 
 from __future__ import annotations
@@ -28,7 +31,7 @@ import numpy as np
 from app.core.mesh import face_normals
 from app.core.mesh_normals import corner_normals, vertex_normals
 
-SIZES = (69_451, 871_414)
+SIZES = (69_451, 871_414, 14_000_000)
 
 
 def torus_mesh(triangles: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
@@ -53,22 +56,10 @@ def torus_mesh(triangles: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     return vertices.reshape(-1, 3), faces
 
 
-def best_times(kernels: dict[str, Callable[[], object] | None], repeats: int) -> dict[str, float]:
-    """Best wall time in milliseconds of each kernel, the kernels run alternately."""
-    times: dict[str, list[float]] = {name: [] for name, kernel in kernels.items() if kernel}
-    for _ in range(repeats):
-        for name in times:
-            kernel = kernels[name]
-            assert kernel is not None
-            start = time.perf_counter()
-            kernel()
-            times[name].append(time.perf_counter() - start)
-    return {name: 1e3 * min(values) for name, values in times.items()}
+Kernels = dict[str, Callable[[], object]]
 
 
-def trimesh_kernels(
-    vertices: np.ndarray, faces: np.ndarray
-) -> dict[str, Callable[[], object] | None]:
+def trimesh_kernels(vertices: np.ndarray, faces: np.ndarray) -> Kernels:
     import trimesh  # a test dependency, imported only here
 
     def face() -> object:
@@ -77,13 +68,44 @@ def trimesh_kernels(
     def angle() -> object:
         return trimesh.Trimesh(vertices=vertices, faces=faces, process=False).vertex_normals
 
-    def area() -> object:
-        mesh = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
-        summed = trimesh.geometry.mean_vertex_normals(len(vertices), faces, mesh.triangles_cross)
-        return trimesh.util.unitize(summed)
+    def summed(kind: str) -> Callable[[], object]:
+        def run() -> object:
+            mesh = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
+            each = mesh.triangles_cross if kind == "area" else mesh.face_normals
+            total = trimesh.geometry.mean_vertex_normals(len(vertices), faces, each)
+            return trimesh.util.unitize(total)
+        return run
 
-    sparse = importlib.util.find_spec("scipy") is not None
-    return {"face": face, "area": area if sparse else None, "angle": angle if sparse else None}
+    if importlib.util.find_spec("scipy") is None:  # else a Python loop per vertex
+        return {"face": face}
+    return {"face": face, "area": summed("area"), "angle": angle, "uniform": summed("uniform")}
+
+
+def igl_kernels(vertices: np.ndarray, faces: np.ndarray) -> Kernels:
+    if importlib.util.find_spec("igl") is None:
+        return {}
+    import igl
+
+    def vertex(weighting: str) -> Callable[[], object]:
+        kind = getattr(igl, f"PER_VERTEX_NORMALS_WEIGHTING_TYPE_{weighting.upper()}")
+        return lambda: igl.per_vertex_normals(vertices, faces, kind)
+
+    return {"face": lambda: igl.per_face_normals(vertices, faces),
+            **{weighting: vertex(weighting) for weighting in ("area", "angle", "uniform")}}
+
+
+def open3d_kernels(vertices: np.ndarray, faces: np.ndarray) -> Kernels:
+    if importlib.util.find_spec("open3d") is None:
+        return {}
+    import open3d as o3d
+
+    def mesh() -> o3d.geometry.TriangleMesh:
+        return o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(vertices),
+                                         o3d.utility.Vector3iVector(faces.astype(np.int32)))
+
+    flat, smooth = mesh(), mesh()  # built here, outside the timed calls
+    return {"face": lambda: np.asarray(flat.compute_triangle_normals().triangle_normals),
+            "area": lambda: np.asarray(smooth.compute_vertex_normals().vertex_normals)}
 
 
 def largest_angle(ours: np.ndarray, theirs: np.ndarray) -> float:
@@ -95,52 +117,167 @@ def largest_angle(ours: np.ndarray, theirs: np.ndarray) -> float:
     return float(angles.max(initial=0.0))
 
 
+PEERS = ("trimesh", "libigl", "Open3D")
+LABELS = {"face": "face normals", "area": "vertex normals, area-weighted",
+          "angle": "vertex normals, angle-weighted", "uniform": "vertex normals, uniform",
+          "corner": "corner normals, crease 30°",
+          "corner 1": "corner normals, crease 1° (most vertices pairwise)"}
+LARGE = 2_000_000
+
+
 def run(size: int, repeats: int) -> list[str]:
     vertices, faces = torus_mesh(size)
-    ours = {
+    ours: Kernels = {
         "face": lambda: face_normals(vertices, faces),
         "area": lambda: vertex_normals(vertices, faces, "area"),
         "angle": lambda: vertex_normals(vertices, faces, "angle"),
-        "corner": lambda: corner_normals(vertices, faces, 30.0),
-        "corner 1": lambda: corner_normals(vertices, faces, 1.0),
+        "uniform": lambda: vertex_normals(vertices, faces, "uniform"),
     }
-    theirs = trimesh_kernels(vertices, faces)
-    kernels = {f"ours {k}": v for k, v in ours.items()}
-    kernels.update({f"trimesh {k}": v for k, v in theirs.items()})
+    if size < LARGE:  # the pairwise corner normals of Lucy take minutes and gigabytes
+        ours["corner"] = lambda: corner_normals(vertices, faces, 30.0)
+        ours["corner 1"] = lambda: corner_normals(vertices, faces, 1.0)
+    face_normals(vertices[:3], faces[:1] % 3)  # compiled (or loaded from the cache) before timing
+    peers = dict(zip(PEERS, (trimesh_kernels(vertices, faces), igl_kernels(vertices, faces),
+                             open3d_kernels(vertices, faces)), strict=True))
+    kernels = {("ours", k): v for k, v in ours.items()}
+    kernels.update({(peer, k): v for peer, their in peers.items() for k, v in their.items()})
     times = best_times(kernels, repeats)
-    labels = {"face": "face normals", "area": "vertex normals, area-weighted",
-              "angle": "vertex normals, angle-weighted", "corner": "corner normals, crease 30°",
-              "corner 1": "corner normals, crease 1° (most vertices pairwise)"}
     rows = []
-    for key, label in labels.items():
-        mine = times[f"ours {key}"]
-        other = times.get(f"trimesh {key}")
-        if other is None:
-            reason = "no equivalent" if key.startswith("corner") else "not measured (no SciPy)"
-            rows.append(f"| {size:,} | {label} | {mine:.1f} | {reason} | |")
-        else:
-            rows.append(f"| {size:,} | {label} | {mine:.1f} | {other:.1f} | {other / mine:.2f}x |")
-    if theirs["angle"] is not None:
+    for key, mine in ((k, times["ours", k]) for k in ours):
+        theirs = [times.get((peer, key)) for peer in PEERS]
+        cells = [f"{t:.1f}" if t else "" for t in theirs]
+        ratios = [f"{t / mine:.2f}x" if t else "" for t in theirs]
+        rows.append(f"| {size:,} | {LABELS[key]} | {mine:.1f} | " + " | ".join(cells + ratios)
+                    + " |")
+    if "angle" in peers["trimesh"]:
         import trimesh
 
         mesh = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
         gap = largest_angle(vertex_normals(vertices, faces).normals, mesh.vertex_normals)
-        rows.append(f"| {size:,} | (largest angle between the angle-weighted results: "
-                    f"{gap:.1e} rad) | | | |")
+        rows.append(f"| {size:,} | (largest angle between our and trimesh's angle-weighted "
+                    f"normals: {gap:.1e} rad) | | | | | | | |")
+    return rows
+
+
+def best_times(kernels: dict[tuple[str, str], Callable[[], object]],
+               repeats: int) -> dict[tuple[str, str], float]:
+    """Best wall time in milliseconds of each kernel, the kernels run alternately."""
+    times: dict[tuple[str, str], list[float]] = {name: [] for name in kernels}
+    for _ in range(repeats):
+        for name, kernel in kernels.items():
+            start = time.perf_counter()
+            kernel()
+            times[name].append(time.perf_counter() - start)
+    return {name: 1e3 * min(values) for name, values in times.items()}
+
+
+# --- what each library returns for degenerate and tiny faces --------------------------------
+
+PROBE = np.array([
+    [0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, 0.0, 0.0],  # 0-2: collinear
+    [0.0, 1.0, 0.0],  # 3: with 0 and 1, a valid face next to the collinear one
+    [5.0, 5.0, 5.0], [5.0 + 1e-7, 5.0, 5.0], [5.0, 5.0 + 1e-7, 5.0],  # 4-6: legs of 1e-7
+    [9.0, 9.0, 9.0],  # 7: only in a face with a repeated index
+])
+PROBE_FACES = np.array([[0, 1, 2], [0, 1, 3], [4, 5, 6], [7, 7, 1]])
+PROBE_CASES = (  # (label, face normals row or None, vertex normals row or None, expected)
+    ("collinear face: its face normal", 0, None, None),
+    ("face with a repeated index: its face normal", 3, None, None),
+    ("right triangle with 1e-7 legs: its face normal", 2, None, (0.0, 0.0, 1.0)),
+    ("vertex 0 (a valid face and a collinear one): its normal", None, 0, (0.0, 0.0, 1.0)),
+    ("vertex 2 (only in the collinear face): its normal", None, 2, None),
+)
+
+
+def verdict(row: np.ndarray, expected: tuple[float, ...] | None) -> str:
+    if np.isnan(row).any():
+        return "NaN"
+    if not row.any():
+        return "zero"
+    if expected is not None and np.allclose(row, expected, atol=1e-9):
+        return "right"
+    return f"[{', '.join(f'{x:.2g}' for x in row)}]"
+
+
+def full_rows(normals: object) -> np.ndarray:
+    """trimesh returns the valid rows and a mask; fill the others with zero as Trimesh does."""
+    if isinstance(normals, tuple):
+        rows, valid = normals
+        full = np.zeros((len(valid), 3))
+        full[valid] = rows
+        return full
+    return np.asarray(normals)
+
+
+def probe() -> list[str]:
+    """One row per case, one column per library: what its face or vertex normal is."""
+    import warnings
+
+    results: dict[str, tuple[np.ndarray | None, np.ndarray | None]] = {
+        "ours": (face_normals(PROBE, PROBE_FACES).normals,
+                 vertex_normals(PROBE, PROBE_FACES, "angle").normals)}
+    with warnings.catch_warnings(), np.errstate(all="ignore"):
+        warnings.simplefilter("ignore")
+        for name, kernels in (("trimesh", trimesh_kernels(PROBE, PROBE_FACES)),
+                              ("libigl", igl_kernels(PROBE, PROBE_FACES)),
+                              ("Open3D", open3d_kernels(PROBE, PROBE_FACES))):
+            smooth = kernels.get("angle", kernels.get("area"))
+            results[name] = (full_rows(kernels["face"]()) if "face" in kernels else None,
+                             np.asarray(smooth()) if smooth else None)
+        if importlib.util.find_spec("igl"):
+            import igl
+
+            stable = np.asarray(igl.per_face_normals_stable(PROBE, PROBE_FACES))
+            results["libigl stable"] = (stable, None)
+    rows = ["| case | " + " | ".join(results) + " |", "|---|" + "---|" * len(results)]
+    for label, face, vertex, expected in PROBE_CASES:
+        cells = []
+        for flat, smooth in results.values():
+            array, row = (flat, face) if face is not None else (smooth, vertex)
+            cells.append("" if array is None else verdict(np.asarray(array)[row], expected))
+        rows.append(f"| {label} | " + " | ".join(cells) + " |")
+    return rows
+
+
+def memory(size: int) -> list[str]:
+    """Peak memory allocated during each call beyond its output (tracemalloc)."""
+    import tracemalloc
+
+    vertices, faces = torus_mesh(size)
+    rows = []
+    for label, call in (("face normals", lambda: face_normals(vertices, faces)),
+                        ("vertex normals, angle", lambda: vertex_normals(vertices, faces))):
+        call()
+        tracemalloc.start()
+        result = call()
+        peak = tracemalloc.get_traced_memory()[1]
+        tracemalloc.stop()
+        output = sum(array.nbytes for array in (getattr(result, n) for n in result.__slots__))
+        rows.append(f"| {size:,} | {label} | {output / 2**20:.1f} | {peak / 2**20:.1f} | "
+                    f"{(peak - output) / 2**20:.1f} | {(peak - output) / output:.2f} |")
     return rows
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--large-repeats", type=int, default=2)
     parser.add_argument("--sizes", type=int, nargs="+", default=list(SIZES))
     args = parser.parse_args()
-    print("| triangles | kernel | ours (ms) | trimesh (ms) | trimesh / ours |")
-    print("|---:|---|---:|---:|---:|")
+    print("| triangles | kernel | ours (ms) | " + " | ".join(f"{p} (ms)" for p in PEERS)
+          + " | " + " | ".join(f"{p} / ours" for p in PEERS) + " |")
+    print("|---:|---|---:|" + "---:|" * 6)
     for size in args.sizes:
-        for row in run(size, args.repeats):
+        repeats = args.repeats if size < LARGE else min(args.repeats, args.large_repeats)
+        for row in run(size, repeats):
             print(row, flush=True)
-    print("\nOpen3D and libigl: not installed, not measured.")
+    print("\nDegenerate and tiny faces (angle-weighted vertex normals; Open3D's are by area):\n")
+    print("\n".join(probe()))
+    print("\nExtra memory (MiB): peak allocated during the call, minus its output:\n")
+    print("| triangles | kernel | output | peak | extra | extra / output |")
+    print("|---:|---|---:|---:|---:|---:|")
+    for size in args.sizes:
+        print("\n".join(memory(size)), flush=True)
 
 
 if __name__ == "__main__":
