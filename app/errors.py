@@ -136,6 +136,13 @@ def _sentence(kind: str, field: str, given: Any, context: dict[str, Any]) -> str
         return f"{field} must be a list, not {describe(given)}."
     if kind in ("bool_type", "bool_parsing"):
         return f"{field} must be true or false, not {describe(given)}."
+    if kind in ("literal_error", "enum"):
+        expected = context.get("expected", "one of the listed values")
+        return f"{field} must be {expected}, not {describe(given)}."
+    if kind in ("greater_than_equal", "less_than_equal"):
+        bound = context.get("ge", context.get("le"))
+        side = "at least" if kind == "greater_than_equal" else "at most"
+        return f"{field} must be {side} {bound}, not {describe(given)}."
     if kind == "extra_forbidden":
         return f"{field} is not a field of this request."
     if kind in ("model_type", "dict_type", "model_attributes_type"):

@@ -5,7 +5,7 @@ from __future__ import annotations
 from fastapi import FastAPI
 
 from app import errors, mesh_page, pages
-from app.api import normals
+from app.api import mesh, normals
 from app.middleware import BodyLimit, SecurityHeaders
 from app.static import STATIC_DIR, CompressedStaticFiles
 
@@ -19,7 +19,8 @@ a value outside the double range is `null` with a `message`. Errors are
 """
 
 
-def create_app() -> FastAPI:
+def create_app(upload_limit: int | None = None) -> FastAPI:
+    """The app; ``upload_limit`` (bytes) overrides ``$MESH_UPLOAD_LIMIT_MB`` for mesh files."""
     app = FastAPI(
         title="Mesh Normal Calculator",
         version="0.1.0",
@@ -29,10 +30,11 @@ def create_app() -> FastAPI:
     )
     errors.install(app)
     app.include_router(normals.router)
+    app.include_router(mesh.router)
     app.include_router(pages.router)
     app.include_router(mesh_page.router)
     app.mount("/static", CompressedStaticFiles(directory=STATIC_DIR), name="static")
-    app.add_middleware(BodyLimit)
+    app.add_middleware(BodyLimit, upload_limit=upload_limit)
     app.add_middleware(SecurityHeaders)
     return app
 

@@ -1,0 +1,166 @@
+"""What we find in a mesh file: one analysis, one JSON payload (the API, the page, the CLI).
+
+:func:`analyse` runs the core on a :class:`~app.meshio.LoadedMesh` once and keeps the arrays
+(the page draws them); :func:`report_payload` turns that into the report, every value a plain
+JSON number, string, bool or ``null`` (never NaN or Infinity).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from app.core.mesh import FaceNormals, face_normals
+from app.core.mesh_normals import corner_normals, vertex_normals
+from app.core.orientation import MeshTopology, Orientation, mesh_topology, orient
+from app.diagnosis import problems
+from app.meshio import LoadedMesh
+
+#: How many face indices a list in the report holds at most (the counts are always full).
+INDEX_LIST_LIMIT = 100
+#: File normals within this angle of ours count as agreeing.
+AGREEMENT_DEGREES = 1.0
+#: The crease angle of the corner normals we compare an OBJ's per-corner normals with.
+COMPARISON_CREASE = 30.0
+
+
+@dataclass(frozen=True, slots=True)
+class MeshAnalysis:
+    """Everything the report says about one mesh, with the arrays behind it."""
+
+    mesh: LoadedMesh
+    name: str | None
+    size: int
+    faces: FaceNormals
+    topology: MeshTopology
+    orientation: Orientation
+    repeated: NDArray[np.bool_]
+    unused_vertices: int
+
+
+def analyse(mesh: LoadedMesh, name: str | None = None, size: int = 0) -> MeshAnalysis:
+    """Run every check of the core on ``mesh`` (read from a file of ``size`` bytes)."""
+    faces = mesh.faces
+    repeated = ((faces[:, 0] == faces[:, 1]) | (faces[:, 1] == faces[:, 2])
+                | (faces[:, 2] == faces[:, 0]))
+    used = np.zeros(len(mesh.vertices), dtype=bool)
+    used[faces.ravel()] = True
+    return MeshAnalysis(
+        mesh=mesh,
+        name=name,
+        size=size,
+        faces=face_normals(mesh.vertices, faces),
+        topology=mesh_topology(faces, len(mesh.vertices)),
+        orientation=orient(mesh.vertices, faces),
+        repeated=repeated,
+        unused_vertices=int(len(used) - np.count_nonzero(used)),
+    )
+
+
+def finite(value: float) -> float | None:
+    """``value`` as a JSON number, or ``None`` when it is not finite."""
+    return float(value) if math.isfinite(value) else None
+
+
+def first_indices(mask: NDArray[np.bool_]) -> list[int]:
+    """The first INDEX_LIST_LIMIT indices where ``mask`` is true, 0-based."""
+    return np.flatnonzero(mask)[:INDEX_LIST_LIMIT].tolist()
+
+
+def report_payload(analysis: MeshAnalysis) -> dict[str, Any]:
+    """The report: counts, checks, the fix that orient() would make, and the diagnosis."""
+    mesh, topology, orientation = analysis.mesh, analysis.topology, analysis.orientation
+    degenerate = analysis.faces.degenerate
+    vertices = mesh.vertices
+    report: dict[str, Any] = {
+        "file": {"name": analysis.name, "format": mesh.format, "bytes": analysis.size},
+        "vertices": len(vertices),
+        "faces": len(mesh.faces),
+        "source_faces": mesh.source_faces,
+        "unused_vertices": analysis.unused_vertices,
+        "area": finite(float(np.sum(analysis.faces.areas))),
+        "volume": None if orientation.volume is None else finite(orientation.volume),
+        "watertight": topology.watertight,
+        "winding_consistent": topology.winding_consistent,
+        "orientation": orientation.orientation,
+        "degenerate_faces": int(np.count_nonzero(degenerate)),
+        "degenerate_face_indices": first_indices(degenerate),
+        "repeated_index_faces": int(np.count_nonzero(analysis.repeated)),
+        "boundary_edges": topology.boundary_edges,
+        "nonmanifold_edges": topology.nonmanifold_edges,
+        "components": topology.components,
+        "bounds": _bounds(vertices),
+        "fix": _fix(orientation),
+        "file_normals": file_normal_agreement(analysis),
+        "notes": list(mesh.notes),
+    }
+    report["problems"] = problems(report)
+    return report
+
+
+def _bounds(vertices: NDArray[np.float64]) -> dict[str, list[float]] | None:
+    if not len(vertices):
+        return None
+    return {"min": vertices.min(axis=0).tolist(), "max": vertices.max(axis=0).tolist()}
+
+
+def _fix(orientation: Orientation) -> dict[str, Any]:
+    return {
+        "faces_flipped": int(np.count_nonzero(orientation.flipped)),
+        "flipped_face_indices": first_indices(orientation.flipped),
+        "components": [
+            {
+                "component": part.index,
+                "faces": part.faces,
+                "closed": part.closed,
+                "orientable": part.orientable,
+                "method": part.method,
+                "faces_flipped": part.flipped,
+                "volume": None if part.volume is None else finite(part.volume),
+            }
+            for part in orientation.components
+        ],
+    }
+
+
+def file_normal_agreement(analysis: MeshAnalysis) -> dict[str, Any] | None:
+    """How well the normals stored in the file agree with ours, or ``None`` without any."""
+    mesh = analysis.mesh
+    if mesh.file_face_normals is not None:
+        kind, theirs = "face", mesh.file_face_normals
+        ours, missing = analysis.faces.normals, analysis.faces.degenerate
+        reference = "our face normals"
+    elif mesh.file_corner_normals is not None:
+        corners = corner_normals(mesh.vertices, mesh.faces, COMPARISON_CREASE)
+        kind, theirs = "corner", mesh.file_corner_normals.reshape(-1, 3)
+        ours, missing = corners.normals.reshape(-1, 3), corners.missing.ravel()
+        reference = f"our corner normals (crease angle {COMPARISON_CREASE:g}°)"
+    elif mesh.file_vertex_normals is not None:
+        computed = vertex_normals(mesh.vertices, mesh.faces, "angle")
+        kind, theirs = "vertex", mesh.file_vertex_normals
+        ours, missing = computed.normals, computed.missing
+        reference = "our angle-weighted vertex normals"
+    else:
+        return None
+    lengths = np.linalg.norm(theirs, axis=1)
+    zero = ~(lengths > 0)
+    both = ~zero & ~missing
+    angles = np.degrees(np.arctan2(np.linalg.norm(np.cross(theirs[both], ours[both]), axis=1),
+                                   np.einsum("ij,ij->i", theirs[both], ours[both])))
+    compared = int(np.count_nonzero(both))
+    return {
+        "kind": kind,
+        "compared_with": reference,
+        "stored": len(theirs),
+        "compared": compared,
+        "zero_length": int(np.count_nonzero(zero)),
+        "agreeing": int(np.count_nonzero(angles <= AGREEMENT_DEGREES)),
+        "opposite": int(np.count_nonzero(angles > 90.0)),
+        "agreement_degrees": AGREEMENT_DEGREES,
+        "median_angle_degrees": float(np.median(angles)) if compared else None,
+        "max_angle_degrees": float(angles.max()) if compared else None,
+    }
