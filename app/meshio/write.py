@@ -1,0 +1,73 @@
+"""Writing a mesh: binary PLY, binary STL or OBJ, with the vertices exactly as given.
+
+PLY stores float64 coordinates and OBJ the shortest text that reads back as the same float64
+(Python's ``repr``), so both round-trip bit for bit. STL can only hold float32 corners; its
+facet normals are our face normals (:func:`app.core.face_normals`), zero for degenerate faces.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from app.core import check_mesh, face_normals
+from app.meshio.errors import unsupported
+from app.meshio.stl import HEADER, RECORD
+
+#: The formats :func:`write_mesh` can write.
+WRITABLE = ("ply", "stl", "obj")
+
+_MAKER = "Mesh Normal Calculator"
+
+
+def write_mesh(vertices: ArrayLike, faces: ArrayLike, format: str) -> bytes:
+    """The bytes of a mesh file.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float
+        Finite coordinates, written as given (as float32 in STL, which has nothing wider).
+    faces : (m, 3) int
+        Indices into ``vertices``.
+    format : str
+        ``"ply"`` (binary little endian, float64), ``"stl"`` (binary, with our facet normals)
+        or ``"obj"`` (1-based indices, exact float64 text).
+
+    Raises ``ValueError`` for a bad mesh (from :func:`app.core.check_mesh`) and
+    :class:`~app.meshio.MeshFileError` (415) for another format.
+    """
+    points, triangles = check_mesh(vertices, faces)
+    if format == "ply":
+        return _ply(points, triangles)
+    if format == "stl":
+        return _stl(points, triangles)
+    if format == "obj":
+        return _obj(points, triangles)
+    raise unsupported(f"Cannot write {format!r} files; the formats are {', '.join(WRITABLE)}.")
+
+
+def _ply(points: NDArray[np.float64], triangles: NDArray[np.intp]) -> bytes:
+    header = (f"ply\nformat binary_little_endian 1.0\ncomment written by {_MAKER}\n"
+              f"element vertex {len(points)}\nproperty double x\nproperty double y\n"
+              f"property double z\nelement face {len(triangles)}\n"
+              "property list uchar int vertex_indices\nend_header\n")
+    records = np.empty(len(triangles), dtype=[("count", "u1"), ("indices", "<i4", (3,))])
+    records["count"] = 3
+    records["indices"] = triangles
+    return header.encode() + points.astype("<f8").tobytes() + records.tobytes()
+
+
+def _stl(points: NDArray[np.float64], triangles: NDArray[np.intp]) -> bytes:
+    records = np.zeros(len(triangles), dtype=RECORD)
+    records["normal"] = face_normals(points, triangles).normals
+    records["corners"] = points[triangles]
+    header = f"binary STL written by {_MAKER}".encode().ljust(HEADER - 4, b" ")
+    return header + len(triangles).to_bytes(4, "little") + records.tobytes()
+
+
+def _obj(points: NDArray[np.float64], triangles: NDArray[np.intp]) -> bytes:
+    lines = [f"# written by {_MAKER}"]
+    lines += [f"v {x!r} {y!r} {z!r}" for x, y, z in points.tolist()]
+    lines += [f"f {a} {b} {c}" for a, b, c in (triangles + 1).tolist()]
+    lines.append("")
+    return "\n".join(lines).encode()
