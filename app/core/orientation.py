@@ -1,0 +1,637 @@
+"""How a triangle mesh hangs together, and which way its faces point.
+
+Terms. Half-edge ``3 * f + k`` runs from ``faces[f, k]`` to ``faces[f, (k + 1) % 3]``. An
+edge is an unordered pair of vertices, *used* by every face that has it as a half-edge.
+
+- A face with a repeated index (``[4, 4, 7]``) has no edges here: it is left out of every
+  count and of all adjacency, belongs to no component (label -1) and is never flipped.
+  A face with three distinct indices counts, even if its points are collinear or coincide.
+- A *boundary* edge is used by exactly one face, a *non-manifold* edge by three or more.
+  A mesh is *watertight* when it has at least one face and neither kind of edge.
+- A *component* is a set of faces connected through shared edges, non-manifold ones too.
+  Isolated vertices are in no component. Duplicate faces are faces like any other (two
+  copies of a face on a closed mesh make its edges non-manifold).
+- Winding is *consistent* when the two faces of every manifold edge (used by exactly two
+  faces) traverse it in opposite directions. Non-manifold edges count neither for nor against
+  it, and orientation is not carried across them: they are reported, not judged.
+- A *patch* is a set of faces connected through manifold edges; a component is several
+  patches only where non-manifold edges split it. A patch is *orientable* when flipping some
+  of its faces can make its winding consistent; a Moebius strip is not.
+
+Which way is out. :func:`orient` first makes each orientable patch consistent, then takes the
+sign of V = sum of det(A - c, B - c, C - c) / 6 over its faces, where c is the patch's
+area-weighted centroid. For a closed patch V is the enclosed volume whatever c is, positive
+when the faces point outward (method ``"volume"``). For an open patch it is the heuristic
+(method ``"heuristic"``): the signed volume of the cone from the centroid over the faces,
+positive when the faces, weighted by area and distance, face away from the centroid. For a
+bowl, an open box or a hemisphere that is the convex, outer side: the side Blender's
+"Recalculate Outside" picks. Blender looks only at the face farthest from the centre; this sum
+does not hinge on one face, and it is the volume itself when the patch happens to be closed.
+
+When |V| is at most ``FLAT_SINE`` times sum |det| / 6 (what V would be if every face faced
+away from c), the patch is *flat*: a plane sheet, or a closed surface that encloses nothing
+(two faces back to back). Its direction is undetermined; :func:`orient` still makes it
+consistent, keeping the winding of the majority of its faces (of its lowest-numbered face on
+a tie). A non-orientable patch is left as it is.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+from typing import Literal, overload
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from app.core.mesh import check_mesh
+from app.core.tolerances import MESH_DEGENERATE_SINE
+
+FloatArray = NDArray[np.float64]
+IndexArray = NDArray[np.intp]
+BoolArray = NDArray[np.bool_]
+Verdict = Literal["outward", "inward", "mixed", "undetermined"]
+Method = Literal["volume", "heuristic", "none"]
+
+VERDICTS: tuple[Verdict, ...] = ("outward", "inward", "mixed", "undetermined")
+METHODS: tuple[Method, ...] = ("volume", "heuristic", "none")
+
+#: A patch is flat when |V| <= FLAT_SINE * sum |det| / 6: its faces tilt, on average, by an
+#: angle whose sine is at most this towards or away from its centroid. The same bound as a
+#: degenerate face's largest angle (``MESH_DEGENERATE_SINE``, 2**-37): below it the sign of V
+#: is rounding noise.
+FLAT_SINE = MESH_DEGENERATE_SINE
+
+#: Sort keys edge * 3m + half-edge must stay below this to fit int64 with room to spare.
+KEY_LIMIT = 2**62
+
+_OUTWARD, _INWARD, _MIXED, _UNDETERMINED = range(4)
+_VOLUME, _HEURISTIC, _NONE = range(3)
+
+
+@dataclass(frozen=True, slots=True)
+class MeshTopology:
+    """Edges, components and winding of a mesh (see the module docstring for the terms).
+
+    Attributes
+    ----------
+    boundary_edges : int
+        Edges used by exactly one face.
+    nonmanifold_edges : int
+        Edges used by three or more faces.
+    components : int
+        Edge-connected components.
+    face_component : (m,) intp
+        The component of each face, numbered 0 .. components - 1 in order of their first
+        face; -1 for a face with a repeated index.
+    watertight : bool
+        At least one face, and no boundary or non-manifold edge.
+    winding_consistent : bool
+        Every manifold edge is traversed in opposite directions by its two faces (true when
+        there is no manifold edge).
+    orientable : bool
+        Every patch can be made consistent by flipping faces.
+    boundary_edge_list : (b, 2) intp
+        The boundary edges, each in the direction its face traverses it, sorted by their
+        smaller vertex, then the larger.
+    nonmanifold_edge_list : (k, 2) intp
+        The non-manifold edges, each as (smaller vertex, larger vertex), sorted.
+    """
+
+    boundary_edges: int
+    nonmanifold_edges: int
+    components: int
+    face_component: IndexArray
+    watertight: bool
+    winding_consistent: bool
+    orientable: bool
+    boundary_edge_list: IndexArray
+    nonmanifold_edge_list: IndexArray
+
+
+@dataclass(frozen=True, slots=True)
+class ComponentOrientation:
+    """What :func:`orient` found and did in one component.
+
+    Attributes
+    ----------
+    index : int
+        The component's number, as in :attr:`MeshTopology.face_component`.
+    faces : int
+        How many faces it has.
+    closed : bool
+        It has no boundary or non-manifold edge.
+    orientable : bool
+        Every patch of it is orientable.
+    method : {"volume", "heuristic", "none"}
+        How its outside was chosen: by the sign of its volume (closed and orientable), by the
+        cone heuristic (open; at least one patch decided), or not at all (non-orientable,
+        flat, or a closed surface enclosing no volume).
+    flipped : int
+        How many of its faces :func:`orient` reversed.
+    volume : float or None
+        Its signed volume after orienting, when closed and orientable; else None.
+    orientation : {"outward", "inward", "mixed", "undetermined"}
+        Its verdict as given (see :attr:`Orientation.orientation`).
+    """
+
+    index: int
+    faces: int
+    closed: bool
+    orientable: bool
+    method: Method
+    flipped: int
+    volume: float | None
+    orientation: Verdict
+
+
+@dataclass(frozen=True, slots=True)
+class ComponentTable(Sequence[ComponentOrientation]):
+    """One :class:`ComponentOrientation` per component, stored as arrays.
+
+    A triangle soup has as many components as faces, so the records are built only when
+    indexed or iterated; the arrays serve vectorised use.
+
+    Attributes
+    ----------
+    faces : (c,) intp
+    closed : (c,) bool
+    orientable : (c,) bool
+    method : (c,) intp
+        Indices into ``METHODS``.
+    flipped : (c,) intp
+    volume : (c,) float64
+        Zero where ``has_volume`` is false.
+    has_volume : (c,) bool
+    orientation : (c,) intp
+        Indices into ``VERDICTS``.
+    """
+
+    faces: IndexArray
+    closed: BoolArray
+    orientable: BoolArray
+    method: IndexArray
+    flipped: IndexArray
+    volume: FloatArray
+    has_volume: BoolArray
+    orientation: IndexArray
+
+    def __len__(self) -> int:
+        return len(self.faces)
+
+    @overload
+    def __getitem__(self, index: int) -> ComponentOrientation: ...
+
+    @overload
+    def __getitem__(self, index: slice) -> tuple[ComponentOrientation, ...]: ...
+
+    def __getitem__(
+        self, index: int | slice
+    ) -> ComponentOrientation | tuple[ComponentOrientation, ...]:
+        if isinstance(index, slice):
+            return tuple(self[i] for i in range(*index.indices(len(self))))
+        i = range(len(self))[index]  # IndexError and negative indices, as for a tuple
+        return ComponentOrientation(
+            index=i,
+            faces=int(self.faces[i]),
+            closed=bool(self.closed[i]),
+            orientable=bool(self.orientable[i]),
+            method=METHODS[self.method[i]],
+            flipped=int(self.flipped[i]),
+            volume=float(self.volume[i]) if self.has_volume[i] else None,
+            orientation=VERDICTS[self.orientation[i]],
+        )
+
+    def __iter__(self) -> Iterator[ComponentOrientation]:
+        return (self[i] for i in range(len(self)))
+
+
+@dataclass(frozen=True, slots=True)
+class Orientation:
+    """The result of :func:`orient`.
+
+    Attributes
+    ----------
+    faces : (m, 3) intp
+        The input faces, rows ``[a, b, c]`` that were flipped as ``[a, c, b]``.
+    flipped : (m,) bool
+        Which faces were reversed.
+    orientation : {"outward", "inward", "mixed", "undetermined"}
+        The verdict on the input. Each patch votes: "outward" if orient flipped none of its
+        faces, "inward" if it flipped all, "mixed" if some; a flat patch votes "mixed" if its
+        winding was inconsistent and not at all otherwise, a non-orientable one not at all.
+        The verdict is the common vote, "mixed" if the votes differ, and "undetermined" if
+        nothing voted (no faces; only flat or non-orientable parts).
+    components : ComponentTable
+        Per component, a sequence of :class:`ComponentOrientation`.
+    volume : float or None
+        The signed volume of the input (see :func:`signed_volume`) when it is watertight and
+        consistently wound; else None.
+    topology : MeshTopology
+        The topology of the input, as :func:`mesh_topology` returns it.
+    """
+
+    faces: IndexArray
+    flipped: BoolArray
+    orientation: Verdict
+    components: ComponentTable
+    volume: float | None
+    topology: MeshTopology
+
+
+@dataclass(frozen=True, slots=True)
+class _Structure:
+    """What both public functions need: the topology and the patches with their parities."""
+
+    topology: MeshTopology
+    patch: IndexArray  # (m,) patch number per face, -1 for repeated-index faces
+    patches: int
+    parity: IndexArray  # (m,) 1 where a face must flip to agree with its patch's first face
+    orientable: BoolArray  # (patches,)
+    closed: BoolArray  # (components,)
+
+
+def mesh_topology(faces: ArrayLike, vertex_count: int) -> MeshTopology:
+    """Count the boundary and non-manifold edges and the components; judge the winding.
+
+    Parameters
+    ----------
+    faces : (m, 3) int
+        Indices into ``vertex_count`` vertices.
+    vertex_count : int
+        n, the number of vertices.
+
+    Returns
+    -------
+    MeshTopology
+        See the module docstring for the terms.
+
+    Examples
+    --------
+    >>> t = mesh_topology([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]], 4)
+    >>> t.watertight, t.winding_consistent, t.components
+    (True, True, 1)
+    """
+    _, indices = check_mesh(np.zeros((vertex_count, 3)), faces)
+    return _structure(indices, vertex_count).topology
+
+
+def signed_volume(vertices: ArrayLike, faces: ArrayLike) -> float:
+    """Return the sum of det(A - c, B - c, C - c) / 6 over the faces.
+
+    For a closed mesh this is the enclosed volume whatever c is, positive when the faces point
+    outward. Here c is the area-weighted centroid of the faces, which keeps the terms small;
+    for an open mesh the value is the volume of the cone from c (see the module docstring).
+
+    Precision. Each term is computed as n . (A - c) with n = (B - A) x (C - A), after scaling
+    the vertices by a power of two, within about 8 eps |n| |A - c| of its exact value
+    (eps = 2**-53); the terms are summed pairwise. The result is within about
+    (8 + log2 m) eps sum |n| |A - c| / 6 of the exact volume about c. It is infinite only
+    beyond the double range (coordinates beyond about 1e102).
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64
+        Finite coordinates.
+    faces : (m, 3) int
+        Indices into ``vertices``.
+
+    Returns
+    -------
+    float
+        The signed volume; 0.0 for no faces.
+
+    Examples
+    --------
+    >>> signed_volume([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]],
+    ...               [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    0.16666666666666666
+    """
+    points, indices = check_mesh(vertices, faces)
+    if not len(indices):
+        return 0.0
+    terms, _, scale = _cone_terms(points, indices, np.zeros(len(indices), dtype=np.intp), 1)
+    return _unscaled(float(np.sum(terms)) / 6, scale)
+
+
+def orient(vertices: ArrayLike, faces: ArrayLike) -> Orientation:
+    """Make the winding consistent and outward, patch by patch, and report what changed.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64
+        Finite coordinates; they are not changed.
+    faces : (m, 3) int
+        Indices into ``vertices``.
+
+    Returns
+    -------
+    Orientation
+        The oriented faces, which were flipped, the verdicts and the input's topology.
+
+    Examples
+    --------
+    >>> inward = [[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]]
+    >>> r = orient([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], inward)
+    >>> r.orientation, r.flipped.tolist(), r.components[0].volume
+    ('inward', [True, True, True, True], 0.16666666666666666)
+    """
+    points, indices = check_mesh(vertices, faces)
+    structure = _structure(indices, len(points))
+    topology, patch, patches = structure.topology, structure.patch, structure.patches
+    member = patch >= 0
+    # Faces with a repeated index go to a group of their own, after the patches.
+    terms, bounds, scale = _cone_terms(points, indices, np.where(member, patch, patches),
+                                       patches + 1)
+    sign = 1.0 - 2.0 * structure.parity
+    volume = np.bincount(patch[member], (sign * terms)[member], patches) / 6
+    bound = np.bincount(patch[member], bounds[member], patches) / 6
+    decided = structure.orientable & (np.abs(volume) > FLAT_SINE * bound)
+    turn, flipped = _flips(structure, member, decided, volume < 0)
+    patch_vote = _patch_votes(structure, member, decided, flipped)
+    after = _unscaled_array(np.where(turn, -volume, volume), scale)
+    components = _component_table(structure, member, decided, patch_vote, flipped, after)
+    oriented = indices.copy()
+    oriented[flipped, 1:] = indices[flipped, :0:-1]
+    input_volume = None
+    if topology.watertight and topology.winding_consistent:
+        input_volume = _unscaled(float(np.sum(terms)) / 6, scale)
+    return Orientation(oriented, flipped, VERDICTS[_combined(patch_vote)], components,
+                       input_volume, topology)
+
+
+# --- edges, patches and components -----------------------------------------------------------
+
+
+def _structure(faces: IndexArray, vertex_count: int) -> _Structure:
+    starts, following = faces.ravel(), faces[:, [1, 2, 0]].ravel()
+    valid = (starts != following).reshape(-1, 3).all(axis=1)
+    order, key = _sorted_half_edges(starts, following, valid, vertex_count)
+    # At each sorted position: is the edge the same as the previous one, the next, the one
+    # after next? Edges used once, twice and more follow.
+    same_as_next = key[1:] == key[:-1]
+    before, after, after_next = (np.zeros(len(key), dtype=bool) for _ in range(3))
+    before[1:] = after[:-1] = same_as_next
+    after_next[:-1] = after[1:]
+    starting = ~before
+    boundary = order[np.flatnonzero(starting & ~after)]
+    paired = np.flatnonzero(starting & after & ~after_next)
+    nonmanifold = np.flatnonzero(starting & after & after_next)
+    # The two half-edges of each manifold edge, and whether they run the same way.
+    one, two = order[paired], order[paired + 1]
+    forward = starts < following
+    same = (forward[one] == forward[two]).astype(np.intp)
+    one_face, two_face = one // 3, two // 3
+    root, parity = _connected(len(faces), one_face, two_face, same)
+    patch, patches = _numbered(root, valid)
+    orientable = np.ones(patches, dtype=bool)
+    orientable[patch[one_face[(parity[one_face] ^ parity[two_face]) != same]]] = False
+    face_component, components = _merged(patch, patches, order, starting, nonmanifold)
+    closed = np.ones(components, dtype=bool)
+    closed[face_component[np.r_[boundary, order[nonmanifold]] // 3]] = False
+    topology = MeshTopology(
+        boundary_edges=len(boundary),
+        nonmanifold_edges=len(nonmanifold),
+        components=components,
+        face_component=face_component,
+        watertight=components > 0 and bool(closed.all()),
+        winding_consistent=not same.any(),
+        orientable=bool(orientable.all()),
+        boundary_edge_list=np.stack([starts[boundary], following[boundary]], axis=1),
+        nonmanifold_edge_list=np.stack(np.divmod(key[nonmanifold], max(vertex_count, 1)), 1),
+    )
+    return _Structure(topology, patch, patches, parity, orientable, closed)
+
+
+def _sorted_half_edges(
+    starts: IndexArray, following: IndexArray, valid: BoolArray, vertex_count: int
+) -> tuple[IndexArray, IndexArray]:
+    """Half-edges of valid faces sorted by edge, then by id; and each one's edge key.
+
+    The key of the edge {u, v} is min * n + max. Sorting unique values key * 2**s + id
+    (2**s > 3m) is several times faster than an argsort (NumPy sorts integers with SIMD);
+    past ``KEY_LIMIT`` two such sorts, by the larger vertex and then stably by the smaller,
+    do it.
+    """
+    if valid.all():
+        ids, low, high = np.arange(len(starts)), starts, following
+    else:
+        ids = np.flatnonzero(np.repeat(valid, 3))
+        low, high = starts[ids], following[ids]
+    low, high = np.minimum(low, high), np.maximum(low, high)
+    shift = max(len(starts) - 1, 1).bit_length()
+    if vertex_count * vertex_count << shift < KEY_LIMIT:
+        packed = low * vertex_count
+        packed += high
+        packed <<= shift
+        packed |= ids
+        packed.sort()
+        return packed & ((1 << shift) - 1), packed >> shift
+    if vertex_count << shift < KEY_LIMIT:
+        position = np.arange(len(ids))
+        mask = (1 << shift) - 1
+        by_high = np.sort(high << shift | position) & mask
+        by_both = by_high[np.sort(low[by_high] << shift | position) & mask]
+    else:
+        by_both = np.lexsort((high, low))
+    return ids[by_both], low[by_both] * vertex_count + high[by_both]
+
+
+def _connected(
+    count: int, one: IndexArray, two: IndexArray, same: IndexArray
+) -> tuple[IndexArray, IndexArray]:
+    """Label the nodes of a graph with the smallest node connected to them, vectorised.
+
+    Nodes ``one[i]`` and ``two[i]`` are joined, with parity ``same[i]`` (1 when exactly one
+    of them must flip to agree with the other). Returns each node's label and its parity
+    relative to the labelling node; where a cycle has odd parity (not orientable) the
+    parities conflict and are meaningless, but the labels are right regardless.
+
+    Each level hooks every node to its smallest neighbour (``np.minimum.at``), jumps pointers
+    until every node points at a root, and contracts the graph to the roots that still have
+    an edge to another root. On a mesh a level leaves about a quarter of the nodes, so the
+    work is O(edges) in all. Labels travel as 2 * label + parity.
+    """
+    levels = []
+    while len(one):
+        packed = 2 * np.arange(count)
+        np.minimum.at(packed, one, 2 * two + same)
+        np.minimum.at(packed, two, 2 * one + same)
+        packed = _jumped(packed)
+        ends = packed[one], packed[two]
+        one, two = ends[0] >> 1, ends[1] >> 1
+        apart = np.flatnonzero(one != two)
+        one, two = one[apart], two[apart]
+        same = (same[apart] ^ ends[0][apart] ^ ends[1][apart]) & 1
+        active = np.zeros(count, dtype=bool)
+        active[one] = active[two] = True
+        rank = np.cumsum(active) - 1
+        levels.append((packed, np.flatnonzero(active)))
+        one, two, count = rank[one], rank[two], len(levels[-1][1])
+    root, parity = np.arange(count), np.zeros(count, dtype=np.intp)
+    for packed, active in reversed(levels):
+        above, turn = np.arange(len(packed)), np.zeros(len(packed), dtype=np.intp)
+        above[active], turn[active] = active[root], parity
+        label = packed >> 1
+        root, parity = above[label], (packed & 1) ^ turn[label]
+    return root, parity
+
+
+def _jumped(packed: IndexArray) -> IndexArray:
+    """Point every node at its root, composing parities on the way."""
+    while True:
+        jumped = packed.take(packed >> 1) ^ (packed & 1)
+        if np.array_equal(jumped, packed):
+            return packed
+        packed = jumped
+
+
+def _merged(
+    patch: IndexArray, patches: int, order: IndexArray, starting: BoolArray,
+    nonmanifold: IndexArray,
+) -> tuple[IndexArray, int]:
+    """Join the patches around each non-manifold edge into components; number them."""
+    if not len(nonmanifold):
+        return patch, patches
+    # Link each later half-edge of a non-manifold edge to the edge's first half-edge.
+    first = np.flatnonzero(starting)
+    uses = np.diff(np.r_[first, len(order)])[np.searchsorted(first, nonmanifold)]
+    group = np.repeat(nonmanifold, uses)
+    position = group + np.arange(len(group)) - np.repeat(np.cumsum(uses) - uses, uses)
+    one, two = patch[order[group] // 3], patch[order[position] // 3]
+    root, _ = _connected(patches, one, two, np.zeros(len(one), dtype=np.intp))
+    number, components = _numbered(root, np.ones(patches, dtype=bool))
+    return np.where(patch >= 0, number[patch], -1), components
+
+
+def _numbered(root: IndexArray, valid: BoolArray) -> tuple[IndexArray, int]:
+    """Number the roots 0, 1, ... in order of their first face; -1 for invalid faces."""
+    is_root = valid & (root == np.arange(len(root)))
+    number = np.cumsum(is_root) - 1
+    return np.where(valid, number[root], -1), int(is_root.sum())
+
+
+# --- geometry and decisions ------------------------------------------------------------------
+
+
+def _cone_terms(
+    points: FloatArray, faces: IndexArray, group: IndexArray, groups: int
+) -> tuple[FloatArray, FloatArray, int]:
+    """det(A - c, B - c, C - c) of each face and its bound |n| |A - c|, c its group's centroid.
+
+    The vertices are first divided by 2**scale (exact) so that the largest |coordinate| is in
+    [0.5, 1): the terms are 2**(-3 scale) times the true ones.
+    """
+    largest = float(np.abs(points).max(initial=0.0))
+    scale = int(np.frexp(largest)[1]) if largest else 0
+    columns = np.ldexp(np.ascontiguousarray(points.T), -scale)
+    corners = np.ascontiguousarray(faces.T)
+    a, b, c = (np.stack([column.take(corners[k]) for column in columns]) for k in range(3))
+    b -= a
+    c -= a
+    normal = np.stack([b[1] * c[2] - b[2] * c[1], b[2] * c[0] - b[0] * c[2],
+                       b[0] * c[1] - b[1] * c[0]])
+    area = np.sqrt(np.einsum("km,km->m", normal, normal))
+    # Area-weighted centroid of the face centroids A + (B - A + C - A) / 3 of each group.
+    centre = a + (b + c) / 3
+    total = np.bincount(group, area, groups)
+    weight = np.where(total[group] > 0, area, 1.0)
+    count = np.bincount(group, weight, groups)
+    count[count == 0] = 1.0  # an empty group
+    mean = np.stack([np.bincount(group, weight * centre[k], groups) for k in range(3)]) / count
+    a -= mean.take(group, axis=1)
+    terms = np.einsum("km,km->m", normal, a)
+    bounds = area * np.sqrt(np.einsum("km,km->m", a, a))
+    return terms, bounds, scale
+
+
+def _unscaled(value: float, scale: int) -> float:
+    with np.errstate(over="ignore"):
+        return float(np.ldexp(value, 3 * scale)) + 0.0
+
+
+def _unscaled_array(values: FloatArray, scale: int) -> FloatArray:
+    with np.errstate(over="ignore"):
+        return np.ldexp(values, 3 * scale)
+
+
+def _flips(
+    structure: _Structure, member: BoolArray, decided: BoolArray, inward: BoolArray
+) -> tuple[BoolArray, BoolArray]:
+    """Which faces to reverse: the consistent winding, outward where decided; the majority
+    winding where flat; nothing where not orientable.
+
+    Also returns, per patch, whether its consistent winding (that of its first face) was
+    turned over.
+    """
+    patch, parity = structure.patch[member], structure.parity[member]
+    size = np.bincount(patch, minlength=structure.patches)
+    against = np.bincount(patch, parity, structure.patches)
+    turn = np.where(decided, inward, 2 * against > size)  # flip the whole consistent patch
+    flips = np.zeros(len(member), dtype=bool)
+    flips[member] = (parity ^ turn[patch]).astype(bool) & structure.orientable[patch]
+    return turn, flips
+
+
+def _patch_votes(
+    structure: _Structure, member: BoolArray, decided: BoolArray, flipped: BoolArray
+) -> IndexArray:
+    """Each patch's verdict on the input (see :attr:`Orientation.orientation`)."""
+    patch = structure.patch[member]
+    size = np.bincount(patch, minlength=structure.patches)
+    count = np.bincount(patch, flipped[member], structure.patches)
+    vote = np.where(count == 0, _OUTWARD, np.where(count == size, _INWARD, _MIXED))
+    vote[~decided & (count == 0)] = _UNDETERMINED
+    vote[~decided & (count > 0)] = _MIXED
+    vote[~structure.orientable] = _UNDETERMINED
+    return vote
+
+
+def _combined(votes: IndexArray) -> int:
+    """The common vote, ignoring undetermined ones; mixed if they differ."""
+    cast = np.bincount(votes, minlength=4)
+    kinds = np.flatnonzero(cast[:_UNDETERMINED])
+    if len(kinds) == 0:
+        return _UNDETERMINED
+    return int(kinds[0]) if len(kinds) == 1 else _MIXED
+
+
+def _component_table(
+    structure: _Structure,
+    member: BoolArray,
+    decided: BoolArray,
+    patch_vote: IndexArray,
+    flipped: BoolArray,
+    volume: FloatArray,
+) -> ComponentTable:
+    topology = structure.topology
+    count = topology.components
+    face_component = topology.face_component[member]
+    # The component of each patch, from any of its faces.
+    of_patch = np.zeros(structure.patches, dtype=np.intp)
+    of_patch[structure.patch[member]] = face_component
+
+    def any_patch(mask: BoolArray) -> BoolArray:
+        return np.bincount(of_patch, mask, count) > 0
+
+    orientable = ~any_patch(~structure.orientable)
+    closed = structure.closed
+    has_volume = closed & orientable
+    # A closed component is one patch, so its volume is that patch's.
+    component_volume = np.zeros(count)
+    component_volume[of_patch[has_volume[of_patch]]] = volume[has_volume[of_patch]]
+    method = np.where(any_patch(decided), np.where(closed, _VOLUME, _HEURISTIC), _NONE)
+    votes = np.stack([any_patch(patch_vote == v) for v in range(_UNDETERMINED)])
+    kinds = votes.sum(axis=0)
+    orientation = np.where(kinds == 0, _UNDETERMINED,
+                           np.where(kinds == 1, np.argmax(votes, axis=0), _MIXED))
+    return ComponentTable(
+        faces=np.bincount(face_component, minlength=count),
+        closed=closed,
+        orientable=orientable,
+        method=method,
+        flipped=np.bincount(face_component, flipped[member], count).astype(np.intp),
+        volume=component_volume,
+        has_volume=has_volume,
+        orientation=orientation,
+    )
