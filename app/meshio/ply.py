@@ -74,6 +74,8 @@ def _header(data: bytes) -> tuple[str, list[_Element], int]:
             elif words[0] == "property":
                 elements[-1].scalars.append((words[2], _type(words[1])))
                 elements[-1].order.append(words[2])
+        except MeshFileError:
+            raise
         except (IndexError, ValueError, KeyError):
             raise MeshFileError(f"Line {number} of the PLY header cannot be read: "
                                 f"{line[:60]!r}.") from None
