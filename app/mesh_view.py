@@ -246,7 +246,7 @@ def build_view(vertices: NDArray[np.float64], faces: IntArray, normals: NDArray[
             "type": "mesh3d", "name": "faces", "x": x, "y": y, "z": z, "i": i, "j": j, "k": k,
             "facecolor": [COLORS[int(code)] for code in classes[shown][solid]],
             "flatshading": True, "hoverinfo": "skip",
-            "lighting": {"ambient": 0.55, "diffuse": 0.6, "specular": 0.05, "roughness": 0.9,
+            "lighting": {"ambient": 0.7, "diffuse": 0.5, "specular": 0.05, "roughness": 0.9,
                          "fresnel": 0.05},
             "lightposition": {"x": 1e5, "y": 2e5, "z": 3e5}})
     traces.extend(_problem_edges(vertices, points, used, boundary_edges, nonmanifold_edges))

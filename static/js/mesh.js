@@ -21,6 +21,7 @@
     modeBarButtonsToRemove: ["select2d", "lasso2d", "sendChartToCloud", "sendDataToCloud"],
     toImageButtonOptions: { format: "png", filename: "mesh-face-areas", scale: 2 },
   };
+  form.classList.add("mesh-form-js");  // choosing or dropping a file starts at once
   let file = null;      // the file the page holds, sent again by every download
   let request = null;   // the upload in flight, if any
 
