@@ -21,7 +21,7 @@ from typing import Any, TextIO
 from app.core.mesh_normals import WEIGHTINGS
 from app.core.orientation import orient
 from app.exports import KINDS, compute_normals, normals_csv, normals_ply, npy_bytes
-from app.mesh_report import analyse, report_payload
+from app.mesh_report import analyse, flips_by_component, report_payload
 from app.meshio import SUFFIXES, LoadedMesh, MeshFileError, read_mesh, write_mesh
 
 EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE, EXIT_INPUT, EXIT_OUTPUT = 0, 1, 2, 3, 4
@@ -146,8 +146,8 @@ def fix(args: argparse.Namespace, progress: Progress) -> int:
     write(args.output, write_mesh(mesh.vertices, fixed.faces, chosen))
     progress.done()
     flipped = int(fixed.flipped.sum())
-    parts = ", ".join(f"{part.flipped:,}" for part in fixed.components)
-    print(f"flipped {flipped:,} of {len(mesh.faces):,} faces (per component: {parts}); "
+    parts = flips_by_component(fixed) or "none"
+    print(f"flipped {flipped:,} of {len(mesh.faces):,} faces (component:faces {parts}); "
           f"orientation before: {fixed.orientation}")
     return EXIT_OK
 

@@ -110,11 +110,11 @@ def _nonmanifold(report: dict[str, Any]) -> Problem | None:
 
 
 def _nonorientable(report: dict[str, Any]) -> Problem | None:
-    parts = [part for part in report["fix"]["components"] if not part["orientable"]]
+    parts = report["nonorientable_components"]
     if not parts:
         return None
     return _problem(
-        "nonorientable", "error", f"{_count(len(parts), 'part is', 'parts are')} one-sided",
+        "nonorientable", "error", f"{_count(parts, 'part is', 'parts are')} one-sided",
         "Like a Moebius strip, these parts have no consistent winding at all: going around "
         "them turns the front into the back. Their faces were left unflipped.",
         "Cut the part along an edge in your modeller, or accept per-face normals there.")

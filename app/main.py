@@ -6,7 +6,7 @@ from fastapi import FastAPI
 
 from app import errors, mesh_page, pages
 from app.api import mesh, normals
-from app.middleware import BodyLimit, SecurityHeaders
+from app.middleware import BodyLimit, PageCompression, SecurityHeaders
 from app.static import STATIC_DIR, CompressedStaticFiles
 
 DESCRIPTION = """
@@ -34,6 +34,7 @@ def create_app(upload_limit: int | None = None) -> FastAPI:
     app.include_router(pages.router)
     app.include_router(mesh_page.router)
     app.mount("/static", CompressedStaticFiles(directory=STATIC_DIR), name="static")
+    app.add_middleware(PageCompression)
     app.add_middleware(BodyLimit, upload_limit=upload_limit)
     app.add_middleware(SecurityHeaders)
     return app

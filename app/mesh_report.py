@@ -16,11 +16,11 @@ from numpy.typing import NDArray
 
 from app.core.mesh import FaceNormals, face_normals
 from app.core.mesh_normals import corner_normals, vertex_normals
-from app.core.orientation import MeshTopology, Orientation, mesh_topology, orient
+from app.core.orientation import MeshTopology, Orientation, orient
 from app.diagnosis import problems
 from app.meshio import LoadedMesh
 
-#: How many face indices a list in the report holds at most (the counts are always full).
+#: How many face indices (or components) a list in the report holds at most; counts are full.
 INDEX_LIST_LIMIT = 100
 #: File normals within this angle of ours count as agreeing.
 AGREEMENT_DEGREES = 1.0
@@ -49,13 +49,14 @@ def analyse(mesh: LoadedMesh, name: str | None = None, size: int = 0) -> MeshAna
                 | (faces[:, 2] == faces[:, 0]))
     used = np.zeros(len(mesh.vertices), dtype=bool)
     used[faces.ravel()] = True
+    orientation = orient(mesh.vertices, faces)
     return MeshAnalysis(
         mesh=mesh,
         name=name,
         size=size,
         faces=face_normals(mesh.vertices, faces),
-        topology=mesh_topology(faces, len(mesh.vertices)),
-        orientation=orient(mesh.vertices, faces),
+        topology=orientation.topology,
+        orientation=orientation,
         repeated=repeated,
         unused_vertices=int(len(used) - np.count_nonzero(used)),
     )
@@ -93,6 +94,7 @@ def report_payload(analysis: MeshAnalysis) -> dict[str, Any]:
         "boundary_edges": topology.boundary_edges,
         "nonmanifold_edges": topology.nonmanifold_edges,
         "components": topology.components,
+        "nonorientable_components": int(np.count_nonzero(~orientation.components.orientable)),
         "bounds": _bounds(vertices),
         "fix": _fix(orientation),
         "file_normals": file_normal_agreement(analysis),
@@ -108,9 +110,17 @@ def _bounds(vertices: NDArray[np.float64]) -> dict[str, list[float]] | None:
     return {"min": vertices.min(axis=0).tolist(), "max": vertices.max(axis=0).tolist()}
 
 
+def flips_by_component(orientation: Orientation) -> str:
+    """``"component:faces"`` for the first components with flipped faces, e.g. ``"0:1,3:12"``."""
+    flipped = orientation.components.flipped
+    parts = np.flatnonzero(flipped)[:INDEX_LIST_LIMIT]
+    return ",".join(f"{part}:{flipped[part]}" for part in parts.tolist())
+
+
 def _fix(orientation: Orientation) -> dict[str, Any]:
     return {
         "faces_flipped": int(np.count_nonzero(orientation.flipped)),
+        "components_changed": int(np.count_nonzero(orientation.components.flipped)),
         "flipped_face_indices": first_indices(orientation.flipped),
         "components": [
             {
@@ -122,7 +132,7 @@ def _fix(orientation: Orientation) -> dict[str, Any]:
                 "faces_flipped": part.flipped,
                 "volume": None if part.volume is None else finite(part.volume),
             }
-            for part in orientation.components
+            for part in orientation.components[:INDEX_LIST_LIMIT]
         ],
     }
 

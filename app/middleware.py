@@ -1,9 +1,10 @@
-"""Pure ASGI middleware: security headers on every response, and the request body limit."""
+"""Pure ASGI middleware: security headers, gzip for pages, and the request body limit."""
 
 from __future__ import annotations
 
 import json
 
+from starlette.middleware.gzip import GZipMiddleware
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from app import config
@@ -29,6 +30,32 @@ class SecurityHeaders:
             await send(message)
 
         await self.app(scope, receive, send_with_headers)
+
+
+class PageCompression:
+    """Gzip for HTML pages, whose size grows with a mesh report's 3D view data.
+
+    API responses are left as they are (their overhead is what the benchmarks measure, and
+    downloads such as .npy are for scripts), and static files come pre-compressed.
+    """
+
+    def __init__(self, app: ASGIApp) -> None:
+        self.app = app
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        path = scope.get("path", "")
+        if scope["type"] != "http" or path.startswith(("/api/", "/static/")):
+            await self.app(scope, receive, send)
+            return
+
+        async def app(scope: Scope, receive: Receive, gzip_send: Send) -> None:
+            async def route(message: Message) -> None:
+                # GZipMiddleware drops the template debug message that the TestClient reads.
+                await (send if message["type"] == "http.response.debug" else gzip_send)(message)
+
+            await self.app(scope, receive, route)
+
+        await GZipMiddleware(app, minimum_size=1024, compresslevel=6)(scope, receive, send)
 
 
 class BodyLimit:

@@ -16,18 +16,23 @@ from starlette.datastructures import UploadFile
 from app.errors import ApiError
 from app.meshio import SUFFIXES
 
+#: A tetrahedron as OBJ text: the example upload in the API documentation.
+EXAMPLE_FILE = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
+
 #: The OpenAPI ``requestBody`` of every route that takes a mesh file.
 UPLOAD_BODY: dict[str, Any] = {"requestBody": {"required": True, "content": {
     "multipart/form-data": {"schema": {
         "type": "object",
         "properties": {"file": {
             "type": "string", "format": "binary",
-            "description": "The mesh file: " + ", ".join(sorted(SUFFIXES)) + "."}},
+            "description": "The mesh file: " + ", ".join(sorted(SUFFIXES)) + ".",
+            "example": EXAMPLE_FILE}},
         "required": ["file"],
     }},
     "application/octet-stream": {"schema": {"type": "string", "format": "binary",
                                             "description": "The mesh file's bytes as they are "
-                                            "(name it with ?filename=)."}},
+                                            "(name it with ?filename=).",
+                                            "example": EXAMPLE_FILE}},
 }}}
 
 

@@ -196,7 +196,7 @@ def test_fix_flips_the_one_face_and_keeps_the_vertices(client: TestClient) -> No
     response = upload(client, "/api/mesh/fix", CUBE_ONE_FLIPPED, "box.obj")
     assert response.status_code == 200, response.text
     assert response.headers["x-faces-flipped"] == "1"
-    assert response.headers["x-component-faces-flipped"] == "1"
+    assert response.headers["x-component-faces-flipped"] == "0:1"
     assert response.headers["x-orientation-before"] == "mixed"
     assert 'filename="box-fixed.obj"' in response.headers["content-disposition"]
     fixed = read_mesh(response.content, "fixed.obj")

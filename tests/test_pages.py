@@ -292,7 +292,8 @@ def test_docs_script_fetches_nothing_from_elsewhere(client) -> None:  # type: ig
 
 def test_openapi_lists_the_api_and_not_the_pages(client) -> None:  # type: ignore[no-untyped-def]
     spec = client.get("/openapi.json").json()
-    assert set(spec["paths"]) == {"/api/normal", "/api/normal.csv", "/api/normals", "/api/chart"}
+    assert set(spec["paths"]) == {"/api/normal", "/api/normal.csv", "/api/normals", "/api/chart",
+                                  "/api/mesh", "/api/mesh/normals", "/api/mesh/fix"}
     assert set(spec["paths"]["/api/normal"]) == {"get", "post"}
 
 

@@ -19,7 +19,7 @@ from app.core.mesh_normals import Weighting
 from app.core.orientation import orient
 from app.errors import ERROR_RESPONSES, ApiError
 from app.exports import NormalsKind, export_normals
-from app.mesh_report import analyse, report_payload
+from app.mesh_report import analyse, flips_by_component, report_payload
 from app.meshio import LoadedMesh, MeshFileError, read_mesh, write_mesh
 from app.uploads import UPLOAD_BODY, Upload, read_upload
 
@@ -90,8 +90,9 @@ async def post_mesh_normals(
 
 @router.post("/fix", openapi_extra=UPLOAD_BODY, response_class=Response, responses={
     200: {"description": "The mesh with consistent, outward winding; vertices untouched. "
-                         "X-Faces-Flipped, X-Component-Faces-Flipped and X-Orientation-Before "
-                         "say what changed.",
+                         "X-Faces-Flipped (a count), X-Component-Faces-Flipped (component:faces "
+                         "for the first 100 components changed) and X-Orientation-Before say "
+                         "what changed.",
           "content": {"application/octet-stream": {}, "model/stl": {}, "model/obj": {}}}})
 async def post_mesh_fix(
     request: Request,
@@ -108,8 +109,7 @@ async def post_mesh_fix(
         fixed = orient(mesh.vertices, mesh.faces)
         headers = {
             "x-faces-flipped": str(int(np.count_nonzero(fixed.flipped))),
-            "x-component-faces-flipped": ",".join(str(part.flipped)
-                                                  for part in fixed.components),
+            "x-component-faces-flipped": flips_by_component(fixed),
             "x-orientation-before": fixed.orientation,
         }
         return write_mesh(mesh.vertices, fixed.faces, chosen), chosen, headers
