@@ -2,10 +2,15 @@
 
 from __future__ import annotations
 
+import threading
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
+
 from fastapi import FastAPI
 
 from app import errors, mesh_page, pages
 from app.api import mesh, normals
+from app.core.mesh_normals import compile_kernels
 from app.middleware import BodyLimit, PageCompression, SecurityHeaders
 from app.static import STATIC_DIR, CompressedStaticFiles
 
@@ -16,7 +21,20 @@ For points A, B, C: u = B - A, v = C - A, the normal n = u x v, |n| is twice the
 n / |n| the unit normal. Every value is the exact result rounded once to the nearest double;
 a value outside the double range is `null` with a `message`. Errors are
 `{"error": "<one sentence>", "field": "<input name or null>"}`.
+
+Whole meshes (STL, OBJ, PLY, OFF, GLB/glTF) are sent as the multipart field `file` (or as the
+raw body, named with `?filename=`): `/api/mesh` reports on them, `/api/mesh/normals` returns
+face, vertex or corner normals in the file's order, and `/api/mesh/fix` returns the file with
+consistent, outward winding. The server keeps no file after its response.
 """
+
+
+@asynccontextmanager
+async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+    """Load the compiled mesh kernels from numba's cache in the background, so that the first
+    mesh upload does not wait for them while the server already answers everything else."""
+    threading.Thread(target=compile_kernels, name="compile-kernels", daemon=True).start()
+    yield
 
 
 def create_app(upload_limit: int | None = None) -> FastAPI:
@@ -27,6 +45,7 @@ def create_app(upload_limit: int | None = None) -> FastAPI:
         description=DESCRIPTION,
         docs_url=None,
         redoc_url=None,
+        lifespan=lifespan,
     )
     errors.install(app)
     app.include_router(normals.router)

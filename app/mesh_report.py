@@ -156,11 +156,14 @@ def file_normal_agreement(analysis: MeshAnalysis) -> dict[str, Any] | None:
         reference = "our angle-weighted vertex normals"
     else:
         return None
-    lengths = np.linalg.norm(theirs, axis=1)
+    lengths = np.sqrt(np.einsum("ij,ij->i", theirs, theirs))
     zero = ~(lengths > 0)
     both = ~zero & ~missing
-    angles = np.degrees(np.arctan2(np.linalg.norm(np.cross(theirs[both], ours[both]), axis=1),
-                                   np.einsum("ij,ij->i", theirs[both], ours[both])))
+    # Ours are unit vectors: the cosine is a dot product over their length. Only the cosines
+    # are formed (one pass); the angles of the median and the worst row come from atan2.
+    rows = np.flatnonzero(both)
+    cosines = (np.einsum("ij,ij->i", theirs, ours) / np.where(zero, 1.0, lengths))[rows]
+    agree = math.cos(math.radians(AGREEMENT_DEGREES))
     compared = int(np.count_nonzero(both))
     return {
         "kind": kind,
@@ -168,9 +171,23 @@ def file_normal_agreement(analysis: MeshAnalysis) -> dict[str, Any] | None:
         "stored": len(theirs),
         "compared": compared,
         "zero_length": int(np.count_nonzero(zero)),
-        "agreeing": int(np.count_nonzero(angles <= AGREEMENT_DEGREES)),
-        "opposite": int(np.count_nonzero(angles > 90.0)),
+        "agreeing": int(np.count_nonzero(cosines >= agree)),
+        "opposite": int(np.count_nonzero(cosines < 0)),
         "agreement_degrees": AGREEMENT_DEGREES,
-        "median_angle_degrees": float(np.median(angles)) if compared else None,
-        "max_angle_degrees": float(angles.max()) if compared else None,
+        "median_angle_degrees": _angle(theirs, ours, rows, cosines, "median"),
+        "max_angle_degrees": _angle(theirs, ours, rows, cosines, "max"),
     }
+
+
+def _angle(theirs: NDArray[np.float64], ours: NDArray[np.float64], rows: NDArray[np.intp],
+           cosines: NDArray[np.float64], which: str) -> float | None:
+    """The median or largest angle in degrees, taken accurately (atan2) at that one row."""
+    if not len(cosines):
+        return None
+    if which == "max":
+        row = int(rows[np.argmin(cosines)])
+    else:
+        middle = len(cosines) // 2
+        row = int(rows[np.argpartition(cosines, middle)[middle]])
+    a, b = theirs[row], ours[row]
+    return math.degrees(math.atan2(float(np.linalg.norm(np.cross(a, b))), float(a @ b)))

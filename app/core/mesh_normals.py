@@ -259,6 +259,9 @@ def compile_kernels() -> None:
     faces = np.array([[0, 1, 2]])
     face_normals(vertices, faces)
     corner_normals(vertices, faces, 30.0)  # vertex normals, face geometry and weights too
+    from app.core.orientation import orient  # imported here: orientation imports this package
+
+    orient(vertices, faces)
 
 
 def _crease_cosine(crease_angle: float) -> float:

@@ -16,7 +16,6 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-from trimesh.exchange.gltf import load_glb, load_gltf
 
 from app.meshio.errors import MeshFileError
 from app.meshio.loaded import LoadedMesh, build
@@ -24,12 +23,16 @@ from app.meshio.loaded import LoadedMesh, build
 
 def read_glb(data: bytes) -> LoadedMesh:
     """Read binary glTF (see the module docstring)."""
+    from trimesh.exchange.gltf import load_glb  # imported on first use: trimesh is slow to import
+
     return _flatten(load_glb(io.BytesIO(data), merge_primitives=False), "glb")
 
 
 def read_gltf(data: bytes) -> LoadedMesh:
     """Read JSON glTF with embedded buffers (see the module docstring)."""
     try:
+        from trimesh.exchange.gltf import load_gltf
+
         scene = load_gltf(io.BytesIO(data), resolver=None, merge_primitives=False)
     except (FileNotFoundError, ValueError, AttributeError, TypeError) as error:
         if b'"uri"' in data and b"data:" not in data:
