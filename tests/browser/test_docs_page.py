@@ -9,7 +9,8 @@ from tests.browser.helpers import FIELDS
 
 pytestmark = pytest.mark.browser
 
-PATHS = {"/api/normal", "/api/normal.csv", "/api/normals", "/api/chart"}
+PATHS = {"/api/normal", "/api/normal.csv", "/api/normals", "/api/chart", "/api/mesh",
+         "/api/mesh/normals", "/api/mesh/fix"}
 
 
 def test_docs_show_the_operations_and_try_them(page: Page, base_url: str) -> None:
@@ -22,8 +23,9 @@ def test_docs_show_the_operations_and_try_them(page: Page, base_url: str) -> Non
 
     paths = page.locator(".opblock-summary-path")
     expect(paths.first).to_be_visible()
-    # GET and POST /api/normal, GET /api/normal.csv, POST /api/normals, GET /api/chart
-    expect(paths).to_have_count(5)
+    # GET and POST /api/normal, GET /api/normal.csv, POST /api/normals, GET /api/chart, and
+    # POST /api/mesh, /api/mesh/normals, /api/mesh/fix
+    expect(paths).to_have_count(8)
     assert {text.strip() for text in paths.all_inner_texts()} == PATHS
     expect(page.get_by_text("Mesh Normal Calculator").first).to_be_visible()
     expect(page.get_by_role("link", name="← Back to the calculator")).to_have_attribute("href", "/")
