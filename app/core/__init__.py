@@ -1,4 +1,8 @@
-"""The geometry core: pure NumPy and the standard library, no web imports."""
+"""The geometry core: NumPy and the standard library, no web imports.
+
+The per-face mesh loops (and the union-find of :mod:`app.core.orientation`) are compiled with
+numba and cached on disk; everything else is plain NumPy.
+"""
 
 from app.core.batch import BatchNormals, triangle_normals
 from app.core.mesh import FaceNormals, check_mesh, face_areas, face_normals
