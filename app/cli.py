@@ -102,6 +102,9 @@ def summary(report: dict[str, Any]) -> str:
         lines.append("No problems found.")
     for item in report["problems"]:
         lines.append(f"{item['severity']}: {item['title']}. {item['action']}")
+    if report["fix"]["faces_flipped"]:
+        lines.append(f"To fix the winding: mesh-normal fix {report['file']['name']} "
+                     "FIXED.ply (or .stl, .obj)")
     return "\n".join(lines)
 
 
