@@ -8,7 +8,7 @@ from contextlib import asynccontextmanager
 
 from fastapi import FastAPI
 
-from app import errors, mesh_page, pages
+from app import config, errors, mesh_page, pages
 from app.api import mesh, normals
 from app.core.mesh_normals import compile_kernels
 from app.middleware import BodyLimit, PageCompression, SecurityHeaders
@@ -54,7 +54,8 @@ def create_app(upload_limit: int | None = None) -> FastAPI:
     app.include_router(mesh_page.router)
     app.mount("/static", CompressedStaticFiles(directory=STATIC_DIR), name="static")
     app.add_middleware(PageCompression)
-    app.add_middleware(BodyLimit, upload_limit=upload_limit)
+    app.state.upload_limit = config.upload_limit() if upload_limit is None else upload_limit
+    app.add_middleware(BodyLimit, upload_limit=app.state.upload_limit)
     app.add_middleware(SecurityHeaders)
     return app
 

@@ -16,13 +16,13 @@ from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import HTMLResponse
 
 from app.api.mesh import load, stem
-from app.config import upload_limit
 from app.core.mesh_normals import Weighting
 from app.errors import ApiError
 from app.exports import FORMATS, KINDS
 from app.mesh_report import analyse, report_payload
 from app.mesh_view import CLASSES, mesh_figures
 from app.meshio import SUFFIXES
+from app.middleware import size_text
 from app.pages import templates
 from app.uploads import Upload, read_upload
 
@@ -33,11 +33,11 @@ FIX_FORMATS = ("ply", "stl", "obj")
 FIXED_BY_ORIENT = frozenset({"winding", "inward", "mixed"})
 
 
-def _form_context() -> dict[str, Any]:
-    """What the upload form needs: the accepted suffixes and the size limit."""
-    limit = upload_limit()
+def _form_context(request: Request) -> dict[str, Any]:
+    """What the upload form needs: the accepted suffixes and the app's size limit."""
+    limit: int = request.app.state.upload_limit
     return {"suffixes": sorted(suffix.lstrip(".") for suffix in SUFFIXES), "limit": limit,
-            "limit_text": f"{limit / (1024 * 1024):,.0f} MB",
+            "limit_text": size_text(limit),
             "report": None, "error": None}
 
 
@@ -58,14 +58,14 @@ def _report_context(upload: Upload, base_url: str) -> dict[str, Any]:
 
 @router.get("/mesh", response_class=HTMLResponse)
 def mesh_form(request: Request) -> HTMLResponse:
-    return templates.TemplateResponse(request, "mesh.html", _form_context())
+    return templates.TemplateResponse(request, "mesh.html", _form_context(request))
 
 
 @router.post("/mesh", response_class=HTMLResponse)
 async def mesh_upload(request: Request) -> HTMLResponse:
     """The report on an uploaded mesh: the whole page, or with ``?part=report`` the report."""
     fragment = request.query_params.get("part") == "report"
-    context = _form_context()
+    context = _form_context(request)
     try:
         upload = await read_upload(request)
         context.update(await run_in_threadpool(_report_context, upload,

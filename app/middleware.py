@@ -136,14 +136,14 @@ def _content_length(scope: Scope) -> int | None:
     return None
 
 
-def _size_text(size: int) -> str:
+def size_text(size: int) -> str:
     if size >= 1024 * 1024:
         return f"{size / (1024 * 1024):.4g} MB"
     return f"{size / 1024:.4g} KB"
 
 
 def too_large_sentence(limit: int) -> str:
-    return f"The request body is larger than {_size_text(limit)}, the limit for this address."
+    return f"The request body is larger than {size_text(limit)}, the limit for this address."
 
 
 async def _too_large(send: Send, limit: int) -> None:

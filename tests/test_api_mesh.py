@@ -250,6 +250,7 @@ def test_upload_limit_declared(small_limit: TestClient) -> None:
     body = assert_error(upload(small_limit, "/api/mesh", big), 413, None, "larger than")
     assert "1.953 KB" in body["error"]
     assert upload(small_limit, "/api/mesh", CUBE).status_code == 200
+    assert "up to 1.953 KB" in small_limit.get("/mesh").text  # the page states the app's limit
 
 
 def test_upload_limit_streamed(small_limit: TestClient) -> None:
