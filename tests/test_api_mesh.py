@@ -275,3 +275,52 @@ def test_upload_limit_from_the_environment(monkeypatch: pytest.MonkeyPatch) -> N
 def test_report_is_strict_json(client: TestClient) -> None:
     text = upload(client, "/api/mesh", CUBE_ONE_FLIPPED).text
     json.loads(text, parse_constant=lambda name: pytest.fail(f"{name} in the report"))
+
+
+def test_mesh_work_runs_off_the_event_loop(monkeypatch: pytest.MonkeyPatch) -> None:
+    """While one upload is being analysed, the server answers other requests."""
+    import asyncio
+    import threading
+
+    import httpx
+
+    import app.api.mesh as api
+    from tests.conftest import EXAMPLE_QUERY
+
+    started, release = threading.Event(), threading.Event()
+    real = api.analyse
+
+    def slow(*args, **kwargs):  # type: ignore[no-untyped-def]
+        started.set()
+        release.wait(10)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(api, "analyse", slow)
+
+    async def scenario() -> None:
+        transport = httpx.ASGITransport(app=create_app())
+        async with httpx.AsyncClient(transport=transport, base_url="http://test") as client:
+            pending = asyncio.create_task(
+                client.post("/api/mesh", files={"file": ("cube.obj", CUBE.encode())}))
+            assert await asyncio.to_thread(started.wait, 10)
+            quick = await client.get("/api/normal", params=EXAMPLE_QUERY)
+            assert quick.status_code == 200
+            assert not pending.done()
+            release.set()
+            assert (await pending).json()["faces"] == 12
+
+    asyncio.run(scenario())
+
+
+@pytest.mark.skipif(not Path("/proc/self/fd").exists(), reason="needs /proc")
+def test_no_upload_outlives_its_request(client: TestClient) -> None:
+    """A large upload is spooled to a temporary file; it is closed (and so gone) afterwards."""
+    import os
+
+    big = CUBE + "# padding to pass the 1 MB spooling threshold\n" * 40_000
+    assert len(big) > 1024 * 1024
+    upload(client, "/api/mesh", CUBE)  # warm up: whatever the first request opens for good
+    before = set(os.listdir("/proc/self/fd"))
+    for path in ("/api/mesh", "/mesh"):
+        assert upload(client, path, big).status_code == 200
+    assert set(os.listdir("/proc/self/fd")) <= before
