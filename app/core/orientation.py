@@ -28,7 +28,7 @@ bowl, an open box or a hemisphere that is the convex, outer side: the side Blend
 "Recalculate Outside" picks. Blender looks only at the face farthest from the centre; this sum
 does not hinge on one face, and it is the volume itself when the patch happens to be closed.
 
-When |V| is at most ``FLAT_SINE`` times sum |det| / 6 (what V would be if every face faced
+When |V| is at most ``MESH_FLAT_SINE`` times sum |det| / 6 (what V would be if every face faced
 away from c), the patch is *flat*: a plane sheet, or a closed surface that encloses nothing
 (two faces back to back). Its direction is undetermined; :func:`orient` still makes it
 consistent, keeping the winding of the majority of its faces (of its lowest-numbered face on
@@ -51,7 +51,7 @@ from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
 from app.core.mesh import check_mesh
-from app.core.tolerances import MESH_DEGENERATE_SINE
+from app.core.tolerances import MESH_FLAT_SINE
 
 FloatArray = NDArray[np.float64]
 IndexArray = NDArray[np.intp]
@@ -62,11 +62,6 @@ Method = Literal["volume", "heuristic", "none"]
 VERDICTS: tuple[Verdict, ...] = ("outward", "inward", "mixed", "undetermined")
 METHODS: tuple[Method, ...] = ("volume", "heuristic", "none")
 
-#: A patch is flat when |V| <= FLAT_SINE * sum |det| / 6: its faces tilt, on average, by an
-#: angle whose sine is at most this towards or away from its centroid. The same bound as a
-#: degenerate face's largest angle (``MESH_DEGENERATE_SINE``, 2**-37): below it the sign of V
-#: is rounding noise.
-FLAT_SINE = MESH_DEGENERATE_SINE
 
 #: Sort keys edge * 3m + half-edge must stay below this to fit int64 with room to spare.
 KEY_LIMIT = 2**62
@@ -356,7 +351,7 @@ def orient(vertices: ArrayLike, faces: ArrayLike) -> Orientation:
     volume = per_patch(np.where(parity, -terms, terms)) / 6
     size, against = per_patch(), per_patch(parity)
     orientable = structure.orientable
-    decided = orientable & (np.abs(volume) > FLAT_SINE * per_patch(bounds) / 6)
+    decided = orientable & (np.abs(volume) > MESH_FLAT_SINE * per_patch(bounds) / 6)
     # Turn the consistent patch over when it points in, or when most of its faces are against
     # its first face (flat patches).
     turn = np.where(decided, volume < 0, 2 * against > size)

@@ -58,3 +58,10 @@ MESH_CREASE_SLACK = 16 * EPSILON
 #: The corner normals compare pairs of corners around a vertex; at most this many pairs
 #: (about 20 bytes each) are held in memory at once.
 MESH_PAIR_CHUNK = 2**20
+
+#: A mesh patch is flat when |V| <= MESH_FLAT_SINE * sum |det| / 6 (V: the volume of the cone
+#: from its centroid over its faces, see :mod:`app.core.orientation`): its faces tilt, on
+#: average, by an angle whose sine is at most this towards or away from the centroid. The same
+#: bound as a degenerate face's largest angle: below it the sign of V is rounding noise, so
+#: which side is outside is left undetermined.
+MESH_FLAT_SINE = MESH_DEGENERATE_SINE
