@@ -33,6 +33,9 @@ bench-mesh: env
 	$(UV) sync --locked --extra test --extra bench
 	.venv/bin/python -m benchmarks.mesh_kernels
 
+bench-mesh-e2e: env
+	.venv/bin/python -m benchmarks.mesh_end_to_end
+
 clean:
 	rm -rf .venv .tools .pytest_cache .hypothesis
 
