@@ -25,10 +25,13 @@ count as degenerate), and only areas beyond the double range (coordinates beyond
 are infinite; nothing else overflows.
 
 Compiled kernels. The per-face work is one loop compiled with numba (``@njit(cache=True)``:
-compiled on first use, about 5 s once, then loaded from the cache;
-``NUMBA_CACHE_DIR`` moves the cache). It is the only implementation: NumPy alone measured 3-5
-times slower than Open3D, whose times are the target (see the README's mesh kernels
-section). So this part of ``app.core`` is not pure NumPy.
+compiled on first use, about 5 s once, then loaded from the cache; ``NUMBA_CACHE_DIR`` moves
+the cache). It is the only implementation: NumPy alone measured 3-5 times slower than
+Open3D, whose times are the target (see the README's mesh kernels section). So this part of
+``app.core`` is not pure NumPy. ``error_model="numpy"`` drops Python's zero-division checks
+(no division here can be by zero, and IEEE rules apply); the face normals run their blocks
+of faces on every core (``parallel=True``: blocks write disjoint rows, so the bits do not
+depend on the number of cores).
 """
 
 from __future__ import annotations
@@ -37,7 +40,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 from numpy.typing import ArrayLike, NDArray
 
 from app.core.tolerances import MESH_DEGENERATE_SINE, MESH_RECOMPUTE_SINE
@@ -106,7 +109,7 @@ def _as_faces(faces: ArrayLike, vertex_count: int) -> IndexArray:
     return np.ascontiguousarray(array, dtype=np.intp)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _index_range(faces: IndexArray) -> tuple[int, int]:
     low, high = 0, 0
     for index in faces.ravel():
@@ -219,7 +222,7 @@ _RECOMPUTE = MESH_RECOMPUTE_SINE**2
 _DEGENERATE = MESH_DEGENERATE_SINE**2
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def gather(points: FloatArray, factor: float, faces: IndexArray, start: int,
            corners: FloatArray) -> int:
     """Copy A, B, C of faces ``start`` on, times ``factor``, into the rows of ``corners``.
@@ -236,17 +239,17 @@ def gather(points: FloatArray, factor: float, faces: IndexArray, start: int,
     return count
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _dot(p: Vector, q: Vector) -> float:
     return p[0] * q[0] + p[1] * q[1] + p[2] * q[2]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _cross(p: Vector, q: Vector) -> Vector:
     return (p[1] * q[2] - p[2] * q[1], p[2] * q[0] - p[0] * q[2], p[0] * q[1] - p[1] * q[0])
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def face_edges(corners: FloatArray, row: int) -> Edges:
     """The edges B - A, C - B, A - C of one face: corner k lies between edges k - 1 and k."""
     ax, ay, az = corners[row, 0], corners[row, 1], corners[row, 2]
@@ -255,7 +258,7 @@ def face_edges(corners: FloatArray, row: int) -> Edges:
     return (bx - ax, by - ay, bz - az), (cx - bx, cy - by, cz - bz), (ax - cx, ay - cy, az - cz)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def face_cross(edges: Edges) -> tuple[Vector, float, bool]:
     """(B - A) x (C - A) from its most accurate corner, its squared length, and the verdict.
 
@@ -283,13 +286,15 @@ def face_cross(edges: Edges) -> tuple[Vector, float, bool]:
     return normal, square, False
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", parallel=True)
 def _face_normals_kernel(
     points: FloatArray, factor: float, faces: IndexArray, normals: FloatArray,
     lengths: FloatArray, degenerate: BoolArray,
 ) -> None:
-    corners = np.empty((_BLOCK, 9))
-    for start in range(0, len(faces), _BLOCK):
+    blocks = (len(faces) + _BLOCK - 1) // _BLOCK
+    for block in prange(blocks):  # blocks write disjoint rows: they run on every core
+        corners = np.empty((_BLOCK, 9))
+        start = block * _BLOCK
         for row in range(gather(points, factor, faces, start, corners)):
             face = start + row
             (x, y, z), square, flat = face_cross(face_edges(corners, row))
@@ -302,7 +307,7 @@ def _face_normals_kernel(
             degenerate[face] = flat
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _geometry_kernel(
     points: FloatArray, factor: float, faces: IndexArray, edges: FloatArray,
     squares: FloatArray, normal: FloatArray, length: FloatArray, degenerate: BoolArray,

@@ -25,7 +25,7 @@ from numbers import Real
 from typing import Literal
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 from numpy.typing import ArrayLike, NDArray
 
 from app.core.mesh import (
@@ -101,7 +101,7 @@ def _weighting_code(weighting: str) -> int:
     return WEIGHTINGS.index(weighting)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _weights(code: int, edges: Edges, length: float) -> Vector:
     """The weights at corners 0, 1, 2 of a usable face (``code`` indexes ``WEIGHTINGS``).
 
@@ -119,7 +119,7 @@ def _weights(code: int, edges: Edges, length: float) -> Vector:
     return length / (s2 * s0), length / (s0 * s1), length / (s1 * s2)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _weights_kernel(
     code: int, edges: FloatArray, length: FloatArray, degenerate: BoolArray, weights: FloatArray
 ) -> None:
@@ -153,18 +153,41 @@ def corner_weights(geometry: FaceGeometry, weighting: str) -> FloatArray:
     return weights
 
 
-@njit(cache=True)
+#: The faces are summed in this many halves (in parallel where there are cores), each into
+#: its own (n, 4) buffer, and the buffers are added in a fixed order: the result has the same
+#: bits on every machine, whatever its number of cores.
+_CHUNKS = 2
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
 def _vertex_sums_kernel(
-    code: int, points: FloatArray, factor: float, faces: IndexArray, sums: FloatArray
+    code: int, points: FloatArray, factor: float, faces: IndexArray, sums: FloatArray,
+    spare: FloatArray,
 ) -> None:
     """Add each usable face's weighted unit normal and its weight into its vertices' rows.
 
-    ``sums`` is (n, 4): the sum of weighted normals and the sum of weights side by side,
-    so that each corner updates one cache line.
+    ``sums`` and ``spare`` are (n, 4) zeros: the sum of weighted normals and the sum of
+    weights side by side, so that each corner updates one cache line. The first half of the
+    faces (in whole blocks) goes into ``sums``, the rest into ``spare``; the caller adds
+    ``spare`` to ``sums``.
     """
+    half = (len(faces) + 2 * _BLOCK - 1) // (2 * _BLOCK) * _BLOCK
+    for chunk in prange(_CHUNKS):
+        if chunk == 0:
+            _accumulate(code, points, factor, faces, 0, half, sums)
+        else:
+            _accumulate(code, points, factor, faces, half, len(faces), spare)
+
+
+@njit(cache=True, error_model="numpy")
+def _accumulate(
+    code: int, points: FloatArray, factor: float, faces: IndexArray, first: int, stop: int,
+    sums: FloatArray,
+) -> None:
+    """The sums of faces ``first`` to ``stop`` (``first`` a multiple of the block size)."""
     corners = np.empty((_BLOCK, 9))
-    for start in range(0, len(faces), _BLOCK):
-        for row in range(gather(points, factor, faces, start, corners)):
+    for start in range(first, stop, _BLOCK):
+        for row in range(gather(points, factor, faces[:stop], start, corners)):
             edges = face_edges(corners, row)
             normal, square, flat = face_cross(edges)
             if flat:
@@ -177,7 +200,7 @@ def _vertex_sums_kernel(
             _add(sums[faces[start + row, 2]], w2, x, y, z)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _add(total: FloatArray, weight: float, x: float, y: float, z: float) -> None:
     total[0] += weight * x
     total[1] += weight * y
@@ -185,7 +208,7 @@ def _add(total: FloatArray, weight: float, x: float, y: float, z: float) -> None
     total[3] += weight
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _normalise_kernel(sums: FloatArray, normals: FloatArray, missing: BoolArray) -> None:
     """Unit rows of ``sums[:, :3]``, or zero where they cancel against ``sums[:, 3]``.
 
@@ -221,8 +244,10 @@ def _smooth(
     code = _weighting_code(weighting)
     points, factor, _ = scaling(points)
     count = len(points)
-    sums = np.zeros((count, 4))
-    _vertex_sums_kernel(code, points, factor, faces, sums)
+    sums, spare = np.zeros((count, 4)), np.zeros((count, 4))
+    _vertex_sums_kernel(code, points, factor, faces, sums, spare)
+    sums += spare
+    del spare
     normals = sums.reshape(-1)[:3 * count].reshape(count, 3)
     missing = np.empty(count, dtype=bool)
     _normalise_kernel(sums, normals, missing)
