@@ -6,7 +6,7 @@ UV := $(shell command -v uv 2>/dev/null || echo .tools/bin/uv)
 HOST ?= 127.0.0.1
 PORT ?= 8000
 
-.PHONY: run test lint bench bench-mesh env clean vendor
+.PHONY: run test lint bench bench-mesh bench-mesh-e2e env clean vendor
 
 # uv itself comes from PyPI when the machine does not have it yet.
 .tools/bin/uv:
@@ -34,6 +34,7 @@ bench-mesh: env
 	.venv/bin/python -m benchmarks.mesh_kernels
 
 bench-mesh-e2e: env
+	$(UV) sync --locked --extra test --extra bench
 	.venv/bin/python -m benchmarks.mesh_end_to_end
 
 clean:
