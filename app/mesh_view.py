@@ -19,6 +19,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from app.view3d import FONT  # the calculator's 3D view: one look for both
+
 if TYPE_CHECKING:
     from app.mesh_report import MeshAnalysis
 
@@ -66,8 +68,6 @@ ARROW_COLOR = "#3a44b0"
 BOUNDARY_LINE = "#c99a06"
 NONMANIFOLD_LINE = "#862e9c"
 AREA_COLOR = "#4f5bd5"
-FONT = {"family": "system-ui, -apple-system, Segoe UI, Roboto, sans-serif", "size": 13,
-        "color": "#56607a"}
 GRID = "rgba(138, 147, 168, 0.35)"
 
 Trace = dict[str, Any]
