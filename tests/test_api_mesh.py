@@ -309,7 +309,11 @@ def test_mesh_work_runs_off_the_event_loop(monkeypatch: pytest.MonkeyPatch) -> N
             release.set()
             assert (await pending).json()["faces"] == 12
 
-    asyncio.run(scenario())
+    # In a thread of its own: Playwright's sync API may hold an event loop in this one.
+    from concurrent.futures import ThreadPoolExecutor
+
+    with ThreadPoolExecutor(1) as pool:
+        pool.submit(lambda: asyncio.run(scenario())).result(timeout=60)
 
 
 @pytest.mark.skipif(not Path("/proc/self/fd").exists(), reason="needs /proc")
