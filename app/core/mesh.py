@@ -37,6 +37,7 @@ depend on the number of cores).
 from __future__ import annotations
 
 import math
+import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -218,6 +219,11 @@ def scaling(vertices: FloatArray) -> tuple[FloatArray, float, int]:
 # does what the module docstring says for each face, through face_edges and face_cross.
 # Constants are frozen at compile time.
 _BLOCK = 512
+
+#: Held while a parallel kernel runs. numba's thread pools (its "workqueue" layer, the one
+#: left where neither OpenMP nor TBB is installed) abort the process when two threads launch
+#: parallel work at once; the web server calls the kernels from several worker threads.
+PARALLEL_KERNELS = threading.Lock()
 _RECOMPUTE = MESH_RECOMPUTE_SINE**2
 _DEGENERATE = MESH_DEGENERATE_SINE**2
 
@@ -390,7 +396,8 @@ def face_normals(vertices: ArrayLike, faces: ArrayLike) -> FaceNormals:
     points, factor, scale = scaling(points)
     count = len(indices)
     normals, areas, degenerate = np.empty((count, 3)), np.empty(count), np.empty(count, dtype=bool)
-    _face_normals_kernel(points, factor, indices, normals, areas, degenerate)
+    with PARALLEL_KERNELS:
+        _face_normals_kernel(points, factor, indices, normals, areas, degenerate)
     with np.errstate(over="ignore"):
         np.ldexp(areas, 2 * scale - 1, out=areas)
     return FaceNormals(normals, areas, degenerate)

@@ -30,6 +30,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from app.core.mesh import (
     _BLOCK,
+    PARALLEL_KERNELS,
     Edges,
     FaceGeometry,
     Vector,
@@ -245,7 +246,8 @@ def _smooth(
     points, factor, _ = scaling(points)
     count = len(points)
     sums, spare = np.zeros((count, 4)), np.zeros((count, 4))
-    _vertex_sums_kernel(code, points, factor, faces, sums, spare)
+    with PARALLEL_KERNELS:
+        _vertex_sums_kernel(code, points, factor, faces, sums, spare)
     sums += spare
     del spare
     normals = sums.reshape(-1)[:3 * count].reshape(count, 3)
