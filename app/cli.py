@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import time
 from pathlib import Path
@@ -68,9 +69,15 @@ def load(path: str, progress: Progress) -> tuple[LoadedMesh, int]:
 
 
 def write(path: str, data: bytes) -> None:
+    """Write through a temporary file beside ``path`` and rename it: never a half-written
+    file, and ``mesh-normal fix a.obj a.obj`` cannot lose the input."""
+    target = Path(path)
+    temporary = target.with_name(f".{target.name}.{os.getpid()}.tmp")
     try:
-        Path(path).write_bytes(data)
+        temporary.write_bytes(data)
+        os.replace(temporary, target)
     except OSError as error:
+        temporary.unlink(missing_ok=True)
         raise Failure(f"cannot write {path}: {error.strerror or error}", EXIT_OUTPUT) from None
 
 
@@ -146,7 +153,11 @@ def fix(args: argparse.Namespace, progress: Progress) -> int:
     progress.step("making the winding consistent and outward")
     fixed = orient(mesh.vertices, mesh.faces)
     progress.step(f"writing {args.output}")
-    write(args.output, write_mesh(mesh.vertices, fixed.faces, chosen))
+    try:
+        data = write_mesh(mesh.vertices, fixed.faces, chosen)
+    except MeshFileError as error:
+        raise Failure(f"cannot write {args.output}: {error}", EXIT_OUTPUT) from None
+    write(args.output, data)
     progress.done()
     flipped = int(fixed.flipped.sum())
     parts = flips_by_component(fixed) or "none"

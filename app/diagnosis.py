@@ -31,9 +31,9 @@ def _problem(code: str, severity: str, title: str, detail: str, action: str,
 
 
 def _winding(report: dict[str, Any]) -> Problem | None:
-    if report["winding_consistent"]:
-        return None
     flipped = report["fix"]["faces_flipped"]
+    if report["winding_consistent"] or (report["nonorientable_components"] and not flipped):
+        return None  # a one-sided part has no consistent winding: see _nonorientable
     return _problem(
         "winding", "error", "Faces are wound against their neighbours",
         f"Across some shared edges the two faces run the same way, so their normals point to "

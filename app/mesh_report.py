@@ -156,13 +156,18 @@ def file_normal_agreement(analysis: MeshAnalysis) -> dict[str, Any] | None:
         reference = "our angle-weighted vertex normals"
     else:
         return None
-    lengths = np.sqrt(np.einsum("ij,ij->i", theirs, theirs))
-    zero = ~(lengths > 0)
-    both = ~zero & ~missing
-    # Ours are unit vectors: the cosine is a dot product over their length. Only the cosines
-    # are formed (one pass); the angles of the median and the worst row come from atan2.
+    # A stored normal is usable when it is finite and not zero. Each is first divided by its
+    # largest |component| (so its length can neither overflow nor underflow); ours are unit
+    # vectors, so the cosine is a dot product over that length. Only the cosines are formed
+    # (one pass); the angles of the median and the worst row come from atan2.
+    with np.errstate(invalid="ignore", divide="ignore"):
+        largest = np.abs(theirs).max(axis=1)
+        usable = np.isfinite(largest) & (largest > 0)
+        theirs = theirs / np.where(usable, largest, 1.0)[:, None]
+        lengths = np.sqrt(np.einsum("ij,ij->i", theirs, theirs))
+    both = usable & ~missing
     rows = np.flatnonzero(both)
-    cosines = (np.einsum("ij,ij->i", theirs, ours) / np.where(zero, 1.0, lengths))[rows]
+    cosines = (np.einsum("ij,ij->i", theirs[rows], ours[rows]) / lengths[rows])
     agree = math.cos(math.radians(AGREEMENT_DEGREES))
     compared = int(np.count_nonzero(both))
     return {
@@ -170,7 +175,7 @@ def file_normal_agreement(analysis: MeshAnalysis) -> dict[str, Any] | None:
         "compared_with": reference,
         "stored": len(theirs),
         "compared": compared,
-        "zero_length": int(np.count_nonzero(zero)),
+        "unusable": int(np.count_nonzero(~usable)),
         "agreeing": int(np.count_nonzero(cosines >= agree)),
         "opposite": int(np.count_nonzero(cosines < 0)),
         "agreement_degrees": AGREEMENT_DEGREES,

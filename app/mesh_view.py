@@ -341,7 +341,7 @@ def area_histogram(areas: NDArray[np.float64], degenerate: NDArray[np.bool_],
     log = high > LOG_SPAN * low
     count = max(1, min(bins, int(np.ceil(np.sqrt(len(values))))))
     if low == high:
-        edges = np.array([low * (1 - 1 / 16), high * (1 + 1 / 16)])
+        edges = np.array([low * (1 - 1 / 16), min(high * (1 + 1 / 16), np.finfo(float).max)])
     elif log:
         edges = np.geomspace(low, high, count + 1)
     else:
@@ -356,7 +356,8 @@ def histogram_figure(histogram: dict[str, Any]) -> dict[str, Any]:
     edges = np.array(histogram["edges"], dtype=np.float64)
     log = histogram["log"]
     at = np.log10(edges) if log else edges
-    centres, widths = (at[:-1] + at[1:]) / 2, np.diff(at)
+    # Halves first: near the double maximum a sum of two edges would overflow.
+    centres, widths = at[:-1] / 2 + at[1:] / 2, np.diff(at)
     hover = [f"{a:.3g} to {b:.3g}: {n:,} faces"
              for a, b, n in zip(edges[:-1], edges[1:], histogram["counts"], strict=True)]
     traces: list[Trace] = [{

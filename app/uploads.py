@@ -12,6 +12,7 @@ from typing import Any
 
 from fastapi import Request
 from starlette.datastructures import UploadFile
+from starlette.exceptions import HTTPException
 
 from app.errors import ApiError
 from app.meshio import SUFFIXES
@@ -57,7 +58,12 @@ async def read_upload(request: Request) -> Upload:
 
 
 async def _multipart(request: Request) -> Upload:
-    async with request.form(max_files=1, max_fields=16) as form:
+    try:
+        form = await request.form(max_files=8, max_fields=16)
+    except HTTPException as error:  # Starlette's words for a malformed multipart body
+        detail = str(error.detail).strip().rstrip(".").replace(". ", "; ")
+        raise ApiError(400, f"The multipart body cannot be read: {detail}.", "file") from None
+    try:
         item = form.get("file")
         if not isinstance(item, UploadFile):
             given = "is missing" if item is None else "must be a file, not a text field"
@@ -65,6 +71,8 @@ async def _multipart(request: Request) -> Upload:
                            "file")
         data = await item.read()
         filename = item.filename
+    finally:
+        await form.close()  # the spooled temporary files go now, not at garbage collection
     if not data:
         raise ApiError(422, f"The uploaded file {filename or ''} is empty.".replace("  ", " "),
                        "file")

@@ -328,3 +328,84 @@ def test_no_upload_outlives_its_request(client: TestClient) -> None:
     for path in ("/api/mesh", "/mesh"):
         assert upload(client, path, big).status_code == 200
     assert set(os.listdir("/proc/self/fd")) <= before
+
+
+# --- regressions found in review ---------------------------------------------------------------
+
+
+def test_stored_normals_that_are_not_finite_are_unusable_not_nan(client: TestClient) -> None:
+    import struct
+
+    from app.meshio import write_mesh
+
+    mesh = read_mesh(TETRA.encode(), "t.obj")
+    stl = bytearray(write_mesh(mesh.vertices, mesh.faces, "stl"))
+    stl[84:88] = struct.pack("<f", float("inf"))  # the first facet normal's x
+    response = upload(client, "/api/mesh", bytes(stl), "t.stl")
+    json.loads(response.text, parse_constant=lambda name: pytest.fail(f"{name} in the report"))
+    stored = response.json()["file_normals"]
+    assert (stored["stored"], stored["compared"], stored["unusable"]) == (4, 3, 1)
+    assert stored["agreeing"] == 3
+
+
+def test_areas_near_the_double_maximum_keep_the_page_data_finite(client: TestClient) -> None:
+    huge = "v 0 0 0\nv 1.8e154 0 0\nv 0 1.8e154 0\nf 1 2 3\n"
+    response = upload(client, "/mesh", huge, part="report")
+    assert response.status_code == 200
+    assert "Infinity" not in response.text and "NaN" not in response.text
+
+
+def test_stl_cannot_hold_coordinates_beyond_float32(client: TestClient) -> None:
+    big = "v 0 0 0\nv 1e300 0 0\nv 0 1e300 0\nf 1 2 3\n"
+    assert_error(upload(client, "/api/mesh/fix", big, format="stl"), 422, "format", "PLY or OBJ")
+    assert upload(client, "/api/mesh/fix", big, format="ply").status_code == 200
+
+
+def test_a_byte_order_mark_is_not_part_of_the_first_line(client: TestClient) -> None:
+    text = "\ufeffv 9 9 9\n" + TETRA_POINTS + "f -3 -2 -1\n"
+    report = upload(client, "/api/mesh", text.encode("utf-8")).json()
+    assert (report["vertices"], report["unused_vertices"]) == (5, 2)
+
+
+def test_an_ascii_stl_may_name_its_solid_with_keywords(client: TestClient) -> None:
+    text = ("solid part with vertex colors and facet data\nfacet normal 0 0 1\nouter loop\n"
+            "vertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\n"
+            "endsolid part with vertex colors and facet data\n")
+    assert upload(client, "/api/mesh", text, "a.stl").json()["faces"] == 1
+
+
+def test_ascii_ply_face_indices_must_be_whole_numbers(client: TestClient) -> None:
+    ply = ("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+           "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+           "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 1.9\n")
+    assert_error(upload(client, "/api/mesh", ply, "p.ply"), 400, "file", "whole number")
+
+
+def test_other_multipart_fields_do_not_get_in_the_way(client: TestClient) -> None:
+    response = client.post("/api/mesh", files=[("file", ("t.obj", TETRA.encode())),
+                                                ("other", ("b.txt", b"x"))])
+    assert response.status_code == 200 and response.json()["faces"] == 4
+
+
+def test_a_malformed_multipart_body_is_one_sentence(client: TestClient) -> None:
+    response = client.post("/api/mesh", content=b"--x\r\nnot a part",
+                           headers={"content-type": "multipart/form-data; boundary=x"})
+    assert response.status_code in (400, 422)
+    assert_error(response, response.status_code, "file")
+
+
+def test_a_one_sided_part_is_not_offered_a_winding_fix(client: TestClient) -> None:
+    strip = 12
+    points, faces = [], []
+    for i in range(strip):
+        t = 2 * math.pi * i / strip
+        for s in (-0.3, 0.3):
+            radius = 1 + s * math.cos(t / 2)
+            points.append(f"v {radius * math.cos(t)} {radius * math.sin(t)} {s * math.sin(t / 2)}")
+    for i in range(strip):
+        a, b = 2 * i, 2 * i + 1
+        c, d = (2 * i + 2, 2 * i + 3) if i < strip - 1 else (1, 0)  # the half twist
+        faces += [(a, b, d), (a, d, c)]
+    report = upload(client, "/api/mesh", obj("\n".join(points) + "\n", faces)).json()
+    codes = [item["code"] for item in report["problems"]]
+    assert "nonorientable" in codes and "winding" not in codes

@@ -137,3 +137,18 @@ def test_installed_entry_point(cube: Path) -> None:
                             check=False)
     assert result.returncode == 0, result.stderr
     assert "No problems found." in result.stdout
+
+
+def test_fix_in_place_writes_through_a_temporary_file(flipped: Path) -> None:
+    assert main(["fix", str(flipped), str(flipped.with_suffix(".obj"))]) == 0
+    assert main(["analyze", str(flipped)]) == 0  # the same path, now fixed
+    assert sorted(path.name for path in flipped.parent.iterdir()) == ["flipped.obj"]
+
+
+def test_fix_to_stl_beyond_float32_fails_cleanly(tmp_path: Path,
+                                                 capsys: pytest.CaptureFixture[str]) -> None:
+    path = tmp_path / "big.obj"
+    path.write_text("v 0 0 0\nv 1e300 0 0\nv 0 1e300 0\nf 1 2 3\n")
+    assert main(["fix", str(path), str(tmp_path / "big.stl")]) == 4
+    assert "PLY or OBJ" in capsys.readouterr().err
+    assert not (tmp_path / "big.stl").exists()

@@ -112,7 +112,10 @@ async def post_mesh_fix(
             "x-component-faces-flipped": flips_by_component(fixed),
             "x-orientation-before": fixed.orientation,
         }
-        return write_mesh(mesh.vertices, fixed.faces, chosen), chosen, headers
+        try:
+            return write_mesh(mesh.vertices, fixed.faces, chosen), chosen, headers
+        except MeshFileError as error:  # e.g. coordinates beyond what STL's floats hold
+            raise ApiError(error.status_code, str(error), "format") from None
 
     body, chosen, headers = await run_in_threadpool(work)
     headers.update(attachment(f"{stem(upload.filename)}-fixed.{chosen}"))

@@ -288,8 +288,10 @@ def _mesh(elements: list[_Element]) -> LoadedMesh:
 def _polygons(column: object) -> tuple[NDArray[np.intp], NDArray[np.int64]]:
     """Corner counts and the flat corner indices of a list column (array or list of rows)."""
     if isinstance(column, np.ndarray) and column.ndim == 2:
-        return np.full(len(column), column.shape[1], dtype=np.intp), column.ravel().astype(
-            np.int64)
+        flat = column.ravel()
+        if flat.dtype.kind == "f" and not np.all(flat == np.round(flat)):  # ASCII, "2.9"
+            raise MeshFileError("The PLY file has a face index that is not a whole number.")
+        return np.full(len(column), column.shape[1], dtype=np.intp), flat.astype(np.int64)
     rows = list(column)  # type: ignore[call-overload]
     counts = np.fromiter(map(len, rows), dtype=np.intp, count=len(rows))
     flat = [value for row in rows for value in row]

@@ -41,6 +41,8 @@ def read_mesh(data: bytes, filename: str | None = None) -> LoadedMesh:
     """
     if not data:
         raise MeshFileError("The file is empty (0 bytes).")
+    if data.startswith(b"\xef\xbb\xbf"):  # a UTF-8 byte order mark: text formats only
+        data = data[3:]
     named = suffix_format(filename)
     format = sniff(data) or named
     if format is None:

@@ -25,9 +25,10 @@ HEADER = 84
 RECORD = np.dtype([("normal", "<f4", (3,)), ("corners", "<f4", (3, 3)), ("attribute", "<u2")])
 
 _NUMBER = rb"\s+(\S+)\s+(\S+)\s+(\S+)"
-_VERTEX = re.compile(rb"\bvertex" + _NUMBER)
-_NORMAL = re.compile(rb"\bfacet\s+normal" + _NUMBER)
-_FACET = re.compile(rb"\bfacet\b")
+# Keywords count only at the start of a line, so that a solid named "vertex colours" is fine.
+_VERTEX = re.compile(rb"(?m)^[ \t]*vertex" + _NUMBER)
+_NORMAL = re.compile(rb"(?m)^[ \t]*facet\s+normal" + _NUMBER)
+_FACET = re.compile(rb"(?m)^[ \t]*facet\b")
 
 
 def triangle_count(data: bytes) -> int | None:

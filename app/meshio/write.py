@@ -11,7 +11,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from app.core import check_mesh, face_normals
-from app.meshio.errors import unsupported
+from app.meshio.errors import MeshFileError, unsupported
 from app.meshio.stl import HEADER, RECORD
 
 #: The formats :func:`write_mesh` can write.
@@ -58,6 +58,10 @@ def _ply(points: NDArray[np.float64], triangles: NDArray[np.intp]) -> bytes:
 
 
 def _stl(points: NDArray[np.float64], triangles: NDArray[np.intp]) -> bytes:
+    largest = float(np.abs(points).max(initial=0.0))
+    if largest > float(np.finfo(np.float32).max):
+        raise MeshFileError(f"Coordinates up to {largest:.3g} do not fit in STL, which stores "
+                            "32-bit floats (up to about 3.4e38); choose PLY or OBJ.", 422)
     records = np.zeros(len(triangles), dtype=RECORD)
     records["normal"] = face_normals(points, triangles).normals
     records["corners"] = points[triangles]
