@@ -120,7 +120,9 @@ def _scan(text: str) -> _Statements:
     rows = {kind: np.flatnonzero(kinds == kind) for kind in (VERTEX, NORMAL, FACE)}
     vertices = _numbers([lines[row] for row in rows[VERTEX]], numbers[rows[VERTEX]], "v")
     normals = _numbers([lines[row] for row in rows[NORMAL]], numbers[rows[NORMAL]], "vn")
-    corners, counts = _face_corners([lines[row] for row in rows[FACE]])
+    # A comment may follow a face's corners: "f 1 2 3 # the lid".
+    corners, counts = _face_corners([line.partition("#")[0] if "#" in line else line
+                                     for line in (lines[row] for row in rows[FACE])])
     return _Statements(
         vertices=vertices, vertex_lines=numbers[rows[VERTEX]], normals=normals,
         corners=corners, counts=counts, face_lines=numbers[rows[FACE]],

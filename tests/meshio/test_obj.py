@@ -132,3 +132,10 @@ def test_errors_name_the_line(text: str, message: str) -> None:
         read_mesh(text.encode(), "bad.obj")
     assert message in str(error.value)
     assert error.value.status_code == 400
+
+
+def test_comments_may_follow_vertices_and_faces() -> None:
+    mesh = read_mesh(b"v 0 0 0 # origin\nv 1 0 0\nv 0 1 0\nf 1 2 3 # the lid\nf 1 3 2#under\n",
+                     "c.obj")
+    assert mesh.faces.tolist() == [[0, 1, 2], [0, 2, 1]]
+    assert mesh.vertices.tolist() == [[0, 0, 0], [1, 0, 0], [0, 1, 0]]
