@@ -158,13 +158,20 @@ def _components(report: dict[str, Any]) -> Problem | None:
 
 
 def _area(report: dict[str, Any]) -> Problem | None:
-    if report["area"] is not None:
+    volume_lost = (report["volume"] is None and report["watertight"]
+                   and report["winding_consistent"] and not report["nonorientable_components"])
+    if report["area"] is not None and not volume_lost:
         return None
+    which = "area and volume" if report["area"] is None and volume_lost else (
+        "area" if report["area"] is None else "volume")
+    both = " and " in which
     return _problem(
-        "area_overflow", "warning", "The total area is beyond the double range",
-        "The coordinates are so large (beyond about 1e154) that the area overflows a 64-bit "
-        "float; it is reported as null. Normals are unaffected.",
-        "Scale the mesh down (by a power of two, which is exact) before measuring areas.")
+        "overflow", "warning",
+        f"The total {which} {'are' if both else 'is'} beyond the double range",
+        f"The coordinates are so large that the {which} {'overflow' if both else 'overflows'} "
+        "a 64-bit float (areas beyond coordinates of about 1e154, volumes beyond about 1e102); "
+        f"{'they are' if both else 'it is'} reported as null. Normals are unaffected.",
+        "Scale the mesh down (by a power of two, which is exact) before measuring.")
 
 
 CHECKS = (_winding, _inward, _mixed, _nonmanifold, _nonorientable, _degenerate, _open,

@@ -409,3 +409,17 @@ def test_a_one_sided_part_is_not_offered_a_winding_fix(client: TestClient) -> No
     report = upload(client, "/api/mesh", obj("\n".join(points) + "\n", faces)).json()
     codes = [item["code"] for item in report["problems"]]
     assert "nonorientable" in codes and "winding" not in codes
+
+
+@pytest.mark.parametrize("size, area, title", [
+    ("1e120", True, "The total volume is beyond the double range"),
+    ("1e200", False, "The total area and volume are beyond the double range"),
+])
+def test_values_beyond_the_double_range_are_null_and_explained(
+    client: TestClient, size: str, area: bool, title: str
+) -> None:
+    points = f"v 0 0 0\nv {size} 0 0\nv 0 {size} 0\nv 0 0 {size}\n"
+    report = upload(client, "/api/mesh", points + TETRA[len(TETRA_POINTS):]).json()
+    assert report["volume"] is None and (report["area"] is not None) == area
+    assert report["watertight"] and report["orientation"] == "outward"
+    assert [(item["code"], item["title"]) for item in report["problems"]] == [("overflow", title)]
