@@ -79,11 +79,13 @@ class BodyLimit:
         limit = (self.upload_limit if streamed
                  else config.BODY_LIMITS.get(scope["path"], config.DEFAULT_BODY_LIMIT))
         declared = _content_length(scope)
+        if streamed:
+            # Refused inside the route, where the one error handler answers: JSON for the API,
+            # the HTML page for /mesh. A declared length beyond the limit fails at once.
+            await self.app(scope, _counted(receive, limit, declared or 0), send)
+            return
         if declared is not None and declared > limit:
             await _too_large(send, limit)
-            return
-        if streamed:
-            await self.app(scope, _counted(receive, limit), send)
             return
         chunks: list[bytes] = []
         size = 0
@@ -112,11 +114,13 @@ class BodyLimit:
         await self.app(scope, replay, send)
 
 
-def _counted(receive: Receive, limit: int) -> Receive:
+def _counted(receive: Receive, limit: int, declared: int) -> Receive:
     size = 0
 
     async def counted() -> Message:
         nonlocal size
+        if declared > limit:
+            raise ApiError(413, too_large_sentence(limit))
         message = await receive()
         size += len(message.get("body", b""))
         if size > limit:

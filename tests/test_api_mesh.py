@@ -423,3 +423,11 @@ def test_values_beyond_the_double_range_are_null_and_explained(
     assert report["volume"] is None and (report["area"] is not None) == area
     assert report["watertight"] and report["orientation"] == "outward"
     assert [(item["code"], item["title"]) for item in report["problems"]] == [("overflow", title)]
+
+
+def test_the_page_refuses_a_large_upload_with_its_own_html(small_limit: TestClient) -> None:
+    big = CUBE + "# padding\n" * 400
+    response = upload(small_limit, "/mesh", big)
+    assert response.status_code == 413
+    assert response.headers["content-type"].startswith("text/html")
+    assert "larger than 1.953 KB" in response.text
