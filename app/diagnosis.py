@@ -49,9 +49,10 @@ def _inward(report: dict[str, Any]) -> Problem | None:
         return None
     return _problem(
         "inward", "error", "The normals point inward",
-        "The winding is consistent, but every part is wound clockwise seen from outside: "
-        "normals point into the solid, back-face culling hides the outside, and the signed "
-        "volume is negative.",
+        "The winding is consistent, but every part whose outside can be decided is wound "
+        "clockwise seen from outside: "
+        "normals point into the solid, back-face culling hides the outside, and a closed "
+        "part's signed volume is negative.",
         "Download the fixed mesh (every face reversed), or reverse each face's winding.",
         "faces = faces[:, ::-1]  # reverses every face: A, B, C becomes C, B, A")
 

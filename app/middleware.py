@@ -75,7 +75,7 @@ class BodyLimit:
         if scope["type"] != "http" or scope["method"] in ("GET", "HEAD", "OPTIONS"):
             await self.app(scope, receive, send)
             return
-        streamed = scope["path"] in config.MESH_PATHS
+        streamed = scope["path"].rstrip("/") in config.MESH_PATHS  # "/api/mesh/" redirects
         limit = (self.upload_limit if streamed
                  else config.BODY_LIMITS.get(scope["path"], config.DEFAULT_BODY_LIMIT))
         declared = _content_length(scope)

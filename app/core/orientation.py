@@ -42,6 +42,7 @@ returns the topology too, so a caller that needs both calls only :func:`orient`.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from typing import Literal, overload
@@ -50,7 +51,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
-from app.core.mesh import check_mesh
+from app.core.mesh import check_mesh, scaling
 from app.core.tolerances import MESH_FLAT_SINE
 
 FloatArray = NDArray[np.float64]
@@ -549,30 +550,52 @@ def _cone_terms(
     """det(A - c, B - c, C - c) of each face and its bound |n| |A - c|, c its group's centroid.
 
     The vertices are first divided by 2**scale (exact) so that the largest |coordinate| is in
-    [0.5, 1): the terms are 2**(-3 scale) times the true ones.
+    [0.5, 1): the terms are 2**(-3 scale) times the true ones. c is the area-weighted centroid
+    of the face centroids A + (B - A + C - A) / 3 of each group; in a group of zero area
+    every normal is zero, and so is every term whatever c is.
     """
-    largest = float(np.abs(points).max(initial=0.0))
-    scale = int(np.frexp(largest)[1]) if largest else 0
-    columns = np.ldexp(np.ascontiguousarray(points.T), -scale)
-    corners = np.ascontiguousarray(faces.T)
-    a, b, c = (np.stack([column.take(corners[k]) for column in columns]) for k in range(3))
-    b -= a
-    c -= a
-    normal = np.stack([b[1] * c[2] - b[2] * c[1], b[2] * c[0] - b[0] * c[2],
-                       b[0] * c[1] - b[1] * c[0]])
-    area = np.sqrt(np.einsum("km,km->m", normal, normal))
-    # Area-weighted centroid of the face centroids A + (B - A + C - A) / 3 of each group. In
-    # a group of zero area every normal is zero, and so is every term whatever c is.
-    b += c
-    b /= 3
-    b += a
-    total = np.bincount(group, area, groups)
-    total[total == 0] = 1.0
-    mean = np.stack([np.bincount(group, area * b[k], groups) for k in range(3)]) / total
-    a -= mean.take(group, axis=1)
-    terms = np.einsum("km,km->m", normal, a)
-    bounds = area * np.sqrt(np.einsum("km,km->m", a, a))
+    points, factor, scale = scaling(points)
+    count = len(faces)
+    terms, bounds = np.empty(count), np.empty(count)
+    sums = np.zeros((groups, 4))  # area-weighted centroid sums and the area, per group
+    _cone_kernel(points, factor, faces, group, sums, terms, bounds)
     return terms, bounds, scale
+
+
+@njit(cache=True, error_model="numpy")
+def _cone_face(points: FloatArray, factor: float, faces: IndexArray, face: int) -> tuple[
+        float, float, float, float, float, float, float, float, float]:
+    """A, and the cross product n = (B - A) x (C - A) and the centroid of one face, scaled."""
+    a, b, c = faces[face, 0], faces[face, 1], faces[face, 2]
+    ax, ay, az = points[a, 0] * factor, points[a, 1] * factor, points[a, 2] * factor
+    ux, uy, uz = points[b, 0] * factor - ax, points[b, 1] * factor - ay, points[b, 2] * factor - az
+    vx, vy, vz = points[c, 0] * factor - ax, points[c, 1] * factor - ay, points[c, 2] * factor - az
+    nx, ny, nz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+    return ax, ay, az, nx, ny, nz, (ux + vx) / 3 + ax, (uy + vy) / 3 + ay, (uz + vz) / 3 + az
+
+
+@njit(cache=True, error_model="numpy")
+def _cone_kernel(points: FloatArray, factor: float, faces: IndexArray, group: IndexArray,
+                 sums: FloatArray, terms: FloatArray, bounds: FloatArray) -> None:
+    """Two passes over the faces: the groups' centroids, then each face's term and bound."""
+    for face in range(len(faces)):
+        _, _, _, nx, ny, nz, cx, cy, cz = _cone_face(points, factor, faces, face)
+        area = math.sqrt(nx * nx + ny * ny + nz * nz)
+        row = sums[group[face]]
+        row[0] += area * cx
+        row[1] += area * cy
+        row[2] += area * cz
+        row[3] += area
+    for row in sums:
+        total = row[3] if row[3] != 0.0 else 1.0
+        row[0], row[1], row[2] = row[0] / total, row[1] / total, row[2] / total
+    for face in range(len(faces)):
+        ax, ay, az, nx, ny, nz, _, _, _ = _cone_face(points, factor, faces, face)
+        row = sums[group[face]]
+        dx, dy, dz = ax - row[0], ay - row[1], az - row[2]
+        terms[face] = nx * dx + ny * dy + nz * dz
+        bounds[face] = math.sqrt(nx * nx + ny * ny + nz * nz) * math.sqrt(
+            dx * dx + dy * dy + dz * dz)
 
 
 def _unscaled(value: float, scale: int) -> float:
