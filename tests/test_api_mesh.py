@@ -431,3 +431,11 @@ def test_the_page_refuses_a_large_upload_with_its_own_html(small_limit: TestClie
     assert response.status_code == 413
     assert response.headers["content-type"].startswith("text/html")
     assert "larger than 1.953 KB" in response.text
+
+
+def test_a_trailing_slash_gets_the_upload_limit_too(client: TestClient) -> None:
+    padded = CUBE + "# padding past the 64 KB limit of other addresses\n" * 2000
+    assert len(padded) > 64 * 1024
+    response = upload(client, "/api/mesh/", padded)
+    assert response.status_code == 200, response.text  # redirected to /api/mesh, not a 413
+    assert response.json()["faces"] == 12
