@@ -151,9 +151,12 @@
   function render(html) {
     output.innerHTML = html;
     const report = data("mesh-report");
-    const count = report ? report.problems.length : 0;
-    say("Report ready for " + (report && report.file.name || "the file") + ": " +
-        (count ? count + (count === 1 ? " problem" : " problems") + " found." : "no problems found."),
+    const items = report ? report.problems : [];
+    const count = items.filter(function (item) { return item.severity !== "info"; }).length;
+    const notes = items.length - count;
+    const found = count ? count + (count === 1 ? " problem" : " problems") + " found" : "no problems found";
+    say("Report ready for " + (report && report.file.name || "the file") + ": " + found +
+        (notes ? (count ? " and " : ", ") + notes + (notes === 1 ? " note." : " notes.") : "."),
         "ok");
     const heading = document.getElementById("mesh-report-title");
     if (heading) heading.focus({ preventScroll: window.innerWidth >= 900 });
