@@ -194,11 +194,24 @@ def _accumulate(
             if flat:
                 continue
             length = math.sqrt(square)
+            if code == 1:  # area: the cross product itself is the unit normal times |n|
+                for k in range(3):
+                    _add_raw(sums[faces[start + row, k]], length, normal)
+                continue
             x, y, z = normal[0] / length, normal[1] / length, normal[2] / length
             w0, w1, w2 = _weights(code, edges, length)
             _add(sums[faces[start + row, 0]], w0, x, y, z)
             _add(sums[faces[start + row, 1]], w1, x, y, z)
             _add(sums[faces[start + row, 2]], w2, x, y, z)
+
+
+@njit(cache=True, error_model="numpy")
+def _add_raw(total: FloatArray, weight: float, normal: Vector) -> None:
+    """Area weighting: add n (not weight * n / |n|, which would round twice more)."""
+    total[0] += normal[0]
+    total[1] += normal[1]
+    total[2] += normal[2]
+    total[3] += weight
 
 
 @njit(cache=True, error_model="numpy")
