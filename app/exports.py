@@ -12,6 +12,7 @@ from pydantic_core import to_json
 from app.core.mesh import face_normals
 from app.core.mesh_normals import Weighting, corner_normals, vertex_normals
 from app.meshio import LoadedMesh
+from app.meshio.write import ply_bytes
 
 NormalsKind = Literal["face", "vertex", "corner"]
 NormalsFormat = Literal["json", "csv", "npy"]
@@ -85,27 +86,6 @@ def normals_csv(normals: NDArray[np.float64], kind: NormalsKind) -> bytes:
 
 def normals_ply(mesh: LoadedMesh, normals: NDArray[np.float64], kind: NormalsKind) -> bytes:
     """A binary PLY of the mesh with the normals as ``nx ny nz`` of its vertices or faces."""
-    vertex_fields = [("x", "<f8"), ("y", "<f8"), ("z", "<f8")]
-    face_fields = [("count", "u1"), ("indices", "<i4", (3,))]
-    extra = [("nx", "<f8"), ("ny", "<f8"), ("nz", "<f8")]
-    vertices = np.empty(len(mesh.vertices), dtype=vertex_fields + (extra if kind == "vertex"
-                                                                    else []))
-    faces = np.empty(len(mesh.faces), dtype=face_fields + (extra if kind == "face" else []))
-    for axis, name in enumerate("xyz"):
-        vertices[name] = mesh.vertices[:, axis]
-    faces["count"] = 3
-    faces["indices"] = mesh.faces
-    target = vertices if kind == "vertex" else faces
-    for axis, name in enumerate(("nx", "ny", "nz")):
-        target[name] = normals[:, axis]
-    normal_lines = "".join(f"property double {name}\n" for name in ("nx", "ny", "nz"))
-    header = (
-        "ply\nformat binary_little_endian 1.0\ncomment normals by mesh-normal-calculator\n"
-        f"element vertex {len(vertices)}\n"
-        "property double x\nproperty double y\nproperty double z\n"
-        f"{normal_lines if kind == 'vertex' else ''}"
-        f"element face {len(faces)}\nproperty list uchar int vertex_indices\n"
-        f"{normal_lines if kind == 'face' else ''}"
-        "end_header\n"
-    )
-    return header.encode("ascii") + vertices.tobytes() + faces.tobytes()
+    if kind == "vertex":
+        return ply_bytes(mesh.vertices, mesh.faces, vertex_normals=normals)
+    return ply_bytes(mesh.vertices, mesh.faces, face_normals=normals)

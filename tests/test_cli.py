@@ -152,3 +152,14 @@ def test_fix_to_stl_beyond_float32_fails_cleanly(tmp_path: Path,
     assert main(["fix", str(path), str(tmp_path / "big.stl")]) == 4
     assert "PLY or OBJ" in capsys.readouterr().err
     assert not (tmp_path / "big.stl").exists()
+
+
+def test_face_normals_ply_carries_them_per_face(cube: Path, tmp_path: Path) -> None:
+    out = tmp_path / "faces.ply"
+    assert main(["normals", str(cube), "--kind", "face", "-o", str(out)]) == 0
+    written = read_mesh(out.read_bytes(), "faces.ply")
+    mesh = read_mesh(CUBE.encode(), "cube.obj")
+    np.testing.assert_array_equal(written.vertices, mesh.vertices)
+    np.testing.assert_array_equal(written.faces, mesh.faces)
+    np.testing.assert_array_equal(written.file_face_normals,
+                                  face_normals(mesh.vertices, mesh.faces).normals)

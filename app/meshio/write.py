@@ -38,7 +38,7 @@ def write_mesh(vertices: ArrayLike, faces: ArrayLike, format: str) -> bytes:
     """
     points, triangles = check_mesh(vertices, faces)
     if format == "ply":
-        return _ply(points, triangles)
+        return ply_bytes(points, triangles)
     if format == "stl":
         return _stl(points, triangles)
     if format == "obj":
@@ -46,15 +46,40 @@ def write_mesh(vertices: ArrayLike, faces: ArrayLike, format: str) -> bytes:
     raise unsupported(f"Cannot write {format!r} files; the formats are {', '.join(WRITABLE)}.")
 
 
-def _ply(points: NDArray[np.float64], triangles: NDArray[np.intp]) -> bytes:
+def ply_bytes(
+    points: NDArray[np.float64], triangles: NDArray[np.intp],
+    vertex_normals: NDArray[np.float64] | None = None,
+    face_normals: NDArray[np.float64] | None = None,
+) -> bytes:
+    """Binary little-endian PLY: float64 ``x y z`` and int32 triangles, and ``nx ny nz``
+    (float64) of the vertices or of the faces where those normals are given.
+
+    Parameters
+    ----------
+    points : (n, 3) float64
+    triangles : (m, 3) intp
+    vertex_normals : (n, 3) float64, optional
+    face_normals : (m, 3) float64, optional
+    """
+    normal_fields = [("nx", "<f8"), ("ny", "<f8"), ("nz", "<f8")]
+    normal_lines = "".join(f"property double {name}\n" for name, _ in normal_fields)
+    vertices = np.empty(len(points), dtype=[("xyz", "<f8", (3,))]
+                        + (normal_fields if vertex_normals is not None else []))
+    faces = np.empty(len(triangles), dtype=[("count", "u1"), ("indices", "<i4", (3,))]
+                     + (normal_fields if face_normals is not None else []))
+    vertices["xyz"] = points
+    faces["count"] = 3
+    faces["indices"] = triangles
+    for records, normals in ((vertices, vertex_normals), (faces, face_normals)):
+        if normals is not None:
+            for axis, (name, _) in enumerate(normal_fields):
+                records[name] = normals[:, axis]
     header = (f"ply\nformat binary_little_endian 1.0\ncomment written by {_MAKER}\n"
               f"element vertex {len(points)}\nproperty double x\nproperty double y\n"
-              f"property double z\nelement face {len(triangles)}\n"
-              "property list uchar int vertex_indices\nend_header\n")
-    records = np.empty(len(triangles), dtype=[("count", "u1"), ("indices", "<i4", (3,))])
-    records["count"] = 3
-    records["indices"] = triangles
-    return header.encode() + points.astype("<f8").tobytes() + records.tobytes()
+              f"property double z\n{normal_lines if vertex_normals is not None else ''}"
+              f"element face {len(triangles)}\nproperty list uchar int vertex_indices\n"
+              f"{normal_lines if face_normals is not None else ''}end_header\n")
+    return header.encode() + vertices.tobytes() + faces.tobytes()
 
 
 def _stl(points: NDArray[np.float64], triangles: NDArray[np.intp]) -> bytes:
