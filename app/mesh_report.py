@@ -38,15 +38,12 @@ class MeshAnalysis:
     faces: FaceNormals
     topology: MeshTopology
     orientation: Orientation
-    repeated: NDArray[np.bool_]
     unused_vertices: int
 
 
 def analyse(mesh: LoadedMesh, name: str | None = None, size: int = 0) -> MeshAnalysis:
     """Run every check of the core on ``mesh`` (read from a file of ``size`` bytes)."""
     faces = mesh.faces
-    repeated = ((faces[:, 0] == faces[:, 1]) | (faces[:, 1] == faces[:, 2])
-                | (faces[:, 2] == faces[:, 0]))
     used = np.zeros(len(mesh.vertices), dtype=bool)
     used[faces.ravel()] = True
     orientation = orient(mesh.vertices, faces)
@@ -57,7 +54,6 @@ def analyse(mesh: LoadedMesh, name: str | None = None, size: int = 0) -> MeshAna
         faces=face_normals(mesh.vertices, faces),
         topology=orientation.topology,
         orientation=orientation,
-        repeated=repeated,
         unused_vertices=int(len(used) - np.count_nonzero(used)),
     )
 
@@ -90,7 +86,8 @@ def report_payload(analysis: MeshAnalysis) -> dict[str, Any]:
         "orientation": orientation.orientation,
         "degenerate_faces": int(np.count_nonzero(degenerate)),
         "degenerate_face_indices": first_indices(degenerate),
-        "repeated_index_faces": int(np.count_nonzero(analysis.repeated)),
+        # Faces with a repeated index are the ones outside every component.
+        "repeated_index_faces": int(np.count_nonzero(topology.face_component < 0)),
         "boundary_edges": topology.boundary_edges,
         "nonmanifold_edges": topology.nonmanifold_edges,
         "components": topology.components,

@@ -71,7 +71,7 @@ def check_mesh(vertices: ArrayLike, faces: ArrayLike) -> tuple[FloatArray, Index
         C-contiguous.
     """
     points = _as_vertices(vertices)
-    return points, _as_faces(faces, len(points))
+    return points, check_faces(faces, len(points))
 
 
 def _as_vertices(vertices: ArrayLike) -> FloatArray:
@@ -89,7 +89,21 @@ def _as_vertices(vertices: ArrayLike) -> FloatArray:
     return points
 
 
-def _as_faces(faces: ArrayLike, vertex_count: int) -> IndexArray:
+def check_faces(faces: ArrayLike, vertex_count: int) -> IndexArray:
+    """Convert and check faces alone, for ``vertex_count`` vertices (see :func:`check_mesh`).
+
+    Parameters
+    ----------
+    faces : (m, 3) int
+        Indices, each in ``0 .. vertex_count - 1`` (any integer dtype).
+    vertex_count : int
+        n, the number of vertices.
+
+    Returns
+    -------
+    (m, 3) intp
+        C-contiguous.
+    """
     array = np.asarray(faces)
     if array.size == 0 and array.ndim <= 2:
         return np.empty((0, 3), dtype=np.intp)

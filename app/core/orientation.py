@@ -51,7 +51,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
-from app.core.mesh import check_mesh, scaling
+from app.core.mesh import check_faces, check_mesh, scaling
 from app.core.tolerances import MESH_FLAT_SINE
 
 FloatArray = NDArray[np.float64]
@@ -275,8 +275,7 @@ def mesh_topology(faces: ArrayLike, vertex_count: int) -> MeshTopology:
     >>> t.watertight, t.winding_consistent, t.components
     (True, True, 1)
     """
-    _, indices = check_mesh(np.zeros((vertex_count, 3)), faces)
-    return _structure(indices, vertex_count).topology
+    return _structure(check_faces(faces, vertex_count), vertex_count).topology
 
 
 def signed_volume(vertices: ArrayLike, faces: ArrayLike) -> float:
