@@ -15,9 +15,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from app.core.mesh import FaceNormals, face_normals
-from app.core.mesh_normals import corner_normals, vertex_normals
 from app.core.orientation import MeshTopology, Orientation, orient
 from app.diagnosis import problems
+from app.exports import compute_normals
 from app.meshio import LoadedMesh
 
 #: How many face indices (or components) a list in the report holds at most; counts are full.
@@ -142,14 +142,13 @@ def file_normal_agreement(analysis: MeshAnalysis) -> dict[str, Any] | None:
         ours, missing = analysis.faces.normals, analysis.faces.degenerate
         reference = "our face normals"
     elif mesh.file_corner_normals is not None:
-        corners = corner_normals(mesh.vertices, mesh.faces, COMPARISON_CREASE)
+        corners, corner_missing = compute_normals(mesh, "corner", "angle", COMPARISON_CREASE)
         kind, theirs = "corner", mesh.file_corner_normals.reshape(-1, 3)
-        ours, missing = corners.normals.reshape(-1, 3), corners.missing.ravel()
+        ours, missing = corners.reshape(-1, 3), corner_missing.ravel()
         reference = f"our corner normals (crease angle {COMPARISON_CREASE:g}°)"
     elif mesh.file_vertex_normals is not None:
-        computed = vertex_normals(mesh.vertices, mesh.faces, "angle")
         kind, theirs = "vertex", mesh.file_vertex_normals
-        ours, missing = computed.normals, computed.missing
+        ours, missing = compute_normals(mesh, "vertex", "angle")
         reference = "our angle-weighted vertex normals"
     else:
         return None

@@ -439,3 +439,24 @@ def test_a_trailing_slash_gets_the_upload_limit_too(client: TestClient) -> None:
     response = upload(client, "/api/mesh/", padded)
     assert response.status_code == 200, response.text  # redirected to /api/mesh, not a 413
     assert response.json()["faces"] == 12
+
+
+def test_stored_corner_and_vertex_normals_are_compared(client: TestClient) -> None:
+    from app.core import face_normals
+    from app.meshio.write import ply_bytes
+
+    mesh = read_mesh(CUBE.encode(), "cube.obj")
+    flat = face_normals(mesh.vertices, mesh.faces).normals  # a cube's corners: its faces'
+    vn = "".join(f"vn {x!r} {y!r} {z!r}\n" for x, y, z in flat.tolist())
+    faces = "".join(f"f {a + 1}//{k + 1} {b + 1}//{k + 1} {c + 1}//{k + 1}\n"
+                    for k, (a, b, c) in enumerate(mesh.faces.tolist()))
+    corner = upload(client, "/api/mesh", CUBE_POINTS + vn + faces).json()["file_normals"]
+    assert corner["kind"] == "corner" and corner["compared"] == 36
+    assert corner["agreeing"] == 36 and corner["opposite"] == 0
+
+    smooth = vertex_normals(mesh.vertices, mesh.faces, "angle").normals
+    ply = ply_bytes(mesh.vertices, mesh.faces, vertex_normals=-smooth)  # stored inside out
+    vertex = upload(client, "/api/mesh", ply, "cube.ply").json()
+    assert vertex["file_normals"]["kind"] == "vertex"
+    assert vertex["file_normals"]["opposite"] == 8 and vertex["file_normals"]["agreeing"] == 0
+    assert "file_normals" in [item["code"] for item in vertex["problems"]]
