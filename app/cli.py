@@ -21,7 +21,7 @@ from typing import Any, TextIO
 
 from app.core.mesh_normals import WEIGHTINGS
 from app.core.orientation import orient
-from app.exports import KINDS, compute_normals, normals_csv, normals_ply, npy_bytes
+from app.exports import KINDS, compute_normals, normals_file, normals_ply
 from app.mesh_report import analyse, flips_by_component, report_payload
 from app.meshio import SUFFIXES, LoadedMesh, MeshFileError, read_mesh, write_mesh
 
@@ -127,15 +127,11 @@ def normals(args: argparse.Namespace, progress: Progress) -> int:
     progress.step(f"computing {args.kind} normals")
     values, missing = compute_normals(mesh, args.kind, args.weighting, args.crease_angle)
     progress.step(f"writing {args.output}")
-    if suffix == ".npy":
-        data = npy_bytes(values)
-    elif suffix == ".csv":
-        data = normals_csv(values, args.kind)
-    elif suffix == ".ply":
+    if suffix == ".ply":
         data = normals_ply(mesh, values, args.kind)
-    else:
-        data = json.dumps({"kind": args.kind, "shape": list(values.shape),
-                           "normals": values.tolist()}).encode()
+    else:  # the same files as POST /api/mesh/normals
+        data = normals_file(values, missing, args.kind, args.weighting, args.crease_angle,
+                            suffix[1:])
     write(args.output, data)
     progress.done()
     if int(missing.sum()):

@@ -45,6 +45,12 @@ def export_normals(mesh: LoadedMesh, kind: NormalsKind, weighting: Weighting,
                    crease_angle: float, format: NormalsFormat) -> bytes:
     """The normals as the bytes of a JSON, CSV or ``.npy`` file."""
     normals, missing = compute_normals(mesh, kind, weighting, crease_angle)
+    return normals_file(normals, missing, kind, weighting, crease_angle, format)
+
+
+def normals_file(normals: NDArray[np.float64], missing: NDArray[np.bool_], kind: NormalsKind,
+                 weighting: Weighting, crease_angle: float, format: NormalsFormat) -> bytes:
+    """Computed normals (see :func:`compute_normals`) as a JSON, CSV or ``.npy`` file."""
     if format == "npy":
         return npy_bytes(normals)
     if format == "csv":
