@@ -13,28 +13,38 @@ PORT ?= 8000
 	python3 -m venv .tools
 	.tools/bin/pip install --quiet uv
 
-.venv/.installed: pyproject.toml uv.lock | $(UV)
-	$(UV) sync --locked --extra test
-	touch $@
+# Serving needs the library and the `web` group; testing adds the `test` group. Each target
+# syncs the environment to exactly what it needs (uv is quick when nothing changed).
+.venv/.web: pyproject.toml uv.lock | $(UV)
+	$(UV) sync --locked --group web
+	rm -f .venv/.test && touch $@
 
-env: .venv/.installed
+.venv/.test: pyproject.toml uv.lock | $(UV)
+	$(UV) sync --locked --group test
+	rm -f .venv/.web && touch $@
 
-run: env
+env: .venv/.test
+
+run: .venv/.web
 	.venv/bin/uvicorn app.main:app --host $(HOST) --port $(PORT)
 
-test: env
-	.venv/bin/ruff check app tests benchmarks
+lint: .venv/.test
+	.venv/bin/ruff format --check mesh_normal app tests benchmarks
+	.venv/bin/ruff check mesh_normal app tests benchmarks
+	.venv/bin/mypy
+
+test: lint
 	.venv/bin/pytest
 
-bench: env
+bench: .venv/.test
 	.venv/bin/python -m benchmarks.run
 
-bench-mesh: env
-	$(UV) sync --locked --extra test --extra bench
+bench-mesh: .venv/.test
+	$(UV) sync --locked --group test --group bench
 	.venv/bin/python -m benchmarks.mesh_kernels
 
-bench-mesh-e2e: env
-	$(UV) sync --locked --extra test --extra bench
+bench-mesh-e2e: .venv/.test
+	$(UV) sync --locked --group test --group bench
 	.venv/bin/python -m benchmarks.mesh_end_to_end
 
 clean:

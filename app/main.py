@@ -8,11 +8,15 @@ from contextlib import asynccontextmanager
 
 from fastapi import FastAPI
 
-from app import config, errors, mesh_page, pages
-from app.api import mesh, normals
-from app.core.mesh_normals import compile_kernels
-from app.middleware import BodyLimit, PageCompression, SecurityHeaders
-from app.static import STATIC_DIR, CompressedStaticFiles
+from app import config
+from app.calculator import api as calculator_api
+from app.calculator import pages
+from app.mesh import api as mesh_api
+from app.mesh import page as mesh_page
+from app.web import errors
+from app.web.middleware import BodyLimit, PageCompression, SecurityHeaders
+from app.web.static import STATIC_DIR, CompressedStaticFiles
+from mesh_normal.vertices import compile_kernels
 
 DESCRIPTION = """
 Surface normals of triangles, exact to the last bit.
@@ -48,8 +52,8 @@ def create_app(upload_limit: int | None = None) -> FastAPI:
         lifespan=lifespan,
     )
     errors.install(app)
-    app.include_router(normals.router)
-    app.include_router(mesh.router)
+    app.include_router(calculator_api.router)
+    app.include_router(mesh_api.router)
     app.include_router(pages.router)
     app.include_router(mesh_page.router)
     app.mount("/static", CompressedStaticFiles(directory=STATIC_DIR), name="static")

@@ -58,7 +58,7 @@ def stl_file(size: int) -> Path:
     path = CACHE / f"torus-{size}.stl"
     if path.exists() and path.stat().st_size == 84 + 50 * size:
         return path
-    from app.meshio import write_mesh
+    from mesh_normal.files import write_mesh
 
     CACHE.mkdir(parents=True, exist_ok=True)
     print(f"writing {path} ...", file=sys.stderr, flush=True)

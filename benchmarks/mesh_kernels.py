@@ -28,8 +28,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from app.core.mesh import face_normals
-from app.core.mesh_normals import corner_normals, vertex_normals
+from mesh_normal.faces import face_normals
+from mesh_normal.vertices import corner_normals, vertex_normals
 
 SIZES = (69_451, 871_414, 14_000_000)
 

@@ -10,15 +10,15 @@ import numpy as np
 import pytest
 from playwright.sync_api import Page, expect
 
-from app.core import vertex_normals
-from app.core.orientation import mesh_topology
-from app.meshio import read_mesh, write_mesh
+from mesh_normal import vertex_normals
+from mesh_normal.files import read_mesh, write_mesh
+from mesh_normal.orientation import mesh_topology
+from tests.app.mesh.test_api import CUBE_ONE_FLIPPED
 from tests.browser.conftest import ConsoleWatch, NewPage
-from tests.test_api_mesh import CUBE_ONE_FLIPPED
+from tests.paths import ROOT
 
 pytestmark = pytest.mark.browser
 
-ROOT = Path(__file__).resolve().parents[2]
 DOCS = ROOT / "docs"
 DATA = ROOT / "tests" / "data"
 SCREENSHOT_LIMIT = 400 * 1024

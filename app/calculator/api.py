@@ -1,0 +1,91 @@
+"""JSON API: one triangle, a batch, and the chart figure."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+import numpy as np
+from fastapi import APIRouter, Query, Request
+from fastapi.concurrency import run_in_threadpool
+from fastapi.responses import Response
+
+from app.calculator.chart import bar_figure
+from app.calculator.params import TriangleParams, read_triangle
+from app.calculator.payloads import batch_payload, normal_payload, payload_csv
+from app.calculator.schemas import BatchRequest, BatchResult, Figure, NormalRequest, NormalResult
+from app.web.errors import ERROR_RESPONSES
+from app.web.jsonio import (
+    FastJSONResponse,
+    parse_body,
+    raw_json_body,
+    read_body,
+    request_body_spec,
+)
+from mesh_normal.batch import triangle_normals
+from mesh_normal.triangle import triangle_normal
+
+router = APIRouter(prefix="/api", tags=["normals"], responses=ERROR_RESPONSES,
+                   default_response_class=FastJSONResponse)
+
+
+def query_payload(request: Request) -> dict[str, Any]:
+    """The result for the page's query parameters, or the first error as an ApiError."""
+    parsed = read_triangle(request.query_params)
+    if parsed.errors:
+        raise parsed.first_error()
+    a, b, c = parsed.points()
+    return normal_payload(triangle_normal(a, b, c, swap_winding=parsed.swap))
+
+
+@router.post("/normal", response_model=NormalResult,
+             openapi_extra=request_body_spec(NormalRequest))
+async def post_normal(request: Request) -> FastJSONResponse:
+    """The normal of one triangle given as JSON."""
+    body = await read_body(request, NormalRequest)
+    result = triangle_normal(body.a, body.b, body.c, swap_winding=body.swap_winding)
+    return FastJSONResponse(normal_payload(result))
+
+
+@router.get("/normal", response_model=NormalResult)
+async def get_normal(request: Request,
+                     params: Annotated[TriangleParams, Query()]) -> FastJSONResponse:
+    """The normal for the calculator page's query parameters: the JSON twin of a result page."""
+    return FastJSONResponse(query_payload(request))
+
+
+@router.get("/normal.csv", response_class=Response, responses={
+    200: {"description": "One header row and one result row.",
+          "content": {"text/csv": {"schema": {"type": "string"}}}}})
+async def get_normal_csv(request: Request,
+                         params: Annotated[TriangleParams, Query()]) -> Response:
+    """The same result as CSV, for spreadsheets (a download)."""
+    return Response(payload_csv(query_payload(request)), media_type="text/csv",
+                    headers={"content-disposition": 'attachment; filename="triangle-normal.csv"'})
+
+
+@router.post("/normals", response_model=BatchResult,
+             openapi_extra=request_body_spec(BatchRequest))
+async def post_normals(request: Request) -> FastJSONResponse:
+    """Normals of up to 100,000 triangles, in input order."""
+    raw = await raw_json_body(request)
+    # Parsing and computing a full batch takes a while: keep the event loop free meanwhile.
+    content = await run_in_threadpool(_batch, raw)
+    return FastJSONResponse(content)
+
+
+def _batch(raw: bytes) -> dict[str, Any]:
+    body = parse_body(raw, BatchRequest)
+    triangles = np.array(body.triangles, dtype=np.float64).reshape(-1, 3, 3)
+    batch = triangle_normals(triangles, swap_winding=body.swap_winding)
+    exact_rows = {
+        int(row): triangle_normal(*triangles[row].tolist(), swap_winding=body.swap_winding)
+        for row in np.flatnonzero(batch.out_of_range)
+    }
+    return batch_payload(batch, exact_rows)
+
+
+@router.get("/chart", response_model=Figure)
+async def get_chart(request: Request,
+                    params: Annotated[TriangleParams, Query()]) -> FastJSONResponse:
+    """The Plotly figure of the bar chart for the page's query parameters."""
+    return FastJSONResponse(bar_figure(query_payload(request)))

@@ -1,0 +1,120 @@
+"""HTML pages: the calculator, the embeddable chart, the API docs and the error page."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+from urllib.parse import urlencode
+
+from fastapi import APIRouter, Request
+from fastapi.responses import HTMLResponse, JSONResponse
+from fastapi.templating import Jinja2Templates
+from markupsafe import Markup
+
+from app.calculator.chart import bar_figure
+from app.calculator.params import read_triangle
+from app.calculator.payloads import normal_payload
+from app.calculator.snippets import snippets
+from app.calculator.steps import worked_steps
+from app.calculator.view3d import view3d_figure
+from app.config import COORDINATE_FIELDS, EXAMPLE, PRESETS
+from app.web.errors import ApiError
+from app.web.formatting import js_number
+from app.web.static import static_url
+from mesh_normal.triangle import triangle_normal
+
+TEMPLATES_DIR = Path(__file__).resolve().parents[2] / "templates"
+templates = Jinja2Templates(directory=TEMPLATES_DIR)
+templates.env.globals["static_url"] = static_url
+templates.env.filters["num"] = lambda x: "out of range" if x is None else js_number(x)
+
+router = APIRouter(include_in_schema=False)
+
+
+def json_script(value: Any) -> Markup:
+    """JSON that is safe inside ``<script type="application/json">``."""
+    text = json.dumps(value, separators=(",", ":"))
+    return Markup(text.replace("<", "\\u003c").replace(">", "\\u003e").replace("&", "\\u0026"))
+
+
+templates.env.filters["json_script"] = json_script
+
+
+def _calculation(request: Request) -> dict[str, Any]:
+    """What every page shows for its query: typed values, errors, result, payload and chart."""
+    query = request.query_params
+    given = any(name in query for name in COORDINATE_FIELDS)
+    parsed = read_triangle(query if given else {**EXAMPLE, **query})
+    context: dict[str, Any] = {"typed": parsed.typed, "swap": parsed.swap,
+                               "errors": parsed.errors, "result": None, "payload": None,
+                               "figure": None}
+    swap_text = "on" if parsed.swap else query.get("swap") if "swap" in parsed.errors else None
+    params = {**parsed.typed, **({"swap": swap_text} if swap_text else {})}
+    context["query"] = urlencode(params)
+    if not parsed.errors:
+        a, b, c = parsed.points()
+        result = triangle_normal(a, b, c, swap_winding=parsed.swap)
+        context["result"] = result
+        context["payload"] = normal_payload(result)
+        context["figure"] = bar_figure(context["payload"])
+    return context
+
+
+def _with_details(context: dict[str, Any]) -> dict[str, Any]:
+    """Add what only the calculator shows (presets, steps, 3D view, code); /embed skips it."""
+    result, payload = context["result"], context["payload"]
+    return {**context, "presets": PRESETS,
+            "steps": None if result is None else worked_steps(result),
+            "view3d": None if payload is None else view3d_figure(payload),
+            "snippets": [] if payload is None else snippets(payload)}
+
+
+def _status(context: dict[str, Any]) -> int:
+    return 422 if context["errors"] else 200
+
+
+@router.get("/", response_class=HTMLResponse)
+def calculator(request: Request) -> HTMLResponse:
+    context = _with_details(_calculation(request))
+    response = templates.TemplateResponse(request, "index.html", context,
+                                          status_code=_status(context))
+    response.headers["link"] = f'</api/normal?{context["query"]}>; rel="alternate"; ' \
+                               'type="application/json"'
+    return response
+
+
+#: The page's parts that live updates re-render, by element id and template.
+PARTS = {"result": "_result.html", "steps": "_steps.html", "code": "_code.html"}
+
+
+@router.get("/partials")
+def partials(request: Request) -> JSONResponse:
+    """The page's live parts for a query: HTML from the same templates, plus the figures.
+
+    Always 200, so that a typing mistake is data for the page, not a failed request.
+    """
+    context = _with_details(_calculation(request))
+    html = {element: templates.get_template(name).render({**context, "request": request})
+            for element, name in PARTS.items()}
+    return JSONResponse({"query": context["query"], "errors": context["errors"],
+                         "html": html, "figure": context["figure"],
+                         "view3d": context["view3d"]})
+
+
+@router.get("/embed", response_class=HTMLResponse)
+def embed(request: Request) -> HTMLResponse:
+    context = _calculation(request)
+    return templates.TemplateResponse(request, "embed.html", context,
+                                      status_code=_status(context))
+
+
+@router.get("/docs", response_class=HTMLResponse)
+def docs(request: Request) -> HTMLResponse:
+    """Swagger UI from our own files, started by an external script (no inline script)."""
+    return templates.TemplateResponse(request, "docs.html", {"openapi_url": "/openapi.json"})
+
+
+def error_page(request: Request, error: ApiError) -> HTMLResponse:
+    return templates.TemplateResponse(request, "error.html", {"error": error},
+                                      status_code=error.status_code)

@@ -1,0 +1,122 @@
+"""JSON API for whole meshes: the report, the normals and the fixed file.
+
+Every route takes the mesh file itself (the server keeps nothing between requests) and does
+its work in a worker thread, so other requests keep being served meanwhile.
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Annotated, Any, Literal
+
+import numpy as np
+from fastapi import APIRouter, Query, Request
+from fastapi.concurrency import run_in_threadpool
+from fastapi.responses import Response
+
+from app.mesh.uploads import UPLOAD_BODY, Upload, read_upload
+from app.web.errors import ERROR_RESPONSES, ApiError
+from app.web.jsonio import FastJSONResponse
+from mesh_normal.exports import NormalsKind, export_normals
+from mesh_normal.files import LoadedMesh, MeshFileError, read_mesh, write_mesh
+from mesh_normal.orientation import orient
+from mesh_normal.report import analyse, flips_by_component, report_payload
+from mesh_normal.vertices import Weighting
+
+router = APIRouter(prefix="/api/mesh", tags=["meshes"], default_response_class=FastJSONResponse,
+                   responses={**ERROR_RESPONSES, 415: {
+                       "description": "The file's format is unknown or not supported.",
+                       "content": ERROR_RESPONSES[415]["content"]}})
+
+FixFormat = Literal["ply", "stl", "obj"]
+MEDIA_TYPES = {"json": "application/json", "csv": "text/csv",
+               "npy": "application/octet-stream", "ply": "application/octet-stream",
+               "stl": "model/stl", "obj": "model/obj"}
+
+
+def load(upload: Upload) -> LoadedMesh:
+    """Read the uploaded file; a broken or unknown file becomes a 4xx naming the problem."""
+    try:
+        return read_mesh(upload.data, upload.filename)
+    except MeshFileError as error:
+        raise ApiError(error.status_code, str(error), "file") from None
+
+
+def stem(filename: str | None) -> str:
+    """A safe download name from the upload's name: letters, digits, ``-`` and ``_``."""
+    base = (filename or "mesh").rsplit("/", 1)[-1].rsplit("\\", 1)[-1].rsplit(".", 1)[0]
+    return re.sub(r"[^A-Za-z0-9_-]+", "-", base).strip("-")[:60] or "mesh"
+
+
+def attachment(name: str) -> dict[str, str]:
+    return {"content-disposition": f'attachment; filename="{name}"'}
+
+
+@router.post("", openapi_extra=UPLOAD_BODY)
+async def post_mesh(request: Request) -> FastJSONResponse:
+    """Report on a mesh file: counts, area, volume, winding, orientation and problems."""
+    upload = await read_upload(request)
+    return FastJSONResponse(await run_in_threadpool(_report, upload))
+
+
+def _report(upload: Upload) -> dict[str, Any]:
+    return report_payload(analyse(load(upload), upload.filename, len(upload.data)))
+
+
+@router.post("/normals", openapi_extra=UPLOAD_BODY, response_class=Response, responses={
+    200: {"description": "The normals in file order: JSON, CSV or NumPy .npy (float64).",
+          "content": {"application/json": {}, "text/csv": {},
+                      "application/octet-stream": {}}}})
+async def post_mesh_normals(
+    request: Request,
+    kind: Annotated[NormalsKind, Query(description="face, vertex or corner normals")] = "vertex",
+    weighting: Annotated[Weighting, Query(description="how faces count at a vertex "
+                                                      "(vertex and corner kinds)")] = "angle",
+    crease_angle: Annotated[float, Query(ge=0, le=180, description="corner kind: edges with a "
+                                         "larger dihedral angle stay sharp, in degrees")] = 30.0,
+    format: Annotated[Literal["json", "csv", "npy"], Query()] = "json",
+) -> Response:
+    """The face, vertex or corner normals of a mesh file, in the file's order."""
+    upload = await read_upload(request)
+
+    def work() -> bytes:
+        mesh = load(upload)
+        return export_normals(mesh, kind, weighting, crease_angle, format)
+
+    body = await run_in_threadpool(work)
+    name = f"{stem(upload.filename)}-{kind}-normals.{format}"
+    return Response(body, media_type=MEDIA_TYPES[format], headers=attachment(name))
+
+
+@router.post("/fix", openapi_extra=UPLOAD_BODY, response_class=Response, responses={
+    200: {"description": "The mesh with consistent, outward winding; vertices untouched. "
+                         "X-Faces-Flipped (a count), X-Component-Faces-Flipped (component:faces "
+                         "for the first 100 components changed) and X-Orientation-Before say "
+                         "what changed.",
+          "content": {"application/octet-stream": {}, "model/stl": {}, "model/obj": {}}}})
+async def post_mesh_fix(
+    request: Request,
+    format: Annotated[FixFormat | None, Query(description="ply, stl or obj; default: the "
+                                              "upload's format where it is one of these, "
+                                              "else ply")] = None,
+) -> Response:
+    """The mesh file with consistent, outward winding (the vertices untouched)."""
+    upload = await read_upload(request)
+
+    def work() -> tuple[bytes, str, dict[str, str]]:
+        mesh = load(upload)
+        chosen = format or (mesh.format if mesh.format in ("ply", "stl", "obj") else "ply")
+        fixed = orient(mesh.vertices, mesh.faces)
+        headers = {
+            "x-faces-flipped": str(int(np.count_nonzero(fixed.flipped))),
+            "x-component-faces-flipped": flips_by_component(fixed),
+            "x-orientation-before": fixed.orientation,
+        }
+        try:
+            return write_mesh(mesh.vertices, fixed.faces, chosen), chosen, headers
+        except MeshFileError as error:  # e.g. coordinates beyond what STL's floats hold
+            raise ApiError(error.status_code, str(error), "format") from None
+
+    body, chosen, headers = await run_in_threadpool(work)
+    headers.update(attachment(f"{stem(upload.filename)}-fixed.{chosen}"))
+    return Response(body, media_type=MEDIA_TYPES[chosen], headers=headers)

@@ -1,0 +1,79 @@
+"""The mesh page: upload a file, read its diagnosis, see it in 3D, download normals and a fix.
+
+``GET /mesh`` shows the form; ``POST /mesh`` (multipart field ``file``) answers with the whole
+page and its report, so it works without JavaScript. ``POST /mesh?part=report`` answers with
+the report alone, which the page's script swaps in. The server keeps nothing: the page's
+downloads send the file again to the JSON API.
+"""
+
+from __future__ import annotations
+
+import shlex
+from typing import Any, get_args
+
+from fastapi import APIRouter, Request
+from fastapi.concurrency import run_in_threadpool
+from fastapi.responses import HTMLResponse
+
+from app.calculator.pages import templates
+from app.mesh.api import load, stem
+from app.mesh.uploads import Upload, read_upload
+from app.mesh.view import CLASSES, mesh_figures
+from app.web.errors import ApiError
+from app.web.middleware import size_text
+from mesh_normal.exports import FORMATS, KINDS
+from mesh_normal.files import SUFFIXES
+from mesh_normal.report import analyse, report_payload
+from mesh_normal.vertices import Weighting
+
+router = APIRouter(include_in_schema=False)
+
+FIX_FORMATS = ("ply", "stl", "obj")
+#: Problems that the fixed mesh (orient()) repairs: their card gets the download button.
+FIXED_BY_ORIENT = frozenset({"winding", "inward", "mixed"})
+
+
+def _form_context(request: Request) -> dict[str, Any]:
+    """What the upload form needs: the accepted suffixes and the app's size limit."""
+    limit: int = request.app.state.upload_limit
+    return {"suffixes": sorted(suffix.lstrip(".") for suffix in SUFFIXES), "limit": limit,
+            "limit_text": size_text(limit),
+            "report": None, "error": None}
+
+
+def _report_context(upload: Upload, base_url: str) -> dict[str, Any]:
+    """Analyse the upload (in a worker thread): the report, its figures and the downloads."""
+    analysis = analyse(load(upload), upload.filename, len(upload.data))
+    name = upload.filename or "mesh"
+    return {
+        "report": report_payload(analysis),
+        "figures": mesh_figures(analysis),
+        "classes": CLASSES,
+        "stem": stem(upload.filename),
+        "curl": f"curl -F {shlex.quote('file=@' + name)} {base_url}api/mesh",
+        "kinds": KINDS, "weightings": get_args(Weighting), "formats": FORMATS,
+        "fix_formats": FIX_FORMATS, "fixed_by_orient": FIXED_BY_ORIENT,
+    }
+
+
+@router.get("/mesh", response_class=HTMLResponse)
+def mesh_form(request: Request) -> HTMLResponse:
+    return templates.TemplateResponse(request, "mesh.html", _form_context(request))
+
+
+@router.post("/mesh", response_class=HTMLResponse)
+async def mesh_upload(request: Request) -> HTMLResponse:
+    """The report on an uploaded mesh: the whole page, or with ``?part=report`` the report."""
+    fragment = request.query_params.get("part") == "report"
+    context = _form_context(request)
+    try:
+        upload = await read_upload(request)
+        context.update(await run_in_threadpool(_report_context, upload,
+                                               str(request.base_url)))
+    except ApiError as error:
+        context["error"] = error
+        name = "_mesh_error.html" if fragment else "mesh.html"
+        return templates.TemplateResponse(request, name, context,
+                                          status_code=error.status_code)
+    name = "_mesh_report.html" if fragment else "mesh.html"
+    return templates.TemplateResponse(request, name, context)

@@ -1,0 +1,231 @@
+"""The ``mesh-normal`` command: analyse, export normals, fix winding, or serve the web app.
+
+Exit codes a script can use:
+
+- 0: done; for ``analyze``, the mesh has no problem of severity "error".
+- 1: ``analyze`` found at least one problem of severity "error" (the report says which).
+- 2: bad usage (an unknown option, a missing argument, an unsupported output type).
+- 3: the input file cannot be read or is not a valid mesh (the message names the problem).
+- 4: the output file cannot be written.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+from pathlib import Path
+from typing import Any, TextIO
+
+from mesh_normal.exports import KINDS, compute_normals, normals_file, normals_ply
+from mesh_normal.files import SUFFIXES, LoadedMesh, MeshFileError, read_mesh, write_mesh
+from mesh_normal.orientation import orient
+from mesh_normal.report import analyse, flips_by_component, report_payload
+from mesh_normal.vertices import WEIGHTINGS
+
+EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE, EXIT_INPUT, EXIT_OUTPUT = 0, 1, 2, 3, 4
+NORMAL_SUFFIXES = (".npy", ".csv", ".json", ".ply")
+FIX_FORMATS = ("ply", "stl", "obj")
+
+
+class Failure(Exception):
+    """A message for stderr and the exit code to leave with."""
+
+    def __init__(self, message: str, code: int) -> None:
+        super().__init__(message)
+        self.code = code
+
+
+class Progress:
+    """Stage by stage on stderr with elapsed seconds, when stderr is a terminal (or forced)."""
+
+    def __init__(self, stream: TextIO, enabled: bool) -> None:
+        self.stream, self.enabled = stream, enabled
+        self.start = time.perf_counter()
+
+    def step(self, text: str) -> None:
+        if self.enabled:
+            elapsed = time.perf_counter() - self.start
+            self.stream.write(f"\r\033[K[{elapsed:6.1f} s] {text}")
+            self.stream.flush()
+
+    def done(self) -> None:
+        if self.enabled:
+            self.step("done\n")
+
+
+def load(path: str, progress: Progress) -> tuple[LoadedMesh, int]:
+    progress.step(f"reading {path}")
+    try:
+        data = Path(path).read_bytes()
+    except OSError as error:
+        raise Failure(f"cannot read {path}: {error.strerror or error}", EXIT_INPUT) from None
+    try:
+        return read_mesh(data, Path(path).name), len(data)
+    except MeshFileError as error:
+        raise Failure(f"{path}: {error}", EXIT_INPUT) from None
+
+
+def write(path: str, data: bytes) -> None:
+    """Write through a temporary file beside ``path`` and rename it: never a half-written
+    file, and ``mesh-normal fix a.obj a.obj`` cannot lose the input."""
+    target = Path(path)
+    temporary = target.with_name(f".{target.name}.{os.getpid()}.tmp")
+    try:
+        temporary.write_bytes(data)
+        os.replace(temporary, target)
+    except OSError as error:
+        temporary.unlink(missing_ok=True)
+        raise Failure(f"cannot write {path}: {error.strerror or error}", EXIT_OUTPUT) from None
+
+
+def analyze(args: argparse.Namespace, progress: Progress) -> int:
+    mesh, size = load(args.file, progress)
+    progress.step("checking faces, edges and winding")
+    report = report_payload(analyse(mesh, Path(args.file).name, size))
+    progress.done()
+    if args.json:
+        print(json.dumps(report, indent=2))
+    else:
+        print(summary(report))
+    serious = any(item["severity"] == "error" for item in report["problems"])
+    return EXIT_PROBLEMS if serious else EXIT_OK
+
+
+def summary(report: dict[str, Any]) -> str:
+    """The report as a few lines of text: counts, then each problem and what to do."""
+    volume = report["volume"]
+    lines = [
+        f"{report['file']['name']}: {report['vertices']:,} vertices, {report['faces']:,} faces "
+        f"({report['file']['format'].upper()}), {report['components']:,} component(s)",
+        f"area {report['area']!r}, volume {'-' if volume is None else repr(volume)}, "
+        f"orientation {report['orientation']}, "
+        f"{'watertight' if report['watertight'] else 'open'}, "
+        f"winding {'consistent' if report['winding_consistent'] else 'inconsistent'}",
+    ]
+    if not report["problems"]:
+        lines.append("No problems found.")
+    for item in report["problems"]:
+        lines.append(f"{item['severity']}: {item['title']}. {item['action']}")
+    if report["fix"]["faces_flipped"]:
+        lines.append(f"To fix the winding: mesh-normal fix {report['file']['name']} "
+                     "FIXED.ply (or .stl, .obj)")
+    return "\n".join(lines)
+
+
+def normals(args: argparse.Namespace, progress: Progress) -> int:
+    suffix = Path(args.output).suffix.lower()
+    if suffix not in NORMAL_SUFFIXES:
+        raise Failure(f"the output must end in {', '.join(NORMAL_SUFFIXES)}, not "
+                      f"{suffix or 'no suffix'}", EXIT_USAGE)
+    if suffix == ".ply" and args.kind == "corner":
+        raise Failure("corner normals do not fit in a PLY file; use .npy, .csv or .json",
+                      EXIT_USAGE)
+    mesh, _ = load(args.file, progress)
+    progress.step(f"computing {args.kind} normals")
+    values, missing = compute_normals(mesh, args.kind, args.weighting, args.crease_angle)
+    progress.step(f"writing {args.output}")
+    if suffix == ".ply":
+        data = normals_ply(mesh, values, args.kind)
+    else:  # the same files as POST /api/mesh/normals
+        data = normals_file(values, missing, args.kind, args.weighting, args.crease_angle,
+                            suffix[1:])
+    write(args.output, data)
+    progress.done()
+    if int(missing.sum()):
+        print(f"{int(missing.sum()):,} {args.kind} normal(s) are zero rows (degenerate or "
+              "unused); see `mesh-normal analyze`.", file=sys.stderr)
+    return EXIT_OK
+
+
+def fix(args: argparse.Namespace, progress: Progress) -> int:
+    chosen = args.format or Path(args.output).suffix.lower().lstrip(".")
+    if chosen not in FIX_FORMATS:
+        raise Failure(f"the output format must be one of {', '.join(FIX_FORMATS)} (from the "
+                      f"suffix or --format), not {chosen or 'none'}", EXIT_USAGE)
+    mesh, _ = load(args.input, progress)
+    progress.step("making the winding consistent and outward")
+    fixed = orient(mesh.vertices, mesh.faces)
+    progress.step(f"writing {args.output}")
+    try:
+        data = write_mesh(mesh.vertices, fixed.faces, chosen)
+    except MeshFileError as error:
+        raise Failure(f"cannot write {args.output}: {error}", EXIT_OUTPUT) from None
+    write(args.output, data)
+    progress.done()
+    flipped = int(fixed.flipped.sum())
+    parts = flips_by_component(fixed) or "none"
+    print(f"flipped {flipped:,} of {len(mesh.faces):,} faces (component:faces {parts}); "
+          f"orientation before: {fixed.orientation}")
+    return EXIT_OK
+
+
+SERVE_HINT = ("The web app is not part of the mesh-normal package: from a checkout of the "
+              "project, run `make run` (or `uvicorn app.main:app`).")
+
+
+def serve(args: argparse.Namespace, progress: Progress) -> int:
+    print(f"mesh-normal: {SERVE_HINT}", file=sys.stderr)
+    return EXIT_USAGE
+
+
+def parser() -> argparse.ArgumentParser:
+    formats = ", ".join(sorted(SUFFIXES))
+    main_parser = argparse.ArgumentParser(
+        prog="mesh-normal", description="Surface normals of triangle meshes: check, export, fix.",
+        epilog="Exit codes: 0 done, 1 analyze found errors, 2 usage, 3 unreadable input, "
+               "4 unwritable output.")
+    main_parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                             help="show stages on stderr (default: when stderr is a terminal)")
+    commands = main_parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    one = commands.add_parser("analyze", help="report on a mesh file",
+                              description=f"Report on a mesh file ({formats}).")
+    one.add_argument("file")
+    one.add_argument("--json", action="store_true", help="the full report as JSON")
+    one.set_defaults(run=analyze)
+
+    two = commands.add_parser("normals", help="write face, vertex or corner normals")
+    two.add_argument("file")
+    two.add_argument("--kind", choices=KINDS, default="vertex")
+    two.add_argument("--weighting", choices=WEIGHTINGS, default="angle")
+    two.add_argument("--crease-angle", type=float, default=30.0, metavar="DEGREES")
+    two.add_argument("-o", "--output", required=True,
+                     help="OUT.npy (float64), OUT.csv, OUT.json or OUT.ply (face/vertex)")
+    two.set_defaults(run=normals)
+
+    three = commands.add_parser("fix", help="write the mesh with consistent, outward winding")
+    three.add_argument("input")
+    three.add_argument("output", help="OUT.ply, OUT.stl or OUT.obj")
+    three.add_argument("--format", choices=FIX_FORMATS)
+    three.set_defaults(run=fix)
+
+    four = commands.add_parser("serve", help="run the web app")
+    four.add_argument("--host", default="127.0.0.1")
+    four.add_argument("--port", type=int, default=8000)
+    four.add_argument("--upload-limit-mb", type=float, default=None,
+                      help="largest mesh upload (default: $MESH_UPLOAD_LIMIT_MB or 200)")
+    four.set_defaults(run=serve)
+    return main_parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parser().parse_args(argv)
+    if not 0 <= getattr(args, "crease_angle", 0.0) <= 180:
+        print("mesh-normal: --crease-angle must be between 0 and 180 degrees", file=sys.stderr)
+        return EXIT_USAGE
+    enabled = sys.stderr.isatty() if args.progress is None else args.progress
+    progress = Progress(sys.stderr, enabled)
+    try:
+        return int(args.run(args, progress))
+    except Failure as failure:
+        if enabled:
+            sys.stderr.write("\n")
+        print(f"mesh-normal: {failure}", file=sys.stderr)
+        return failure.code
+
+
+if __name__ == "__main__":
+    sys.exit(main())

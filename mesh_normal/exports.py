@@ -1,0 +1,97 @@
+"""A mesh's normals as a file: JSON, CSV or NumPy ``.npy``, in the file's own order."""
+
+from __future__ import annotations
+
+import io
+from typing import Literal
+
+import numpy as np
+from numpy.typing import NDArray
+from pydantic_core import to_json
+
+from mesh_normal.faces import face_normals
+from mesh_normal.files import LoadedMesh
+from mesh_normal.files.write import ply_bytes
+from mesh_normal.vertices import Weighting, corner_normals, vertex_normals
+
+NormalsKind = Literal["face", "vertex", "corner"]
+NormalsFormat = Literal["json", "csv", "npy"]
+KINDS: tuple[NormalsKind, ...] = ("face", "vertex", "corner")
+FORMATS: tuple[NormalsFormat, ...] = ("json", "csv", "npy")
+
+
+def compute_normals(mesh: LoadedMesh, kind: NormalsKind, weighting: Weighting = "angle",
+                    crease_angle: float = 30.0) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    """The normals of one kind and the mask of rows without one (zero rows, never NaN).
+
+    Returns
+    -------
+    normals : (m, 3), (n, 3) or (m, 3, 3) float64
+        Face, vertex or corner normals.
+    missing : (m,), (n,) or (m, 3) bool
+        Degenerate faces, vertices in no usable face, corners whose sum cancels.
+    """
+    if kind == "face":
+        faces = face_normals(mesh.vertices, mesh.faces)
+        return faces.normals, faces.degenerate
+    if kind == "vertex":
+        result = vertex_normals(mesh.vertices, mesh.faces, weighting)
+    else:
+        result = corner_normals(mesh.vertices, mesh.faces, crease_angle, weighting)
+    return result.normals, result.missing
+
+
+def export_normals(mesh: LoadedMesh, kind: NormalsKind, weighting: Weighting,
+                   crease_angle: float, format: NormalsFormat) -> bytes:
+    """The normals as the bytes of a JSON, CSV or ``.npy`` file."""
+    normals, missing = compute_normals(mesh, kind, weighting, crease_angle)
+    return normals_file(normals, missing, kind, weighting, crease_angle, format)
+
+
+def normals_file(normals: NDArray[np.float64], missing: NDArray[np.bool_], kind: NormalsKind,
+                 weighting: Weighting, crease_angle: float, format: NormalsFormat) -> bytes:
+    """Computed normals (see :func:`compute_normals`) as a JSON, CSV or ``.npy`` file."""
+    if format == "npy":
+        return npy_bytes(normals)
+    if format == "csv":
+        return normals_csv(normals, kind)
+    return to_json({
+        "kind": kind,
+        "weighting": None if kind == "face" else weighting,
+        "crease_angle": crease_angle if kind == "corner" else None,
+        "shape": list(normals.shape),
+        "missing": int(np.count_nonzero(missing)),
+        "missing_indices": np.argwhere(missing).tolist() if kind == "corner"
+        else np.flatnonzero(missing).tolist(),
+        "normals": normals.tolist(),
+    })
+
+
+def npy_bytes(array: NDArray[np.float64]) -> bytes:
+    buffer = io.BytesIO()
+    np.save(buffer, np.ascontiguousarray(array, dtype=np.float64), allow_pickle=False)
+    return buffer.getvalue()
+
+
+def normals_csv(normals: NDArray[np.float64], kind: NormalsKind) -> bytes:
+    """One row per face, vertex or corner; 17 significant digits, so every value round-trips."""
+    rows = normals.reshape(-1, 3)
+    buffer = io.BytesIO()
+    if kind == "corner":
+        index = np.indices(normals.shape[:2]).reshape(2, -1).T
+        header = "face,corner,nx,ny,nz"
+        fmt = "%d,%d,%.17g,%.17g,%.17g"
+    else:
+        index = np.arange(len(rows))[:, None]
+        header = f"{kind},nx,ny,nz"
+        fmt = "%d,%.17g,%.17g,%.17g"
+    table = np.hstack([index.astype(np.float64), rows])
+    np.savetxt(buffer, table, fmt=fmt, header=header, comments="", delimiter=",")
+    return buffer.getvalue()
+
+
+def normals_ply(mesh: LoadedMesh, normals: NDArray[np.float64], kind: NormalsKind) -> bytes:
+    """A binary PLY of the mesh with the normals as ``nx ny nz`` of its vertices or faces."""
+    if kind == "vertex":
+        return ply_bytes(mesh.vertices, mesh.faces, vertex_normals=normals)
+    return ply_bytes(mesh.vertices, mesh.faces, face_normals=normals)

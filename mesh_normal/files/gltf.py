@@ -1,0 +1,110 @@
+"""GLB and glTF through trimesh's glTF reader, flattened into one mesh.
+
+Every triangle primitive of every node of the scene is taken, in the order trimesh walks the
+scene graph, with its node's world transform applied (a mesh used by two nodes appears twice).
+``NORMAL`` attributes, when every primitive has them, become the vertex normals, transformed by
+the inverse transpose of the transform and normalised. A node whose transform mirrors (negative
+determinant) has its triangles' winding reversed, as the glTF specification asks, so fronts
+stay fronts. Point and line primitives are skipped with a note. A ``.gltf`` file must embed
+its buffers (``data:`` URIs): an upload comes without its neighbouring files.
+"""
+
+from __future__ import annotations
+
+import io
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mesh_normal.files.errors import MeshFileError
+from mesh_normal.files.loaded import LoadedMesh, build
+
+
+def read_glb(data: bytes) -> LoadedMesh:
+    """Read binary glTF (see the module docstring)."""
+    from trimesh.exchange.gltf import load_glb  # imported on first use: trimesh is slow to import
+
+    return _flatten(load_glb(io.BytesIO(data), merge_primitives=False), "glb")
+
+
+def read_gltf(data: bytes) -> LoadedMesh:
+    """Read JSON glTF with embedded buffers (see the module docstring)."""
+    try:
+        from trimesh.exchange.gltf import load_gltf
+
+        scene = load_gltf(io.BytesIO(data), resolver=None, merge_primitives=False)
+    except (FileNotFoundError, ValueError, AttributeError, TypeError) as error:
+        if b'"uri"' in data and b"data:" not in data:
+            raise MeshFileError("The glTF file refers to separate buffer files, which an upload "
+                                "does not include; export it as GLB or with embedded buffers."
+                                ) from error
+        raise
+    return _flatten(scene, "gltf")
+
+
+def _world_transforms(scene: dict[str, Any]) -> list[tuple[NDArray[np.float64], str]]:
+    """(world transform, geometry name) for every node that holds a geometry, in graph order."""
+    edges = scene.get("graph") or []
+    world = {scene.get("base_frame", "world"): np.eye(4)}
+    placed: list[tuple[NDArray[np.float64], str]] = []
+    pending = list(edges)
+    for _ in range(len(edges) + 1):  # parents normally come first; a few passes otherwise
+        waiting = []
+        for edge in pending:
+            parent = edge.get("frame_from")
+            if parent not in world:
+                waiting.append(edge)
+                continue
+            matrix = np.asarray(edge.get("matrix", np.eye(4)), dtype=np.float64)
+            world[edge["frame_to"]] = world[parent] @ matrix
+            if edge.get("geometry") is not None:
+                placed.append((world[edge["frame_to"]], edge["geometry"]))
+        if not waiting or len(waiting) == len(pending):
+            break
+        pending = waiting
+    return placed
+
+
+def _flatten(scene: dict[str, Any], format: str) -> LoadedMesh:
+    geometry = scene.get("geometry") or {}
+    parts: list[tuple[NDArray[np.float64], NDArray[np.intp], NDArray[np.float64] | None]] = []
+    skipped = mirrored = 0
+    for transform, name in _world_transforms(scene):
+        kwargs = geometry.get(name) or {}
+        if "faces" not in kwargs or "vertices" not in kwargs:
+            skipped += 1
+            continue
+        vertices = np.asarray(kwargs["vertices"], dtype=np.float64).reshape(-1, 3)
+        faces = np.asarray(kwargs["faces"], dtype=np.intp).reshape(-1, 3)
+        linear = transform[:3, :3]
+        if np.linalg.det(linear) < 0:
+            faces, mirrored = faces[:, ::-1], mirrored + 1
+        normals = kwargs.get("vertex_normals")
+        if normals is not None:
+            normals = _unit(np.asarray(normals, dtype=np.float64).reshape(-1, 3)
+                            @ np.linalg.inv(linear))  # row vectors: n @ inv(A) is inv(A).T @ n
+        parts.append((vertices @ linear.T + transform[:3, 3], faces, normals))
+    notes = []
+    if skipped:
+        notes.append(f"Skipped {skipped:,} point or line primitives: only triangles are read.")
+    if mirrored:
+        notes.append(f"Reversed the winding of {mirrored:,} mirrored primitives, as glTF asks.")
+    if len(parts) > 1:
+        notes.append(f"Joined {len(parts):,} primitives with their node transforms applied.")
+    if not parts:
+        raise MeshFileError("The glTF file holds no triangle meshes.")
+    offsets = np.cumsum([0] + [len(part[0]) for part in parts])
+    vertices = np.concatenate([part[0] for part in parts])
+    faces = np.concatenate([part[1] + offset for part, offset in zip(parts, offsets, strict=False)])
+    normals = None
+    if all(part[2] is not None and len(part[2]) == len(part[0]) for part in parts):
+        normals = np.concatenate([part[2] for part in parts])  # type: ignore[misc]
+    return build(format, vertices, faces, source_faces=len(faces), vertex_normals=normals,
+                 notes=notes)
+
+
+def _unit(vectors: NDArray[np.float64]) -> NDArray[np.float64]:
+    lengths = np.linalg.norm(vectors, axis=1, keepdims=True)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(lengths > 0, vectors / lengths, 0.0)

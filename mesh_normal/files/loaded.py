@@ -1,0 +1,142 @@
+"""What reading a file gives: :class:`LoadedMesh`, checked once for all formats by :func:`build`."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mesh_normal.files.errors import MeshFileError
+
+FloatArray = NDArray[np.float64]
+IndexArray = NDArray[np.intp]
+
+#: Describes item ``i`` (0-based) of the built arrays for an error sentence, e.g. "the face on
+#: line 12". The default names the 0-based index.
+Describe = Callable[[int], str]
+
+
+@dataclass(frozen=True, slots=True)
+class LoadedMesh:
+    """A mesh as its file holds it, triangulated.
+
+    Attributes
+    ----------
+    vertices : (n, 3) float64
+        In file order; for STL, the welded corners in order of first appearance.
+    faces : (m, 3) intp
+        Triangles in file order; a polygon becomes ``k - 2`` consecutive fan triangles.
+    format : str
+        ``"stl"``, ``"obj"``, ``"ply"``, ``"off"``, ``"glb"`` or ``"gltf"``.
+    source_faces : int
+        Faces as written in the file, before triangulation (and before skipping any with fewer
+        than three corners).
+    file_face_normals : (m, 3) float64 or None
+        Normals the file stores per face (STL facet normals, PLY face ``nx ny nz``), repeated
+        for each triangle of a polygon; as stored, not normalised. ``None`` when the file has
+        none, or when every STL facet normal is zero (exporters write zeros for "not given").
+    file_vertex_normals : (n, 3) float64 or None
+        PLY vertex ``nx ny nz``, OBJ ``vn`` when every vertex has one consistent ``vn``, glTF
+        ``NORMAL`` (transformed with its node, normalised).
+    file_corner_normals : (m, 3, 3) float64 or None
+        OBJ ``f v//vn`` normals per corner of each triangle, when every corner has one.
+    notes : tuple of str
+        Plain sentences about what reading did (welding, triangulation, skipped elements).
+    """
+
+    vertices: FloatArray
+    faces: IndexArray
+    format: str
+    source_faces: int
+    file_face_normals: FloatArray | None = None
+    file_vertex_normals: FloatArray | None = None
+    file_corner_normals: FloatArray | None = None
+    notes: tuple[str, ...] = ()
+
+
+def build(
+    format: str,
+    vertices: NDArray[np.floating],
+    faces: NDArray[np.integer],
+    *,
+    source_faces: int,
+    face_normals: NDArray[np.floating] | None = None,
+    vertex_normals: NDArray[np.floating] | None = None,
+    corner_normals: NDArray[np.floating] | None = None,
+    notes: Sequence[str] = (),
+    vertex: Describe | None = None,
+    face: Describe | None = None,
+) -> LoadedMesh:
+    """Check the arrays a reader produced and freeze them into a :class:`LoadedMesh`.
+
+    Raises :class:`MeshFileError` for the first non-finite vertex, the first face with an index
+    outside ``0 .. n - 1``, or a mesh without faces. ``vertex`` and ``face`` describe an item
+    for that sentence (with a line number where the reader knows it).
+    """
+    points = np.ascontiguousarray(vertices, dtype=np.float64).reshape(-1, 3)
+    triangles = np.ascontiguousarray(faces, dtype=np.intp).reshape(-1, 3)
+    _check_finite(points, vertex or _nth("vertex"))
+    if len(triangles) == 0:
+        raise MeshFileError("The file holds no faces." if len(points)
+                            else "The file holds no vertices and no faces.")
+    _check_indices(triangles, len(points), face or _nth("face"))
+    return LoadedMesh(
+        vertices=points,
+        faces=triangles,
+        format=format,
+        source_faces=source_faces,
+        file_face_normals=_optional(face_normals, (len(triangles), 3)),
+        file_vertex_normals=_optional(vertex_normals, (len(points), 3)),
+        file_corner_normals=_optional(corner_normals, (len(triangles), 3, 3)),
+        notes=tuple(notes),
+    )
+
+
+def _nth(kind: str) -> Describe:
+    return lambda index: f"{kind} {index:,} (counting from 0)"
+
+
+def first_bad_vertex(points: FloatArray) -> int | None:
+    """The index of the first row with a NaN or infinite coordinate, or ``None``."""
+    if not points.size or np.isfinite(points.min()) and np.isfinite(points.max()):
+        return None  # NaN propagates through min and max: two fast passes settle most files
+    finite = np.isfinite(points).all(axis=1)
+    return None if finite.all() else int(np.argmin(finite))
+
+
+def _check_finite(points: FloatArray, describe: Describe) -> None:
+    row = first_bad_vertex(points)
+    if row is not None:
+        value = points[row][~np.isfinite(points[row])][0]
+        raise MeshFileError(f"The coordinates of {describe(row)} include {value}, which is not a "
+                            "finite number.")
+
+
+def _check_indices(triangles: IndexArray, count: int, describe: Describe) -> None:
+    low, high = int(triangles.min()), int(triangles.max())
+    if low >= 0 and high < count:
+        return
+    bad = (triangles < 0) | (triangles >= count)
+    row, column = np.argwhere(bad)[0]
+    index = int(triangles[row, column])
+    if index < 0:
+        raise MeshFileError(f"{_capital(describe(int(row)))} refers to vertex {index}; vertex "
+                            "indices cannot be negative.")
+    there = f"the file has only {count:,}" if count else "the file has none"
+    raise MeshFileError(f"{_capital(describe(int(row)))} refers to vertex {index:,} (counting "
+                        f"from 0), but {there}.")
+
+
+def _capital(text: str) -> str:
+    return text[:1].upper() + text[1:]
+
+
+def _optional(array: NDArray[np.floating] | None, shape: tuple[int, ...]) -> FloatArray | None:
+    if array is None:
+        return None
+    result = np.ascontiguousarray(array, dtype=np.float64)
+    if result.shape != shape:  # a reader's bug, not the file's: fail loudly in tests
+        raise AssertionError(f"file normals of shape {result.shape}, expected {shape}")
+    return result

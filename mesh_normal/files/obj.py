@@ -1,0 +1,283 @@
+"""OBJ, read by our own parser: every ``v`` kept, in file order.
+
+trimesh's OBJ loader, even with ``process=False``, drops vertices no face uses and splits
+vertices where texture coordinates differ (a seam), so its arrays no longer line up with the
+file's. Here ``v x y z [w] [r g b]`` keeps x, y, z; ``f`` takes ``v``, ``v/vt``, ``v//vn`` and
+``v/vt/vn`` corners with 1-based or negative (relative) indices, polygons fan-triangulated;
+``vt`` is only counted; ``l`` and ``p`` are skipped with a note; ``o``, ``g``, ``s``,
+``usemtl``, ``mtllib`` and other statements are ignored; a backslash at a line's end continues
+it. Errors name the line.
+
+Normals: per corner when every face corner names a ``vn``; per vertex as well when each vertex
+is always given the same normal vector.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mesh_normal.files.errors import MeshFileError
+from mesh_normal.files.loaded import LoadedMesh, build
+from mesh_normal.files.polygons import fan
+
+_IGNORED = {"o", "g", "s", "usemtl", "mtllib", "vp", "cstype", "deg", "curv", "surf", "parm",
+            "end", "mg", "lod", "bevel", "c_interp", "d_interp", "shadow_obj", "trace_obj"}
+
+
+_KINDS = {"v ": 1, "vn": 2, "vt": 3, "f ": 4, "": 0}
+_KEYS = {"v": 1, "vn": 2, "vt": 3, "f": 4, "l": 5, "p": 6}
+IGNORE, VERTEX, NORMAL, TEXTURE, FACE, LINE, POINT, OTHER = range(8)
+
+
+@dataclass(frozen=True, slots=True)
+class _Statements:
+    """The file's ``v``, ``vn`` and ``f`` statements, with their line numbers.
+
+    Attributes
+    ----------
+    vertices : (n, 3) float64
+    vertex_lines : (n,) intp
+    normals : (k, 3) float64
+    corners : list of str
+        Every face corner as written (``"3"``, ``"3/1"``, ``"3//2"``, ``"3/1/2"``).
+    counts : (p,) intp
+        Corners of each face.
+    face_lines : (p,) intp
+    vertices_before, normals_before : (p,) intp
+        How many ``v`` and ``vn`` statements come before each face (for negative indices).
+    notes : list of str
+    """
+
+    vertices: NDArray[np.float64]
+    vertex_lines: NDArray[np.intp]
+    normals: NDArray[np.float64]
+    corners: list[str]
+    counts: NDArray[np.intp]
+    face_lines: NDArray[np.intp]
+    vertices_before: NDArray[np.intp]
+    normals_before: NDArray[np.intp]
+    notes: list[str]
+
+
+def read_obj(data: bytes) -> LoadedMesh:
+    """Read an OBJ file (see the module docstring)."""
+    found = _scan(data.decode("latin-1"))
+    vertices, counts = found.vertices, found.counts
+    vertex_ids, normal_ids = _corner_indices(found)
+    positions, source, notes = fan(counts)
+    faces = vertex_ids[positions]
+    face_line = found.face_lines[source]
+    corner_normals = vertex_normals = None
+    if normal_ids is not None and len(faces):
+        corner_normals = found.normals[normal_ids[positions]]
+        vertex_normals = _per_vertex(faces, corner_normals, len(vertices))
+    return build(
+        "obj", vertices, faces, source_faces=len(counts), corner_normals=corner_normals,
+        vertex_normals=vertex_normals, notes=[*notes, *found.notes],
+        vertex=lambda i: f"vertex {i + 1:,} (line {found.vertex_lines[i]:,})",
+        face=lambda i: f"the face on line {face_line[i]:,}",
+    )
+
+
+def _logical_lines(text: str) -> tuple[list[str], NDArray[np.intp]]:
+    """The lines, with backslash continuations joined, and each one's 1-based line number."""
+    lines = text.splitlines()
+    if "\\" not in text:
+        return lines, np.arange(1, len(lines) + 1)
+    joined: list[str] = []
+    numbers: list[int] = []
+    pending: list[str] = []
+    for number, line in enumerate(lines, 1):
+        if line.endswith("\\"):
+            pending.append(line[:-1])
+            continue
+        numbers.append(number - len(pending))
+        joined.append(" ".join([*pending, line]))
+        pending = []
+    if pending:
+        numbers.append(len(lines) - len(pending) + 1)
+        joined.append(" ".join(pending))
+    return joined, np.asarray(numbers, dtype=np.intp)
+
+
+def _scan(text: str) -> _Statements:
+    lines, numbers = _logical_lines(text)
+    # Most lines start "v ", "vn", "vt" or "f ": classify those by their first two characters,
+    # and only the rest (comments, groups, indented or tab-separated lines) by splitting.
+    kinds = np.fromiter((_KINDS.get(line[:2], -1) for line in lines), np.int8, len(lines))
+    other: Counter[str] = Counter()
+    for row in np.flatnonzero(kinds < 0):
+        parts = lines[row].split(None, 1)
+        key = parts[0] if parts else ""
+        kinds[row] = _KEYS.get(key, IGNORE if not key or key[0] == "#" or key in _IGNORED
+                               else OTHER)
+        if kinds[row] >= LINE:
+            other[key] += 1
+    rows = {kind: np.flatnonzero(kinds == kind) for kind in (VERTEX, NORMAL, FACE)}
+    vertices = _numbers([lines[row] for row in rows[VERTEX]], numbers[rows[VERTEX]], "v")
+    normals = _numbers([lines[row] for row in rows[NORMAL]], numbers[rows[NORMAL]], "vn")
+    # A comment may follow a face's corners: "f 1 2 3 # the lid".
+    corners, counts = _face_corners([line.partition("#")[0] if "#" in line else line
+                                     for line in (lines[row] for row in rows[FACE])])
+    return _Statements(
+        vertices=vertices, vertex_lines=numbers[rows[VERTEX]], normals=normals,
+        corners=corners, counts=counts, face_lines=numbers[rows[FACE]],
+        vertices_before=np.searchsorted(rows[VERTEX], rows[FACE]),
+        normals_before=np.searchsorted(rows[NORMAL], rows[FACE]),
+        notes=_skipped(other),
+    )
+
+
+def _numbers(lines: list[str], numbers: NDArray[np.intp], key: str) -> NDArray[np.float64]:
+    """The first three numbers after the keyword of each line."""
+    tokens = " ".join(lines).split()
+    width = len(tokens) // len(lines) if lines else 4
+    try:
+        if (width >= 4 and len(tokens) == width * len(lines)  # all as wide: slice columns
+                and tokens[::width].count(key) == len(lines)):
+            return np.stack([np.array(tokens[column::width], dtype=np.float64)
+                             for column in (1, 2, 3)], axis=1)
+        values = np.array([line.split()[1:4] for line in lines], dtype=np.float64)
+        if values.shape == (len(lines), 3) or not lines:
+            return values.reshape(-1, 3)
+    except ValueError:
+        pass
+    for line, number in zip(lines, numbers, strict=True):
+        values = line.split()[1:4]
+        if len(values) < 3:
+            raise MeshFileError(f"Line {number:,}: '{key}' needs 3 numbers, but has "
+                                f"{len(values)}.")
+        for value in values:
+            try:
+                float(value)
+            except ValueError:
+                raise MeshFileError(f"Line {number:,}: {value[:40]!r} is not a number.") from None
+    raise AssertionError("unreachable: a line failed to convert")
+
+
+def _face_corners(lines: list[str]) -> tuple[list[str], NDArray[np.intp]]:
+    """Every corner token, and how many each face has (the ``f`` keywords split the faces)."""
+    tokens = " ".join(lines).split()
+    width = len(tokens) // len(lines) if lines else 4
+    if len(tokens) == width * len(lines) and tokens[::width].count("f") == len(lines):
+        del tokens[::width]
+        return tokens, np.full(len(lines), width - 1, dtype=np.intp)
+    starts = np.array([i for i, token in enumerate(tokens) if token == "f"], dtype=np.intp)
+    counts = np.diff(np.append(starts, len(tokens))) - 1
+    return [token for token in tokens if token != "f"], counts
+
+
+def _corner_indices(found: _Statements) -> tuple[NDArray[np.intp], NDArray[np.intp] | None]:
+    """0-based vertex index of every corner, and normal index when every corner has one."""
+    fields = _fields(found.corners)
+    face_of_corner = np.repeat(np.arange(len(found.counts)), found.counts)
+    vertex_ids = _resolve(fields[0], face_of_corner, found.vertices_before, found.face_lines,
+                          "vertex", len(found.vertices))
+    normal_ids = None
+    if fields[2] is not None:
+        normal_ids = _resolve(fields[2], face_of_corner, found.normals_before, found.face_lines,
+                              "normal", len(found.normals))
+    return vertex_ids, normal_ids
+
+
+def _fields(corners: list[str]) -> list[NDArray[np.int64] | None]:
+    """Vertex, texture and normal index of every corner as written (0 where a field is empty,
+    ``None`` for the normal unless every corner has one, and for texture indices when the
+    form is uniform: they are not used)."""
+    text = " ".join(corners)
+    slashes, count = text.count("/"), len(corners)
+    try:
+        if not slashes:
+            return [_ints(text.split()), None, None]
+        doubles = text.count("//")
+        if slashes == 2 * count and doubles == count:  # v//vn
+            tokens = text.replace("//", " ").split()
+            return [_ints(tokens[0::2]), None, _ints(tokens[1::2])]
+        if slashes in (count, 2 * count) and not doubles:  # v/vt or v/vt/vn
+            width = slashes // count + 1
+            tokens = text.replace("/", " ").split()
+            if len(tokens) == width * count:
+                return [_ints(tokens[0::width]), None,
+                        _ints(tokens[2::width]) if width == 3 else None]
+    except ValueError:
+        pass
+    return _mixed_fields(corners)
+
+
+def _ints(tokens: list[str]) -> NDArray[np.int64]:
+    return np.array(tokens, dtype=np.int64)
+
+
+def _mixed_fields(corners: list[str]) -> list[NDArray[np.int64] | None]:
+    columns: list[list[int]] = [[], [], []]
+    has_normal = True
+    for corner in corners:
+        parts = corner.split("/")
+        if len(parts) > 3:
+            raise _BadCorner(corner)
+        parts += [""] * (3 - len(parts))
+        has_normal = has_normal and parts[2] != ""
+        for column, part in zip(columns, parts, strict=True):
+            try:
+                column.append(int(part) if part else 0)
+            except ValueError:
+                raise _BadCorner(corner) from None
+        if not parts[0]:
+            raise _BadCorner(corner)
+    arrays = [np.array(column, dtype=np.int64) for column in columns]
+    return [arrays[0], arrays[1], arrays[2] if has_normal else None]
+
+
+class _BadCorner(MeshFileError):
+    def __init__(self, corner: str) -> None:
+        super().__init__(f"The face corner {corner[:40]!r} is not an index, nor index/texture, "
+                         "index//normal or index/texture/normal.")
+
+
+def _resolve(written: NDArray[np.int64], face_of_corner: NDArray[np.intp],
+             defined_before: NDArray[np.intp], face_lines: NDArray[np.intp], kind: str,
+             total: int) -> NDArray[np.intp]:
+    """1-based or negative (relative to what is defined so far) indices to 0-based ones."""
+    before = defined_before[face_of_corner]
+    resolved = np.where(written < 0, before + written, written - 1)
+    bad = (written == 0) | (resolved < 0) | (resolved >= total)
+    if bad.any():
+        corner = int(np.argmax(bad))
+        line = int(face_lines[face_of_corner[corner]])
+        value = int(written[corner])
+        if value == 0:
+            raise MeshFileError(f"Line {line:,}: {kind} index 0 is not valid; OBJ counts from 1.")
+        if value < 0:
+            raise MeshFileError(f"Line {line:,}: {kind} index {value} reaches back before the "
+                                f"first {kind}; only {int(before[corner]):,} come before it.")
+        raise MeshFileError(f"Line {line:,}: {kind} index {value:,} is out of range; the file "
+                            f"has {total:,} {kind} statements.")
+    return resolved.astype(np.intp)
+
+
+def _per_vertex(faces: NDArray[np.intp], corner_normals: NDArray[np.float64],
+                count: int) -> NDArray[np.float64] | None:
+    """One normal per vertex, if every vertex is used and always given the same vector."""
+    flat, normals = faces.ravel(), corner_normals.reshape(-1, 3)
+    result = np.full((count, 3), np.nan)
+    result[flat] = normals
+    if np.isnan(result).any() or not np.array_equal(result[flat], normals):
+        return None
+    return result
+
+
+def _skipped(other: Counter[str]) -> list[str]:
+    notes = []
+    lines, points = other.pop("l", 0), other.pop("p", 0)
+    if lines or points:
+        parts = [f"{count:,} {name}" for count, name in ((lines, "line ('l')"),
+                                                         (points, "point ('p')")) if count]
+        notes.append(f"Skipped {' and '.join(parts)} elements: only faces are read.")
+    if other:
+        names = ", ".join(f"'{key[:20]}' ({count:,})" for key, count in other.most_common(5))
+        notes.append(f"Ignored statements this reader does not use: {names}.")
+    return notes

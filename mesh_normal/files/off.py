@@ -1,0 +1,98 @@
+"""OFF (Object File Format), ASCII, by our own small parser.
+
+The keyword may be ``OFF``, ``COFF``, ``NOFF``, ``CNOFF``, ``STOFF`` and the like: each vertex
+line then starts with x y z (and, after ``N``, nx ny nz, kept as vertex normals); anything after
+is ignored, as are colours after a face's indices and ``#`` comments. Vertices keep their order;
+polygons are fan-triangulated in file order. Binary OFF is not supported.
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mesh_normal.files.errors import MeshFileError, unsupported
+from mesh_normal.files.loaded import LoadedMesh, build
+from mesh_normal.files.polygons import fan
+
+_KEYWORD = re.compile(r"(ST)?(C)?(N)?(4)?(n)?OFF")
+
+
+def read_off(data: bytes) -> LoadedMesh:
+    """Read an ASCII OFF file (see the module docstring)."""
+    rows = [(number, line.split("#", 1)[0].split())
+            for number, line in enumerate(data.decode("latin-1").splitlines(), 1)]
+    rows = [(number, words) for number, words in rows if words]
+    if not rows or not (match := _KEYWORD.fullmatch(rows[0][1][0])):
+        raise MeshFileError("The file does not start with OFF (or COFF, NOFF, ...).")
+    if match.group(4) or match.group(5):
+        raise unsupported("OFF files in 4D or n dimensions are not supported.")
+    rest = rows[0][1][1:]
+    if rest and rest[0].upper() == "BINARY":
+        raise unsupported("Binary OFF files are not supported; save it as ASCII OFF.")
+    if rest:  # counts on the keyword line
+        rows[0] = (rows[0][0], rest)
+    else:
+        rows = rows[1:]
+    if not rows:
+        raise MeshFileError("The OFF file has no line with its vertex and face counts.")
+    number, counts = rows[0]
+    try:
+        vertex_count, face_count = int(counts[0]), int(counts[1])
+    except (ValueError, IndexError):
+        raise MeshFileError(f"Line {number}: the OFF counts line must start with the number of "
+                            "vertices and of faces.") from None
+    if vertex_count < 0 or face_count < 0:
+        raise MeshFileError(f"Line {number}: the OFF counts cannot be negative.")
+    vertex_rows = rows[1:1 + vertex_count]
+    face_rows = rows[1 + vertex_count:1 + vertex_count + face_count]
+    if len(vertex_rows) < vertex_count or len(face_rows) < face_count:
+        raise MeshFileError(f"The OFF header says {vertex_count:,} vertices and {face_count:,} "
+                            f"faces, but the file holds only {len(vertex_rows):,} vertex and "
+                            f"{len(face_rows):,} face lines: it looks truncated.")
+    width = 6 if match.group(3) else 3
+    table = _table(vertex_rows, width)
+    polygon_counts, flat = _faces(face_rows)
+    positions, source, notes = fan(polygon_counts)
+    lines = np.array([number for number, _ in face_rows], dtype=np.intp)
+    return build("off", table[:, :3], flat[positions], source_faces=face_count,
+                 vertex_normals=table[:, 3:6] if width == 6 else None, notes=notes,
+                 vertex=lambda i: f"vertex {i:,} (counting from 0, line {vertex_rows[i][0]:,})",
+                 face=lambda i: f"the face on line {lines[source[i]]:,}")
+
+
+def _table(rows: list[tuple[int, list[str]]], width: int) -> NDArray[np.float64]:
+    for number, words in rows:
+        if len(words) < width:
+            raise MeshFileError(f"Line {number}: an OFF vertex needs {width} numbers, but has "
+                                f"{len(words)}.")
+    try:
+        return np.array([words[:width] for _, words in rows], dtype=np.float64).reshape(-1, width)
+    except ValueError:
+        for number, words in rows:
+            for word in words[:width]:
+                _number(word, number, float)
+        raise
+
+
+def _faces(rows: list[tuple[int, list[str]]]) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    counts = np.zeros(len(rows), dtype=np.intp)
+    flat: list[int] = []
+    for row, (number, words) in enumerate(rows):
+        size = _number(words[0], number, int)
+        if size < 0 or len(words) < 1 + size:
+            raise MeshFileError(f"Line {number}: the face says it has {size} corners, but "
+                                f"{len(words) - 1} numbers follow.")
+        counts[row] = size
+        flat += [_number(word, number, int) for word in words[1:1 + size]]
+    return counts, np.array(flat, dtype=np.intp)
+
+
+def _number(word: str, line: int, kind: type[int] | type[float]) -> int:
+    try:
+        return kind(word)  # type: ignore[return-value]
+    except ValueError:
+        what = "a whole number" if kind is int else "a number"
+        raise MeshFileError(f"Line {line}: {word[:40]!r} is not {what}.") from None

@@ -1,0 +1,317 @@
+"""PLY, ASCII and binary (either endianness), read by our own parser.
+
+trimesh's ``load_ply`` keeps vertex order, but it triangulates polygons grouped by size (all
+triangles first, then quads, ...), not in file order, and drops face normals. Here every
+element is read as the header declares it (fixed-size elements with one ``np.frombuffer``,
+lists of one size too; mixed sizes record by record), vertices keep their order, faces are
+fan-triangulated in file order, and ``nx ny nz`` on vertices or faces are kept. Elements other
+than ``vertex`` and ``face`` are read past and named in a note.
+"""
+
+from __future__ import annotations
+
+import struct
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mesh_normal.files.errors import MeshFileError
+from mesh_normal.files.loaded import LoadedMesh, build
+from mesh_normal.files.polygons import fan
+
+_TYPES = {"char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2",
+          "int16": "i2", "ushort": "u2", "uint16": "u2", "int": "i4", "int32": "i4",
+          "uint": "u4", "uint32": "u4", "float": "f4", "float32": "f4", "double": "f8",
+          "float64": "f8"}
+_ENDIAN = {"binary_little_endian": "<", "binary_big_endian": ">", "ascii": "="}
+_NORMAL = ("nx", "ny", "nz")
+
+
+@dataclass(slots=True)
+class _Element:
+    name: str
+    count: int
+    scalars: list[tuple[str, str]] = field(default_factory=list)  # (name, type) in order
+    lists: dict[str, tuple[str, str]] = field(default_factory=dict)  # name: (count, item)
+    order: list[str] = field(default_factory=list)  # every property name in order
+    data: dict[str, object] = field(default_factory=dict)
+
+
+def read_ply(data: bytes) -> LoadedMesh:
+    """Read a PLY file (see the module docstring)."""
+    encoding, elements, body = _header(data)
+    if encoding == "ascii":
+        _read_ascii(elements, data[body:])
+    else:
+        _read_binary(elements, data, body, _ENDIAN[encoding])
+    return _mesh(elements)
+
+
+def _header(data: bytes) -> tuple[str, list[_Element], int]:
+    end = data.find(b"end_header")
+    if end < 0:
+        raise MeshFileError("The PLY header has no 'end_header' line: the file is cut short or "
+                            "not PLY.")
+    body = data.find(b"\n", end) + 1 or len(data)
+    lines = data[:end].decode("latin-1").splitlines()[1:]
+    encoding, elements = None, []
+    for number, line in enumerate(lines, 2):
+        words = line.split()
+        if not words or words[0] in ("comment", "obj_info"):
+            continue
+        try:
+            if words[0] == "format":
+                encoding = words[1]
+                if encoding not in _ENDIAN:
+                    raise MeshFileError(f"Line {number}: the PLY format {encoding[:30]!r} is "
+                                        "not ascii, binary_little_endian or binary_big_endian.")
+            elif words[0] == "element":
+                elements.append(_Element(words[1], int(words[2])))
+            elif words[0] == "property" and words[1] == "list":
+                elements[-1].lists[words[4]] = (_type(words[2]), _type(words[3]))
+                elements[-1].order.append(words[4])
+            elif words[0] == "property":
+                elements[-1].scalars.append((words[2], _type(words[1])))
+                elements[-1].order.append(words[2])
+        except MeshFileError:
+            raise
+        except (IndexError, ValueError, KeyError):
+            raise MeshFileError(f"Line {number} of the PLY header cannot be read: "
+                                f"{line[:60]!r}.") from None
+    if encoding is None:
+        raise MeshFileError("The PLY header has no 'format' line.")
+    if any(element.count < 0 for element in elements):
+        raise MeshFileError("The PLY header declares an element with a negative count.")
+    return encoding, elements, body
+
+
+def _type(name: str) -> str:
+    if name not in _TYPES:
+        raise KeyError(name)
+    return _TYPES[name]
+
+
+def _read_binary(elements: list[_Element], data: bytes, offset: int, endian: str) -> None:
+    for element in elements:
+        if not element.lists:
+            dtype = np.dtype([(name, endian + kind) for name, kind in element.scalars])
+            offset = _frombuffer(element, data, dtype, offset)
+        else:
+            offset = _binary_lists(element, data, offset, endian)
+
+
+def _frombuffer(element: _Element, data: bytes, dtype: np.dtype, offset: int) -> int:
+    size = dtype.itemsize * element.count
+    if offset + size > len(data):
+        held = (len(data) - offset) // max(dtype.itemsize, 1)
+        raise MeshFileError(f"The PLY header says {element.count:,} {element.name} elements, "
+                            f"but the file holds only {max(held, 0):,}: it looks truncated.")
+    records = np.frombuffer(data, dtype, element.count, offset)
+    element.data = {name: records[name] for name in dtype.names or ()}
+    return offset + size
+
+
+def _binary_lists(element: _Element, data: bytes, offset: int, endian: str) -> int:
+    """Lists of one size read at once; mixed sizes record by record."""
+    first = _list_sizes(element, data, offset, endian) if element.count else None
+    if first is not None:
+        dtype = np.dtype([(name, endian + _kind(element, name)) if name not in element.lists
+                          else (name, [("count", endian + element.lists[name][0]),
+                                       ("items", endian + element.lists[name][1],
+                                        (first[name],))])
+                          for name in element.order])
+        if offset + dtype.itemsize * element.count <= len(data):
+            records = np.frombuffer(data, dtype, element.count, offset)
+            if all(np.all(records[name]["count"] == first[name]) for name in element.lists):
+                element.data = {name: records[name]["items"] if name in element.lists
+                                else records[name] for name in element.order}
+                return offset + dtype.itemsize * element.count
+    return _binary_records(element, data, offset, endian)
+
+
+def _kind(element: _Element, name: str) -> str:
+    return dict(element.scalars)[name]
+
+
+def _list_sizes(element: _Element, data: bytes, offset: int,
+                endian: str) -> dict[str, int] | None:
+    """The list sizes of the first record, or ``None`` when the file ends inside it."""
+    sizes = {}
+    try:
+        for name in element.order:
+            if name in element.lists:
+                count_type, item_type = element.lists[name]
+                (count,) = struct.unpack_from(endian + _struct(count_type), data, offset)
+                sizes[name] = int(count)
+                offset += np.dtype(count_type).itemsize + count * np.dtype(item_type).itemsize
+            else:
+                offset += np.dtype(_kind(element, name)).itemsize
+    except struct.error:
+        return None
+    return sizes
+
+
+def _struct(kind: str) -> str:
+    return {"i1": "b", "u1": "B", "i2": "h", "u2": "H", "i4": "i", "u4": "I", "f4": "f",
+            "f8": "d"}[kind]
+
+
+def _binary_records(element: _Element, data: bytes, offset: int, endian: str) -> int:
+    columns: dict[str, list[object]] = {name: [] for name in element.order}
+    readers = []
+    for name in element.order:
+        if name in element.lists:
+            count_type, item_type = element.lists[name]
+            readers.append((name, struct.Struct(endian + _struct(count_type)),
+                            endian + _struct(item_type), np.dtype(item_type).itemsize))
+        else:
+            readers.append((name, struct.Struct(endian + _struct(_kind(element, name))), "", 0))
+    try:
+        for _ in range(element.count):
+            for name, scalar, item, size in readers:
+                (value,) = scalar.unpack_from(data, offset)
+                offset += scalar.size
+                if item:
+                    columns[name].append(struct.unpack_from(f"{endian}{value}{item[1:]}", data,
+                                                            offset))
+                    offset += value * size
+                else:
+                    columns[name].append(value)
+    except struct.error:
+        raise MeshFileError(f"The PLY file ends inside its {element.name} elements: it looks "
+                            "truncated.") from None
+    element.data = {name: column if name in element.lists else np.array(column)
+                    for name, column in columns.items()}
+    return offset
+
+
+def _read_ascii(elements: list[_Element], body: bytes) -> None:
+    tokens = body.split()
+    position = 0
+    for element in elements:
+        if not element.lists:
+            width = len(element.scalars)
+            end = position + width * element.count
+            if end > len(tokens):
+                raise _short(element, (len(tokens) - position) // max(width, 1))
+            values = _floats(tokens[position:end]).reshape(element.count, width)
+            # As declared: a float32 property holds the float32 nearest to its text.
+            element.data = {name: values[:, i].astype(kind)
+                            for i, (name, kind) in enumerate(element.scalars)}
+            position = end
+        else:
+            position = _ascii_lists(element, tokens, position)
+
+
+def _short(element: _Element, held: int) -> MeshFileError:
+    return MeshFileError(f"The PLY header says {element.count:,} {element.name} elements, but "
+                         f"the file holds only {max(held, 0):,}: it looks truncated.")
+
+
+def _floats(tokens: list[bytes]) -> NDArray[np.float64]:
+    try:
+        return np.array(tokens, dtype=np.float64)
+    except ValueError:
+        bad = next(token for token in tokens if not _is_number(token))
+        raise MeshFileError(f"The PLY file has {bad[:40].decode('latin-1')!r} where a number "
+                            "should be.") from None
+
+
+def _is_number(token: bytes) -> bool:
+    try:
+        float(token)
+    except ValueError:
+        return False
+    return True
+
+
+def _ascii_lists(element: _Element, tokens: list[bytes], position: int) -> int:
+    if element.order == [*element.lists] and len(element.lists) == 1 and element.count:
+        size = tokens[position] if position < len(tokens) else b""
+        width = int(size) + 1 if size.isdigit() else 0
+        end = position + width * element.count
+        if width and end <= len(tokens) and tokens[position:end:width].count(size) == element.count:
+            rows = _floats(tokens[position:end]).reshape(element.count, width)[:, 1:]
+            element.data = {element.order[0]: rows}
+            return end
+    columns: dict[str, list[object]] = {name: [] for name in element.order}
+    try:
+        for _ in range(element.count):
+            for name in element.order:
+                if name in element.lists:
+                    count = int(tokens[position])
+                    columns[name].append(tokens[position + 1:position + 1 + count])
+                    if position + 1 + count > len(tokens):
+                        raise IndexError
+                    position += 1 + count
+                else:
+                    columns[name].append(tokens[position])
+                    position += 1
+    except IndexError:
+        raise _short(element, len(columns[element.order[0]]) - 1) from None
+    except ValueError:
+        raise MeshFileError(f"The PLY file has {tokens[position][:40].decode('latin-1')!r} "
+                            "where a list length should be.") from None
+    element.data = {name: column if name in element.lists else _floats(column)  # type: ignore[arg-type]
+                    for name, column in columns.items()}
+    return position
+
+
+def _mesh(elements: list[_Element]) -> LoadedMesh:
+    named = {element.name: element for element in elements}
+    vertex = named.get("vertex")
+    if vertex is None or not {"x", "y", "z"} <= vertex.data.keys():
+        raise MeshFileError("The PLY file has no vertex element with x, y and z.")
+    vertices = np.stack([np.asarray(vertex.data[axis], dtype=np.float64)
+                         for axis in "xyz"], axis=1)
+    notes = []
+    face = named.get("face")
+    key = next((name for name in ("vertex_indices", "vertex_index")
+                if face is not None and name in face.lists), None)
+    if face is None or key is None:
+        counts, flat = np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp)
+    else:
+        counts, flat = _polygons(face.data[key])
+    positions, source, fan_notes = fan(counts)
+    notes += fan_notes
+    faces = flat[positions]
+    others = [f"{element.name} ({element.count:,})" for element in elements
+              if element.name not in ("vertex", "face")]
+    if others:
+        notes.append(f"Ignored elements this reader does not use: {', '.join(others)}.")
+    return build("ply", vertices, faces, source_faces=len(counts),
+                 vertex_normals=_normals(vertex), face_normals=_face_normals(face, source),
+                 notes=notes, face=lambda i: f"face {source[i]:,} (counting from 0)")
+
+
+def _polygons(column: object) -> tuple[NDArray[np.intp], NDArray[np.int64]]:
+    """Corner counts and the flat corner indices of a list column (array or list of rows)."""
+    if isinstance(column, np.ndarray) and column.ndim == 2:
+        flat = column.ravel()
+        if flat.dtype.kind == "f" and not np.all(flat == np.round(flat)):  # ASCII, "2.9"
+            raise MeshFileError("The PLY file has a face index that is not a whole number.")
+        return np.full(len(column), column.shape[1], dtype=np.intp), flat.astype(np.int64)
+    rows = list(column)  # type: ignore[call-overload]
+    counts = np.fromiter(map(len, rows), dtype=np.intp, count=len(rows))
+    flat = [value for row in rows for value in row]
+    try:
+        values = np.array(flat, dtype=np.float64) if flat else np.zeros(0)
+    except ValueError:
+        raise MeshFileError("The PLY file has a face index that is not a number.") from None
+    if not np.all(values == np.round(values)):
+        raise MeshFileError("The PLY file has a face index that is not a whole number.")
+    return counts, values.astype(np.int64)
+
+
+def _normals(element: _Element | None) -> NDArray[np.float64] | None:
+    if element is None or not set(_NORMAL) <= element.data.keys():
+        return None
+    return np.stack([np.asarray(element.data[axis], dtype=np.float64) for axis in _NORMAL],
+                    axis=1)
+
+
+def _face_normals(face: _Element | None, source: NDArray[np.intp]) -> NDArray[np.float64] | None:
+    normals = _normals(face)
+    return None if normals is None else normals[source]
+

@@ -1,0 +1,67 @@
+"""Every tolerance and limit of the core, in one place.
+
+The single-triangle path has no tolerance at all: it is exact. The batch path is float64
+and uses the bounds below to decide which rows it must hand to the exact path.
+"""
+
+from __future__ import annotations
+
+import sys
+
+#: Unit roundoff of float64, 2**-53.
+EPSILON = sys.float_info.epsilon / 2
+
+#: Shewchuk's bound for a 2x2 determinant of differences, (3 + 16 eps) eps: the float value of
+#: ``(b - a)(c - d) - (e - f)(g - h)`` is within this times the sum of the absolute products
+#: of the exact value (Shewchuk 1997, "Adaptive Precision Floating-Point Arithmetic").
+DETERMINANT_ERROR = (3 + 16 * EPSILON) * EPSILON
+
+#: A batch row keeps its float result only if |n| exceeds this many times the largest
+#: error bound of its components; otherwise it is recomputed exactly. The direction of a
+#: kept unit normal is then within about sqrt(3) / 2**26 (3e-8) radians of the exact one.
+BATCH_MARGIN = 2.0**26
+
+#: Below this, products in the (scaled) batch computation may be subnormal and lose bits.
+BATCH_TINY = 2.0**-1000
+
+LARGEST_DOUBLE_TEXT = "about 1.8e308"
+
+# Meshes (mesh_normal.faces, mesh_normal.vertices). These are relative, so a mesh in millimetres
+# and the same mesh in metres get the same verdicts.
+
+#: k in the degenerate-face test |n| <= k * EPSILON * |p| * |q|, where n is the cross product
+#: of a face's edges p and q at its largest corner (its two shortest edges), i.e. the sine of
+#: its largest angle is at most k * EPSILON = 2**-37 (about 7.3e-12). The float n is within
+#: about 6 * EPSILON * |p| * |q| of the exact one, so below this bound its direction is
+#: rounding noise, and above it a kept normal points within 6 / k (1e-4) radians of the
+#: exact direction in the worst case (at the bound). A right triangle with 1e-7 edges has
+#: a sine of 1 and is not degenerate, whatever the unit.
+MESH_DEGENERATE_FACTOR = 2.0**16
+MESH_DEGENERATE_SINE = MESH_DEGENERATE_FACTOR * EPSILON
+
+#: A face's cross product is first taken at its corner A. If the sine of that angle is at
+#: most this, it is taken again at the largest corner (between the two shortest edges),
+#: where it is most accurate. Faces kept from the first pass point within
+#: 6 * EPSILON / 2**-10 (7e-13) radians of the exact direction.
+MESH_RECOMPUTE_SINE = 2.0**-10
+
+#: A vertex (or corner) whose weighted sum of unit face normals is at most this fraction of
+#: the sum of its weights gets no normal: its faces cancel (a sheet folded flat onto itself)
+#: and the direction that is left is rounding noise.
+MESH_CANCELLED_SUM = 2.0**-32
+
+#: Two faces are within the crease angle when the dot product of their unit normals is at
+#: least cos(crease) minus this, so that a dihedral angle exactly at the crease counts as
+#: smooth despite rounding (a cube's faces at a crease of exactly 90 degrees).
+MESH_CREASE_SLACK = 16 * EPSILON
+
+#: The corner normals compare pairs of corners around a vertex; at most this many pairs
+#: (about 20 bytes each) are held in memory at once.
+MESH_PAIR_CHUNK = 2**20
+
+#: A mesh patch is flat when |V| <= MESH_FLAT_SINE * sum |det| / 6 (V: the volume of the cone
+#: from its centroid over its faces, see :mod:`mesh_normal.orientation`): its faces tilt, on
+#: average, by an angle whose sine is at most this towards or away from the centroid. The same
+#: bound as a degenerate face's largest angle: below it the sign of V is rounding noise, so
+#: which side is outside is left undetermined.
+MESH_FLAT_SINE = MESH_DEGENERATE_SINE

@@ -1,0 +1,224 @@
+"""The normal of one triangle, computed exactly and rounded once.
+
+For points A, B, C the edges are u = B - A and v = C - A, the raw normal is n = u x v,
+its length |n| is twice the triangle's area, and n / |n| is the unit normal. The normal
+points to the side from which A, B, C run counter-clockwise (the right-hand rule);
+swapping the winding to A, C, B negates it.
+
+:func:`triangle_normal` works on the exact values of the given doubles: every output is
+the exact result rounded once to the nearest double, so a sliver that a naive float cross
+product reports as flat, or coordinates whose normal underflows, still get the right
+direction. Values outside the double range come back as ``None`` with a message.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from decimal import Decimal, localcontext
+from math import isfinite
+from numbers import Real
+
+from mesh_normal.exact import OutOfRange, ratio_sqrt, round_scaled, sqrt_scaled, to_fixed
+from mesh_normal.tolerances import LARGEST_DOUBLE_TEXT
+
+Vector = tuple[float, float, float]
+MaybeVector = tuple[float | None, float | None, float | None]
+
+AXES = ("x", "y", "z")
+
+
+@dataclass(frozen=True, slots=True)
+class TriangleNormal:
+    """The normal of one triangle and everything derived from it.
+
+    ``None`` marks a value whose exact result is outside the double range; ``message``
+    then says which and why. ``unit_normal`` is ``None`` only for a degenerate triangle.
+    """
+
+    a: Vector
+    b: Vector
+    c: Vector
+    order: str
+    u: MaybeVector
+    v: MaybeVector
+    normal: MaybeVector
+    magnitude: float | None
+    unit_normal: Vector | None
+    area: float | None
+    degenerate: bool
+    message: str | None
+
+
+def _as_point(name: str, point: Sequence[float]) -> Vector:
+    """Check one point up front, the way trimesh checks its inputs."""
+    if type(point) in (list, tuple) and len(point) == 3:  # the common case, quickly
+        x, y, z = point
+        if (type(x) is float and type(y) is float and type(z) is float
+                and isfinite(x) and isfinite(y) and isfinite(z)):
+            return (x, y, z)
+    try:
+        values = tuple(point)
+    except TypeError:
+        raise ValueError(f"Point {name} must be a sequence of 3 numbers.") from None
+    if len(values) != 3:
+        raise ValueError(f"Point {name} must have 3 coordinates, not {len(values)}.")
+    floats = []
+    for axis, value in zip(AXES, values, strict=True):
+        if isinstance(value, bool) or not isinstance(value, Real):
+            raise ValueError(f"{name.lower()}{axis} must be a number.")
+        try:
+            number = float(value)
+        except OverflowError:
+            number = float("inf")
+        if not isfinite(number):
+            raise ValueError(f"{name.lower()}{axis} must be a finite number within the "
+                             "double range.")
+        floats.append(number)
+    return (floats[0], floats[1], floats[2])
+
+
+def _approx(value: Decimal) -> str:
+    return f"{value.normalize():.3g}"
+
+
+class _Rounder:
+    """Rounds exact fixed-point values, collecting the ones that do not fit a double."""
+
+    def __init__(self) -> None:
+        self.overflow: list[tuple[str, str]] = []
+        self.underflow: list[tuple[str, str]] = []
+
+    def value(self, name: str, value: int, exponent: int, *, root: bool = False) -> float | None:
+        try:
+            if root:
+                return sqrt_scaled(value, exponent)
+            return round_scaled(value, exponent)
+        except OutOfRange as error:
+            with localcontext() as context:
+                context.prec = 3
+                exact = Decimal(value).sqrt() if root else Decimal(value)
+                approx = _approx(exact / Decimal(2) ** exponent)
+            target = self.overflow if error.kind == "overflow" else self.underflow
+            target.append((name, approx))
+            return None
+
+    def vector(self, name: str, values: Sequence[int], exponent: int) -> MaybeVector:
+        # The common case inline (this runs for every API request): one correctly rounded
+        # division each; anything out of range goes through value() for its message.
+        scale = 1 << exponent
+        out: list[float | None] = []
+        for axis, value in zip(AXES, values, strict=True):
+            try:
+                rounded = value / scale
+            except OverflowError:
+                rounded = 0.0
+            if rounded == 0.0 and value != 0:
+                out.append(self.value(f"{name}_{axis}", value, exponent))
+            else:
+                out.append(rounded)
+        return (out[0], out[1], out[2])
+
+    def message(self, lead: str | None = None) -> str | None:
+        """The sentences about out-of-range values, after ``lead`` when given."""
+        sentences = [lead] if lead else []
+        if self.overflow:
+            sentences.append(
+                f"{_listing(self.overflow)} {_verb(self.overflow)} beyond the largest double "
+                f"({LARGEST_DOUBLE_TEXT}), so {_pronoun(self.overflow)} null."
+            )
+        if self.underflow:
+            sentences.append(
+                f"{_listing(self.underflow)} {_verb(self.underflow)} nonzero but smaller than "
+                f"the smallest double (4.9e-324), so {_pronoun(self.underflow)} null."
+            )
+        if (self.overflow or self.underflow) and not lead:
+            sentences.append("The unit normal is exact all the same.")
+        return " ".join(sentences) or None
+
+
+def _listing(items: list[tuple[str, str]]) -> str:
+    parts = [f"{name} (about {approx})" for name, approx in items]
+    if len(parts) == 1:
+        return parts[0]
+    return ", ".join(parts[:-1]) + " and " + parts[-1]
+
+
+def _verb(items: list[tuple[str, str]]) -> str:
+    return "is" if len(items) == 1 else "are"
+
+
+def _pronoun(items: list[tuple[str, str]]) -> str:
+    return "it is" if len(items) == 1 else "they are"
+
+
+def _degenerate_message(p: Vector, q: Vector, r: Vector, order: str) -> str:
+    first, second, third = order
+    if p == q == r:
+        return "All three points are the same, so the triangle has no area and no normal."
+    for (x, y), (nx, ny) in (((p, q), (first, second)), ((p, r), (first, third)),
+                             ((q, r), (second, third))):
+        if x == y:
+            return (f"Points {nx} and {ny} coincide, so the triangle has no area "
+                    "and no normal direction.")
+    return ("The three points lie on one line, so the triangle has no area "
+            "and no normal direction.")
+
+
+def triangle_normal(
+    a: Sequence[float],
+    b: Sequence[float],
+    c: Sequence[float],
+    *,
+    swap_winding: bool = False,
+) -> TriangleNormal:
+    """Return the normal of triangle ABC (or ACB with ``swap_winding``), rounded once.
+
+    Parameters
+    ----------
+    a, b, c : (3,) float
+        The corners, finite numbers.
+    swap_winding : bool
+        Use the order A, C, B, which negates the normal.
+
+    Returns
+    -------
+    TriangleNormal
+        u = B - A, v = C - A, n = u x v, |n|, n / |n| and the area |n| / 2, each the exact
+        value rounded once to the nearest double. A degenerate triangle (the exact n is
+        zero: repeated or collinear points) has n = (0, 0, 0), magnitude and area 0, no
+        unit normal, and a message.
+
+    Examples
+    --------
+    >>> triangle_normal((0, 0, 0), (1, 0, 0), (0, 1, 0)).unit_normal
+    (0.0, 0.0, 1.0)
+    """
+    pa, pb, pc = _as_point("A", a), _as_point("B", b), _as_point("C", c)
+    order = "ACB" if swap_winding else "ABC"
+    p, q, r = (pa, pc, pb) if swap_winding else (pa, pb, pc)
+
+    fixed, k = to_fixed([*p, *q, *r])
+    ux, uy, uz = (fixed[3 + i] - fixed[i] for i in range(3))
+    vx, vy, vz = (fixed[6 + i] - fixed[i] for i in range(3))
+    n = (uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx)
+    square = n[0] * n[0] + n[1] * n[1] + n[2] * n[2]
+
+    rounder = _Rounder()
+    u = rounder.vector("u", (ux, uy, uz), k)
+    v = rounder.vector("v", (vx, vy, vz), k)
+    degenerate = square == 0
+    if degenerate:
+        return TriangleNormal(pa, pb, pc, order, u, v, (0.0, 0.0, 0.0), 0.0, None, 0.0,
+                              True, rounder.message(_degenerate_message(p, q, r, order)))
+
+    normal = rounder.vector("n", n, 2 * k)
+    magnitude = rounder.value("magnitude", square, 2 * k, root=True)
+    area = rounder.value("area", square, 2 * k + 1, root=True)
+    ex, ey, ez = (_signed(ratio_sqrt(ni * ni, square), ni) for ni in n)
+    return TriangleNormal(pa, pb, pc, order, u, v, normal, magnitude, (ex, ey, ez), area,
+                          False, rounder.message())
+
+
+def _signed(value: float, sign_of: int) -> float:
+    return -value if sign_of < 0 else value

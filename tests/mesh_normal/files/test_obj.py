@@ -1,0 +1,142 @@
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+
+from mesh_normal.files import MeshFileError, read_mesh
+from tests.mesh_normal.files._meshes import TETRA_FACES, TETRA_VERTICES
+from tests.paths import DATA
+
+
+def obj(text: str) -> bytes:
+    return text.strip().replace("\n    ", "\n").encode()
+
+
+def test_tetrahedron() -> None:
+    lines = [f"v {x} {y} {z}" for x, y, z in TETRA_VERTICES.tolist()]
+    lines += [f"f {a} {b} {c}" for a, b, c in (TETRA_FACES + 1).tolist()]
+    mesh = read_mesh("\n".join(lines).encode(), "t.obj")
+    assert mesh.format == "obj" and mesh.source_faces == 4 and mesh.notes == ()
+    np.testing.assert_array_equal(mesh.vertices, TETRA_VERTICES)
+    np.testing.assert_array_equal(mesh.faces, TETRA_FACES)
+    assert mesh.file_corner_normals is None and mesh.file_vertex_normals is None
+
+
+@pytest.mark.parametrize("name", ["cube.obj", "cow.obj"])
+def test_samples_match_trimesh(name: str) -> None:
+    """Without unused vertices or texture seams trimesh keeps the file's arrays too."""
+    mesh = read_mesh((DATA / name).read_bytes(), name)
+    reference = trimesh.load_mesh(DATA / name, process=False)
+    np.testing.assert_array_equal(mesh.vertices, reference.vertices)
+    np.testing.assert_array_equal(mesh.faces, reference.faces)
+
+
+def test_keeps_unused_vertices_and_order_and_does_not_split_at_seams() -> None:
+    data = obj("""
+    # an unused vertex first, then a quad whose corners repeat with other texture coordinates
+    v 9 9 9
+    v 0 0 0
+    v 1 0 0
+    v 1 1 0
+    v 0 1 0
+    vt 0 0
+    vt 1 0
+    vt 1 1
+    vt 0 1
+    vt 0.5 0.5
+    f 2/1 3/2 4/3
+    f 2/5 4/4 5/3
+    """)
+    mesh = read_mesh(data, "seam.obj")
+    np.testing.assert_array_equal(mesh.vertices, [[9, 9, 9], [0, 0, 0], [1, 0, 0], [1, 1, 0],
+                                                  [0, 1, 0]])
+    np.testing.assert_array_equal(mesh.faces, [[1, 2, 3], [1, 3, 4]])
+    trimesh_mesh = trimesh.load(trimesh.util.wrap_as_stream(data), file_type="obj",
+                                process=False)
+    assert len(trimesh_mesh.vertices) != 5  # why we parse OBJ ourselves
+
+
+def test_polygons_negative_indices_and_statements() -> None:
+    data = obj("""
+    mtllib a.mtl
+    o thing
+    v 0 0 0 1.0
+    v 1 0 0 0.5 0.5 0.5
+    v 1 1 0
+    v 0 1 0
+    g group
+    usemtl red
+    s off
+    f -4 -3 -2 -1
+    l 1 2
+    p 3
+    v 0.5 0.5 1
+    f 1 2 3 4 -1
+    f 1 \\
+      3 5
+    """)
+    mesh = read_mesh(data, "poly.obj")
+    np.testing.assert_array_equal(mesh.faces, [[0, 1, 2], [0, 2, 3], [0, 1, 2], [0, 2, 3],
+                                               [0, 3, 4], [0, 2, 4]])
+    assert mesh.source_faces == 3
+    assert mesh.notes == (
+        "Triangulated 1 quad and 1 larger polygon as fans from each one's first corner.",
+        "Skipped 1 line ('l') and 1 point ('p') elements: only faces are read.",
+    )
+
+
+def test_corner_and_vertex_normals() -> None:
+    data = obj("""
+    v 0 0 0
+    v 1 0 0
+    v 0 1 0
+    vn 0 0 1
+    vn 0 0 -1
+    f 1//1 2//1 3//1
+    """)
+    mesh = read_mesh(data, "n.obj")
+    np.testing.assert_array_equal(mesh.file_corner_normals, [[[0, 0, 1]] * 3])
+    np.testing.assert_array_equal(mesh.file_vertex_normals, [[0, 0, 1]] * 3)
+    mixed = read_mesh(data + b"\nf 1//1 3//2 2//1", "n.obj")  # vertex 3 gets two normals
+    assert mixed.file_vertex_normals is None
+    np.testing.assert_array_equal(mixed.file_corner_normals[1, 1], [0, 0, -1])
+    full = read_mesh(data.replace(b"//", b"/1/") + b"\nvt 0 0", "n.obj")
+    np.testing.assert_array_equal(full.file_corner_normals, mesh.file_corner_normals)
+
+
+def test_mixed_corner_forms() -> None:
+    mesh = read_mesh(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1 2/1 3//", "m.obj")
+    np.testing.assert_array_equal(mesh.faces, [[0, 1, 2]])
+
+
+def test_exact_floats() -> None:
+    value = 0.1 + 0.2
+    mesh = read_mesh(f"v {value!r} 1e-300 -2.5\nv 1 0 0\nv 0 1 0\nf 1 2 3".encode(), "e.obj")
+    assert mesh.vertices[0].tolist() == [value, 1e-300, -2.5]
+
+
+@pytest.mark.parametrize(("text", "message"), [
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4", "Line 4: vertex index 4 is out of range; the file "
+                                            "has 3 vertex statements."),
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 0", "Line 4: vertex index 0 is not valid"),
+    ("v 0 0 0\nf -1 -2 -3\nv 1 0 0\nv 0 1 0", "Line 2: vertex index -2 reaches back before"),
+    ("v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3", "vertex 2 (line 2) include nan"),
+    ("v 0 0 0\nv 1 0\nv 0 1 0\nf 1 2 3", "Line 2: 'v' needs 3 numbers, but has 2."),
+    ("v 0 0 0\nv 1 x 0\nv 0 1 0\nf 1 2 3", "Line 2: 'x' is not a number."),
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 a", "The face corner 'a' is not an index"),
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0", "The file holds no faces."),
+    ("# nothing\n", "The file holds no vertices and no faces."),
+])
+def test_errors_name_the_line(text: str, message: str) -> None:
+    with pytest.raises(MeshFileError) as error:
+        read_mesh(text.encode(), "bad.obj")
+    assert message in str(error.value)
+    assert error.value.status_code == 400
+
+
+def test_comments_may_follow_vertices_and_faces() -> None:
+    mesh = read_mesh(b"v 0 0 0 # origin\nv 1 0 0\nv 0 1 0\nf 1 2 3 # the lid\nf 1 3 2#under\n",
+                     "c.obj")
+    assert mesh.faces.tolist() == [[0, 1, 2], [0, 2, 1]]
+    assert mesh.vertices.tolist() == [[0, 0, 0], [1, 0, 0], [0, 1, 0]]

@@ -1,0 +1,123 @@
+from __future__ import annotations
+
+import struct
+
+import numpy as np
+import pytest
+import trimesh
+
+from mesh_normal.files import MeshFileError, read_mesh
+from tests.mesh_normal.files._meshes import TETRA_FACES, TETRA_VERTICES
+from tests.paths import DATA
+
+HEADER = """ply
+format {format} 1.0
+comment test
+element vertex {vertices}
+property float x
+property float y
+property float z
+property float nx
+property float ny
+property float nz
+property uchar red
+element face {faces}
+property list uchar int vertex_indices
+property float nx
+property float ny
+property float nz
+element edge 1
+property int vertex1
+property int vertex2
+end_header
+"""
+SQUARE = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0.5, 0.5, 1), (9, 9, 9)]
+POLYGONS = [[0, 1, 2, 3], [0, 2, 3], [1, 0, 4, 3, 2]]
+
+
+def polygon_ply(format: str) -> bytes:
+    header = HEADER.format(format=format, vertices=len(SQUARE), faces=len(POLYGONS)).encode()
+    if format == "ascii":
+        body = "".join(f"{x} {y} {z} 0 0 1 5\n" for x, y, z in SQUARE)
+        body += "".join(f"{len(p)} {' '.join(map(str, p))} 0 0 {i}\n"
+                        for i, p in enumerate(POLYGONS))
+        return header + (body + "0 1\n").encode()
+    e = ">" if format == "binary_big_endian" else "<"
+    body = b"".join(struct.pack(f"{e}6fB", x, y, z, 0, 0, 1, 5) for x, y, z in SQUARE)
+    body += b"".join(struct.pack(f"{e}B{len(p)}i3f", len(p), *p, 0, 0, i)
+                     for i, p in enumerate(POLYGONS))
+    return header + body + struct.pack(f"{e}2i", 0, 1)
+
+
+@pytest.mark.parametrize("format", ["ascii", "binary_little_endian", "binary_big_endian"])
+def test_polygons_normals_and_extra_properties(format: str) -> None:
+    mesh = read_mesh(polygon_ply(format), "p.ply")
+    np.testing.assert_array_equal(mesh.vertices, SQUARE)  # the unused vertex 5 is kept
+    np.testing.assert_array_equal(mesh.faces, [[0, 1, 2], [0, 2, 3], [0, 2, 3], [1, 0, 4],
+                                               [1, 4, 3], [1, 3, 2]])
+    np.testing.assert_array_equal(mesh.file_vertex_normals, [[0, 0, 1]] * 6)
+    np.testing.assert_array_equal(mesh.file_face_normals[:, 2], [0, 0, 1, 2, 2, 2])
+    assert mesh.source_faces == 3
+    assert mesh.notes == (
+        "Triangulated 1 quad and 1 larger polygon as fans from each one's first corner.",
+        "Ignored elements this reader does not use: edge (1).",
+    )
+
+
+@pytest.mark.parametrize("name", ["sphere.ply", "ant.ply", "nut.ply", "airplane.ply"])
+def test_samples_match_trimesh(name: str) -> None:
+    """All-triangle files: trimesh keeps the file's arrays, and so do we (float32 as declared)."""
+    mesh = read_mesh((DATA / name).read_bytes(), name)
+    reference = trimesh.load_mesh(DATA / name, process=False)
+    np.testing.assert_array_equal(mesh.vertices, reference.vertices)
+    np.testing.assert_array_equal(mesh.faces, reference.faces)
+
+
+def test_trimesh_reorders_mixed_polygons() -> None:
+    """Why we parse PLY ourselves: trimesh groups triangulated faces by polygon size."""
+    kwargs = trimesh.exchange.ply.load_ply(trimesh.util.wrap_as_stream(polygon_ply("ascii")))
+    ours = read_mesh(polygon_ply("ascii"), "p.ply").faces
+    assert not np.array_equal(kwargs["faces"], ours)
+
+
+def test_tetrahedron_ascii() -> None:
+    text = ("ply\nformat ascii 1.0\nelement vertex 4\nproperty double x\nproperty double y\n"
+            "property double z\nelement face 4\nproperty list uchar uint vertex_index\n"
+            "end_header\n")
+    text += "".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in TETRA_VERTICES.tolist())
+    text += "".join(f"3 {a} {b} {c}\n" for a, b, c in TETRA_FACES.tolist())
+    mesh = read_mesh(text.encode())
+    assert mesh.format == "ply"
+    np.testing.assert_array_equal(mesh.vertices, TETRA_VERTICES)
+    np.testing.assert_array_equal(mesh.faces, TETRA_FACES)
+
+
+@pytest.mark.parametrize(("edit", "message"), [
+    (lambda d: d[:-60], "ends inside its face elements"),
+    (lambda d: d.replace(b"element vertex 6", b"element vertex 600"), "600 vertex elements"),
+    (lambda d: d.replace(b"format binary_little_endian", b"format binary_middle"),
+     "not ascii, binary_little_endian or binary_big_endian"),
+    (lambda d: d.replace(b"end_header", b"end_heade"), "no 'end_header'"),
+    (lambda d: d.replace(b"property float x", b"property quad x"), "Line 5 of the PLY header"),
+])
+def test_broken_binary(edit, message: str) -> None:  # type: ignore[no-untyped-def]
+    with pytest.raises(MeshFileError, match=message):
+        read_mesh(edit(polygon_ply("binary_little_endian")), "p.ply")
+
+
+@pytest.mark.parametrize(("polygon", "message"), [
+    ("3 0 1 7", "Face 0 \\(counting from 0\\) refers to vertex 7 \\(counting from 0\\), but the "
+                "file has only 6."),
+    ("3 0 -1 2", "Face 0 \\(counting from 0\\) refers to vertex -1; vertex indices cannot be "
+                 "negative."),
+])
+def test_index_out_of_range(polygon: str, message: str) -> None:
+    data = polygon_ply("ascii").replace(b"4 0 1 2 3 0 0 0", polygon.encode() + b" 0 0 0")
+    with pytest.raises(MeshFileError, match=message):
+        read_mesh(data, "p.ply")
+
+
+def test_nan_vertex() -> None:
+    data = polygon_ply("ascii").replace(b"1 1 0 0 0 1 5", b"1 nan 0 0 0 1 5")
+    with pytest.raises(MeshFileError, match="vertex 2 \\(counting from 0\\) include nan"):
+        read_mesh(data, "p.ply")

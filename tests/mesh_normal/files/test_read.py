@@ -1,0 +1,78 @@
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+
+from mesh_normal.files import SUFFIXES, LoadedMesh, MeshFileError, read_mesh, write_mesh
+from tests.mesh_normal.files._meshes import TETRA_FACES, TETRA_VERTICES, ascii_stl
+from tests.paths import DATA
+
+SAMPLES = {name: (DATA / name).read_bytes()
+           for name in ("sphere.ply", "ant.ply", "nut.ply", "airplane.ply", "cube.obj",
+                        "cow.obj")}
+SAMPLES["tetra.stl"] = write_mesh(TETRA_VERTICES, TETRA_FACES, "stl")
+SAMPLES["ascii.stl"] = ascii_stl(TETRA_VERTICES[TETRA_FACES], np.zeros((4, 3)))
+SAMPLES["tetra.off"] = b"OFF\n4 4 0\n" + b"".join(
+    f"{x} {y} {z}\n".encode() for x, y, z in TETRA_VERTICES) + b"".join(
+    f"3 {a} {b} {c}\n".encode() for a, b, c in TETRA_FACES)
+SAMPLES["box.glb"] = trimesh.creation.box().export(file_type="glb")
+
+
+def test_suffixes() -> None:
+    assert SUFFIXES == {".stl": "stl", ".obj": "obj", ".ply": "ply", ".off": "off",
+                        ".glb": "glb", ".gltf": "gltf"}
+
+
+@pytest.mark.parametrize("name", sorted(SAMPLES))
+def test_format_from_the_bytes_alone(name: str) -> None:
+    mesh = read_mesh(SAMPLES[name])
+    assert mesh.format == SUFFIXES["." + name.rsplit(".", 1)[1]]
+    assert mesh.faces.dtype == np.intp and mesh.vertices.dtype == np.float64
+
+
+def test_content_wins_over_a_wrong_name_with_a_note() -> None:
+    mesh = read_mesh(SAMPLES["sphere.ply"], "sphere.stl")
+    assert mesh.format == "ply"
+    assert mesh.notes[0] == "The file is named as STL but holds PLY; it was read as PLY."
+
+
+@pytest.mark.parametrize(("data", "filename", "message", "status"), [
+    (b"", "a.stl", "The file is empty (0 bytes).", 400),
+    (b"", None, "The file is empty (0 bytes).", 400),
+    (b"hello world", "notes.txt", "The format of this .txt file is not supported", 415),
+    (bytes(range(256)) * 4, None, "The file's format was not recognised", 415),
+    (bytes(range(256)) * 4, "x.ply", "PLY header has no 'end_header'", 400),
+    (b"\x00" * 10, "x.glb", "could not be read as GLB", 400),
+])
+def test_unreadable(data: bytes, filename: str | None, message: str, status: int) -> None:
+    with pytest.raises(MeshFileError) as error:
+        read_mesh(data, filename)
+    assert message in str(error.value)
+    assert error.value.status_code == status
+
+
+def outcome(data: bytes, filename: str | None) -> LoadedMesh | MeshFileError:
+    try:
+        return read_mesh(data, filename)
+    except MeshFileError as error:
+        assert str(error) and error.status_code in (400, 415)
+        return error
+
+
+@pytest.mark.parametrize("name", sorted(SAMPLES))
+def test_truncated_and_garbled_files_give_a_mesh_or_a_mesh_file_error(name: str) -> None:
+    data = SAMPLES[name]
+    rng = np.random.default_rng(len(data))
+    cuts = sorted({*rng.integers(0, len(data), 25).tolist(), 1, 4, 80, 84, 100, len(data) - 1})
+    for cut in cuts:
+        for filename in (name, None):
+            result = outcome(data[:cut], filename)
+            if isinstance(result, LoadedMesh):
+                assert np.isfinite(result.vertices).all()
+                assert result.faces.min() >= 0 and result.faces.max() < len(result.vertices)
+    for _ in range(25):
+        garbled = np.frombuffer(data, dtype=np.uint8).copy()
+        garbled[rng.integers(0, len(data), 8)] = rng.integers(0, 256, 8)
+        outcome(garbled.tobytes(), name)
+        outcome(garbled[: len(garbled) // 2].tobytes(), None)

@@ -1,0 +1,47 @@
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mesh_normal.files import weld as weld_module
+from mesh_normal.files.weld import weld
+
+
+def reference(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Plain dictionary welding in order of first appearance."""
+    ids: dict[tuple[float, ...], int] = {}
+    index = [ids.setdefault(tuple(row), len(ids)) for row in (corners + 0.0).tolist()]
+    return np.array(list(ids), dtype=np.float64).reshape(-1, 3), np.array(index)
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_matches_a_dictionary(dtype: type) -> None:
+    rng = np.random.default_rng(3)
+    points = rng.standard_normal((300, 3)).astype(dtype)
+    corners = points[rng.integers(0, 300, 2000)]
+    corners[::7] *= -0.0  # some -0.0 rows, which must weld with +0.0
+    corners[1::7] = 0.0
+    vertices, index = weld(corners)
+    expected_vertices, expected_index = reference(corners)
+    np.testing.assert_array_equal(vertices, expected_vertices)
+    np.testing.assert_array_equal(index, expected_index)
+    assert vertices.dtype == np.float64 and index.dtype == np.intp
+
+
+def test_hash_collisions_are_split_exactly(monkeypatch: pytest.MonkeyPatch) -> None:
+    def everything_collides(words):  # type: ignore[no-untyped-def]
+        starts = np.zeros(len(words[0]), dtype=bool)
+        starts[0] = True
+        return np.arange(len(words[0])), starts
+
+    monkeypatch.setattr(weld_module, "_hash_groups", everything_collides)
+    corners = np.random.default_rng(5).integers(0, 4, (500, 3)).astype(np.float64)
+    vertices, index = weld(corners)
+    expected_vertices, expected_index = reference(corners)
+    np.testing.assert_array_equal(vertices, expected_vertices)
+    np.testing.assert_array_equal(index, expected_index)
+
+
+def test_empty() -> None:
+    vertices, index = weld(np.zeros((0, 3)))
+    assert vertices.shape == (0, 3) and index.shape == (0,)
