@@ -34,7 +34,7 @@ consistent, outward winding. The server keeps no file after its response.
 
 
 @asynccontextmanager
-async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+async def lifespan(_app: FastAPI) -> AsyncIterator[None]:
     """Load the compiled mesh kernels from numba's cache in the background, so that the first
     mesh upload does not wait for them while the server already answers everything else."""
     threading.Thread(target=compile_kernels, name="compile-kernels", daemon=True).start()

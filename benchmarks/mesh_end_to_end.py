@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import argparse
 import io
+import itertools
 import os
 import re
 import statistics
@@ -78,8 +79,22 @@ def server() -> Iterator[str]:
 
     port = free_port()
     process = subprocess.Popen(
-        [sys.executable, "-m", "uvicorn", "app.main:app", "--host", "127.0.0.1", "--port",
-         str(port), "--workers", "1", "--no-access-log", "--log-level", "warning"])
+        [
+            sys.executable,
+            "-m",
+            "uvicorn",
+            "app.main:app",
+            "--host",
+            "127.0.0.1",
+            "--port",
+            str(port),
+            "--workers",
+            "1",
+            "--no-access-log",
+            "--log-level",
+            "warning",
+        ]
+    )
     base = f"http://127.0.0.1:{port}"
     try:
         for _ in range(400):
@@ -97,8 +112,10 @@ def server() -> Iterator[str]:
 
 
 def upload(client: object, base: str, name: str, data: bytes) -> int:
-    response = client.post(base + "/api/mesh",  # type: ignore[attr-defined]
-                           files={"file": (name, data, "application/octet-stream")})
+    response = client.post(
+        base + "/api/mesh",  # type: ignore[attr-defined]
+        files={"file": (name, data, "application/octet-stream")},
+    )
     if response.status_code != 200:
         raise RuntimeError(f"POST /api/mesh: {response.status_code} {response.text[:300]}")
     return int(response.json()["faces"])
@@ -108,8 +125,7 @@ def trimesh_report(data: bytes, process: bool) -> None:
     import trimesh
 
     mesh = trimesh.load(io.BytesIO(data), file_type="stl", process=process)
-    _ = (mesh.is_watertight, mesh.is_winding_consistent, mesh.volume, mesh.area,
-         mesh.face_normals)
+    _ = (mesh.is_watertight, mesh.is_winding_consistent, mesh.volume, mesh.area, mesh.face_normals)
 
 
 def open3d_report(path: Path) -> None:
@@ -119,8 +135,12 @@ def open3d_report(path: Path) -> None:
     mesh.remove_duplicated_vertices()
     mesh.compute_triangle_normals()
     # is_watertight() would add is_self_intersecting(), 44 s alone at the bunny size
-    _ = (mesh.is_edge_manifold(allow_boundary_edges=False), mesh.is_vertex_manifold(),
-         mesh.is_orientable(), mesh.get_surface_area())
+    _ = (
+        mesh.is_edge_manifold(allow_boundary_edges=False),
+        mesh.is_vertex_manifold(),
+        mesh.is_orientable(),
+        mesh.get_surface_area(),
+    )
 
 
 def timed(call: Callable[[], object]) -> float:
@@ -167,10 +187,18 @@ def bench_uploads(sizes: list[int], repeats: int) -> list[str]:
                 else:
                     cells.append("")
                     ratios.append("")
-            target = f"< {TARGET_UPLOAD} s: {'met' if median_ours < TARGET_UPLOAD else 'MISSED'}" \
-                if size == 871_414 else ""
-            rows.append(f"| {size:,} | {len(data) / 2**20:.1f} MiB | " + " | ".join(cells)
-                        + " | " + " | ".join(ratios) + f" | {target} |")
+            target = (
+                f"< {TARGET_UPLOAD} s: {'met' if median_ours < TARGET_UPLOAD else 'MISSED'}"
+                if size == 871_414
+                else ""
+            )
+            rows.append(
+                f"| {size:,} | {len(data) / 2**20:.1f} MiB | "
+                + " | ".join(cells)
+                + " | "
+                + " | ".join(ratios)
+                + f" | {target} |"
+            )
             print(rows[-1], file=sys.stderr, flush=True)
     return rows
 
@@ -192,8 +220,12 @@ def _vm_hwm(pid: int) -> int:
 
 
 #: The CLI's progress lines by their first word, and what each stage does.
-STAGES = {"reading": "read + weld", "computing": "normals", "checking": "report",
-          "writing": "write .npy"}
+STAGES = {
+    "reading": "read + weld",
+    "computing": "normals",
+    "checking": "report",
+    "writing": "write .npy",
+}
 _STAGE = re.compile(r"\[\s*([\d.]+) s\] ([^\r\n]*)")
 
 
@@ -224,10 +256,12 @@ def run_cli(args: list[str]) -> tuple[float, int, dict[str, float], str]:
         peak = int(peak_file.read_text().split()[-1]) * 1024 if gnu_time.exists() else high_water
     if process.returncode not in (0, 1):
         raise RuntimeError(f"mesh-normal {' '.join(args)} exited {process.returncode}: {stderr}")
-    marks = [(float(m.group(1)), STAGES.get(m.group(2).split(" ")[0], m.group(2)))
-             for m in _STAGE.finditer(stderr)]
+    marks = [
+        (float(m.group(1)), STAGES.get(m.group(2).split(" ")[0], m.group(2)))
+        for m in _STAGE.finditer(stderr)
+    ]
     stages: dict[str, float] = {}
-    for (at, stage), (until, _) in zip(marks, marks[1:], strict=False):
+    for (at, stage), (until, _) in itertools.pairwise(marks):
         stages[stage] = stages.get(stage, 0.0) + until - at
     if marks:  # before the first mark: start-up and imports; after the last: exit
         stages["start-up + exit"] = wall - marks[-1][0]
@@ -240,17 +274,27 @@ def bench_lucy(runs: int) -> list[str]:
     run_cli(["normals", str(small), "--kind", "vertex", "-o", str(output)])  # numba's cache
     lucy = stl_file(LUCY)
     rows = []
-    commands = [("normals --kind vertex -o OUT.npy",
-                 ["normals", str(lucy), "--kind", "vertex", "-o", str(output)])] * runs
+    commands = [
+        (
+            "normals --kind vertex -o OUT.npy",
+            ["normals", str(lucy), "--kind", "vertex", "-o", str(output)],
+        )
+    ] * runs
     commands.append(("analyze", ["analyze", str(lucy)]))
     for label, args in commands:
         wall, rss, stages, _ = run_cli(args)
         stage_text = ", ".join(f"{name} {seconds:.1f} s" for name, seconds in stages.items())
-        verdict = "" if label == "analyze" else (
-            f"{'met' if wall < TARGET_LUCY_SECONDS else 'MISSED'} / "
-            f"{'met' if rss < TARGET_LUCY_RSS else 'MISSED'}")
-        rows.append(f"| `mesh-normal {label}` | {wall:.1f} | {rss / 2**30:.2f} | {stage_text} | "
-                    f"{verdict} |")
+        verdict = (
+            ""
+            if label == "analyze"
+            else (
+                f"{'met' if wall < TARGET_LUCY_SECONDS else 'MISSED'} / "
+                f"{'met' if rss < TARGET_LUCY_RSS else 'MISSED'}"
+            )
+        )
+        rows.append(
+            f"| `mesh-normal {label}` | {wall:.1f} | {rss / 2**30:.2f} | {stage_text} | {verdict} |"
+        )
         print(rows[-1], file=sys.stderr, flush=True)
     output.unlink(missing_ok=True)
     return rows
@@ -265,16 +309,20 @@ def main() -> None:
     args = parser.parse_args()
 
     rows = bench_uploads(args.sizes, args.repeats)
-    print(f"\n| triangles | binary STL | ours: POST /api/mesh, median / best of {args.repeats} (s) "
-          "| trimesh process=True, median / best (s) | trimesh process=False (s) | Open3D (s) "
-          "| trimesh process=True / ours | process=False / ours | Open3D / ours | target |")
+    print(
+        f"\n| triangles | binary STL | ours: POST /api/mesh, median / best of {args.repeats} (s) "
+        "| trimesh process=True, median / best (s) | trimesh process=False (s) | Open3D (s) "
+        "| trimesh process=True / ours | process=False / ours | Open3D / ours | target |"
+    )
     print("|---:|---:|" + "---:|" * 7 + "---|")
     print("\n".join(rows))
     if not args.skip_lucy:
         rows = bench_lucy(args.lucy_runs)
         size = (84 + 50 * LUCY) / 2**20
-        print(f"\n| {LUCY:,} triangles, binary STL ({size:,.0f} MiB) | wall (s) | peak RSS (GiB) "
-              "| stages (the CLI's --progress) | 30 s / 6 GiB |")
+        print(
+            f"\n| {LUCY:,} triangles, binary STL ({size:,.0f} MiB) | wall (s) | peak RSS (GiB) "
+            "| stages (the CLI's --progress) | 30 s / 6 GiB |"
+        )
         print("|---|---:|---:|---|---|")
         print("\n".join(rows))
 

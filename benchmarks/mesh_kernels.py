@@ -50,8 +50,12 @@ def torus_mesh(triangles: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
         return (a % around) * across + b % across
 
     corners = index(i, j), index(i + 1, j), index(i + 1, j + 1), index(i, j + 1)
-    faces = np.concatenate([np.stack([corners[0], corners[1], corners[2]], -1).reshape(-1, 3),
-                            np.stack([corners[0], corners[2], corners[3]], -1).reshape(-1, 3)])
+    faces = np.concatenate(
+        [
+            np.stack([corners[0], corners[1], corners[2]], -1).reshape(-1, 3),
+            np.stack([corners[0], corners[2], corners[3]], -1).reshape(-1, 3),
+        ]
+    )
     faces = faces[rng.permutation(len(faces))[:triangles]]
     return vertices.reshape(-1, 3), faces
 
@@ -74,6 +78,7 @@ def trimesh_kernels(vertices: np.ndarray, faces: np.ndarray) -> Kernels:
             each = mesh.triangles_cross if kind == "area" else mesh.face_normals
             total = trimesh.geometry.mean_vertex_normals(len(vertices), faces, each)
             return trimesh.util.unitize(total)
+
         return run
 
     if importlib.util.find_spec("scipy") is None:  # else a Python loop per vertex
@@ -90,8 +95,10 @@ def igl_kernels(vertices: np.ndarray, faces: np.ndarray) -> Kernels:
         kind = getattr(igl, f"PER_VERTEX_NORMALS_WEIGHTING_TYPE_{weighting.upper()}")
         return lambda: igl.per_vertex_normals(vertices, faces, kind)
 
-    return {"face": lambda: igl.per_face_normals(vertices, faces),
-            **{weighting: vertex(weighting) for weighting in ("area", "angle", "uniform")}}
+    return {
+        "face": lambda: igl.per_face_normals(vertices, faces),
+        **{weighting: vertex(weighting) for weighting in ("area", "angle", "uniform")},
+    }
 
 
 def open3d_kernels(vertices: np.ndarray, faces: np.ndarray) -> Kernels:
@@ -100,12 +107,15 @@ def open3d_kernels(vertices: np.ndarray, faces: np.ndarray) -> Kernels:
     import open3d as o3d
 
     def mesh() -> o3d.geometry.TriangleMesh:
-        return o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(vertices),
-                                         o3d.utility.Vector3iVector(faces.astype(np.int32)))
+        return o3d.geometry.TriangleMesh(
+            o3d.utility.Vector3dVector(vertices), o3d.utility.Vector3iVector(faces.astype(np.int32))
+        )
 
     flat, smooth = mesh(), mesh()  # built here, outside the timed calls
-    return {"face": lambda: np.asarray(flat.compute_triangle_normals().triangle_normals),
-            "area": lambda: np.asarray(smooth.compute_vertex_normals().vertex_normals)}
+    return {
+        "face": lambda: np.asarray(flat.compute_triangle_normals().triangle_normals),
+        "area": lambda: np.asarray(smooth.compute_vertex_normals().vertex_normals),
+    }
 
 
 def largest_angle(ours: np.ndarray, theirs: np.ndarray) -> float:
@@ -118,10 +128,14 @@ def largest_angle(ours: np.ndarray, theirs: np.ndarray) -> float:
 
 
 PEERS = ("trimesh", "libigl", "Open3D")
-LABELS = {"face": "face normals", "area": "vertex normals, area-weighted",
-          "angle": "vertex normals, angle-weighted", "uniform": "vertex normals, uniform",
-          "corner": "corner normals, crease 30°",
-          "corner 1": "corner normals, crease 1° (most vertices pairwise)"}
+LABELS = {
+    "face": "face normals",
+    "area": "vertex normals, area-weighted",
+    "angle": "vertex normals, angle-weighted",
+    "uniform": "vertex normals, uniform",
+    "corner": "corner normals, crease 30°",
+    "corner 1": "corner normals, crease 1° (most vertices pairwise)",
+}
 LARGE = 2_000_000
 
 
@@ -137,8 +151,17 @@ def run(size: int, repeats: int) -> list[str]:
         ours["corner"] = lambda: corner_normals(vertices, faces, 30.0)
         ours["corner 1"] = lambda: corner_normals(vertices, faces, 1.0)
     face_normals(vertices[:3], faces[:1] % 3)  # compiled (or loaded from the cache) before timing
-    peers = dict(zip(PEERS, (trimesh_kernels(vertices, faces), igl_kernels(vertices, faces),
-                             open3d_kernels(vertices, faces)), strict=True))
+    peers = dict(
+        zip(
+            PEERS,
+            (
+                trimesh_kernels(vertices, faces),
+                igl_kernels(vertices, faces),
+                open3d_kernels(vertices, faces),
+            ),
+            strict=True,
+        )
+    )
     kernels = {("ours", k): v for k, v in ours.items()}
     kernels.update({(peer, k): v for peer, their in peers.items() for k, v in their.items()})
     times = best_times(kernels, repeats)
@@ -147,20 +170,24 @@ def run(size: int, repeats: int) -> list[str]:
         theirs = [times.get((peer, key)) for peer in PEERS]
         cells = [f"{t:.1f}" if t else "" for t in theirs]
         ratios = [f"{t / mine:.2f}x" if t else "" for t in theirs]
-        rows.append(f"| {size:,} | {LABELS[key]} | {mine:.1f} | " + " | ".join(cells + ratios)
-                    + " |")
+        rows.append(
+            f"| {size:,} | {LABELS[key]} | {mine:.1f} | " + " | ".join(cells + ratios) + " |"
+        )
     if "angle" in peers["trimesh"]:
         import trimesh
 
         mesh = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
         gap = largest_angle(vertex_normals(vertices, faces).normals, mesh.vertex_normals)
-        rows.append(f"| {size:,} | (largest angle between our and trimesh's angle-weighted "
-                    f"normals: {gap:.1e} rad) | | | | | | | |")
+        rows.append(
+            f"| {size:,} | (largest angle between our and trimesh's angle-weighted "
+            f"normals: {gap:.1e} rad) | | | | | | | |"
+        )
     return rows
 
 
-def best_times(kernels: dict[tuple[str, str], Callable[[], object]],
-               repeats: int) -> dict[tuple[str, str], float]:
+def best_times(
+    kernels: dict[tuple[str, str], Callable[[], object]], repeats: int
+) -> dict[tuple[str, str], float]:
     """Best wall time in milliseconds of each kernel, the kernels run alternately."""
     times: dict[tuple[str, str], list[float]] = {name: [] for name in kernels}
     for _ in range(repeats):
@@ -173,12 +200,18 @@ def best_times(kernels: dict[tuple[str, str], Callable[[], object]],
 
 # --- what each library returns for degenerate and tiny faces --------------------------------
 
-PROBE = np.array([
-    [0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, 0.0, 0.0],  # 0-2: collinear
-    [0.0, 1.0, 0.0],  # 3: with 0 and 1, a valid face next to the collinear one
-    [5.0, 5.0, 5.0], [5.0 + 1e-7, 5.0, 5.0], [5.0, 5.0 + 1e-7, 5.0],  # 4-6: legs of 1e-7
-    [9.0, 9.0, 9.0],  # 7: only in a face with a repeated index
-])
+PROBE = np.array(
+    [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.5, 0.0, 0.0],  # 0-2: collinear
+        [0.0, 1.0, 0.0],  # 3: with 0 and 1, a valid face next to the collinear one
+        [5.0, 5.0, 5.0],
+        [5.0 + 1e-7, 5.0, 5.0],
+        [5.0, 5.0 + 1e-7, 5.0],  # 4-6: legs of 1e-7
+        [9.0, 9.0, 9.0],  # 7: only in a face with a repeated index
+    ]
+)
 PROBE_FACES = np.array([[0, 1, 2], [0, 1, 3], [4, 5, 6], [7, 7, 1]])
 PROBE_CASES = (  # (label, face normals row or None, vertex normals row or None, expected)
     ("collinear face: its face normal", 0, None, None),
@@ -214,16 +247,23 @@ def probe() -> list[str]:
     import warnings
 
     results: dict[str, tuple[np.ndarray | None, np.ndarray | None]] = {
-        "ours": (face_normals(PROBE, PROBE_FACES).normals,
-                 vertex_normals(PROBE, PROBE_FACES, "angle").normals)}
+        "ours": (
+            face_normals(PROBE, PROBE_FACES).normals,
+            vertex_normals(PROBE, PROBE_FACES, "angle").normals,
+        )
+    }
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
-        for name, kernels in (("trimesh", trimesh_kernels(PROBE, PROBE_FACES)),
-                              ("libigl", igl_kernels(PROBE, PROBE_FACES)),
-                              ("Open3D", open3d_kernels(PROBE, PROBE_FACES))):
+        for name, kernels in (
+            ("trimesh", trimesh_kernels(PROBE, PROBE_FACES)),
+            ("libigl", igl_kernels(PROBE, PROBE_FACES)),
+            ("Open3D", open3d_kernels(PROBE, PROBE_FACES)),
+        ):
             smooth = kernels.get("angle", kernels.get("area"))
-            results[name] = (full_rows(kernels["face"]()) if "face" in kernels else None,
-                             np.asarray(smooth()) if smooth else None)
+            results[name] = (
+                full_rows(kernels["face"]()) if "face" in kernels else None,
+                np.asarray(smooth()) if smooth else None,
+            )
         if importlib.util.find_spec("igl"):
             import igl
 
@@ -245,16 +285,20 @@ def memory(size: int) -> list[str]:
 
     vertices, faces = torus_mesh(size)
     rows = []
-    for label, call in (("face normals", lambda: face_normals(vertices, faces)),
-                        ("vertex normals, angle", lambda: vertex_normals(vertices, faces))):
+    for label, call in (
+        ("face normals", lambda: face_normals(vertices, faces)),
+        ("vertex normals, angle", lambda: vertex_normals(vertices, faces)),
+    ):
         call()
         tracemalloc.start()
         result = call()
         peak = tracemalloc.get_traced_memory()[1]
         tracemalloc.stop()
         output = sum(array.nbytes for array in (getattr(result, n) for n in result.__slots__))
-        rows.append(f"| {size:,} | {label} | {output / 2**20:.1f} | {peak / 2**20:.1f} | "
-                    f"{(peak - output) / 2**20:.1f} | {(peak - output) / output:.2f} |")
+        rows.append(
+            f"| {size:,} | {label} | {output / 2**20:.1f} | {peak / 2**20:.1f} | "
+            f"{(peak - output) / 2**20:.1f} | {(peak - output) / output:.2f} |"
+        )
     return rows
 
 
@@ -264,8 +308,13 @@ def main() -> None:
     parser.add_argument("--large-repeats", type=int, default=2)
     parser.add_argument("--sizes", type=int, nargs="+", default=list(SIZES))
     args = parser.parse_args()
-    print("| triangles | kernel | ours (ms) | " + " | ".join(f"{p} (ms)" for p in PEERS)
-          + " | " + " | ".join(f"{p} / ours" for p in PEERS) + " |")
+    print(
+        "| triangles | kernel | ours (ms) | "
+        + " | ".join(f"{p} (ms)" for p in PEERS)
+        + " | "
+        + " | ".join(f"{p} / ours" for p in PEERS)
+        + " |"
+    )
     print("|---:|---|---:|" + "---:|" * 6)
     for size in args.sizes:
         repeats = args.repeats if size < LARGE else min(args.repeats, args.large_repeats)

@@ -24,10 +24,18 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
-BODY = ('{"a": [1.5, -2.25, 0.1], "b": [4.0, 0.5, -3.0], "c": [0.3, 7.0, 2.5], '
-        '"swap_winding": false}')
-CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
-                 "--disable-component-update", "--disable-sync", "--no-first-run"]
+BODY = (
+    '{"a": [1.5, -2.25, 0.1], "b": [4.0, 0.5, -3.0], "c": [0.3, 7.0, 2.5], "swap_winding": false}'
+)
+CHROMIUM_ARGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--no-first-run",
+]
 
 
 def free_port() -> int:
@@ -41,8 +49,21 @@ def server(target: str) -> Iterator[str]:
     """One uvicorn worker serving ``target`` on a free loopback port."""
     port = free_port()
     process = subprocess.Popen(
-        [sys.executable, "-m", "uvicorn", target, "--host", "127.0.0.1", "--port", str(port),
-         "--workers", "1", "--no-access-log", "--log-level", "warning"],
+        [
+            sys.executable,
+            "-m",
+            "uvicorn",
+            target,
+            "--host",
+            "127.0.0.1",
+            "--port",
+            str(port),
+            "--workers",
+            "1",
+            "--no-access-log",
+            "--log-level",
+            "warning",
+        ],
     )
     base = f"http://127.0.0.1:{port}"
     try:
@@ -61,7 +82,9 @@ def server(target: str) -> Iterator[str]:
 def wrk(url: str, seconds: int, script: Path) -> float:
     output = subprocess.run(
         ["wrk", "-t1", "-c16", f"-d{seconds}s", "-s", str(script), url],
-        capture_output=True, text=True, check=True,
+        capture_output=True,
+        text=True,
+        check=True,
     ).stdout
     match = re.search(r"Requests/sec:\s+([\d.]+)", output)
     if not match or "Non-2xx" in output:
@@ -99,8 +122,9 @@ def bench_page(loads: int) -> tuple[float, float]:
     from playwright.sync_api import sync_playwright
 
     with server("app.main:app") as base, sync_playwright() as playwright:
-        browser = playwright.chromium.launch(executable_path="/usr/bin/chromium",
-                                             args=CHROMIUM_ARGS)
+        browser = playwright.chromium.launch(
+            executable_path="/usr/bin/chromium", args=CHROMIUM_ARGS
+        )
         urllib.request.urlopen(base + "/").read()  # let the server compress its assets once
         times, sizes = [], []
         for _ in range(loads):
@@ -109,10 +133,13 @@ def bench_page(loads: int) -> tuple[float, float]:
             page.goto(base + "/")
             page.wait_for_function("window.__chartDrawnAt", timeout=20_000)
             times.append(page.evaluate("window.__chartDrawnAt"))
-            sizes.append(page.evaluate(
-                "performance.getEntriesByType('navigation')[0].transferSize + "
-                "performance.getEntriesByType('resource')"
-                ".reduce((sum, r) => sum + r.transferSize, 0)"))
+            sizes.append(
+                page.evaluate(
+                    "performance.getEntriesByType('navigation')[0].transferSize + "
+                    "performance.getEntriesByType('resource')"
+                    ".reduce((sum, r) => sum + r.transferSize, 0)"
+                )
+            )
             context.close()
         browser.close()
     return statistics.median(times), max(sizes)
@@ -127,15 +154,19 @@ def main() -> None:
 
     rates = bench_api(args.seconds, args.rounds)
     ours = rates["POST /api/normal"]
-    print(f"\n| endpoint (1 uvicorn worker, wrk -c16, median of {args.rounds}) "
-          "| requests/s | ours as share |")
+    print(
+        f"\n| endpoint (1 uvicorn worker, wrk -c16, median of {args.rounds}) "
+        "| requests/s | ours as share |"
+    )
     print("|---|---:|---:|")
     for name, rate in rates.items():
         print(f"| {name} | {rate:,.0f} | {ours / rate:.0%} |")
 
     drawn, size = bench_page(args.loads)
-    print(f"\n| first load of / (headless Chromium, median of {args.loads} fresh loads) "
-          "| value | target |")
+    print(
+        f"\n| first load of / (headless Chromium, median of {args.loads} fresh loads) "
+        "| value | target |"
+    )
     print("|---|---:|---:|")
     print(f"| transferred, compressed | {size / 1024:,.0f} KB | 500 KB |")
     print(f"| chart drawn after navigation start | {drawn:,.0f} ms | 1000 ms |")

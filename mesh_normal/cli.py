@@ -110,19 +110,24 @@ def summary(report: dict[str, Any]) -> str:
     for item in report["problems"]:
         lines.append(f"{item['severity']}: {item['title']}. {item['action']}")
     if report["fix"]["faces_flipped"]:
-        lines.append(f"To fix the winding: mesh-normal fix {report['file']['name']} "
-                     "FIXED.ply (or .stl, .obj)")
+        lines.append(
+            f"To fix the winding: mesh-normal fix {report['file']['name']} "
+            "FIXED.ply (or .stl, .obj)"
+        )
     return "\n".join(lines)
 
 
 def normals(args: argparse.Namespace, progress: Progress) -> int:
     suffix = Path(args.output).suffix.lower()
     if suffix not in NORMAL_SUFFIXES:
-        raise Failure(f"the output must end in {', '.join(NORMAL_SUFFIXES)}, not "
-                      f"{suffix or 'no suffix'}", EXIT_USAGE)
+        raise Failure(
+            f"the output must end in {', '.join(NORMAL_SUFFIXES)}, not {suffix or 'no suffix'}",
+            EXIT_USAGE,
+        )
     if suffix == ".ply" and args.kind == "corner":
-        raise Failure("corner normals do not fit in a PLY file; use .npy, .csv or .json",
-                      EXIT_USAGE)
+        raise Failure(
+            "corner normals do not fit in a PLY file; use .npy, .csv or .json", EXIT_USAGE
+        )
     mesh, _ = load(args.file, progress)
     progress.step(f"computing {args.kind} normals")
     values, missing = compute_normals(mesh, args.kind, args.weighting, args.crease_angle)
@@ -130,21 +135,28 @@ def normals(args: argparse.Namespace, progress: Progress) -> int:
     if suffix == ".ply":
         data = normals_ply(mesh, values, args.kind)
     else:  # the same files as POST /api/mesh/normals
-        data = normals_file(values, missing, args.kind, args.weighting, args.crease_angle,
-                            suffix[1:])
+        data = normals_file(
+            values, missing, args.kind, args.weighting, args.crease_angle, suffix[1:]
+        )
     write(args.output, data)
     progress.done()
     if int(missing.sum()):
-        print(f"{int(missing.sum()):,} {args.kind} normal(s) are zero rows (degenerate or "
-              "unused); see `mesh-normal analyze`.", file=sys.stderr)
+        print(
+            f"{int(missing.sum()):,} {args.kind} normal(s) are zero rows (degenerate or "
+            "unused); see `mesh-normal analyze`.",
+            file=sys.stderr,
+        )
     return EXIT_OK
 
 
 def fix(args: argparse.Namespace, progress: Progress) -> int:
     chosen = args.format or Path(args.output).suffix.lower().lstrip(".")
     if chosen not in FIX_FORMATS:
-        raise Failure(f"the output format must be one of {', '.join(FIX_FORMATS)} (from the "
-                      f"suffix or --format), not {chosen or 'none'}", EXIT_USAGE)
+        raise Failure(
+            f"the output format must be one of {', '.join(FIX_FORMATS)} (from the "
+            f"suffix or --format), not {chosen or 'none'}",
+            EXIT_USAGE,
+        )
     mesh, _ = load(args.input, progress)
     progress.step("making the winding consistent and outward")
     fixed = orient(mesh.vertices, mesh.faces)
@@ -157,16 +169,20 @@ def fix(args: argparse.Namespace, progress: Progress) -> int:
     progress.done()
     flipped = int(fixed.flipped.sum())
     parts = flips_by_component(fixed) or "none"
-    print(f"flipped {flipped:,} of {len(mesh.faces):,} faces (component:faces {parts}); "
-          f"orientation before: {fixed.orientation}")
+    print(
+        f"flipped {flipped:,} of {len(mesh.faces):,} faces (component:faces {parts}); "
+        f"orientation before: {fixed.orientation}"
+    )
     return EXIT_OK
 
 
-SERVE_HINT = ("The web app is not part of the mesh-normal package: from a checkout of the "
-              "project, run `make run` (or `uvicorn app.main:app`).")
+SERVE_HINT = (
+    "The web app is not part of the mesh-normal package: from a checkout of the "
+    "project, run `make run` (or `uvicorn app.main:app`)."
+)
 
 
-def serve(args: argparse.Namespace, progress: Progress) -> int:
+def serve(_args: argparse.Namespace, _progress: Progress) -> int:
     print(f"mesh-normal: {SERVE_HINT}", file=sys.stderr)
     return EXIT_USAGE
 
@@ -174,15 +190,22 @@ def serve(args: argparse.Namespace, progress: Progress) -> int:
 def parser() -> argparse.ArgumentParser:
     formats = ", ".join(sorted(SUFFIXES))
     main_parser = argparse.ArgumentParser(
-        prog="mesh-normal", description="Surface normals of triangle meshes: check, export, fix.",
+        prog="mesh-normal",
+        description="Surface normals of triangle meshes: check, export, fix.",
         epilog="Exit codes: 0 done, 1 analyze found errors, 2 usage, 3 unreadable input, "
-               "4 unwritable output.")
-    main_parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
-                             help="show stages on stderr (default: when stderr is a terminal)")
+        "4 unwritable output.",
+    )
+    main_parser.add_argument(
+        "--progress",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="show stages on stderr (default: when stderr is a terminal)",
+    )
     commands = main_parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
-    one = commands.add_parser("analyze", help="report on a mesh file",
-                              description=f"Report on a mesh file ({formats}).")
+    one = commands.add_parser(
+        "analyze", help="report on a mesh file", description=f"Report on a mesh file ({formats})."
+    )
     one.add_argument("file")
     one.add_argument("--json", action="store_true", help="the full report as JSON")
     one.set_defaults(run=analyze)
@@ -192,8 +215,12 @@ def parser() -> argparse.ArgumentParser:
     two.add_argument("--kind", choices=KINDS, default="vertex")
     two.add_argument("--weighting", choices=WEIGHTINGS, default="angle")
     two.add_argument("--crease-angle", type=float, default=30.0, metavar="DEGREES")
-    two.add_argument("-o", "--output", required=True,
-                     help="OUT.npy (float64), OUT.csv, OUT.json or OUT.ply (face/vertex)")
+    two.add_argument(
+        "-o",
+        "--output",
+        required=True,
+        help="OUT.npy (float64), OUT.csv, OUT.json or OUT.ply (face/vertex)",
+    )
     two.set_defaults(run=normals)
 
     three = commands.add_parser("fix", help="write the mesh with consistent, outward winding")
@@ -205,8 +232,12 @@ def parser() -> argparse.ArgumentParser:
     four = commands.add_parser("serve", help="run the web app")
     four.add_argument("--host", default="127.0.0.1")
     four.add_argument("--port", type=int, default=8000)
-    four.add_argument("--upload-limit-mb", type=float, default=None,
-                      help="largest mesh upload (default: $MESH_UPLOAD_LIMIT_MB or 200)")
+    four.add_argument(
+        "--upload-limit-mb",
+        type=float,
+        default=None,
+        help="largest mesh upload (default: $MESH_UPLOAD_LIMIT_MB or 200)",
+    )
     four.set_defaults(run=serve)
     return main_parser
 

@@ -24,10 +24,17 @@ def problems(report: dict[str, Any]) -> list[Problem]:
     return sorted(found, key=lambda item: rank[str(item["severity"])])
 
 
-def _problem(code: str, severity: str, title: str, detail: str, action: str,
-             python: str | None = None) -> Problem:
-    return {"code": code, "severity": severity, "title": title, "detail": detail,
-            "action": action, "python": python}
+def _problem(
+    code: str, severity: str, title: str, detail: str, action: str, python: str | None = None
+) -> Problem:
+    return {
+        "code": code,
+        "severity": severity,
+        "title": title,
+        "detail": detail,
+        "action": action,
+        "python": python,
+    }
 
 
 def _winding(report: dict[str, Any]) -> Problem | None:
@@ -35,36 +42,45 @@ def _winding(report: dict[str, Any]) -> Problem | None:
     if report["winding_consistent"] or (report["nonorientable_components"] and not flipped):
         return None  # a one-sided part has no consistent winding: see _nonorientable
     return _problem(
-        "winding", "error", "Faces are wound against their neighbours",
+        "winding",
+        "error",
+        "Faces are wound against their neighbours",
         f"Across some shared edges the two faces run the same way, so their normals point to "
         f"opposite sides of the surface: shading shows dark patches, and the volume is "
         f"meaningless. Making the winding consistent flips {_count(flipped, 'face')}.",
         "Download the fixed mesh, or call orient() in your own code.",
         "from mesh_normal import orient\nfixed = orient(vertices, faces)\n"
-        "faces = fixed.faces  # fixed.flipped marks the faces that were reversed")
+        "faces = fixed.faces  # fixed.flipped marks the faces that were reversed",
+    )
 
 
 def _inward(report: dict[str, Any]) -> Problem | None:
     if report["orientation"] != "inward":
         return None
     return _problem(
-        "inward", "error", "The normals point inward",
+        "inward",
+        "error",
+        "The normals point inward",
         "The winding is consistent, but every part whose outside can be decided is wound "
         "clockwise seen from outside: "
         "normals point into the solid, back-face culling hides the outside, and a closed "
         "part's signed volume is negative.",
         "Download the fixed mesh (every face reversed), or reverse each face's winding.",
-        "faces = faces[:, ::-1]  # reverses every face: A, B, C becomes C, B, A")
+        "faces = faces[:, ::-1]  # reverses every face: A, B, C becomes C, B, A",
+    )
 
 
 def _mixed(report: dict[str, Any]) -> Problem | None:
     if report["orientation"] != "mixed" or not report["winding_consistent"]:
         return None
     return _problem(
-        "mixed", "error", "Some parts point outward, others inward",
+        "mixed",
+        "error",
+        "Some parts point outward, others inward",
         "Each part is wound consistently, but not all of them face out.",
         "Download the fixed mesh: each part is turned to face outward on its own.",
-        "from mesh_normal import orient\nfaces = orient(vertices, faces).faces")
+        "from mesh_normal import orient\nfaces = orient(vertices, faces).faces",
+    )
 
 
 def _degenerate(report: dict[str, Any]) -> Problem | None:
@@ -74,13 +90,16 @@ def _degenerate(report: dict[str, Any]) -> Problem | None:
     repeated = report["repeated_index_faces"]
     which = f" ({_count(repeated, 'face')} repeat a vertex index)" if repeated else ""
     return _problem(
-        "degenerate", "warning", f"{_count(count, 'face has', 'faces have')} no area",
+        "degenerate",
+        "warning",
+        f"{_count(count, 'face has', 'faces have')} no area",
         f"Their corners coincide or lie on one line{which}, so they have no normal. They get "
         "a zero normal and count for nothing in vertex normals; naive code gets NaN here.",
         "Remove them before export (Blender: Merge by Distance, then Delete Loose / "
         "Degenerate Dissolve; trimesh: update_faces with nondegenerate_faces()).",
         "from mesh_normal import face_normals\nkeep = ~face_normals(vertices, faces).degenerate\n"
-        "faces = faces[keep]")
+        "faces = faces[keep]",
+    )
 
 
 def _open(report: dict[str, Any]) -> Problem | None:
@@ -88,12 +107,15 @@ def _open(report: dict[str, Any]) -> Problem | None:
     if not edges:
         return None
     return _problem(
-        "open", "warning", f"The mesh is open: {_count(edges, 'boundary edge')}",
+        "open",
+        "warning",
+        f"The mesh is open: {_count(edges, 'boundary edge')}",
         "Some edges belong to one face only, so the surface has holes or borders. A volume "
         "is not defined, and which side is outside is decided by a heuristic (as in "
         "Blender's Recalculate Outside), not by the volume.",
         "If the mesh should be closed, fill the holes in your modeller (Blender: select "
-        "the border, then Fill). Open sheets such as terrain are fine as they are.")
+        "the border, then Fill). Open sheets such as terrain are fine as they are.",
+    )
 
 
 def _nonmanifold(report: dict[str, Any]) -> Problem | None:
@@ -101,13 +123,15 @@ def _nonmanifold(report: dict[str, Any]) -> Problem | None:
     if not edges:
         return None
     return _problem(
-        "nonmanifold", "error",
+        "nonmanifold",
+        "error",
         f"{_count(edges, 'edge is', 'edges are')} shared by three or more faces",
         "Such edges are non-manifold: no surface has a single inside and outside there, so "
         "the winding cannot be made consistent across them. We report them and leave them "
         "as they are.",
         "Separate or delete the extra faces in your modeller (Blender: Select > All by "
-        "Trait > Non Manifold).")
+        "Trait > Non Manifold).",
+    )
 
 
 def _nonorientable(report: dict[str, Any]) -> Problem | None:
@@ -115,10 +139,13 @@ def _nonorientable(report: dict[str, Any]) -> Problem | None:
     if not parts:
         return None
     return _problem(
-        "nonorientable", "error", f"{_count(parts, 'part is', 'parts are')} one-sided",
+        "nonorientable",
+        "error",
+        f"{_count(parts, 'part is', 'parts are')} one-sided",
         "Like a Moebius strip, these parts have no consistent winding at all: going around "
         "them turns the front into the back. Their faces were left unflipped.",
-        "Cut the part along an edge in your modeller, or accept per-face normals there.")
+        "Cut the part along an edge in your modeller, or accept per-face normals there.",
+    )
 
 
 def _file_normals(report: dict[str, Any]) -> Problem | None:
@@ -126,7 +153,8 @@ def _file_normals(report: dict[str, Any]) -> Problem | None:
     if not stored or not stored["compared"] or not stored["opposite"]:
         return None
     return _problem(
-        "file_normals", "warning",
+        "file_normals",
+        "warning",
         f"{_count(stored['opposite'], 'normal')} stored in the file point the other way",
         f"Of {stored['compared']:,} {stored['kind']} normals in the file, "
         f"{stored['opposite']:,} differ from {stored['compared_with']} by more than 90°: "
@@ -134,7 +162,8 @@ def _file_normals(report: dict[str, Any]) -> Problem | None:
         "inside-out faces.",
         "Recompute the normals from the (fixed) winding and export them again.",
         "from mesh_normal import vertex_normals\n"
-        "normals = vertex_normals(vertices, faces, weighting=\"angle\").normals")
+        'normals = vertex_normals(vertices, faces, weighting="angle").normals',
+    )
 
 
 def _unused(report: dict[str, Any]) -> Problem | None:
@@ -142,10 +171,13 @@ def _unused(report: dict[str, Any]) -> Problem | None:
     if not count:
         return None
     return _problem(
-        "unused_vertices", "info", f"{_count(count, 'vertex is', 'vertices are')} used by no face",
+        "unused_vertices",
+        "info",
+        f"{_count(count, 'vertex is', 'vertices are')} used by no face",
         "They keep their place in the file's order, so arrays line up with yours; their "
         "vertex normal is a zero row.",
-        "Nothing to do unless you want them gone (trimesh: remove_unreferenced_vertices).")
+        "Nothing to do unless you want them gone (trimesh: remove_unreferenced_vertices).",
+    )
 
 
 def _components(report: dict[str, Any]) -> Problem | None:
@@ -153,27 +185,50 @@ def _components(report: dict[str, Any]) -> Problem | None:
     if count <= 1:
         return None
     return _problem(
-        "components", "info", f"The mesh has {count:,} separate parts",
+        "components",
+        "info",
+        f"The mesh has {count:,} separate parts",
         "Parts share no edge. Each is checked and oriented on its own.",
-        "Nothing to do, unless the parts should be joined (Blender: Merge by Distance).")
+        "Nothing to do, unless the parts should be joined (Blender: Merge by Distance).",
+    )
 
 
 def _area(report: dict[str, Any]) -> Problem | None:
-    volume_lost = (report["volume"] is None and report["watertight"]
-                   and report["winding_consistent"] and not report["nonorientable_components"])
+    volume_lost = (
+        report["volume"] is None
+        and report["watertight"]
+        and report["winding_consistent"]
+        and not report["nonorientable_components"]
+    )
     if report["area"] is not None and not volume_lost:
         return None
-    which = "area and volume" if report["area"] is None and volume_lost else (
-        "area" if report["area"] is None else "volume")
+    which = (
+        "area and volume"
+        if report["area"] is None and volume_lost
+        else ("area" if report["area"] is None else "volume")
+    )
     both = " and " in which
     return _problem(
-        "overflow", "warning",
+        "overflow",
+        "warning",
         f"The total {which} {'are' if both else 'is'} beyond the double range",
         f"The coordinates are so large that the {which} {'overflow' if both else 'overflows'} "
         "a 64-bit float (areas beyond coordinates of about 1e154, volumes beyond about 1e102); "
         f"{'they are' if both else 'it is'} reported as null. Normals are unaffected.",
-        "Scale the mesh down (by a power of two, which is exact) before measuring.")
+        "Scale the mesh down (by a power of two, which is exact) before measuring.",
+    )
 
 
-CHECKS = (_winding, _inward, _mixed, _nonmanifold, _nonorientable, _degenerate, _open,
-          _file_normals, _unused, _components, _area)
+CHECKS = (
+    _winding,
+    _inward,
+    _mixed,
+    _nonmanifold,
+    _nonorientable,
+    _degenerate,
+    _open,
+    _file_normals,
+    _unused,
+    _components,
+    _area,
+)

@@ -20,8 +20,9 @@ KINDS: tuple[NormalsKind, ...] = ("face", "vertex", "corner")
 FORMATS: tuple[NormalsFormat, ...] = ("json", "csv", "npy")
 
 
-def compute_normals(mesh: LoadedMesh, kind: NormalsKind, weighting: Weighting = "angle",
-                    crease_angle: float = 30.0) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+def compute_normals(
+    mesh: LoadedMesh, kind: NormalsKind, weighting: Weighting = "angle", crease_angle: float = 30.0
+) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
     """The normals of one kind and the mask of rows without one (zero rows, never NaN).
 
     Returns
@@ -41,30 +42,44 @@ def compute_normals(mesh: LoadedMesh, kind: NormalsKind, weighting: Weighting = 
     return result.normals, result.missing
 
 
-def export_normals(mesh: LoadedMesh, kind: NormalsKind, weighting: Weighting,
-                   crease_angle: float, format: NormalsFormat) -> bytes:
+def export_normals(
+    mesh: LoadedMesh,
+    kind: NormalsKind,
+    weighting: Weighting,
+    crease_angle: float,
+    file_format: NormalsFormat,
+) -> bytes:
     """The normals as the bytes of a JSON, CSV or ``.npy`` file."""
     normals, missing = compute_normals(mesh, kind, weighting, crease_angle)
-    return normals_file(normals, missing, kind, weighting, crease_angle, format)
+    return normals_file(normals, missing, kind, weighting, crease_angle, file_format)
 
 
-def normals_file(normals: NDArray[np.float64], missing: NDArray[np.bool_], kind: NormalsKind,
-                 weighting: Weighting, crease_angle: float, format: NormalsFormat) -> bytes:
+def normals_file(
+    normals: NDArray[np.float64],
+    missing: NDArray[np.bool_],
+    kind: NormalsKind,
+    weighting: Weighting,
+    crease_angle: float,
+    file_format: NormalsFormat,
+) -> bytes:
     """Computed normals (see :func:`compute_normals`) as a JSON, CSV or ``.npy`` file."""
-    if format == "npy":
+    if file_format == "npy":
         return npy_bytes(normals)
-    if format == "csv":
+    if file_format == "csv":
         return normals_csv(normals, kind)
-    return to_json({
-        "kind": kind,
-        "weighting": None if kind == "face" else weighting,
-        "crease_angle": crease_angle if kind == "corner" else None,
-        "shape": list(normals.shape),
-        "missing": int(np.count_nonzero(missing)),
-        "missing_indices": np.argwhere(missing).tolist() if kind == "corner"
-        else np.flatnonzero(missing).tolist(),
-        "normals": normals.tolist(),
-    })
+    return to_json(
+        {
+            "kind": kind,
+            "weighting": None if kind == "face" else weighting,
+            "crease_angle": crease_angle if kind == "corner" else None,
+            "shape": list(normals.shape),
+            "missing": int(np.count_nonzero(missing)),
+            "missing_indices": np.argwhere(missing).tolist()
+            if kind == "corner"
+            else np.flatnonzero(missing).tolist(),
+            "normals": normals.tolist(),
+        }
+    )
 
 
 def npy_bytes(array: NDArray[np.float64]) -> bytes:

@@ -118,8 +118,11 @@ def check_faces(faces: ArrayLike, vertex_count: int) -> IndexArray:
         raise ValueError(f"faces[{row}] has a negative vertex index, {array[row, column]}.")
     if high >= vertex_count:
         row, column = np.argwhere(array >= vertex_count)[0]
-        there = (f"there are only {vertex_count} vertices (indices 0 to {vertex_count - 1})"
-                 if vertex_count else "there are no vertices")
+        there = (
+            f"there are only {vertex_count} vertices (indices 0 to {vertex_count - 1})"
+            if vertex_count
+            else "there are no vertices"
+        )
         raise ValueError(f"faces[{row}] refers to vertex {array[row, column]}, but {there}.")
     return np.ascontiguousarray(array, dtype=np.intp)
 
@@ -243,8 +246,9 @@ _DEGENERATE = MESH_DEGENERATE_SINE**2
 
 
 @njit(cache=True, error_model="numpy")
-def gather(points: FloatArray, factor: float, faces: IndexArray, start: int,
-           corners: FloatArray) -> int:
+def gather(
+    points: FloatArray, factor: float, faces: IndexArray, start: int, corners: FloatArray
+) -> int:
     """Copy A, B, C of faces ``start`` on, times ``factor``, into the rows of ``corners``.
 
     ``corners`` is (block, 9); returns how many rows were filled.
@@ -308,8 +312,12 @@ def face_cross(edges: Edges) -> tuple[Vector, float, bool]:
 
 @njit(cache=True, error_model="numpy", parallel=True)
 def _face_normals_kernel(
-    points: FloatArray, factor: float, faces: IndexArray, normals: FloatArray,
-    lengths: FloatArray, degenerate: BoolArray,
+    points: FloatArray,
+    factor: float,
+    faces: IndexArray,
+    normals: FloatArray,
+    lengths: FloatArray,
+    degenerate: BoolArray,
 ) -> None:
     blocks = (len(faces) + _BLOCK - 1) // _BLOCK
     for block in prange(blocks):  # blocks write disjoint rows: they run on every core
@@ -329,8 +337,14 @@ def _face_normals_kernel(
 
 @njit(cache=True, error_model="numpy")
 def _geometry_kernel(
-    points: FloatArray, factor: float, faces: IndexArray, edges: FloatArray,
-    squares: FloatArray, normal: FloatArray, length: FloatArray, degenerate: BoolArray,
+    points: FloatArray,
+    factor: float,
+    faces: IndexArray,
+    edges: FloatArray,
+    squares: FloatArray,
+    normal: FloatArray,
+    length: FloatArray,
+    degenerate: BoolArray,
 ) -> None:
     corners = np.empty((_BLOCK, 9))
     for start in range(0, len(faces), _BLOCK):

@@ -368,8 +368,9 @@ def orient(vertices: ArrayLike, faces: ArrayLike) -> Orientation:
     input_volume = None
     if topology.watertight and topology.winding_consistent:
         input_volume = _unscaled(float(np.sum(terms)) / 6, scale)
-    return Orientation(oriented, flipped, VERDICTS[_combined(vote)], components, input_volume,
-                       topology)
+    return Orientation(
+        oriented, flipped, VERDICTS[_combined(vote)], components, input_volume, topology
+    )
 
 
 # --- edges, patches and components -----------------------------------------------------------
@@ -412,8 +413,7 @@ def _structure(faces: IndexArray, vertex_count: int) -> _Structure:
         nonmanifold_edge_list=_edge_list(key[nonmanifold], None, vertex_count),
     )
     group = np.where(valid, patch, patches)
-    return _Structure(topology, group, patches, parity, orientable, face_component[firsts],
-                      closed)
+    return _Structure(topology, group, patches, parity, orientable, face_component[firsts], closed)
 
 
 def _edge_list(key: IndexArray, forward: IndexArray | None, vertex_count: int) -> IndexArray:
@@ -476,9 +476,14 @@ def _connected(
     """
     root = np.empty(count, dtype=np.intp)
     parity = np.empty(count, dtype=np.intp)
-    _union_find(count, np.ascontiguousarray(one, dtype=np.intp),
-                np.ascontiguousarray(two, dtype=np.intp),
-                np.ascontiguousarray(same, dtype=np.intp), root, parity)
+    _union_find(
+        count,
+        np.ascontiguousarray(one, dtype=np.intp),
+        np.ascontiguousarray(two, dtype=np.intp),
+        np.ascontiguousarray(same, dtype=np.intp),
+        root,
+        parity,
+    )
     return root, parity
 
 
@@ -498,8 +503,14 @@ def _find(parent: IndexArray, relation: IndexArray, node: int) -> tuple[int, int
 
 
 @njit(cache=True)
-def _union_find(count: int, one: IndexArray, two: IndexArray, same: IndexArray,
-                root: IndexArray, parity: IndexArray) -> None:
+def _union_find(
+    count: int,
+    one: IndexArray,
+    two: IndexArray,
+    same: IndexArray,
+    root: IndexArray,
+    parity: IndexArray,
+) -> None:
     """Union-find with parities, one pass over the edges; the smaller root always wins."""
     parent = np.arange(count)
     relation = np.zeros(count, dtype=np.intp)
@@ -516,7 +527,10 @@ def _union_find(count: int, one: IndexArray, two: IndexArray, same: IndexArray,
 
 
 def _merged(
-    patch: IndexArray, patches: int, face: IndexArray, starting: BoolArray,
+    patch: IndexArray,
+    patches: int,
+    face: IndexArray,
+    starting: BoolArray,
     nonmanifold: IndexArray,
 ) -> tuple[IndexArray, int]:
     """Join the patches around each non-manifold edge into components; number them."""
@@ -562,8 +576,9 @@ def _cone_terms(
 
 
 @njit(cache=True, error_model="numpy")
-def _cone_face(points: FloatArray, factor: float, faces: IndexArray, face: int) -> tuple[
-        float, float, float, float, float, float, float, float, float]:
+def _cone_face(
+    points: FloatArray, factor: float, faces: IndexArray, face: int
+) -> tuple[float, float, float, float, float, float, float, float, float]:
     """A, and the cross product n = (B - A) x (C - A) and the centroid of one face, scaled."""
     a, b, c = faces[face, 0], faces[face, 1], faces[face, 2]
     ax, ay, az = points[a, 0] * factor, points[a, 1] * factor, points[a, 2] * factor
@@ -574,8 +589,15 @@ def _cone_face(points: FloatArray, factor: float, faces: IndexArray, face: int) 
 
 
 @njit(cache=True, error_model="numpy")
-def _cone_kernel(points: FloatArray, factor: float, faces: IndexArray, group: IndexArray,
-                 sums: FloatArray, terms: FloatArray, bounds: FloatArray) -> None:
+def _cone_kernel(
+    points: FloatArray,
+    factor: float,
+    faces: IndexArray,
+    group: IndexArray,
+    sums: FloatArray,
+    terms: FloatArray,
+    bounds: FloatArray,
+) -> None:
     """Two passes over the faces: the groups' centroids, then each face's term and bound."""
     for face in range(len(faces)):
         _, _, _, nx, ny, nz, cx, cy, cz = _cone_face(points, factor, faces, face)
@@ -594,7 +616,8 @@ def _cone_kernel(points: FloatArray, factor: float, faces: IndexArray, group: In
         dx, dy, dz = ax - row[0], ay - row[1], az - row[2]
         terms[face] = nx * dx + ny * dy + nz * dz
         bounds[face] = math.sqrt(nx * nx + ny * ny + nz * nz) * math.sqrt(
-            dx * dx + dy * dy + dz * dz)
+            dx * dx + dy * dy + dz * dz
+        )
 
 
 def _unscaled(value: float, scale: int) -> float:
@@ -641,8 +664,9 @@ def _component_table(
     method = np.where(any_patch(decided), np.where(closed, _VOLUME, _HEURISTIC), _NONE)
     votes = np.stack([any_patch(vote == v) for v in range(_UNDETERMINED)])
     kinds = votes.sum(axis=0)
-    orientation = np.where(kinds == 0, _UNDETERMINED,
-                           np.where(kinds == 1, np.argmax(votes, axis=0), _MIXED))
+    orientation = np.where(
+        kinds == 0, _UNDETERMINED, np.where(kinds == 1, np.argmax(votes, axis=0), _MIXED)
+    )
     return ComponentTable(
         faces=np.bincount(of_patch, size, count).astype(np.intp),
         closed=closed,

@@ -181,8 +181,13 @@ def file_normal_agreement(analysis: MeshAnalysis) -> dict[str, Any] | None:
     }
 
 
-def _angle(theirs: NDArray[np.float64], ours: NDArray[np.float64], rows: NDArray[np.intp],
-           cosines: NDArray[np.float64], which: str) -> float | None:
+def _angle(
+    theirs: NDArray[np.float64],
+    ours: NDArray[np.float64],
+    rows: NDArray[np.intp],
+    cosines: NDArray[np.float64],
+    which: str,
+) -> float | None:
     """The median or largest angle in degrees, taken accurately (atan2) at that one row."""
     if not len(cosines):
         return None

@@ -54,8 +54,14 @@ def _as_point(name: str, point: Sequence[float]) -> Vector:
     """Check one point up front, the way trimesh checks its inputs."""
     if type(point) in (list, tuple) and len(point) == 3:  # the common case, quickly
         x, y, z = point
-        if (type(x) is float and type(y) is float and type(z) is float
-                and isfinite(x) and isfinite(y) and isfinite(z)):
+        if (
+            type(x) is float
+            and type(y) is float
+            and type(z) is float
+            and isfinite(x)
+            and isfinite(y)
+            and isfinite(z)
+        ):
             return (x, y, z)
     try:
         values = tuple(point)
@@ -72,8 +78,9 @@ def _as_point(name: str, point: Sequence[float]) -> Vector:
         except OverflowError:
             number = float("inf")
         if not isfinite(number):
-            raise ValueError(f"{name.lower()}{axis} must be a finite number within the "
-                             "double range.")
+            raise ValueError(
+                f"{name.lower()}{axis} must be a finite number within the double range."
+            )
         floats.append(number)
     return (floats[0], floats[1], floats[2])
 
@@ -156,13 +163,17 @@ def _degenerate_message(p: Vector, q: Vector, r: Vector, order: str) -> str:
     first, second, third = order
     if p == q == r:
         return "All three points are the same, so the triangle has no area and no normal."
-    for (x, y), (nx, ny) in (((p, q), (first, second)), ((p, r), (first, third)),
-                             ((q, r), (second, third))):
+    for (x, y), (nx, ny) in (
+        ((p, q), (first, second)),
+        ((p, r), (first, third)),
+        ((q, r), (second, third)),
+    ):
         if x == y:
-            return (f"Points {nx} and {ny} coincide, so the triangle has no area "
-                    "and no normal direction.")
-    return ("The three points lie on one line, so the triangle has no area "
-            "and no normal direction.")
+            return (
+                f"Points {nx} and {ny} coincide, so the triangle has no area "
+                "and no normal direction."
+            )
+    return "The three points lie on one line, so the triangle has no area and no normal direction."
 
 
 def triangle_normal(
@@ -209,15 +220,28 @@ def triangle_normal(
     v = rounder.vector("v", (vx, vy, vz), k)
     degenerate = square == 0
     if degenerate:
-        return TriangleNormal(pa, pb, pc, order, u, v, (0.0, 0.0, 0.0), 0.0, None, 0.0,
-                              True, rounder.message(_degenerate_message(p, q, r, order)))
+        return TriangleNormal(
+            pa,
+            pb,
+            pc,
+            order,
+            u,
+            v,
+            (0.0, 0.0, 0.0),
+            0.0,
+            None,
+            0.0,
+            True,
+            rounder.message(_degenerate_message(p, q, r, order)),
+        )
 
     normal = rounder.vector("n", n, 2 * k)
     magnitude = rounder.value("magnitude", square, 2 * k, root=True)
     area = rounder.value("area", square, 2 * k + 1, root=True)
     ex, ey, ez = (_signed(ratio_sqrt(ni * ni, square), ni) for ni in n)
-    return TriangleNormal(pa, pb, pc, order, u, v, normal, magnitude, (ex, ey, ez), area,
-                          False, rounder.message())
+    return TriangleNormal(
+        pa, pb, pc, order, u, v, normal, magnitude, (ex, ey, ez), area, False, rounder.message()
+    )
 
 
 def _signed(value: float, sign_of: int) -> float:

@@ -114,8 +114,11 @@ def _weights(code: int, edges: Edges, length: float) -> Vector:
         return length, length, length
     e0, e1, e2 = edges
     if code == 2:  # angle: atan2(|n|, p . q) for the corner's edges p, q
-        return (math.atan2(length, -_dot(e2, e0)), math.atan2(length, -_dot(e0, e1)),
-                math.atan2(length, -_dot(e1, e2)))
+        return (
+            math.atan2(length, -_dot(e2, e0)),
+            math.atan2(length, -_dot(e0, e1)),
+            math.atan2(length, -_dot(e1, e2)),
+        )
     s0, s1, s2 = _dot(e0, e0), _dot(e1, e1), _dot(e2, e2)  # max: |n| / (|p|**2 |q|**2)
     return length / (s2 * s0), length / (s0 * s1), length / (s1 * s2)
 
@@ -125,9 +128,11 @@ def _weights_kernel(
     code: int, edges: FloatArray, length: FloatArray, degenerate: BoolArray, weights: FloatArray
 ) -> None:
     for face in range(len(length)):
-        sides = ((edges[0, 0, face], edges[1, 0, face], edges[2, 0, face]),
-                 (edges[0, 1, face], edges[1, 1, face], edges[2, 1, face]),
-                 (edges[0, 2, face], edges[1, 2, face], edges[2, 2, face]))
+        sides = (
+            (edges[0, 0, face], edges[1, 0, face], edges[2, 0, face]),
+            (edges[0, 1, face], edges[1, 1, face], edges[2, 1, face]),
+            (edges[0, 2, face], edges[1, 2, face], edges[2, 2, face]),
+        )
         weight = (0.0, 0.0, 0.0) if degenerate[face] else _weights(code, sides, length[face])
         for k in range(3):
             weights[k, face] = weight[k]
@@ -162,7 +167,11 @@ _CHUNKS = 2
 
 @njit(cache=True, error_model="numpy", parallel=True)
 def _vertex_sums_kernel(
-    code: int, points: FloatArray, factor: float, faces: IndexArray, sums: FloatArray,
+    code: int,
+    points: FloatArray,
+    factor: float,
+    faces: IndexArray,
+    sums: FloatArray,
     spare: FloatArray,
 ) -> None:
     """Add each usable face's weighted unit normal and its weight into its vertices' rows.
@@ -182,7 +191,12 @@ def _vertex_sums_kernel(
 
 @njit(cache=True, error_model="numpy")
 def _accumulate(
-    code: int, points: FloatArray, factor: float, faces: IndexArray, first: int, stop: int,
+    code: int,
+    points: FloatArray,
+    factor: float,
+    faces: IndexArray,
+    first: int,
+    stop: int,
     sums: FloatArray,
 ) -> None:
     """The sums of faces ``first`` to ``stop`` (``first`` a multiple of the block size)."""
@@ -248,9 +262,7 @@ def _normalised(sums: FloatArray, totals: FloatArray) -> tuple[FloatArray, BoolA
     return sums, missing
 
 
-def _smooth(
-    points: FloatArray, faces: IndexArray, weighting: str
-) -> tuple[FloatArray, BoolArray]:
+def _smooth(points: FloatArray, faces: IndexArray, weighting: str) -> tuple[FloatArray, BoolArray]:
     """Vertex normals and their mask for checked arrays.
 
     The sums are (n, 4) and the normals are packed into the same memory as (n, 3).
@@ -263,7 +275,7 @@ def _smooth(
         _vertex_sums_kernel(code, points, factor, faces, sums, spare)
     sums += spare
     del spare
-    normals = sums.reshape(-1)[:3 * count].reshape(count, 3)
+    normals = sums.reshape(-1)[: 3 * count].reshape(count, 3)
     missing = np.empty(count, dtype=bool)
     _normalise_kernel(sums, normals, missing)
     return normals, missing
@@ -410,7 +422,7 @@ def _creased(
         firsts = groups.starts[:-1][counts == size]
         step = MESH_PAIR_CHUNK // (size * size)
         for chunk in range(0, len(firsts), step) if step else ():
-            at = firsts[chunk:chunk + step, None] + np.arange(size)  # (vertices, d)
+            at = firsts[chunk : chunk + step, None] + np.arange(size)  # (vertices, d)
             around = take_rows(normal, at)  # (vertices, d, 3)
             within = np.matmul(around, around.transpose(0, 2, 1)) >= threshold
             weight_in = within * weight[at][:, None, :]  # (vertices, d mine, d theirs)
@@ -418,10 +430,10 @@ def _creased(
             totals[at] = weight_in.sum(axis=2)
         rows = max(1, MESH_PAIR_CHUNK // size)
         for first in firsts.tolist() if not step else ():
-            around, theirs = normal[first:first + size], weight[first:first + size]
+            around, theirs = normal[first : first + size], weight[first : first + size]
             for row in range(first, first + size, rows):
-                mine = normal[row:min(row + rows, first + size)]
+                mine = normal[row : min(row + rows, first + size)]
                 weight_in = (mine @ around.T >= threshold) * theirs  # (rows, d)
-                sums[row:row + len(mine)] = weight_in @ around
-                totals[row:row + len(mine)] = weight_in.sum(axis=1)
+                sums[row : row + len(mine)] = weight_in @ around
+                totals[row : row + len(mine)] = weight_in.sum(axis=1)
     return _normalised(sums, totals)

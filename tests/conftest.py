@@ -20,8 +20,17 @@ with warnings.catch_warnings():
 from app.main import create_app
 
 #: The calculator's example, as query parameters (the page opens with it).
-EXAMPLE_QUERY = {"ax": "1", "ay": "0", "az": "0", "bx": "0", "by": "2", "bz": "0",
-                 "cx": "0", "cy": "0", "cz": "3"}
+EXAMPLE_QUERY = {
+    "ax": "1",
+    "ay": "0",
+    "az": "0",
+    "bx": "0",
+    "by": "2",
+    "bz": "0",
+    "cx": "0",
+    "cy": "0",
+    "cz": "3",
+}
 
 
 @pytest.fixture(scope="session")
@@ -58,8 +67,23 @@ def assert_error(response, status: int, field: str | None, *words: str) -> dict:
     return body
 
 
-VOID = frozenset({"area", "base", "br", "col", "embed", "hr", "img", "input", "link", "meta",
-                  "source", "track", "wbr"})
+VOID = frozenset(
+    {
+        "area",
+        "base",
+        "br",
+        "col",
+        "embed",
+        "hr",
+        "img",
+        "input",
+        "link",
+        "meta",
+        "source",
+        "track",
+        "wbr",
+    }
+)
 
 
 class Page(HTMLParser):
@@ -106,8 +130,11 @@ class Page(HTMLParser):
     def find(self, tag: str, **wanted: str) -> list[dict[str, str | None]]:
         """Elements with that tag whose attributes include ``wanted`` (``class_`` = class)."""
         wanted = {key.rstrip("_"): value for key, value in wanted.items()}
-        return [attrs for name, attrs in self.elements
-                if name == tag and all(attrs.get(key) == value for key, value in wanted.items())]
+        return [
+            attrs
+            for name, attrs in self.elements
+            if name == tag and all(attrs.get(key) == value for key, value in wanted.items())
+        ]
 
     def one(self, tag: str, **wanted: str) -> dict[str, str | None]:
         found = self.find(tag, **wanted)
@@ -121,10 +148,17 @@ class Page(HTMLParser):
     def cells(self) -> dict[str, str]:
         """{data-key: text} for the result cells (elements with a data-key and no id)."""
         prefix = "data-key="
-        return {key.removeprefix(prefix): " ".join("".join(parts).split())
-                for key, parts in self._texts.items() if key.startswith(prefix)}
+        return {
+            key.removeprefix(prefix): " ".join("".join(parts).split())
+            for key, parts in self._texts.items()
+            if key.startswith(prefix)
+        }
 
     def urls(self) -> list[str]:
         """Every src and href in the page."""
-        return [value for _, attrs in self.elements for key, value in attrs.items()
-                if key in ("src", "href") and value is not None]
+        return [
+            value
+            for _, attrs in self.elements
+            for key, value in attrs.items()
+            if key in ("src", "href") and value is not None
+        ]

@@ -24,8 +24,12 @@ from app.web.jsonio import (
 from mesh_normal.batch import triangle_normals
 from mesh_normal.triangle import triangle_normal
 
-router = APIRouter(prefix="/api", tags=["normals"], responses=ERROR_RESPONSES,
-                   default_response_class=FastJSONResponse)
+router = APIRouter(
+    prefix="/api",
+    tags=["normals"],
+    responses=ERROR_RESPONSES,
+    default_response_class=FastJSONResponse,
+)
 
 
 def query_payload(request: Request) -> dict[str, Any]:
@@ -37,8 +41,7 @@ def query_payload(request: Request) -> dict[str, Any]:
     return normal_payload(triangle_normal(a, b, c, swap_winding=parsed.swap))
 
 
-@router.post("/normal", response_model=NormalResult,
-             openapi_extra=request_body_spec(NormalRequest))
+@router.post("/normal", response_model=NormalResult, openapi_extra=request_body_spec(NormalRequest))
 async def post_normal(request: Request) -> FastJSONResponse:
     """The normal of one triangle given as JSON."""
     body = await read_body(request, NormalRequest)
@@ -47,24 +50,37 @@ async def post_normal(request: Request) -> FastJSONResponse:
 
 
 @router.get("/normal", response_model=NormalResult)
-async def get_normal(request: Request,
-                     params: Annotated[TriangleParams, Query()]) -> FastJSONResponse:
+async def get_normal(
+    request: Request,
+    params: Annotated[TriangleParams, Query()],  # noqa: ARG001 (declared for the schema and validation; read by read_triangle)
+) -> FastJSONResponse:
     """The normal for the calculator page's query parameters: the JSON twin of a result page."""
     return FastJSONResponse(query_payload(request))
 
 
-@router.get("/normal.csv", response_class=Response, responses={
-    200: {"description": "One header row and one result row.",
-          "content": {"text/csv": {"schema": {"type": "string"}}}}})
-async def get_normal_csv(request: Request,
-                         params: Annotated[TriangleParams, Query()]) -> Response:
+@router.get(
+    "/normal.csv",
+    response_class=Response,
+    responses={
+        200: {
+            "description": "One header row and one result row.",
+            "content": {"text/csv": {"schema": {"type": "string"}}},
+        }
+    },
+)
+async def get_normal_csv(
+    request: Request,
+    params: Annotated[TriangleParams, Query()],  # noqa: ARG001 (declared for the schema and validation; read by read_triangle)
+) -> Response:
     """The same result as CSV, for spreadsheets (a download)."""
-    return Response(payload_csv(query_payload(request)), media_type="text/csv",
-                    headers={"content-disposition": 'attachment; filename="triangle-normal.csv"'})
+    return Response(
+        payload_csv(query_payload(request)),
+        media_type="text/csv",
+        headers={"content-disposition": 'attachment; filename="triangle-normal.csv"'},
+    )
 
 
-@router.post("/normals", response_model=BatchResult,
-             openapi_extra=request_body_spec(BatchRequest))
+@router.post("/normals", response_model=BatchResult, openapi_extra=request_body_spec(BatchRequest))
 async def post_normals(request: Request) -> FastJSONResponse:
     """Normals of up to 100,000 triangles, in input order."""
     raw = await raw_json_body(request)
@@ -85,7 +101,9 @@ def _batch(raw: bytes) -> dict[str, Any]:
 
 
 @router.get("/chart", response_model=Figure)
-async def get_chart(request: Request,
-                    params: Annotated[TriangleParams, Query()]) -> FastJSONResponse:
+async def get_chart(
+    request: Request,
+    params: Annotated[TriangleParams, Query()],  # noqa: ARG001 (declared for the schema and validation; read by read_triangle)
+) -> FastJSONResponse:
     """The Plotly figure of the bar chart for the page's query parameters."""
     return FastJSONResponse(bar_figure(query_payload(request)))

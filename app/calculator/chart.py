@@ -19,16 +19,18 @@ def bar_figure(payload: dict[str, Any]) -> dict[str, Any]:
     values = [*payload["normal"], payload["magnitude"], payload["area"]]
     hover = ["out of double range" if value is None else js_number(value) for value in values]
     return {
-        "data": [{
-            "type": "bar",
-            "x": LABELS,
-            "y": values,
-            "marker": {"color": COLORS},
-            "text": hover,
-            "textposition": "outside",
-            "hovertemplate": "%{x}: %{text}<extra></extra>",
-            "cliponaxis": False,
-        }],
+        "data": [
+            {
+                "type": "bar",
+                "x": LABELS,
+                "y": values,
+                "marker": {"color": COLORS},
+                "text": hover,
+                "textposition": "outside",
+                "hovertemplate": "%{x}: %{text}<extra></extra>",
+                "cliponaxis": False,
+            }
+        ],
         "layout": {
             "title": {"text": f"Normal of {payload['order']}", "x": 0.02, "xanchor": "left"},
             "margin": {"l": 48, "r": 16, "t": 44, "b": 36},
@@ -36,10 +38,17 @@ def bar_figure(payload: dict[str, Any]) -> dict[str, Any]:
             "bargap": 0.35,
             "paper_bgcolor": "rgba(0,0,0,0)",
             "plot_bgcolor": "rgba(0,0,0,0)",
-            "font": {"family": "system-ui, -apple-system, Segoe UI, Roboto, sans-serif",
-                     "size": 13, "color": "#56607a"},
-            "yaxis": {"zeroline": True, "zerolinecolor": "#8a93a8", "gridcolor": "#d9deea",
-                      "exponentformat": "e"},
+            "font": {
+                "family": "system-ui, -apple-system, Segoe UI, Roboto, sans-serif",
+                "size": 13,
+                "color": "#56607a",
+            },
+            "yaxis": {
+                "zeroline": True,
+                "zerolinecolor": "#8a93a8",
+                "gridcolor": "#d9deea",
+                "exponentformat": "e",
+            },
             "xaxis": {"fixedrange": True},
             "showlegend": False,
         },

@@ -46,9 +46,14 @@ def _calculation(request: Request) -> dict[str, Any]:
     query = request.query_params
     given = any(name in query for name in COORDINATE_FIELDS)
     parsed = read_triangle(query if given else {**EXAMPLE, **query})
-    context: dict[str, Any] = {"typed": parsed.typed, "swap": parsed.swap,
-                               "errors": parsed.errors, "result": None, "payload": None,
-                               "figure": None}
+    context: dict[str, Any] = {
+        "typed": parsed.typed,
+        "swap": parsed.swap,
+        "errors": parsed.errors,
+        "result": None,
+        "payload": None,
+        "figure": None,
+    }
     swap_text = "on" if parsed.swap else query.get("swap") if "swap" in parsed.errors else None
     params = {**parsed.typed, **({"swap": swap_text} if swap_text else {})}
     context["query"] = urlencode(params)
@@ -64,10 +69,13 @@ def _calculation(request: Request) -> dict[str, Any]:
 def _with_details(context: dict[str, Any]) -> dict[str, Any]:
     """Add what only the calculator shows (presets, steps, 3D view, code); /embed skips it."""
     result, payload = context["result"], context["payload"]
-    return {**context, "presets": PRESETS,
-            "steps": None if result is None else worked_steps(result),
-            "view3d": None if payload is None else view3d_figure(payload),
-            "snippets": [] if payload is None else snippets(payload)}
+    return {
+        **context,
+        "presets": PRESETS,
+        "steps": None if result is None else worked_steps(result),
+        "view3d": None if payload is None else view3d_figure(payload),
+        "snippets": [] if payload is None else snippets(payload),
+    }
 
 
 def _status(context: dict[str, Any]) -> int:
@@ -77,10 +85,12 @@ def _status(context: dict[str, Any]) -> int:
 @router.get("/", response_class=HTMLResponse)
 def calculator(request: Request) -> HTMLResponse:
     context = _with_details(_calculation(request))
-    response = templates.TemplateResponse(request, "index.html", context,
-                                          status_code=_status(context))
-    response.headers["link"] = f'</api/normal?{context["query"]}>; rel="alternate"; ' \
-                               'type="application/json"'
+    response = templates.TemplateResponse(
+        request, "index.html", context, status_code=_status(context)
+    )
+    response.headers["link"] = (
+        f'</api/normal?{context["query"]}>; rel="alternate"; type="application/json"'
+    )
     return response
 
 
@@ -95,18 +105,25 @@ def partials(request: Request) -> JSONResponse:
     Always 200, so that a typing mistake is data for the page, not a failed request.
     """
     context = _with_details(_calculation(request))
-    html = {element: templates.get_template(name).render({**context, "request": request})
-            for element, name in PARTS.items()}
-    return JSONResponse({"query": context["query"], "errors": context["errors"],
-                         "html": html, "figure": context["figure"],
-                         "view3d": context["view3d"]})
+    html = {
+        element: templates.get_template(name).render({**context, "request": request})
+        for element, name in PARTS.items()
+    }
+    return JSONResponse(
+        {
+            "query": context["query"],
+            "errors": context["errors"],
+            "html": html,
+            "figure": context["figure"],
+            "view3d": context["view3d"],
+        }
+    )
 
 
 @router.get("/embed", response_class=HTMLResponse)
 def embed(request: Request) -> HTMLResponse:
     context = _calculation(request)
-    return templates.TemplateResponse(request, "embed.html", context,
-                                      status_code=_status(context))
+    return templates.TemplateResponse(request, "embed.html", context, status_code=_status(context))
 
 
 @router.get("/docs", response_class=HTMLResponse)
@@ -116,5 +133,6 @@ def docs(request: Request) -> HTMLResponse:
 
 
 def error_page(request: Request, error: ApiError) -> HTMLResponse:
-    return templates.TemplateResponse(request, "error.html", {"error": error},
-                                      status_code=error.status_code)
+    return templates.TemplateResponse(
+        request, "error.html", {"error": error}, status_code=error.status_code
+    )

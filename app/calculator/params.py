@@ -26,12 +26,17 @@ SWAP_ON = frozenset({"on", "true", "1"})
 SWAP_OFF = frozenset({"", "off", "false", "0"})
 
 #: What the OpenAPI schema says of a coordinate (documentation only: read_triangle checks).
-Text = Annotated[str, Field(description="A decimal number, such as 1.5 or -2e3.",
-                            examples=["1.5"],
-                            json_schema_extra={
-                                "pattern": rf"^[{SPACE_CLASS}]*{DECIMAL.pattern}[{SPACE_CLASS}]*$",
-                                "maxLength": MAX_TEXT,
-                            })]
+Text = Annotated[
+    str,
+    Field(
+        description="A decimal number, such as 1.5 or -2e3.",
+        examples=["1.5"],
+        json_schema_extra={
+            "pattern": rf"^[{SPACE_CLASS}]*{DECIMAL.pattern}[{SPACE_CLASS}]*$",
+            "maxLength": MAX_TEXT,
+        },
+    ),
+]
 
 
 class TriangleParams(BaseModel):
@@ -46,8 +51,11 @@ class TriangleParams(BaseModel):
     cx: Text
     cy: Text
     cz: Text
-    swap: str | None = Field(None, description="`on`, `true` or `1` uses the order A, C, B.",
-                             json_schema_extra={"enum": sorted(SWAP_ON | SWAP_OFF)})
+    swap: str | None = Field(
+        None,
+        description="`on`, `true` or `1` uses the order A, C, B.",
+        json_schema_extra={"enum": sorted(SWAP_ON | SWAP_OFF)},
+    )
 
 
 Point = tuple[float, float, float]
@@ -78,11 +86,18 @@ def parse_decimal(name: str, text: str) -> float:
     if not stripped:
         raise ApiError(422, f"{name} is empty; enter a decimal number such as 1.5.", name)
     if len(text) > MAX_TEXT:
-        raise ApiError(422, f"{name} is longer than {MAX_TEXT} characters; "
-                            "shorten it or use an exponent, such as 1.5e-30.", name)
+        raise ApiError(
+            422,
+            f"{name} is longer than {MAX_TEXT} characters; "
+            "shorten it or use an exponent, such as 1.5e-30.",
+            name,
+        )
     if not DECIMAL.fullmatch(stripped):
-        raise ApiError(422, f"{name} must be a decimal number such as 1.5 or -2e3, "
-                            f"not {clip(stripped)!r}.", name)
+        raise ApiError(
+            422,
+            f"{name} must be a decimal number such as 1.5 or -2e3, not {clip(stripped)!r}.",
+            name,
+        )
     value = float(stripped)
     if not isfinite(value):
         raise ApiError(422, f"{name} is beyond the double range (about ±1.8e308).", name)

@@ -43,13 +43,15 @@ def batch_payload(batch: BatchNormals, exact_rows: dict[int, TriangleNormal]) ->
         if exact is not None:
             results.append(_batch_item(normal_payload(exact)))
             continue
-        results.append({
-            "normal": normals[row],
-            "unit_normal": None if degenerate[row] else units[row],
-            "magnitude": magnitudes[row],
-            "area": areas[row],
-            "degenerate": degenerate[row],
-        })
+        results.append(
+            {
+                "normal": normals[row],
+                "unit_normal": None if degenerate[row] else units[row],
+                "magnitude": magnitudes[row],
+                "area": areas[row],
+                "degenerate": degenerate[row],
+            }
+        )
     return {"results": results}
 
 
@@ -59,21 +61,59 @@ def _batch_item(payload: dict[str, Any]) -> dict[str, Any]:
 
 
 CSV_COLUMNS = [
-    "order", "ax", "ay", "az", "bx", "by", "bz", "cx", "cy", "cz",
-    "ux", "uy", "uz", "vx", "vy", "vz", "nx", "ny", "nz", "magnitude",
-    "unit_x", "unit_y", "unit_z", "area", "degenerate", "message",
+    "order",
+    "ax",
+    "ay",
+    "az",
+    "bx",
+    "by",
+    "bz",
+    "cx",
+    "cy",
+    "cz",
+    "ux",
+    "uy",
+    "uz",
+    "vx",
+    "vy",
+    "vz",
+    "nx",
+    "ny",
+    "nz",
+    "magnitude",
+    "unit_x",
+    "unit_y",
+    "unit_z",
+    "area",
+    "degenerate",
+    "message",
 ]
 
 
 def payload_csv(payload: dict[str, Any]) -> str:
     """One header row and one result row; numbers round-trip, an out-of-range value is empty."""
     unit = payload["unit_normal"] or [None, None, None]
-    values = [payload["order"], *payload["a"], *payload["b"], *payload["c"], *payload["u"],
-              *payload["v"], *payload["normal"], payload["magnitude"], *unit, payload["area"],
-              str(payload["degenerate"]).lower(), payload.get("message", "")]
+    values = [
+        payload["order"],
+        *payload["a"],
+        *payload["b"],
+        *payload["c"],
+        *payload["u"],
+        *payload["v"],
+        *payload["normal"],
+        payload["magnitude"],
+        *unit,
+        payload["area"],
+        str(payload["degenerate"]).lower(),
+        payload.get("message", ""),
+    ]
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")
     writer.writerow(CSV_COLUMNS)
-    writer.writerow(["" if value is None else repr(value) if isinstance(value, float) else value
-                     for value in values])
+    writer.writerow(
+        [
+            "" if value is None else repr(value) if isinstance(value, float) else value
+            for value in values
+        ]
+    )
     return out.getvalue()

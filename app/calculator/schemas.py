@@ -9,8 +9,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from app.config import BATCH_LIMIT
 
 Coordinate = Annotated[float, Field(allow_inf_nan=False, strict=True)]
-Point = Annotated[list[Coordinate], Field(min_length=3, max_length=3,
-                                          examples=[[0.0, 0.0, 0.0]])]
+Point = Annotated[list[Coordinate], Field(min_length=3, max_length=3, examples=[[0.0, 0.0, 0.0]])]
 MaybeNumber = float | None
 MaybeVector = Annotated[list[MaybeNumber], Field(min_length=3, max_length=3)]
 Vector = Annotated[list[float], Field(min_length=3, max_length=3)]
@@ -23,8 +22,9 @@ class NormalRequest(BaseModel):
     model_config = ConfigDict(
         strict=True,
         extra="forbid",
-        json_schema_extra={"examples": [{"a": [1, 0, 0], "b": [0, 2, 0], "c": [0, 0, 3],
-                                         "swap_winding": False}]},
+        json_schema_extra={
+            "examples": [{"a": [1, 0, 0], "b": [0, 2, 0], "c": [0, 0, 3], "swap_winding": False}]
+        },
     )
 
     a: Point
@@ -39,9 +39,17 @@ class BatchRequest(BaseModel):
     model_config = ConfigDict(
         strict=True,
         extra="forbid",
-        json_schema_extra={"examples": [{"triangles": [[[0, 0, 0], [1, 0, 0], [0, 1, 0]],
-                                                       [[0, 0, 0], [1, 1, 1], [2, 2, 2]]],
-                                         "swap_winding": False}]},
+        json_schema_extra={
+            "examples": [
+                {
+                    "triangles": [
+                        [[0, 0, 0], [1, 0, 0], [0, 1, 0]],
+                        [[0, 0, 0], [1, 1, 1], [2, 2, 2]],
+                    ],
+                    "swap_winding": False,
+                }
+            ]
+        },
     )
 
     triangles: Annotated[list[Triangle], Field(max_length=BATCH_LIMIT)]

@@ -44,7 +44,7 @@ class Snippet:
 
 
 def snippets(payload: dict[str, Any]) -> list[Snippet]:
-    """The snippets for one result of :func:`app.calculator.payloads.normal_payload`, NumPy first."""
+    """The snippets for one result of :func:`~app.calculator.payloads.normal_payload`."""
     return [
         Snippet("numpy", "NumPy", "python", _numpy(payload), True),
         Snippet("python", "Pure Python", "python", _python(payload), True),
@@ -86,19 +86,28 @@ def _float_note(payload: dict[str, Any]) -> list[str]:
     if _float_normal_is_off(payload):
         return _warning("the float normal or its length is off in more than its last digits")
     if _float_cross(payload) != tuple(payload["normal"]):
-        return ["# The page rounds the exact normal once; floats round at every step, so the",
-                "# last digits here may differ."]
+        return [
+            "# The page rounds the exact normal once; floats round at every step, so the",
+            "# last digits here may differ.",
+        ]
     return []
 
 
 def _warning(reason: str) -> list[str]:
-    return ["# Note: the page's numbers are exact, rounded once; the floats here may differ:",
-            f"# {reason}."]
+    return [
+        "# Note: the page's numbers are exact, rounded once; the floats here may differ:",
+        f"# {reason}.",
+    ]
 
 
 def _out_of_range(payload: dict[str, Any]) -> bool:
-    values = [*payload["u"], *payload["v"], *payload["normal"],
-              payload["magnitude"], payload["area"]]
+    values = [
+        *payload["u"],
+        *payload["v"],
+        *payload["normal"],
+        payload["magnitude"],
+        payload["area"],
+    ]
     return any(value is None for value in values)
 
 
@@ -220,8 +229,9 @@ def _trimesh(payload: dict[str, Any]) -> str:
         magnitude = float(np.linalg.norm(n))
         """,
         # face_normals holds (0, 0, 0) for a face trimesh finds degenerate.
-        _report("tuple(n.tolist())", "tuple(mesh.face_normals[0].tolist())",
-                area="float(mesh.area)"),
+        _report(
+            "tuple(n.tolist())", "tuple(mesh.face_normals[0].tolist())", area="float(mesh.area)"
+        ),
     )
 
 
@@ -229,8 +239,10 @@ def _trimesh_tolerance_note(payload: dict[str, Any]) -> str | None:
     magnitude = payload["magnitude"]
     if payload["degenerate"] or magnitude is None or magnitude > TRIMESH_ZERO:
         return None
-    return ("# trimesh counts faces with |n| <= 1e-13 as degenerate (tol.zero), so its unit\n"
-            "# normal here is (0, 0, 0) although the page finds one.\n")
+    return (
+        "# trimesh counts faces with |n| <= 1e-13 as degenerate (tol.zero), so its unit\n"
+        "# normal here is (0, 0, 0) although the page finds one.\n"
+    )
 
 
 def _open3d(payload: dict[str, Any]) -> str:
@@ -259,8 +271,11 @@ def _open3d(payload: dict[str, Any]) -> str:
         mesh.compute_triangle_normals()  # normalized=True: unit normals
         # A degenerate face gets (0, 0, 0) or (0, 0, 1), by version: hence the check below.
         """,
-        _report("tuple(n.tolist())", "tuple(np.asarray(mesh.triangle_normals)[0].tolist())",
-                area="mesh.get_surface_area()"),
+        _report(
+            "tuple(n.tolist())",
+            "tuple(np.asarray(mesh.triangle_normals)[0].tolist())",
+            area="mesh.get_surface_area()",
+        ),
     )
 
 

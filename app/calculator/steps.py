@@ -162,9 +162,11 @@ def _range_notes(named: Iterable[tuple[str, _Shown]]) -> tuple[str, ...]:
     if not names:
         return ()
     one = len(names) == 1
-    return (f"Beyond the range of doubles (above {LARGEST_DOUBLE_TEXT}, or nonzero but below "
-            f"4.9e-324): {_listing(names)}. {'It shows' if one else 'They show'} as “out of "
-            f"range”; the calculation keeps the exact {'value' if one else 'values'}.",)
+    return (
+        f"Beyond the range of doubles (above {LARGEST_DOUBLE_TEXT}, or nonzero but below "
+        f"4.9e-324): {_listing(names)}. {'It shows' if one else 'They show'} as “out of "
+        f"range”; the calculation keeps the exact {'value' if one else 'values'}.",
+    )
 
 
 # --- Exact values -----------------------------------------------------------------------------
@@ -214,13 +216,19 @@ def _magnitude(result: TriangleNormal, x: _Exact) -> _Shown:
 # --- 1. Edges ---------------------------------------------------------------------------------
 
 
-def _edge_lines(name: str, end: str, end_point: Vector, start: Vector,
-                values: tuple[_Shown, ...]) -> list[str]:
+def _edge_lines(
+    name: str, end: str, end_point: Vector, start: Vector, values: tuple[_Shown, ...]
+) -> list[str]:
     lines = [f"{name} = {end} − A"]
     for axis, e, s, value in zip(AXES, end_point, start, values, strict=True):
-        lines.append(_chain(_seg(f"{name}_{axis}"), _seg(f"{end.lower()}_{axis} − a_{axis}"),
-                            _seg(f"{_term(_given(e))} − {_term(_given(s))}"),
-                            _seg(_num(value), value)))
+        lines.append(
+            _chain(
+                _seg(f"{name}_{axis}"),
+                _seg(f"{end.lower()}_{axis} − a_{axis}"),
+                _seg(f"{_term(_given(e))} − {_term(_given(s))}"),
+                _seg(_num(value), value),
+            )
+        )
     return [*lines, f"{name} = {_vector(values)}"]
 
 
@@ -230,12 +238,16 @@ def _edges_step(result: TriangleNormal, x: _Exact) -> Step:
     if result.order == "ABC":
         text = "Both edges start at A: u = B − A and v = C − A, one component at a time."
     else:
-        text = ("In the order A, C, B both edges start at A and C comes first: u = C − A and "
-                "v = B − A, one component at a time.")
+        text = (
+            "In the order A, C, B both edges start at A and C comes first: u = C − A and "
+            "v = B − A, one component at a time."
+        )
     p, q, r = x.points
     lines = [*_edge_lines("u", second, q, p, u), *_edge_lines("v", third, r, p, v)]
-    named = [*zip((f"u_{a}" for a in AXES), u, strict=True),
-             *zip((f"v_{a}" for a in AXES), v, strict=True)]
+    named = [
+        *zip((f"u_{a}" for a in AXES), u, strict=True),
+        *zip((f"v_{a}" for a in AXES), v, strict=True),
+    ]
     notes = _range_notes(named)
     return Step("edges", "Edges from A", text, tuple(lines), notes, warn=bool(notes))
 
@@ -243,30 +255,39 @@ def _edges_step(result: TriangleNormal, x: _Exact) -> Step:
 # --- 2. Cross product -------------------------------------------------------------------------
 
 
-def _cross_line(i: int, u: tuple[_Shown, ...], v: tuple[_Shown, ...], x: _Exact,
-                value: _Shown) -> str:
+def _cross_line(
+    i: int, u: tuple[_Shown, ...], v: tuple[_Shown, ...], x: _Exact, value: _Shown
+) -> str:
     j, k = _CROSS[i]
     a, b, c = AXES[i], AXES[j], AXES[k]
     first, second = _shown(x.u[j] * x.v[k]), _shown(x.u[k] * x.v[j])
-    return _chain(_seg(f"n_{a}"), _seg(f"u_{b}·v_{c} − u_{c}·v_{b}"),
-                  _sub(f"{_factor(u[j])}{_factor(v[k])} − {_factor(u[k])}{_factor(v[j])}",
-                       u[j], v[k], u[k], v[j]),
-                  _sub(f"{_term(first)} − {_term(second)}", first, second),
-                  _seg(_num(value), value))
+    return _chain(
+        _seg(f"n_{a}"),
+        _seg(f"u_{b}·v_{c} − u_{c}·v_{b}"),
+        _sub(
+            f"{_factor(u[j])}{_factor(v[k])} − {_factor(u[k])}{_factor(v[j])}",
+            u[j],
+            v[k],
+            u[k],
+            v[j],
+        ),
+        _sub(f"{_term(first)} − {_term(second)}", first, second),
+        _seg(_num(value), value),
+    )
 
 
 def _cross_step(result: TriangleNormal, x: _Exact) -> Step:
     u, v = _shown_vector(result.u, x.u), _shown_vector(result.v, x.v)
     n = _shown_vector(result.normal, x.n)
-    lines = ["n = u × v", *(_cross_line(i, u, v, x, n[i]) for i in range(3)),
-             f"n = {_vector(n)}"]
+    lines = ["n = u × v", *(_cross_line(i, u, v, x, n[i]) for i in range(3)), f"n = {_vector(n)}"]
     notes = _range_notes(zip((f"n_{a}" for a in AXES), n, strict=True))
     if result.degenerate and result.message:
         notes = (result.message, *notes)
-    text = ("Each component of n = u × v is a 2×2 determinant made of the other two "
-            "components of u and v.")
-    return Step("cross", "The cross product n = u × v", text, tuple(lines), notes,
-                warn=bool(notes))
+    text = (
+        "Each component of n = u × v is a 2×2 determinant made of the other two "
+        "components of u and v."
+    )
+    return Step("cross", "The cross product n = u × v", text, tuple(lines), notes, warn=bool(notes))
 
 
 # --- The naive float cross product, when it disagrees -----------------------------------------
@@ -284,30 +305,42 @@ def _naive_line(axis: str, factors: tuple[float, float, float, float]) -> str:
     uj, vk, uk, vj = factors
     first, second = uj * vk, uk * vj
     fs = [f"({_float_text(f)})" for f in factors]
-    return (f"n_{axis} in floats: {fs[0]}{fs[1]} − {fs[2]}{fs[3]} → {_float_term(first)} − "
-            f"{_float_term(second)} → {_float_text(first - second)}")
+    return (
+        f"n_{axis} in floats: {fs[0]}{fs[1]} − {fs[2]}{fs[3]} → {_float_term(first)} − "
+        f"{_float_term(second)} → {_float_text(first - second)}"
+    )
 
 
 def _exact_step(result: TriangleNormal, x: _Exact) -> Step | None:
     factors = _naive_products(result)
     naive = [uj * vk - uk * vj for uj, vk, uk, vj in factors]
-    differ = [i for i in range(3) if result.normal[i] is not None
-              and naive[i] != result.normal[i]]  # NaN differs too
+    differ = [
+        i for i in range(3) if result.normal[i] is not None and naive[i] != result.normal[i]
+    ]  # NaN differs too
     if not differ:
         return None
     shown = "(" + ", ".join(_float_text(value) for value in naive) + ")"
     exact = _vector(_shown_vector(result.normal, x.n))
-    lines = [*(_naive_line(AXES[i], factors[i]) for i in differ),
-             f"naive n = {shown}", f"exact n, rounded once = {exact}"]
-    note = (f"A naive float computation gives n = {shown} because the products round before "
-            "they are subtracted; this calculator works with the exact values and rounds once.")
+    lines = [
+        *(_naive_line(AXES[i], factors[i]) for i in differ),
+        f"naive n = {shown}",
+        f"exact n, rounded once = {exact}",
+    ]
+    note = (
+        f"A naive float computation gives n = {shown} because the products round before "
+        "they are subtracted; this calculator works with the exact values and rounds once."
+    )
     if not all(isfinite(value) for value in naive):
-        note += (" In floats a value beyond the largest double becomes Infinity, and "
-                 "Infinity − Infinity or 0 · Infinity gives NaN.")
+        note += (
+            " In floats a value beyond the largest double becomes Infinity, and "
+            "Infinity − Infinity or 0 · Infinity gives NaN."
+        )
     elif not any(naive) and not result.degenerate:
         note += " Plain floats would call this triangle flat."
-    text = ("Plain floating point rounds each product to a double (→) before subtracting, so "
-            "digits that the subtraction needs are already gone.")
+    text = (
+        "Plain floating point rounds each product to a double (→) before subtracting, so "
+        "digits that the subtraction needs are already gone."
+    )
     return Step("exact", "Why exact arithmetic matters here", text, tuple(lines), (note,))
 
 
@@ -318,16 +351,26 @@ def _magnitude_step(result: TriangleNormal, x: _Exact) -> Step:
     n = _shown_vector(result.normal, x.n)
     squares = tuple(_shown(ni * ni) for ni in x.n)
     total, magnitude = _shown(x.square), _magnitude(result, x)
-    line = _chain(_seg("|n|"), _seg("sqrt(n_x² + n_y² + n_z²)"),
-                  _sub(f"sqrt({_base(n[0])}² + {_base(n[1])}² + {_base(n[2])}²)", *n),
-                  _sub(f"sqrt({' + '.join(_num(s) for s in squares)})", *squares),
-                  _sub(f"sqrt({_num(total)})", total), _seg(_num(magnitude), magnitude))
-    named = [*zip((f"n_{a}²" for a in AXES), squares, strict=True), ("the sum of squares", total),
-             ("|n|", magnitude)]
+    line = _chain(
+        _seg("|n|"),
+        _seg("sqrt(n_x² + n_y² + n_z²)"),
+        _sub(f"sqrt({_base(n[0])}² + {_base(n[1])}² + {_base(n[2])}²)", *n),
+        _sub(f"sqrt({' + '.join(_num(s) for s in squares)})", *squares),
+        _sub(f"sqrt({_num(total)})", total),
+        _seg(_num(magnitude), magnitude),
+    )
+    named = [
+        *zip((f"n_{a}²" for a in AXES), squares, strict=True),
+        ("the sum of squares", total),
+        ("|n|", magnitude),
+    ]
     notes = _range_notes(named)
     if total.value is None and magnitude.value is not None:
-        notes = (*notes, "The sum of squares does not fit a double, but its square root does: "
-                 "|n| is the square root of the exact sum, rounded once.")
+        notes = (
+            *notes,
+            "The sum of squares does not fit a double, but its square root does: "
+            "|n| is the square root of the exact sum, rounded once.",
+        )
     text = "The length of n, by Pythagoras in three dimensions."
     return Step("magnitude", "The length |n|", text, (line,), notes, warn=bool(notes))
 
@@ -336,14 +379,19 @@ def _area_step(result: TriangleNormal, x: _Exact) -> Step:
     magnitude = _magnitude(result, x)
     area = result.area
     shown = _Shown(area, area is not None and 4 * Fraction(area) ** 2 == x.square)
-    line = _chain(_seg("area"), _seg("|n| / 2"), _sub(f"{_num(magnitude)} / 2", magnitude),
-                  _seg(_num(shown), shown))
+    line = _chain(
+        _seg("area"),
+        _seg("|n| / 2"),
+        _sub(f"{_num(magnitude)} / 2", magnitude),
+        _seg(_num(shown), shown),
+    )
     notes = _range_notes([("the area", shown)])
     if magnitude.value is None and shown.value is not None:
-        notes = ("|n| is beyond the largest double, but half of it is not: the area comes from "
-                 "the exact |n|, rounded once.",)
-    text = ("|n| is the area of the parallelogram spanned by u and v; the triangle is half "
-            "of it.")
+        notes = (
+            "|n| is beyond the largest double, but half of it is not: the area comes from "
+            "the exact |n|, rounded once.",
+        )
+    text = "|n| is the area of the parallelogram spanned by u and v; the triangle is half of it."
     return Step("area", "The area", text, (line,), notes, warn=bool(notes))
 
 
@@ -353,23 +401,35 @@ def _area_step(result: TriangleNormal, x: _Exact) -> Step:
 def _unit_step(result: TriangleNormal, x: _Exact) -> Step:
     title = "The unit normal n̂ = n / |n|"
     if result.unit_normal is None:
-        note = ("There is no unit normal: n = (0, 0, 0) has no direction, and dividing by "
-                "|n| = 0 is undefined.")
-        return Step("unit", title, "n divided by its length.", ("n̂ = n / |n| = n / 0",),
-                    (note,), warn=True)
+        note = (
+            "There is no unit normal: n = (0, 0, 0) has no direction, and dividing by "
+            "|n| = 0 is undefined."
+        )
+        return Step(
+            "unit", title, "n divided by its length.", ("n̂ = n / |n| = n / 0",), (note,), warn=True
+        )
     n, magnitude = _shown_vector(result.normal, x.n), _magnitude(result, x)
-    unit = tuple(_Shown(e, Fraction(e) ** 2 * x.square == ni * ni)
-                 for e, ni in zip(result.unit_normal, x.n, strict=True))
-    lines = [_chain(_seg(f"n̂_{a}"), _seg(f"n_{a} / |n|"),
-                    _sub(f"{_term(ni)} / {_num(magnitude)}", ni, magnitude), _seg(_num(e), e))
-             for a, ni, e in zip(AXES, n, unit, strict=True)]
+    unit = tuple(
+        _Shown(e, Fraction(e) ** 2 * x.square == ni * ni)
+        for e, ni in zip(result.unit_normal, x.n, strict=True)
+    )
+    lines = [
+        _chain(
+            _seg(f"n̂_{a}"),
+            _seg(f"n_{a} / |n|"),
+            _sub(f"{_term(ni)} / {_num(magnitude)}", ni, magnitude),
+            _seg(_num(e), e),
+        )
+        for a, ni, e in zip(AXES, n, unit, strict=True)
+    ]
     notes: tuple[str, ...] = ()
     if magnitude.value is None or any(s.value is None for s in n):
-        notes = ("n or |n| is beyond the range of doubles, but their ratio is not: the unit "
-                 "normal comes from the exact values, rounded once, and is shown all the same.",)
+        notes = (
+            "n or |n| is beyond the range of doubles, but their ratio is not: the unit "
+            "normal comes from the exact values, rounded once, and is shown all the same.",
+        )
     text = "n divided by its length: the same direction, length 1."
-    return Step("unit", title, text, (*lines, f"n̂ = {_vector(unit)}"), notes,
-                warn=bool(notes))
+    return Step("unit", title, text, (*lines, f"n̂ = {_vector(unit)}"), notes, warn=bool(notes))
 
 
 # --- 6. Plane ---------------------------------------------------------------------------------
@@ -388,39 +448,50 @@ def _plane_equation(coefficients: Sequence[float], d: _Shown) -> str:
 
 def _plane_lines(name: str, normal: Sequence[_Shown], a: Vector, d: _Shown) -> list[str]:
     point = [_given(value) for value in a]
-    products = " + ".join(f"{_factor(ni)}{_factor(ai)}" for ni, ai in zip(normal, point,
-                                                                           strict=True))
+    products = " + ".join(
+        f"{_factor(ni)}{_factor(ai)}" for ni, ai in zip(normal, point, strict=True)
+    )
     symbols = " + ".join(f"{name}_{axis}·a_{axis}" for axis in AXES)
     head = "d" if name == "n" else "d′"
-    return [_chain(_seg(head), _seg(f"{name} · A"), _seg(symbols),
-                   _sub(products, *normal, *point), _seg(_num(d), d))]
+    return [
+        _chain(
+            _seg(head),
+            _seg(f"{name} · A"),
+            _seg(symbols),
+            _sub(products, *normal, *point),
+            _seg(_num(d), d),
+        )
+    ]
 
 
 def _plane_step(result: TriangleNormal, x: _Exact) -> Step:
     title = "The plane through the triangle"
     if result.unit_normal is None:
-        note = ("There is no plane: points on one line (or repeated points) do not fix a "
-                "single plane, since every plane through that line contains them.")
+        note = (
+            "There is no plane: points on one line (or repeated points) do not fix a "
+            "single plane, since every plane through that line contains them."
+        )
         return Step("plane", title, "A plane needs a normal direction.", (), (note,), warn=True)
     a = x.points[0]
     n = _shown_vector(result.normal, x.n)
     d = _shown(_dot(x.n, _fractions(a)))
     if all(s.value is not None for s in n) and d.value is not None:
-        text = ("A point (x, y, z) lies on the plane when n · (x, y, z) = d; A is on it, so "
-                "d = n · A.")
+        text = (
+            "A point (x, y, z) lies on the plane when n · (x, y, z) = d; A is on it, so d = n · A."
+        )
         coefficients = [s.value for s in n if s.value is not None]
         lines = _plane_lines("n", n, a, d)
         return Step("plane", title, text, (*lines, _plane_equation(coefficients, d)))
     unit = result.unit_normal
     d_unit = _shown(_dot(_fractions(unit), _fractions(a)))
-    text = ("A point (x, y, z) lies on the plane when n̂ · (x, y, z) = d′; A is on it, so "
-            "d′ = n̂ · A.")
-    note = ("n or n · A is beyond the range of doubles, so the plane is written with the unit "
-            "normal instead; d′ = n̂ · A is computed exactly from the doubles shown and "
-            "rounded once.")
+    text = "A point (x, y, z) lies on the plane when n̂ · (x, y, z) = d′; A is on it, so d′ = n̂ · A."
+    note = (
+        "n or n · A is beyond the range of doubles, so the plane is written with the unit "
+        "normal instead; d′ = n̂ · A is computed exactly from the doubles shown and "
+        "rounded once."
+    )
     lines = _plane_lines("n̂", [_given(e) for e in unit], a, d_unit)
-    return Step("plane", title, text, (*lines, _plane_equation(unit, d_unit)), (note,),
-                warn=True)
+    return Step("plane", title, text, (*lines, _plane_equation(unit, d_unit)), (note,), warn=True)
 
 
 # --- 7. Angle ---------------------------------------------------------------------------------
@@ -447,11 +518,13 @@ def _angle_degrees(square: Fraction, dot: Fraction) -> float:
 def _angle_notes(result: TriangleNormal, x: _Exact) -> tuple[str, ...]:
     if not result.degenerate:
         return ()
-    first, second, third = result.order
+    _first, second, third = result.order
     for name, edge, end in (("u", x.u, second), ("v", x.v, third)):
         if not any(edge):
-            return (f"{name} has zero length (points A and {end} coincide), so the angle "
-                    "between u and v is undefined.",)
+            return (
+                f"{name} has zero length (points A and {end} coincide), so the angle "
+                "between u and v is undefined.",
+            )
     way = "the same way (0°)" if x.dot > 0 else "opposite ways (180°)"
     return (f"The points lie on one line: u and v point {way}.",)
 
@@ -461,24 +534,36 @@ def _angle_step(result: TriangleNormal, x: _Exact) -> Step:
     products = tuple(_shown(a * b) for a, b in zip(x.u, x.v, strict=True))
     dot, magnitude = _shown(x.dot), _magnitude(result, x)
     factors = " + ".join(f"{_factor(a)}{_factor(b)}" for a, b in zip(u, v, strict=True))
-    lines = [_chain(_seg("u · v"), _seg("u_x·v_x + u_y·v_y + u_z·v_z"), _sub(factors, *u, *v),
-                    _sub(" + ".join(_term(p) for p in products), *products),
-                    _seg(_num(dot), dot)),
-             _chain(_seg("|u × v|"), _seg("|n|"), _seg(_num(magnitude), magnitude))]
+    lines = [
+        _chain(
+            _seg("u · v"),
+            _seg("u_x·v_x + u_y·v_y + u_z·v_z"),
+            _sub(factors, *u, *v),
+            _sub(" + ".join(_term(p) for p in products), *products),
+            _seg(_num(dot), dot),
+        ),
+        _chain(_seg("|u × v|"), _seg("|n|"), _seg(_num(magnitude), magnitude)),
+    ]
     notes = _angle_notes(result, x)
     if x.square or x.dot:
         angle = _given(_angle_degrees(x.square, x.dot))
         exact = _Shown(angle.value, not x.square or not x.dot)
-        lines.append(_chain(_seg("θ"), _seg("atan2(|u × v|, u · v)"),
-                            _sub(f"atan2({_num(magnitude)}, {_num(dot)})", magnitude, dot),
-                            _seg(f"{_num(exact)}°", exact)))
+        lines.append(
+            _chain(
+                _seg("θ"),
+                _seg("atan2(|u × v|, u · v)"),
+                _sub(f"atan2({_num(magnitude)}, {_num(dot)})", magnitude, dot),
+                _seg(f"{_num(exact)}°", exact),
+            )
+        )
     else:
         lines.append("θ = atan2(0, 0): undefined")
     notes += _range_notes([("u · v", dot)])
-    text = ("|u × v| = |u||v| sin θ and u · v = |u||v| cos θ; atan2 uses both, so it stays "
-            "accurate near 0° and 180°, where acos(u · v / (|u||v|)) loses digits.")
-    return Step("angle", "The angle between u and v", text, tuple(lines), notes,
-                warn=bool(notes))
+    text = (
+        "|u × v| = |u||v| sin θ and u · v = |u||v| cos θ; atan2 uses both, so it stays "
+        "accurate near 0° and 180°, where acos(u · v / (|u||v|)) loses digits."
+    )
+    return Step("angle", "The angle between u and v", text, tuple(lines), notes, warn=bool(notes))
 
 
 # --- 8. Swapping the winding ------------------------------------------------------------------
@@ -489,25 +574,36 @@ def _swap_step(result: TriangleNormal, x: _Exact) -> Step:
     flipped = [_Shown(None if s.value is None else -s.value, s.exact) for s in n]
     other = "A, C, B" if result.order == "ABC" else "A, B, C"
     if result.order == "ABC":
-        text = ("Listing the corners as A, C, B exchanges the roles of u and v (u = C − A, "
-                "v = B − A).")
+        text = (
+            "Listing the corners as A, C, B exchanges the roles of u and v (u = C − A, v = B − A)."
+        )
     else:
         text = "You listed the corners as A, C, B: compared with A, B, C, u and v exchange roles."
-    text += (" Since v × u = −(u × v), every component of n changes sign, while |n| and the "
-             "area stay the same.")
+    text += (
+        " Since v × u = −(u × v), every component of n changes sign, while |n| and the "
+        "area stay the same."
+    )
     magnitude = _magnitude(result, x)
     area = _Shown(result.area, True)
-    lines = ("v × u = −(u × v)", f"{other}: n = −{_vector(n)} = {_vector(flipped)}",
-             f"|n| = {_num(magnitude)} and area = {_num(area)} either way")
-    notes = ("n = (0, 0, 0) either way: a zero vector has no sign to flip.",) \
-        if result.degenerate else ()
+    lines = (
+        "v × u = −(u × v)",
+        f"{other}: n = −{_vector(n)} = {_vector(flipped)}",
+        f"|n| = {_num(magnitude)} and area = {_num(area)} either way",
+    )
+    notes = (
+        ("n = (0, 0, 0) either way: a zero vector has no sign to flip.",)
+        if result.degenerate
+        else ()
+    )
     return Step("swap", "Why swapping the winding flips the sign", text, lines, notes)
 
 
 # --- All steps --------------------------------------------------------------------------------
 
-_ROUNDED_NOTE = ("“≈” marks a number rounded to the nearest double for display; every step "
-                 "works with the exact values.")
+_ROUNDED_NOTE = (
+    "“≈” marks a number rounded to the nearest double for display; every step "
+    "works with the exact values."
+)
 
 
 def _explain_rounding(steps: list[Step]) -> list[Step]:
@@ -527,7 +623,15 @@ def worked_steps(result: TriangleNormal) -> list[Step]:
     """
     x = _exact(result)
     exact = _exact_step(result, x)
-    steps = [_edges_step(result, x), _cross_step(result, x), *([exact] if exact else []),
-             _magnitude_step(result, x), _area_step(result, x), _unit_step(result, x),
-             _plane_step(result, x), _angle_step(result, x), _swap_step(result, x)]
+    steps = [
+        _edges_step(result, x),
+        _cross_step(result, x),
+        *([exact] if exact else []),
+        _magnitude_step(result, x),
+        _area_step(result, x),
+        _unit_step(result, x),
+        _plane_step(result, x),
+        _angle_step(result, x),
+        _swap_step(result, x),
+    ]
     return _explain_rounding(steps)

@@ -29,8 +29,11 @@ EDGE_COLOR = "#56607a"
 NORMAL_COLOR = "#e8590c"
 TURN_COLOR = "#3a44b0"
 TRIAD_COLOR = "#8a93a8"
-FONT = {"family": "system-ui, -apple-system, Segoe UI, Roboto, sans-serif", "size": 13,
-        "color": "#56607a"}
+FONT = {
+    "family": "system-ui, -apple-system, Segoe UI, Roboto, sans-serif",
+    "size": 13,
+    "color": "#56607a",
+}
 #: Within these sizes (of the largest offset from the centroid) the view keeps true scale.
 TRUE_SCALE = (Fraction(1, 2**20), Fraction(2**20))
 ARROW = 0.6  # the normal arrow's length, times the longest edge
@@ -52,8 +55,12 @@ def view3d_figure(payload: dict[str, Any]) -> dict[str, Any]:
     eye = _eye(normal, points)
     traces = _edges(payload, points, winding, eye)
     if normal is not None:
-        traces = [_face(points, winding, payload), *traces,
-                  *_normal_arrow(normal, longest, payload), *_turn_arrow(normal, points, longest)]
+        traces = [
+            _face(points, winding, payload),
+            *traces,
+            *_normal_arrow(normal, longest, payload),
+            *_turn_arrow(normal, points, longest),
+        ]
     traces.append(_corners(payload, points, exponent, eye))
     radius = max(float(np.linalg.norm(point)) for trace in traces for point in _points(trace))
     traces.extend(_axes_triad(eye, radius or 1.0))  # three equal points: radius 0
@@ -93,29 +100,52 @@ def _line(points: np.ndarray, **style: Any) -> Trace:
     return {"type": "scatter3d", "x": x, "y": y, "z": z, **style}
 
 
-def _cone(name: str, tip: np.ndarray, vector: np.ndarray, color: str,
-          hover: str) -> Trace:
+def _cone(name: str, tip: np.ndarray, vector: np.ndarray, color: str, hover: str) -> Trace:
     """An arrowhead whose tip is at ``tip``; its length is the length of ``vector``."""
     x, y, z = ([float(value)] for value in tip)
     u, v, w = ([float(value)] for value in vector)
-    return {"type": "cone", "name": name, "x": x, "y": y, "z": z, "u": u, "v": v, "w": w,
-            "anchor": "tip", "sizemode": "raw", "sizeref": 1,
-            "colorscale": [[0, color], [1, color]], "showscale": False,
-            "lighting": {"ambient": 0.9, "diffuse": 0.3, "specular": 0.1},
-            "hovertemplate": f"{hover}<extra></extra>"}
+    return {
+        "type": "cone",
+        "name": name,
+        "x": x,
+        "y": y,
+        "z": z,
+        "u": u,
+        "v": v,
+        "w": w,
+        "anchor": "tip",
+        "sizemode": "raw",
+        "sizeref": 1,
+        "colorscale": [[0, color], [1, color]],
+        "showscale": False,
+        "lighting": {"ambient": 0.9, "diffuse": 0.3, "specular": 0.1},
+        "hovertemplate": f"{hover}<extra></extra>",
+    }
 
 
 def _face(points: np.ndarray, winding: list[int], payload: dict[str, Any]) -> Trace:
     x, y, z = points[winding].T.tolist()
     area = "out of range" if payload["area"] is None else js_number(payload["area"])
-    return {"type": "mesh3d", "name": "face", "x": x, "y": y, "z": z, "i": [0], "j": [1], "k": [2],
-            "color": FACE_COLOR, "opacity": 0.45, "flatshading": True,
-            "lighting": {"ambient": 1, "diffuse": 0, "specular": 0, "fresnel": 0},
-            "hovertemplate": f"area {area}<extra></extra>"}
+    return {
+        "type": "mesh3d",
+        "name": "face",
+        "x": x,
+        "y": y,
+        "z": z,
+        "i": [0],
+        "j": [1],
+        "k": [2],
+        "color": FACE_COLOR,
+        "opacity": 0.45,
+        "flatshading": True,
+        "lighting": {"ambient": 1, "diffuse": 0, "specular": 0, "fresnel": 0},
+        "hovertemplate": f"area {area}<extra></extra>",
+    }
 
 
-def _edges(payload: dict[str, Any], points: np.ndarray, winding: list[int],
-           eye: np.ndarray) -> list[Trace]:
+def _edges(
+    payload: dict[str, Any], points: np.ndarray, winding: list[int], eye: np.ndarray
+) -> list[Trace]:
     """u and v from A, labelled at their middles, and the third edge as a thin outline."""
     names = "ABC"
     traces = []
@@ -127,14 +157,27 @@ def _edges(payload: dict[str, Any], points: np.ndarray, winding: list[int],
         if np.linalg.norm(away) <= 1e-9 * np.linalg.norm(edge):
             away = np.zeros(3)  # the edge runs through the centroid: three points on a line
         (side,) = _outward([away], eye, "bottom center")
-        traces.append(_line(np.array([points[0], middle, points[end]]), name=label,
-                            mode="lines+text", text=["", label, ""],
-                            textposition=["middle center", side, "middle center"],
-                            textfont={"color": EDGE_COLOR, "size": 14},
-                            line={"color": EDGE_COLOR, "width": 5},
-                            hovertemplate=f"{hover}<extra></extra>"))
-    traces.append(_line(points[[1, 2]], name="edge", mode="lines",
-                        line={"color": FACE_COLOR, "width": 3}, hoverinfo="skip"))
+        traces.append(
+            _line(
+                np.array([points[0], middle, points[end]]),
+                name=label,
+                mode="lines+text",
+                text=["", label, ""],
+                textposition=["middle center", side, "middle center"],
+                textfont={"color": EDGE_COLOR, "size": 14},
+                line={"color": EDGE_COLOR, "width": 5},
+                hovertemplate=f"{hover}<extra></extra>",
+            )
+        )
+    traces.append(
+        _line(
+            points[[1, 2]],
+            name="edge",
+            mode="lines",
+            line={"color": FACE_COLOR, "width": 3},
+            hoverinfo="skip",
+        )
+    )
     return traces
 
 
@@ -144,12 +187,21 @@ def _normal_arrow(normal: np.ndarray, longest: float, payload: dict[str, Any]) -
     head = 0.22 * length
     tip = normal * length
     hover = f"unit normal {_vector_text(payload['unit_normal'])}"
-    shaft = _line(np.array([[0.0, 0.0, 0.0], normal * (length - head)]), name="normal",
-                  mode="lines",
-                  line={"color": NORMAL_COLOR, "width": 7},
-                  hovertemplate=f"{hover}<extra></extra>")
-    label = _line(np.array([normal * (length + 0.12 * longest)]), name="front", mode="text",
-                  text=["front"], textfont={"color": NORMAL_COLOR, "size": 13}, hoverinfo="skip")
+    shaft = _line(
+        np.array([[0.0, 0.0, 0.0], normal * (length - head)]),
+        name="normal",
+        mode="lines",
+        line={"color": NORMAL_COLOR, "width": 7},
+        hovertemplate=f"{hover}<extra></extra>",
+    )
+    label = _line(
+        np.array([normal * (length + 0.12 * longest)]),
+        name="front",
+        mode="text",
+        text=["front"],
+        textfont={"color": NORMAL_COLOR, "size": 13},
+        hoverinfo="skip",
+    )
     return [shaft, _cone("normal", tip, normal * head, NORMAL_COLOR, hover), label]
 
 
@@ -170,10 +222,18 @@ def _turn_arrow(normal: np.ndarray, points: np.ndarray, longest: float) -> list[
     end = angles[-1]
     tangent = -np.sin(end) * first + np.cos(end) * second
     head = 0.8 * radius
-    return [_line(arc, name="turn", mode="lines", line={"color": TURN_COLOR, "width": 4},
-                  hoverinfo="skip"),
-            _cone("turn", arc[-1] + tangent * head, tangent * head, TURN_COLOR,
-                  "the corners turn this way")]
+    return [
+        _line(
+            arc, name="turn", mode="lines", line={"color": TURN_COLOR, "width": 4}, hoverinfo="skip"
+        ),
+        _cone(
+            "turn",
+            arc[-1] + tangent * head,
+            tangent * head,
+            TURN_COLOR,
+            "the corners turn this way",
+        ),
+    ]
 
 
 def _perpendicular(normal: np.ndarray, hint: np.ndarray) -> np.ndarray:
@@ -186,16 +246,24 @@ def _perpendicular(normal: np.ndarray, hint: np.ndarray) -> np.ndarray:
     raise AssertionError("unreachable: z and x cannot both be parallel to a unit vector")
 
 
-def _corners(payload: dict[str, Any], points: np.ndarray, exponent: int,
-             eye: np.ndarray) -> Trace:
-    note = "" if exponent == 0 else \
-        f"<br>view centred on the centroid and scaled by 2<sup>{-exponent}</sup>"
+def _corners(payload: dict[str, Any], points: np.ndarray, exponent: int, eye: np.ndarray) -> Trace:
+    note = (
+        ""
+        if exponent == 0
+        else f"<br>view centred on the centroid and scaled by 2<sup>{-exponent}</sup>"
+    )
     hover = [f"{name} = {_vector_text(payload[name.lower()])}{note}" for name in "ABC"]
-    return _line(points, name="corners", mode="markers+text", text=["A", "B", "C"],
-                 textposition=_outward(points, eye),
-                 textfont={"color": POINT_COLORS, "size": 15},
-                 marker={"color": POINT_COLORS, "size": 6}, hovertext=hover,
-                 hovertemplate="%{hovertext}<extra></extra>")
+    return _line(
+        points,
+        name="corners",
+        mode="markers+text",
+        text=["A", "B", "C"],
+        textposition=_outward(points, eye),
+        textfont={"color": POINT_COLORS, "size": 15},
+        marker={"color": POINT_COLORS, "size": 6},
+        hovertext=hover,
+        hovertemplate="%{hovertext}<extra></extra>",
+    )
 
 
 def _eye(normal: np.ndarray | None, points: np.ndarray) -> np.ndarray:
@@ -240,12 +308,21 @@ def _screen(eye: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 #: Text positions by the direction they lean to on the screen, counter-clockwise from right.
-POSITIONS = ["middle right", "top right", "top center", "top left", "middle left",
-             "bottom left", "bottom center", "bottom right"]
+POSITIONS = [
+    "middle right",
+    "top right",
+    "top center",
+    "top left",
+    "middle left",
+    "bottom left",
+    "bottom center",
+    "bottom right",
+]
 
 
-def _outward(directions: np.ndarray | list[np.ndarray], eye: np.ndarray,
-             centred: str = "top center") -> list[str]:
+def _outward(
+    directions: np.ndarray | list[np.ndarray], eye: np.ndarray, centred: str = "top center"
+) -> list[str]:
     """Text positions that put labels where the directions point to on the screen.
 
     Labels go away from the centroid: a corner's direction is its position, an edge's is
@@ -273,11 +350,25 @@ def _axes_triad(eye: np.ndarray, radius: float) -> list[Trace]:
     for index, name in enumerate("xyz"):
         direction = np.eye(3)[index]
         end = origin + arm * direction
-        traces.append(_line(np.array([origin, end]), name="axes", mode="lines",
-                            line={"color": TRIAD_COLOR, "width": 3}, hoverinfo="skip"))
-        traces.append(_line(np.array([end + 0.25 * arm * direction]), name="axes", mode="text",
-                            text=[name], textfont={"color": TRIAD_COLOR, "size": 12},
-                            hoverinfo="skip"))
+        traces.append(
+            _line(
+                np.array([origin, end]),
+                name="axes",
+                mode="lines",
+                line={"color": TRIAD_COLOR, "width": 3},
+                hoverinfo="skip",
+            )
+        )
+        traces.append(
+            _line(
+                np.array([end + 0.25 * arm * direction]),
+                name="axes",
+                mode="text",
+                text=[name],
+                textfont={"color": TRIAD_COLOR, "size": 12},
+                hoverinfo="skip",
+            )
+        )
     return traces
 
 
@@ -291,11 +382,15 @@ def _axis(reach: float) -> dict[str, Any]:
 
 def _layout(payload: dict[str, Any], traces: list[Trace], eye: np.ndarray) -> dict[str, Any]:
     reach = max(float(np.linalg.norm(point)) for trace in traces for point in _points(trace))
-    camera = {"eye": dict(zip("xyz", np.round(EYE_DISTANCE * eye, 4).tolist(), strict=True)),
-              "up": {"x": 0, "y": 0, "z": 1}, "center": {"x": 0, "y": 0, "z": 0}}
+    camera = {
+        "eye": dict(zip("xyz", np.round(EYE_DISTANCE * eye, 4).tolist(), strict=True)),
+        "up": {"x": 0, "y": 0, "z": 1},
+        "center": {"x": 0, "y": 0, "z": 0},
+    }
     order = " → ".join(payload["order"])
-    title = "degenerate: no normal" if payload["degenerate"] else \
-        f"Front: {order} counter-clockwise"
+    title = (
+        "degenerate: no normal" if payload["degenerate"] else f"Front: {order} counter-clockwise"
+    )
     return {
         "title": {"text": title, "x": 0.02, "xanchor": "left", "font": {"size": 14}},
         "margin": {"l": 0, "r": 0, "t": 40, "b": 0},
@@ -304,7 +399,13 @@ def _layout(payload: dict[str, Any], traces: list[Trace], eye: np.ndarray) -> di
         "font": FONT,
         "showlegend": False,
         "uirevision": "view3d",
-        "scene": {"aspectmode": "cube", "camera": camera, "dragmode": "turntable",
-                  "bgcolor": "rgba(0,0,0,0)", "xaxis": _axis(reach), "yaxis": _axis(reach),
-                  "zaxis": _axis(reach)},
+        "scene": {
+            "aspectmode": "cube",
+            "camera": camera,
+            "dragmode": "turntable",
+            "bgcolor": "rgba(0,0,0,0)",
+            "xaxis": _axis(reach),
+            "yaxis": _axis(reach),
+            "zaxis": _axis(reach),
+        },
     }

@@ -23,15 +23,28 @@ from mesh_normal.orientation import orient
 from mesh_normal.report import analyse, flips_by_component, report_payload
 from mesh_normal.vertices import Weighting
 
-router = APIRouter(prefix="/api/mesh", tags=["meshes"], default_response_class=FastJSONResponse,
-                   responses={**ERROR_RESPONSES, 415: {
-                       "description": "The file's format is unknown or not supported.",
-                       "content": ERROR_RESPONSES[415]["content"]}})
+router = APIRouter(
+    prefix="/api/mesh",
+    tags=["meshes"],
+    default_response_class=FastJSONResponse,
+    responses={
+        **ERROR_RESPONSES,
+        415: {
+            "description": "The file's format is unknown or not supported.",
+            "content": ERROR_RESPONSES[415]["content"],
+        },
+    },
+)
 
 FixFormat = Literal["ply", "stl", "obj"]
-MEDIA_TYPES = {"json": "application/json", "csv": "text/csv",
-               "npy": "application/octet-stream", "ply": "application/octet-stream",
-               "stl": "model/stl", "obj": "model/obj"}
+MEDIA_TYPES = {
+    "json": "application/json",
+    "csv": "text/csv",
+    "npy": "application/octet-stream",
+    "ply": "application/octet-stream",
+    "stl": "model/stl",
+    "obj": "model/obj",
+}
 
 
 def load(upload: Upload) -> LoadedMesh:
@@ -63,49 +76,77 @@ def _report(upload: Upload) -> dict[str, Any]:
     return report_payload(analyse(load(upload), upload.filename, len(upload.data)))
 
 
-@router.post("/normals", openapi_extra=UPLOAD_BODY, response_class=Response, responses={
-    200: {"description": "The normals in file order: JSON, CSV or NumPy .npy (float64).",
-          "content": {"application/json": {}, "text/csv": {},
-                      "application/octet-stream": {}}}})
+@router.post(
+    "/normals",
+    openapi_extra=UPLOAD_BODY,
+    response_class=Response,
+    responses={
+        200: {
+            "description": "The normals in file order: JSON, CSV or NumPy .npy (float64).",
+            "content": {"application/json": {}, "text/csv": {}, "application/octet-stream": {}},
+        }
+    },
+)
 async def post_mesh_normals(
     request: Request,
     kind: Annotated[NormalsKind, Query(description="face, vertex or corner normals")] = "vertex",
-    weighting: Annotated[Weighting, Query(description="how faces count at a vertex "
-                                                      "(vertex and corner kinds)")] = "angle",
-    crease_angle: Annotated[float, Query(ge=0, le=180, description="corner kind: edges with a "
-                                         "larger dihedral angle stay sharp, in degrees")] = 30.0,
-    format: Annotated[Literal["json", "csv", "npy"], Query()] = "json",
+    weighting: Annotated[
+        Weighting, Query(description="how faces count at a vertex (vertex and corner kinds)")
+    ] = "angle",
+    crease_angle: Annotated[
+        float,
+        Query(
+            ge=0,
+            le=180,
+            description="corner kind: edges with a larger dihedral angle stay sharp, in degrees",
+        ),
+    ] = 30.0,
+    file_format: Annotated[Literal["json", "csv", "npy"], Query(alias="format")] = "json",
 ) -> Response:
     """The face, vertex or corner normals of a mesh file, in the file's order."""
     upload = await read_upload(request)
 
     def work() -> bytes:
         mesh = load(upload)
-        return export_normals(mesh, kind, weighting, crease_angle, format)
+        return export_normals(mesh, kind, weighting, crease_angle, file_format)
 
     body = await run_in_threadpool(work)
-    name = f"{stem(upload.filename)}-{kind}-normals.{format}"
-    return Response(body, media_type=MEDIA_TYPES[format], headers=attachment(name))
+    name = f"{stem(upload.filename)}-{kind}-normals.{file_format}"
+    return Response(body, media_type=MEDIA_TYPES[file_format], headers=attachment(name))
 
 
-@router.post("/fix", openapi_extra=UPLOAD_BODY, response_class=Response, responses={
-    200: {"description": "The mesh with consistent, outward winding; vertices untouched. "
-                         "X-Faces-Flipped (a count), X-Component-Faces-Flipped (component:faces "
-                         "for the first 100 components changed) and X-Orientation-Before say "
-                         "what changed.",
-          "content": {"application/octet-stream": {}, "model/stl": {}, "model/obj": {}}}})
+@router.post(
+    "/fix",
+    openapi_extra=UPLOAD_BODY,
+    response_class=Response,
+    responses={
+        200: {
+            "description": "The mesh with consistent, outward winding; vertices untouched. "
+            "X-Faces-Flipped (a count), X-Component-Faces-Flipped (component:faces "
+            "for the first 100 components changed) and X-Orientation-Before say "
+            "what changed.",
+            "content": {"application/octet-stream": {}, "model/stl": {}, "model/obj": {}},
+        }
+    },
+)
 async def post_mesh_fix(
     request: Request,
-    format: Annotated[FixFormat | None, Query(description="ply, stl or obj; default: the "
-                                              "upload's format where it is one of these, "
-                                              "else ply")] = None,
+    file_format: Annotated[
+        FixFormat | None,
+        Query(
+            alias="format",
+            description="ply, stl or obj; default: the "
+            "upload's format where it is one of these, "
+            "else ply",
+        ),
+    ] = None,
 ) -> Response:
     """The mesh file with consistent, outward winding (the vertices untouched)."""
     upload = await read_upload(request)
 
     def work() -> tuple[bytes, str, dict[str, str]]:
         mesh = load(upload)
-        chosen = format or (mesh.format if mesh.format in ("ply", "stl", "obj") else "ply")
+        chosen = file_format or (mesh.format if mesh.format in ("ply", "stl", "obj") else "ply")
         fixed = orient(mesh.vertices, mesh.faces)
         headers = {
             "x-faces-flipped": str(int(np.count_nonzero(fixed.flipped))),

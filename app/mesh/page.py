@@ -36,9 +36,13 @@ FIXED_BY_ORIENT = frozenset({"winding", "inward", "mixed"})
 def _form_context(request: Request) -> dict[str, Any]:
     """What the upload form needs: the accepted suffixes and the app's size limit."""
     limit: int = request.app.state.upload_limit
-    return {"suffixes": sorted(suffix.lstrip(".") for suffix in SUFFIXES), "limit": limit,
-            "limit_text": size_text(limit),
-            "report": None, "error": None}
+    return {
+        "suffixes": sorted(suffix.lstrip(".") for suffix in SUFFIXES),
+        "limit": limit,
+        "limit_text": size_text(limit),
+        "report": None,
+        "error": None,
+    }
 
 
 def _report_context(upload: Upload, base_url: str) -> dict[str, Any]:
@@ -51,8 +55,11 @@ def _report_context(upload: Upload, base_url: str) -> dict[str, Any]:
         "classes": CLASSES,
         "stem": stem(upload.filename),
         "curl": f"curl -F {shlex.quote('file=@' + name)} {base_url}api/mesh",
-        "kinds": KINDS, "weightings": get_args(Weighting), "formats": FORMATS,
-        "fix_formats": FIX_FORMATS, "fixed_by_orient": FIXED_BY_ORIENT,
+        "kinds": KINDS,
+        "weightings": get_args(Weighting),
+        "formats": FORMATS,
+        "fix_formats": FIX_FORMATS,
+        "fixed_by_orient": FIXED_BY_ORIENT,
     }
 
 
@@ -68,12 +75,10 @@ async def mesh_upload(request: Request) -> HTMLResponse:
     context = _form_context(request)
     try:
         upload = await read_upload(request)
-        context.update(await run_in_threadpool(_report_context, upload,
-                                               str(request.base_url)))
+        context.update(await run_in_threadpool(_report_context, upload, str(request.base_url)))
     except ApiError as error:
         context["error"] = error
         name = "_mesh_error.html" if fragment else "mesh.html"
-        return templates.TemplateResponse(request, name, context,
-                                          status_code=error.status_code)
+        return templates.TemplateResponse(request, name, context, status_code=error.status_code)
     name = "_mesh_report.html" if fragment else "mesh.html"
     return templates.TemplateResponse(request, name, context)

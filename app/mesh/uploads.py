@@ -21,20 +21,35 @@ from mesh_normal.files import SUFFIXES
 EXAMPLE_FILE = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
 
 #: The OpenAPI ``requestBody`` of every route that takes a mesh file.
-UPLOAD_BODY: dict[str, Any] = {"requestBody": {"required": True, "content": {
-    "multipart/form-data": {"schema": {
-        "type": "object",
-        "properties": {"file": {
-            "type": "string", "format": "binary",
-            "description": "The mesh file: " + ", ".join(sorted(SUFFIXES)) + ".",
-            "example": EXAMPLE_FILE}},
-        "required": ["file"],
-    }},
-    "application/octet-stream": {"schema": {"type": "string", "format": "binary",
-                                            "description": "The mesh file's bytes as they are "
-                                            "(name it with ?filename=).",
-                                            "example": EXAMPLE_FILE}},
-}}}
+UPLOAD_BODY: dict[str, Any] = {
+    "requestBody": {
+        "required": True,
+        "content": {
+            "multipart/form-data": {
+                "schema": {
+                    "type": "object",
+                    "properties": {
+                        "file": {
+                            "type": "string",
+                            "format": "binary",
+                            "description": "The mesh file: " + ", ".join(sorted(SUFFIXES)) + ".",
+                            "example": EXAMPLE_FILE,
+                        }
+                    },
+                    "required": ["file"],
+                }
+            },
+            "application/octet-stream": {
+                "schema": {
+                    "type": "string",
+                    "format": "binary",
+                    "description": "The mesh file's bytes as they are (name it with ?filename=).",
+                    "example": EXAMPLE_FILE,
+                }
+            },
+        },
+    }
+}
 
 
 @dataclass(frozen=True, slots=True)
@@ -49,8 +64,12 @@ async def read_upload(request: Request) -> Upload:
     if media_type == "multipart/form-data":
         return await _multipart(request)
     if media_type == "application/x-www-form-urlencoded":
-        raise ApiError(422, "file is missing: send the mesh as the multipart/form-data field "
-                            "file, or as the raw request body.", "file")
+        raise ApiError(
+            422,
+            "file is missing: send the mesh as the multipart/form-data field "
+            "file, or as the raw request body.",
+            "file",
+        )
     data = await request.body()
     if not data:
         raise ApiError(422, "The request body is empty: send a mesh file.", "file")
@@ -67,13 +86,13 @@ async def _multipart(request: Request) -> Upload:
         item = form.get("file")
         if not isinstance(item, UploadFile):
             given = "is missing" if item is None else "must be a file, not a text field"
-            raise ApiError(422, f"file {given}: send the mesh as the multipart field file.",
-                           "file")
+            raise ApiError(422, f"file {given}: send the mesh as the multipart field file.", "file")
         data = await item.read()
         filename = item.filename
     finally:
         await form.close()  # the spooled temporary files go now, not at garbage collection
     if not data:
-        raise ApiError(422, f"The uploaded file {filename or ''} is empty.".replace("  ", " "),
-                       "file")
+        raise ApiError(
+            422, f"The uploaded file {filename or ''} is empty.".replace("  ", " "), "file"
+        )
     return Upload(data, filename)

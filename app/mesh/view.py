@@ -80,8 +80,9 @@ def edge_keys(edges: NDArray[np.integer[Any]], vertex_count: int) -> NDArray[np.
     return pairs[:, 0] * max(vertex_count, 1) + pairs[:, 1]
 
 
-def faces_on_edges(faces: IntArray, vertex_count: int,
-                   edges: NDArray[np.integer[Any]]) -> NDArray[np.bool_]:
+def faces_on_edges(
+    faces: IntArray, vertex_count: int, edges: NDArray[np.integer[Any]]
+) -> NDArray[np.bool_]:
     """For (m, 3) faces, whether each has one of the (k, 2) ``edges`` as a side."""
     if not len(edges) or not len(faces):
         return np.zeros(len(faces), dtype=bool)
@@ -90,9 +91,14 @@ def faces_on_edges(faces: IntArray, vertex_count: int,
     return np.isin(keys, edge_keys(edges, vertex_count)).any(axis=1)
 
 
-def face_classes(faces: IntArray, vertex_count: int, degenerate: NDArray[np.bool_],
-                 flipped: NDArray[np.bool_], boundary_edges: NDArray[np.integer[Any]],
-                 nonmanifold_edges: NDArray[np.integer[Any]]) -> NDArray[np.int8]:
+def face_classes(
+    faces: IntArray,
+    vertex_count: int,
+    degenerate: NDArray[np.bool_],
+    flipped: NDArray[np.bool_],
+    boundary_edges: NDArray[np.integer[Any]],
+    nonmanifold_edges: NDArray[np.integer[Any]],
+) -> NDArray[np.int8]:
     """Each face's worst problem, as one of the codes OK .. DEGENERATE; shape (m,)."""
     classes = np.full(len(faces), OK, dtype=np.int8)
     classes[faces_on_edges(faces, vertex_count, boundary_edges)] = BOUNDARY
@@ -108,8 +114,9 @@ def _sample(indices: IntArray, count: int, rng: np.random.Generator) -> IntArray
     return np.sort(rng.choice(indices, size=count, replace=False))
 
 
-def select_faces(classes: NDArray[np.int8], limit: int = DISPLAY_FACES,
-                 problem_limit: int = PROBLEM_FACES) -> IntArray:
+def select_faces(
+    classes: NDArray[np.int8], limit: int = DISPLAY_FACES, problem_limit: int = PROBLEM_FACES
+) -> IntArray:
     """The faces to draw, in file order: all when they fit, else problems first, then a sample.
 
     Deterministic: the same classes give the same selection.
@@ -175,11 +182,20 @@ def _segments(starts: NDArray[np.float64], ends: NDArray[np.float64]) -> tuple[l
     return tuple([None if np.isnan(x) else float(x) for x in column] for column in stacked.T)
 
 
-def _edge_trace(name: str, points: NDArray[np.float64], edges: NDArray[np.integer[Any]],
-                color: str, width: int) -> Trace:
+def _edge_trace(
+    name: str, points: NDArray[np.float64], edges: NDArray[np.integer[Any]], color: str, width: int
+) -> Trace:
     x, y, z = _segments(points[edges[:, 0]], points[edges[:, 1]])
-    return {"type": "scatter3d", "mode": "lines", "name": name, "x": x, "y": y, "z": z,
-            "line": {"color": color, "width": width}, "hoverinfo": "skip"}
+    return {
+        "type": "scatter3d",
+        "mode": "lines",
+        "name": name,
+        "x": x,
+        "y": y,
+        "z": z,
+        "line": {"color": color, "width": width},
+        "hoverinfo": "skip",
+    }
 
 
 def _arrow_faces(shown: IntArray, classes: NDArray[np.int8]) -> IntArray:
@@ -196,32 +212,65 @@ def _arrow_faces(shown: IntArray, classes: NDArray[np.int8]) -> IntArray:
     return np.sort(np.concatenate([flipped, rest]))
 
 
-def _arrows(name: str, centroids: NDArray[np.float64], normals: NDArray[np.float64],
-            indices: IntArray, length: float, color: str) -> list[Trace]:
+def _arrows(
+    name: str,
+    centroids: NDArray[np.float64],
+    normals: NDArray[np.float64],
+    indices: IntArray,
+    length: float,
+    color: str,
+) -> list[Trace]:
     """Shafts as one line trace and heads as one cone trace, from each face's centroid."""
     if not len(indices):
         return []
     head = 0.3 * length
     tips = _rounded(centroids + normals * length)
     x, y, z = _segments(centroids, _rounded(tips - normals * head))
-    hover = [f"face {i}: normal ({n[0]:.4g}, {n[1]:.4g}, {n[2]:.4g})"
-             for i, n in zip(indices.tolist(), normals.tolist(), strict=True)]
+    hover = [
+        f"face {i}: normal ({n[0]:.4g}, {n[1]:.4g}, {n[2]:.4g})"
+        for i, n in zip(indices.tolist(), normals.tolist(), strict=True)
+    ]
     heads = _rounded(normals * head)
     return [
-        {"type": "scatter3d", "mode": "lines", "name": name, "x": x, "y": y, "z": z,
-         "line": {"color": color, "width": 3}, "hoverinfo": "skip"},
-        {"type": "cone", "name": name, "x": tips[:, 0].tolist(), "y": tips[:, 1].tolist(),
-         "z": tips[:, 2].tolist(), "u": heads[:, 0].tolist(), "v": heads[:, 1].tolist(),
-         "w": heads[:, 2].tolist(), "anchor": "tip", "sizemode": "raw", "sizeref": 1,
-         "colorscale": [[0, color], [1, color]], "showscale": False,
-         "lighting": {"ambient": 0.9, "diffuse": 0.3, "specular": 0.1},
-         "hovertext": hover, "hovertemplate": "%{hovertext}<extra></extra>"},
+        {
+            "type": "scatter3d",
+            "mode": "lines",
+            "name": name,
+            "x": x,
+            "y": y,
+            "z": z,
+            "line": {"color": color, "width": 3},
+            "hoverinfo": "skip",
+        },
+        {
+            "type": "cone",
+            "name": name,
+            "x": tips[:, 0].tolist(),
+            "y": tips[:, 1].tolist(),
+            "z": tips[:, 2].tolist(),
+            "u": heads[:, 0].tolist(),
+            "v": heads[:, 1].tolist(),
+            "w": heads[:, 2].tolist(),
+            "anchor": "tip",
+            "sizemode": "raw",
+            "sizeref": 1,
+            "colorscale": [[0, color], [1, color]],
+            "showscale": False,
+            "lighting": {"ambient": 0.9, "diffuse": 0.3, "specular": 0.1},
+            "hovertext": hover,
+            "hovertemplate": "%{hovertext}<extra></extra>",
+        },
     ]
 
 
-def build_view(vertices: NDArray[np.float64], faces: IntArray, normals: NDArray[np.float64],
-              classes: NDArray[np.int8], boundary_edges: NDArray[np.integer[Any]],
-              nonmanifold_edges: NDArray[np.integer[Any]]) -> dict[str, Any]:
+def build_view(
+    vertices: NDArray[np.float64],
+    faces: IntArray,
+    normals: NDArray[np.float64],
+    classes: NDArray[np.int8],
+    boundary_edges: NDArray[np.integer[Any]],
+    nonmanifold_edges: NDArray[np.integer[Any]],
+) -> dict[str, Any]:
     """The 3D view: ``{"figure", "shown_faces", "total_faces", "arrows", "counts", "note"}``.
 
     ``counts`` holds the number of faces of each class in the whole mesh.
@@ -233,8 +282,9 @@ def build_view(vertices: NDArray[np.float64], faces: IntArray, normals: NDArray[
     local = local.reshape(-1, 3)
     corner_points = points[local] if len(local) else np.zeros((0, 3, 3))
     centroids = _rounded(corner_points.mean(axis=1))
-    diagonal = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0))) if len(points) \
-        else 1.0
+    diagonal = (
+        float(np.linalg.norm(points.max(axis=0) - points.min(axis=0))) if len(points) else 1.0
+    )
     length = ARROW_LENGTH * (diagonal or 1.0)
     where = {int(face): row for row, face in enumerate(shown.tolist())}
     traces: list[Trace] = []
@@ -242,31 +292,64 @@ def build_view(vertices: NDArray[np.float64], faces: IntArray, normals: NDArray[
     if solid.any():
         x, y, z = points.T.tolist()
         i, j, k = local[solid].T.tolist()
-        traces.append({
-            "type": "mesh3d", "name": "faces", "x": x, "y": y, "z": z, "i": i, "j": j, "k": k,
-            "facecolor": [COLORS[int(code)] for code in classes[shown][solid]],
-            "flatshading": True, "hoverinfo": "skip",
-            "lighting": {"ambient": 0.7, "diffuse": 0.5, "specular": 0.05, "roughness": 0.9,
-                         "fresnel": 0.05},
-            "lightposition": {"x": 1e5, "y": 2e5, "z": 3e5}})
-    traces.extend(_problem_edges(vertices, points, used, boundary_edges, nonmanifold_edges))
+        traces.append(
+            {
+                "type": "mesh3d",
+                "name": "faces",
+                "x": x,
+                "y": y,
+                "z": z,
+                "i": i,
+                "j": j,
+                "k": k,
+                "facecolor": [COLORS[int(code)] for code in classes[shown][solid]],
+                "flatshading": True,
+                "hoverinfo": "skip",
+                "lighting": {
+                    "ambient": 0.7,
+                    "diffuse": 0.5,
+                    "specular": 0.05,
+                    "roughness": 0.9,
+                    "fresnel": 0.05,
+                },
+                "lightposition": {"x": 1e5, "y": 2e5, "z": 3e5},
+            }
+        )
+    traces.extend(_problem_edges(points, used, boundary_edges, nonmanifold_edges))
     dots = np.flatnonzero(~solid)[:EDGE_LINES]
     if len(dots):
         x, y, z = centroids[dots].T.tolist()
-        traces.append({"type": "scatter3d", "mode": "markers", "name": "degenerate",
-                       "x": x, "y": y, "z": z,
-                       "marker": {"color": COLORS[DEGENERATE], "size": 4},
-                       "hovertext": [f"face {int(shown[row])}: no area" for row in dots],
-                       "hovertemplate": "%{hovertext}<extra></extra>"})
+        traces.append(
+            {
+                "type": "scatter3d",
+                "mode": "markers",
+                "name": "degenerate",
+                "x": x,
+                "y": y,
+                "z": z,
+                "marker": {"color": COLORS[DEGENERATE], "size": 4},
+                "hovertext": [f"face {int(shown[row])}: no area" for row in dots],
+                "hovertemplate": "%{hovertext}<extra></extra>",
+            }
+        )
     arrow_faces = _arrow_faces(shown, classes)
     rows = np.array([where[int(face)] for face in arrow_faces], dtype=np.intp)
-    for name, color, pick in (("normals", ARROW_COLOR, classes[arrow_faces] != FLIPPED),
-                              ("flipped normals", COLORS[FLIPPED],
-                               classes[arrow_faces] == FLIPPED)):
-        traces.extend(_arrows(name, centroids[rows[pick]] if len(rows) else centroids[:0],
-                              normals[arrow_faces[pick]], arrow_faces[pick], length, color))
+    for name, color, pick in (
+        ("normals", ARROW_COLOR, classes[arrow_faces] != FLIPPED),
+        ("flipped normals", COLORS[FLIPPED], classes[arrow_faces] == FLIPPED),
+    ):
+        traces.extend(
+            _arrows(
+                name,
+                centroids[rows[pick]] if len(rows) else centroids[:0],
+                normals[arrow_faces[pick]],
+                arrow_faces[pick],
+                length,
+                color,
+            )
+        )
     return {
-        "figure": {"data": traces, "layout": _layout(space)},
+        "figure": {"data": traces, "layout": _layout()},
         "shown_faces": len(shown),
         "total_faces": len(faces),
         "arrows": len(arrow_faces),
@@ -275,14 +358,18 @@ def build_view(vertices: NDArray[np.float64], faces: IntArray, normals: NDArray[
     }
 
 
-def _problem_edges(vertices: NDArray[np.float64], points: NDArray[np.float64], used: IntArray,
-                   boundary_edges: NDArray[np.integer[Any]],
-                   nonmanifold_edges: NDArray[np.integer[Any]]) -> list[Trace]:
+def _problem_edges(
+    points: NDArray[np.float64],
+    used: IntArray,
+    boundary_edges: NDArray[np.integer[Any]],
+    nonmanifold_edges: NDArray[np.integer[Any]],
+) -> list[Trace]:
     """Boundary and non-manifold edges whose both ends are drawn, in view coordinates."""
     traces = []
-    for name, edges, color, width in (("boundary edges", boundary_edges, BOUNDARY_LINE, 4),
-                                      ("non-manifold edges", nonmanifold_edges,
-                                       NONMANIFOLD_LINE, 6)):
+    for name, edges, color, width in (
+        ("boundary edges", boundary_edges, BOUNDARY_LINE, 4),
+        ("non-manifold edges", nonmanifold_edges, NONMANIFOLD_LINE, 6),
+    ):
         edges = np.asarray(edges, dtype=np.intp).reshape(-1, 2)
         if not len(edges) or not len(used):
             continue
@@ -298,16 +385,20 @@ def _axis(title: str) -> dict[str, Any]:
     return {"visible": False, "title": {"text": title}}
 
 
-def _layout(space: ViewSpace) -> dict[str, Any]:
+def _layout() -> dict[str, Any]:
     return {
         "margin": {"l": 0, "r": 0, "t": 0, "b": 0},
         "height": 460,
         "paper_bgcolor": "rgba(0,0,0,0)",
         "font": FONT,
         "showlegend": False,
-        "scene": {"aspectmode": "data", "xaxis": _axis("x"), "yaxis": _axis("y"),
-                  "zaxis": _axis("z"),
-                  "camera": {"eye": {"x": 1.05, "y": -1.05, "z": 0.7}}},
+        "scene": {
+            "aspectmode": "data",
+            "xaxis": _axis("x"),
+            "yaxis": _axis("y"),
+            "zaxis": _axis("z"),
+            "camera": {"eye": {"x": 1.05, "y": -1.05, "z": 0.7}},
+        },
     }
 
 
@@ -316,12 +407,15 @@ def _note(space: ViewSpace) -> str | None:
         return None
     centre = ", ".join(f"{x:.6g}" for x in space.centre.tolist())
     scale = f" and scaled by 2^{-space.exponent}" if space.exponent else ""
-    return (f"Drawn centred on ({centre}){scale}, so that WebGL's 32-bit floats can show "
-            "it; the report's numbers are the file's.")
+    return (
+        f"Drawn centred on ({centre}){scale}, so that WebGL's 32-bit floats can show "
+        "it; the report's numbers are the file's."
+    )
 
 
-def area_histogram(areas: NDArray[np.float64], degenerate: NDArray[np.bool_],
-                   bins: int = HISTOGRAM_BINS) -> dict[str, Any]:
+def area_histogram(
+    areas: NDArray[np.float64], degenerate: NDArray[np.bool_], bins: int = HISTOGRAM_BINS
+) -> dict[str, Any]:
     """Bins of the face areas: ``{"edges", "counts", "log", "zero_area", "beyond_range"}``.
 
     Degenerate (and zero) areas are counted apart as ``zero_area``, infinite ones (coordinates
@@ -332,9 +426,13 @@ def area_histogram(areas: NDArray[np.float64], degenerate: NDArray[np.bool_],
     zero = np.asarray(degenerate, dtype=bool) | (areas == 0)
     finite = np.isfinite(areas)
     values = areas[~zero & finite]
-    result: dict[str, Any] = {"edges": [], "counts": [], "log": False,
-                              "zero_area": int(np.count_nonzero(zero)),
-                              "beyond_range": int(np.count_nonzero(~zero & ~finite))}
+    result: dict[str, Any] = {
+        "edges": [],
+        "counts": [],
+        "log": False,
+        "zero_area": int(np.count_nonzero(zero)),
+        "beyond_range": int(np.count_nonzero(~zero & ~finite)),
+    }
     if not len(values):
         return result
     low, high = float(values.min()), float(values.max())
@@ -358,22 +456,44 @@ def histogram_figure(histogram: dict[str, Any]) -> dict[str, Any]:
     at = np.log10(edges) if log else edges
     # Halves first: near the double maximum a sum of two edges would overflow.
     centres, widths = at[:-1] / 2 + at[1:] / 2, np.diff(at)
-    hover = [f"{a:.3g} to {b:.3g}: {n:,} faces"
-             for a, b, n in zip(edges[:-1], edges[1:], histogram["counts"], strict=True)]
-    traces: list[Trace] = [{
-        "type": "bar", "name": "faces", "x": centres.tolist(), "y": histogram["counts"],
-        "width": (widths * 0.92).tolist(), "marker": {"color": AREA_COLOR},
-        "hovertext": hover, "hovertemplate": "%{hovertext}<extra></extra>"}]
-    xaxis: dict[str, Any] = {"title": {"text": "face area" + (" (log scale)" if log else "")},
-                             "gridcolor": GRID, "zeroline": False, "exponentformat": "e"}
+    hover = [
+        f"{a:.3g} to {b:.3g}: {n:,} faces"
+        for a, b, n in zip(edges[:-1], edges[1:], histogram["counts"], strict=True)
+    ]
+    traces: list[Trace] = [
+        {
+            "type": "bar",
+            "name": "faces",
+            "x": centres.tolist(),
+            "y": histogram["counts"],
+            "width": (widths * 0.92).tolist(),
+            "marker": {"color": AREA_COLOR},
+            "hovertext": hover,
+            "hovertemplate": "%{hovertext}<extra></extra>",
+        }
+    ]
+    xaxis: dict[str, Any] = {
+        "title": {"text": "face area" + (" (log scale)" if log else "")},
+        "gridcolor": GRID,
+        "zeroline": False,
+        "exponentformat": "e",
+    }
     zero = histogram["zero_area"]
     if zero and len(centres):
         step = float(widths.mean()) or 1.0
         spot = float(at[0]) - 1.5 * step
-        traces.append({"type": "bar", "name": "zero area", "x": [spot], "y": [zero],
-                       "width": [0.92 * step], "marker": {"color": COLORS[DEGENERATE]},
-                       "hovertext": [f"zero area (degenerate): {zero:,} faces"],
-                       "hovertemplate": "%{hovertext}<extra></extra>"})
+        traces.append(
+            {
+                "type": "bar",
+                "name": "zero area",
+                "x": [spot],
+                "y": [zero],
+                "width": [0.92 * step],
+                "marker": {"color": COLORS[DEGENERATE]},
+                "hovertext": [f"zero area (degenerate): {zero:,} faces"],
+                "hovertemplate": "%{hovertext}<extra></extra>",
+            }
+        )
     if log and len(at):
         xaxis.update(_log_ticks(float(at[0]), float(at[-1])))
     if zero and len(centres):
@@ -384,17 +504,20 @@ def histogram_figure(histogram: dict[str, Any]) -> dict[str, Any]:
             ticks = np.linspace(edges[0], edges[-1], 5)
             xaxis["tickvals"] += ticks.tolist()
             xaxis["ticktext"] += [f"{t:.3g}" for t in ticks]
-    return {"data": traces, "layout": {
-        "margin": {"l": 56, "r": 16, "t": 12, "b": 48},
-        "height": 300,
-        "bargap": 0,
-        "paper_bgcolor": "rgba(0,0,0,0)",
-        "plot_bgcolor": "rgba(0,0,0,0)",
-        "font": FONT,
-        "showlegend": False,
-        "xaxis": xaxis,
-        "yaxis": {"title": {"text": "faces"}, "gridcolor": GRID, "rangemode": "tozero"},
-    }}
+    return {
+        "data": traces,
+        "layout": {
+            "margin": {"l": 56, "r": 16, "t": 12, "b": 48},
+            "height": 300,
+            "bargap": 0,
+            "paper_bgcolor": "rgba(0,0,0,0)",
+            "plot_bgcolor": "rgba(0,0,0,0)",
+            "font": FONT,
+            "showlegend": False,
+            "xaxis": xaxis,
+            "yaxis": {"title": {"text": "faces"}, "gridcolor": GRID, "rangemode": "tozero"},
+        },
+    }
 
 
 def _log_ticks(low: float, high: float) -> dict[str, Any]:
@@ -402,18 +525,35 @@ def _log_ticks(low: float, high: float) -> dict[str, Any]:
     first, last = int(np.floor(low)), int(np.ceil(high))
     step = max(1, (last - first) // 6)
     powers = list(range(first, last + 1, step))
-    return {"tickmode": "array", "tickvals": [float(p) for p in powers],
-            "ticktext": [f"1e{p}" for p in powers]}
+    return {
+        "tickmode": "array",
+        "tickvals": [float(p) for p in powers],
+        "ticktext": [f"1e{p}" for p in powers],
+    }
 
 
 def mesh_figures(analysis: MeshAnalysis) -> dict[str, Any]:
     """The page's figures for one analysed mesh: ``{"view", "histogram", "histogram_figure"}``."""
     mesh, topology = analysis.mesh, analysis.topology
-    classes = face_classes(mesh.faces, len(mesh.vertices), analysis.faces.degenerate,
-                           analysis.orientation.flipped, topology.boundary_edge_list,
-                           topology.nonmanifold_edge_list)
-    view = build_view(mesh.vertices, mesh.faces, analysis.faces.normals, classes,
-                     topology.boundary_edge_list, topology.nonmanifold_edge_list)
+    classes = face_classes(
+        mesh.faces,
+        len(mesh.vertices),
+        analysis.faces.degenerate,
+        analysis.orientation.flipped,
+        topology.boundary_edge_list,
+        topology.nonmanifold_edge_list,
+    )
+    view = build_view(
+        mesh.vertices,
+        mesh.faces,
+        analysis.faces.normals,
+        classes,
+        topology.boundary_edge_list,
+        topology.nonmanifold_edge_list,
+    )
     histogram = area_histogram(analysis.faces.areas, analysis.faces.degenerate)
-    return {"view": view, "histogram": histogram,
-            "histogram_figure": histogram_figure(histogram) if histogram["counts"] else None}
+    return {
+        "view": view,
+        "histogram": histogram,
+        "histogram_figure": histogram_figure(histogram) if histogram["counts"] else None,
+    }

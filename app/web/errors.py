@@ -106,16 +106,22 @@ def from_validation(errors: Sequence[Any]) -> ApiError:
         return ApiError(400, f"The request body is not valid JSON: {reason}{at}.")
     if field is None:
         if isinstance(given, bytes | bytearray):
-            return ApiError(422, "The request body must be a JSON object sent with "
-                                 "Content-Type: application/json.")
+            return ApiError(
+                422,
+                "The request body must be a JSON object sent with Content-Type: application/json.",
+            )
         if kind == "missing":
             return ApiError(422, "The request body is missing; send a JSON object.")
         return ApiError(422, f"The request body must be a JSON object, not {describe(given)}.")
     if field == "triangles" and kind == "too_long":
         count = context.get("actual_length")
         got = f" ({count:,} were sent)" if isinstance(count, int) else ""
-        return ApiError(413, f"A batch holds at most {BATCH_LIMIT:,} triangles{got}; "
-                             "split it into several requests.", field)
+        return ApiError(
+            413,
+            f"A batch holds at most {BATCH_LIMIT:,} triangles{got}; "
+            "split it into several requests.",
+            field,
+        )
     return ApiError(422, _sentence(kind, field, given, context), field)
 
 
@@ -125,8 +131,10 @@ def _sentence(kind: str, field: str, given: Any, context: dict[str, Any]) -> str
     if kind in ("float_type", "float_parsing", "int_type"):
         return f"{field} must be a JSON number, not {describe(given)}."
     if kind == "finite_number":
-        return (f"{field} must be a finite number within the double range (about ±1.8e308); "
-                "NaN, Infinity and larger numbers are not accepted.")
+        return (
+            f"{field} must be a finite number within the double range (about ±1.8e308); "
+            "NaN, Infinity and larger numbers are not accepted."
+        )
     if kind in ("too_short", "too_long"):
         is_triangle = field.startswith("triangles[") and field.count("[") == 1
         size = "3 points" if is_triangle else "3 numbers"
@@ -175,9 +183,13 @@ _HTTP_SENTENCES = {
 def _allowed_methods(request: Request) -> list[str]:
     """Every method some route takes at this path (Starlette names only the first route's)."""
     routes = request.app.router.routes
-    return [method for method in ("GET", "HEAD", "POST", "PUT", "PATCH", "DELETE")
-            if any(route.matches({**request.scope, "method": method})[0] == Match.FULL
-                   for route in routes)]
+    return [
+        method
+        for method in ("GET", "HEAD", "POST", "PUT", "PATCH", "DELETE")
+        if any(
+            route.matches({**request.scope, "method": method})[0] == Match.FULL for route in routes
+        )
+    ]
 
 
 def install(app: FastAPI) -> None:
@@ -200,7 +212,7 @@ def install(app: FastAPI) -> None:
             response.headers["allow"] = ", ".join(_allowed_methods(request))
         return response
 
-    async def on_crash(request: Request, exc: Exception) -> Response:
+    async def on_crash(request: Request, _exc: Exception) -> Response:
         logger.exception("unhandled error on %s", request.url.path)
         response = await _render(request, ApiError(500, "Something went wrong on our side."))
         # Starlette answers a crash outside every middleware, so the headers come from here.

@@ -27,8 +27,7 @@ class FastJSONResponse(JSONResponse):
 def request_body_spec(model: type[BaseModel]) -> dict[str, Any]:
     """The OpenAPI ``requestBody`` of a route that reads ``model`` itself."""
     schema = model.model_json_schema(ref_template="#/components/schemas/{model}")
-    return {"requestBody": {"required": True,
-                            "content": {"application/json": {"schema": schema}}}}
+    return {"requestBody": {"required": True, "content": {"application/json": {"schema": schema}}}}
 
 
 async def raw_json_body(request: Request) -> bytes:
@@ -36,8 +35,9 @@ async def raw_json_body(request: Request) -> bytes:
     content_type = request.headers.get("content-type", "")
     media_type = content_type.split(";", 1)[0].strip().lower()
     if media_type != "application/json" and not media_type.endswith("+json"):
-        raise ApiError(415, "The request body must be JSON sent with "
-                            "Content-Type: application/json.")
+        raise ApiError(
+            415, "The request body must be JSON sent with Content-Type: application/json."
+        )
     raw = await request.body()
     if not raw.strip():
         raise ApiError(422, "The request body is empty; send a JSON object.")
@@ -53,6 +53,7 @@ def parse_body(raw: bytes, model: type[Model]) -> Model:
     try:
         return model.model_validate_json(raw)
     except ValidationError as error:
-        errors = [{**item, "loc": ("body", *item["loc"])}
-                  for item in error.errors(include_url=False)]
+        errors = [
+            {**item, "loc": ("body", *item["loc"])} for item in error.errors(include_url=False)
+        ]
         raise from_validation(errors) from None

@@ -76,8 +76,11 @@ class BodyLimit:
             await self.app(scope, receive, send)
             return
         streamed = scope["path"].rstrip("/") in config.MESH_PATHS  # "/api/mesh/" redirects
-        limit = (self.upload_limit if streamed
-                 else config.BODY_LIMITS.get(scope["path"], config.DEFAULT_BODY_LIMIT))
+        limit = (
+            self.upload_limit
+            if streamed
+            else config.BODY_LIMITS.get(scope["path"], config.DEFAULT_BODY_LIMIT)
+        )
         declared = _content_length(scope)
         if streamed:
             # Refused inside the route, where the one error handler answers: JSON for the API,
@@ -152,9 +155,15 @@ def too_large_sentence(limit: int) -> str:
 
 async def _too_large(send: Send, limit: int) -> None:
     body = json.dumps(ApiError(413, too_large_sentence(limit)).body()).encode()
-    await send({"type": "http.response.start", "status": 413, "headers": [
-        (b"content-type", b"application/json"),
-        (b"content-length", str(len(body)).encode()),
-        (b"connection", b"close"),
-    ]})
+    await send(
+        {
+            "type": "http.response.start",
+            "status": 413,
+            "headers": [
+                (b"content-type", b"application/json"),
+                (b"content-length", str(len(body)).encode()),
+                (b"connection", b"close"),
+            ],
+        }
+    )
     await send({"type": "http.response.body", "body": body})

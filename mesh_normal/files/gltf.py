@@ -36,9 +36,10 @@ def read_gltf(data: bytes) -> LoadedMesh:
         scene = load_gltf(io.BytesIO(data), resolver=None, merge_primitives=False)
     except (FileNotFoundError, ValueError, AttributeError, TypeError) as error:
         if b'"uri"' in data and b"data:" not in data:
-            raise MeshFileError("The glTF file refers to separate buffer files, which an upload "
-                                "does not include; export it as GLB or with embedded buffers."
-                                ) from error
+            raise MeshFileError(
+                "The glTF file refers to separate buffer files, which an upload "
+                "does not include; export it as GLB or with embedded buffers."
+            ) from error
         raise
     return _flatten(scene, "gltf")
 
@@ -66,7 +67,7 @@ def _world_transforms(scene: dict[str, Any]) -> list[tuple[NDArray[np.float64], 
     return placed
 
 
-def _flatten(scene: dict[str, Any], format: str) -> LoadedMesh:
+def _flatten(scene: dict[str, Any], file_format: str) -> LoadedMesh:
     geometry = scene.get("geometry") or {}
     parts: list[tuple[NDArray[np.float64], NDArray[np.intp], NDArray[np.float64] | None]] = []
     skipped = mirrored = 0
@@ -82,8 +83,9 @@ def _flatten(scene: dict[str, Any], format: str) -> LoadedMesh:
             faces, mirrored = faces[:, ::-1], mirrored + 1
         normals = kwargs.get("vertex_normals")
         if normals is not None:
-            normals = _unit(np.asarray(normals, dtype=np.float64).reshape(-1, 3)
-                            @ np.linalg.inv(linear))  # row vectors: n @ inv(A) is inv(A).T @ n
+            normals = _unit(
+                np.asarray(normals, dtype=np.float64).reshape(-1, 3) @ np.linalg.inv(linear)
+            )  # row vectors: n @ inv(A) is inv(A).T @ n
         parts.append((vertices @ linear.T + transform[:3, 3], faces, normals))
     notes = []
     if skipped:
@@ -100,8 +102,9 @@ def _flatten(scene: dict[str, Any], format: str) -> LoadedMesh:
     normals = None
     if all(part[2] is not None and len(part[2]) == len(part[0]) for part in parts):
         normals = np.concatenate([part[2] for part in parts])  # type: ignore[misc]
-    return build(format, vertices, faces, source_faces=len(faces), vertex_normals=normals,
-                 notes=notes)
+    return build(
+        file_format, vertices, faces, source_faces=len(faces), vertex_normals=normals, notes=notes
+    )
 
 
 def _unit(vectors: NDArray[np.float64]) -> NDArray[np.float64]:

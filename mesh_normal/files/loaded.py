@@ -57,7 +57,7 @@ class LoadedMesh:
 
 
 def build(
-    format: str,
+    file_format: str,
     vertices: NDArray[np.floating],
     faces: NDArray[np.integer],
     *,
@@ -79,13 +79,16 @@ def build(
     triangles = np.ascontiguousarray(faces, dtype=np.intp).reshape(-1, 3)
     _check_finite(points, vertex or _nth("vertex"))
     if len(triangles) == 0:
-        raise MeshFileError("The file holds no faces." if len(points)
-                            else "The file holds no vertices and no faces.")
+        raise MeshFileError(
+            "The file holds no faces."
+            if len(points)
+            else "The file holds no vertices and no faces."
+        )
     _check_indices(triangles, len(points), face or _nth("face"))
     return LoadedMesh(
         vertices=points,
         faces=triangles,
-        format=format,
+        format=file_format,
         source_faces=source_faces,
         file_face_normals=_optional(face_normals, (len(triangles), 3)),
         file_vertex_normals=_optional(vertex_normals, (len(points), 3)),
@@ -100,7 +103,7 @@ def _nth(kind: str) -> Describe:
 
 def first_bad_vertex(points: FloatArray) -> int | None:
     """The index of the first row with a NaN or infinite coordinate, or ``None``."""
-    if not points.size or np.isfinite(points.min()) and np.isfinite(points.max()):
+    if not points.size or (np.isfinite(points.min()) and np.isfinite(points.max())):
         return None  # NaN propagates through min and max: two fast passes settle most files
     finite = np.isfinite(points).all(axis=1)
     return None if finite.all() else int(np.argmin(finite))
@@ -110,8 +113,9 @@ def _check_finite(points: FloatArray, describe: Describe) -> None:
     row = first_bad_vertex(points)
     if row is not None:
         value = points[row][~np.isfinite(points[row])][0]
-        raise MeshFileError(f"The coordinates of {describe(row)} include {value}, which is not a "
-                            "finite number.")
+        raise MeshFileError(
+            f"The coordinates of {describe(row)} include {value}, which is not a finite number."
+        )
 
 
 def _check_indices(triangles: IndexArray, count: int, describe: Describe) -> None:
@@ -122,11 +126,14 @@ def _check_indices(triangles: IndexArray, count: int, describe: Describe) -> Non
     row, column = np.argwhere(bad)[0]
     index = int(triangles[row, column])
     if index < 0:
-        raise MeshFileError(f"{_capital(describe(int(row)))} refers to vertex {index}; vertex "
-                            "indices cannot be negative.")
+        raise MeshFileError(
+            f"{_capital(describe(int(row)))} refers to vertex {index}; vertex "
+            "indices cannot be negative."
+        )
     there = f"the file has only {count:,}" if count else "the file has none"
-    raise MeshFileError(f"{_capital(describe(int(row)))} refers to vertex {index:,} (counting "
-                        f"from 0), but {there}.")
+    raise MeshFileError(
+        f"{_capital(describe(int(row)))} refers to vertex {index:,} (counting from 0), but {there}."
+    )
 
 
 def _capital(text: str) -> str:

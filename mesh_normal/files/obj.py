@@ -24,8 +24,27 @@ from mesh_normal.files.errors import MeshFileError
 from mesh_normal.files.loaded import LoadedMesh, build
 from mesh_normal.files.polygons import fan
 
-_IGNORED = {"o", "g", "s", "usemtl", "mtllib", "vp", "cstype", "deg", "curv", "surf", "parm",
-            "end", "mg", "lod", "bevel", "c_interp", "d_interp", "shadow_obj", "trace_obj"}
+_IGNORED = {
+    "o",
+    "g",
+    "s",
+    "usemtl",
+    "mtllib",
+    "vp",
+    "cstype",
+    "deg",
+    "curv",
+    "surf",
+    "parm",
+    "end",
+    "mg",
+    "lod",
+    "bevel",
+    "c_interp",
+    "d_interp",
+    "shadow_obj",
+    "trace_obj",
+}
 
 
 _KINDS = {"v ": 1, "vn": 2, "vt": 3, "f ": 4, "": 0}
@@ -76,8 +95,13 @@ def read_obj(data: bytes) -> LoadedMesh:
         corner_normals = found.normals[normal_ids[positions]]
         vertex_normals = _per_vertex(faces, corner_normals, len(vertices))
     return build(
-        "obj", vertices, faces, source_faces=len(counts), corner_normals=corner_normals,
-        vertex_normals=vertex_normals, notes=[*notes, *found.notes],
+        "obj",
+        vertices,
+        faces,
+        source_faces=len(counts),
+        corner_normals=corner_normals,
+        vertex_normals=vertex_normals,
+        notes=[*notes, *found.notes],
         vertex=lambda i: f"vertex {i + 1:,} (line {found.vertex_lines[i]:,})",
         face=lambda i: f"the face on line {face_line[i]:,}",
     )
@@ -113,19 +137,28 @@ def _scan(text: str) -> _Statements:
     for row in np.flatnonzero(kinds < 0):
         parts = lines[row].split(None, 1)
         key = parts[0] if parts else ""
-        kinds[row] = _KEYS.get(key, IGNORE if not key or key[0] == "#" or key in _IGNORED
-                               else OTHER)
+        kinds[row] = _KEYS.get(
+            key, IGNORE if not key or key[0] == "#" or key in _IGNORED else OTHER
+        )
         if kinds[row] >= LINE:
             other[key] += 1
     rows = {kind: np.flatnonzero(kinds == kind) for kind in (VERTEX, NORMAL, FACE)}
     vertices = _numbers([lines[row] for row in rows[VERTEX]], numbers[rows[VERTEX]], "v")
     normals = _numbers([lines[row] for row in rows[NORMAL]], numbers[rows[NORMAL]], "vn")
     # A comment may follow a face's corners: "f 1 2 3 # the lid".
-    corners, counts = _face_corners([line.partition("#")[0] if "#" in line else line
-                                     for line in (lines[row] for row in rows[FACE])])
+    corners, counts = _face_corners(
+        [
+            line.partition("#")[0] if "#" in line else line
+            for line in (lines[row] for row in rows[FACE])
+        ]
+    )
     return _Statements(
-        vertices=vertices, vertex_lines=numbers[rows[VERTEX]], normals=normals,
-        corners=corners, counts=counts, face_lines=numbers[rows[FACE]],
+        vertices=vertices,
+        vertex_lines=numbers[rows[VERTEX]],
+        normals=normals,
+        corners=corners,
+        counts=counts,
+        face_lines=numbers[rows[FACE]],
         vertices_before=np.searchsorted(rows[VERTEX], rows[FACE]),
         normals_before=np.searchsorted(rows[NORMAL], rows[FACE]),
         notes=_skipped(other),
@@ -137,10 +170,14 @@ def _numbers(lines: list[str], numbers: NDArray[np.intp], key: str) -> NDArray[n
     tokens = " ".join(lines).split()
     width = len(tokens) // len(lines) if lines else 4
     try:
-        if (width >= 4 and len(tokens) == width * len(lines)  # all as wide: slice columns
-                and tokens[::width].count(key) == len(lines)):
-            return np.stack([np.array(tokens[column::width], dtype=np.float64)
-                             for column in (1, 2, 3)], axis=1)
+        if (
+            width >= 4
+            and len(tokens) == width * len(lines)  # all as wide: slice columns
+            and tokens[::width].count(key) == len(lines)
+        ):
+            return np.stack(
+                [np.array(tokens[column::width], dtype=np.float64) for column in (1, 2, 3)], axis=1
+            )
         values = np.array([line.split()[1:4] for line in lines], dtype=np.float64)
         if values.shape == (len(lines), 3) or not lines:
             return values.reshape(-1, 3)
@@ -149,8 +186,7 @@ def _numbers(lines: list[str], numbers: NDArray[np.intp], key: str) -> NDArray[n
     for line, number in zip(lines, numbers, strict=True):
         values = line.split()[1:4]
         if len(values) < 3:
-            raise MeshFileError(f"Line {number:,}: '{key}' needs 3 numbers, but has "
-                                f"{len(values)}.")
+            raise MeshFileError(f"Line {number:,}: '{key}' needs 3 numbers, but has {len(values)}.")
         for value in values:
             try:
                 float(value)
@@ -175,12 +211,24 @@ def _corner_indices(found: _Statements) -> tuple[NDArray[np.intp], NDArray[np.in
     """0-based vertex index of every corner, and normal index when every corner has one."""
     fields = _fields(found.corners)
     face_of_corner = np.repeat(np.arange(len(found.counts)), found.counts)
-    vertex_ids = _resolve(fields[0], face_of_corner, found.vertices_before, found.face_lines,
-                          "vertex", len(found.vertices))
+    vertex_ids = _resolve(
+        fields[0],
+        face_of_corner,
+        found.vertices_before,
+        found.face_lines,
+        "vertex",
+        len(found.vertices),
+    )
     normal_ids = None
     if fields[2] is not None:
-        normal_ids = _resolve(fields[2], face_of_corner, found.normals_before, found.face_lines,
-                              "normal", len(found.normals))
+        normal_ids = _resolve(
+            fields[2],
+            face_of_corner,
+            found.normals_before,
+            found.face_lines,
+            "normal",
+            len(found.normals),
+        )
     return vertex_ids, normal_ids
 
 
@@ -201,8 +249,11 @@ def _fields(corners: list[str]) -> list[NDArray[np.int64] | None]:
             width = slashes // count + 1
             tokens = text.replace("/", " ").split()
             if len(tokens) == width * count:
-                return [_ints(tokens[0::width]), None,
-                        _ints(tokens[2::width]) if width == 3 else None]
+                return [
+                    _ints(tokens[0::width]),
+                    None,
+                    _ints(tokens[2::width]) if width == 3 else None,
+                ]
     except ValueError:
         pass
     return _mixed_fields(corners)
@@ -234,13 +285,20 @@ def _mixed_fields(corners: list[str]) -> list[NDArray[np.int64] | None]:
 
 class _BadCorner(MeshFileError):
     def __init__(self, corner: str) -> None:
-        super().__init__(f"The face corner {corner[:40]!r} is not an index, nor index/texture, "
-                         "index//normal or index/texture/normal.")
+        super().__init__(
+            f"The face corner {corner[:40]!r} is not an index, nor index/texture, "
+            "index//normal or index/texture/normal."
+        )
 
 
-def _resolve(written: NDArray[np.int64], face_of_corner: NDArray[np.intp],
-             defined_before: NDArray[np.intp], face_lines: NDArray[np.intp], kind: str,
-             total: int) -> NDArray[np.intp]:
+def _resolve(
+    written: NDArray[np.int64],
+    face_of_corner: NDArray[np.intp],
+    defined_before: NDArray[np.intp],
+    face_lines: NDArray[np.intp],
+    kind: str,
+    total: int,
+) -> NDArray[np.intp]:
     """1-based or negative (relative to what is defined so far) indices to 0-based ones."""
     before = defined_before[face_of_corner]
     resolved = np.where(written < 0, before + written, written - 1)
@@ -252,15 +310,20 @@ def _resolve(written: NDArray[np.int64], face_of_corner: NDArray[np.intp],
         if value == 0:
             raise MeshFileError(f"Line {line:,}: {kind} index 0 is not valid; OBJ counts from 1.")
         if value < 0:
-            raise MeshFileError(f"Line {line:,}: {kind} index {value} reaches back before the "
-                                f"first {kind}; only {int(before[corner]):,} come before it.")
-        raise MeshFileError(f"Line {line:,}: {kind} index {value:,} is out of range; the file "
-                            f"has {total:,} {kind} statements.")
+            raise MeshFileError(
+                f"Line {line:,}: {kind} index {value} reaches back before the "
+                f"first {kind}; only {int(before[corner]):,} come before it."
+            )
+        raise MeshFileError(
+            f"Line {line:,}: {kind} index {value:,} is out of range; the file "
+            f"has {total:,} {kind} statements."
+        )
     return resolved.astype(np.intp)
 
 
-def _per_vertex(faces: NDArray[np.intp], corner_normals: NDArray[np.float64],
-                count: int) -> NDArray[np.float64] | None:
+def _per_vertex(
+    faces: NDArray[np.intp], corner_normals: NDArray[np.float64], count: int
+) -> NDArray[np.float64] | None:
     """One normal per vertex, if every vertex is used and always given the same vector."""
     flat, normals = faces.ravel(), corner_normals.reshape(-1, 3)
     result = np.full((count, 3), np.nan)
@@ -274,8 +337,11 @@ def _skipped(other: Counter[str]) -> list[str]:
     notes = []
     lines, points = other.pop("l", 0), other.pop("p", 0)
     if lines or points:
-        parts = [f"{count:,} {name}" for count, name in ((lines, "line ('l')"),
-                                                         (points, "point ('p')")) if count]
+        parts = [
+            f"{count:,} {name}"
+            for count, name in ((lines, "line ('l')"), (points, "point ('p')"))
+            if count
+        ]
         notes.append(f"Skipped {' and '.join(parts)} elements: only faces are read.")
     if other:
         names = ", ".join(f"'{key[:20]}' ({count:,})" for key, count in other.most_common(5))

@@ -22,8 +22,10 @@ _KEYWORD = re.compile(r"(ST)?(C)?(N)?(4)?(n)?OFF")
 
 def read_off(data: bytes) -> LoadedMesh:
     """Read an ASCII OFF file (see the module docstring)."""
-    rows = [(number, line.split("#", 1)[0].split())
-            for number, line in enumerate(data.decode("latin-1").splitlines(), 1)]
+    rows = [
+        (number, line.split("#", 1)[0].split())
+        for number, line in enumerate(data.decode("latin-1").splitlines(), 1)
+    ]
     rows = [(number, words) for number, words in rows if words]
     if not rows or not (match := _KEYWORD.fullmatch(rows[0][1][0])):
         raise MeshFileError("The file does not start with OFF (or COFF, NOFF, ...).")
@@ -42,32 +44,43 @@ def read_off(data: bytes) -> LoadedMesh:
     try:
         vertex_count, face_count = int(counts[0]), int(counts[1])
     except (ValueError, IndexError):
-        raise MeshFileError(f"Line {number}: the OFF counts line must start with the number of "
-                            "vertices and of faces.") from None
+        raise MeshFileError(
+            f"Line {number}: the OFF counts line must start with the number of "
+            "vertices and of faces."
+        ) from None
     if vertex_count < 0 or face_count < 0:
         raise MeshFileError(f"Line {number}: the OFF counts cannot be negative.")
-    vertex_rows = rows[1:1 + vertex_count]
-    face_rows = rows[1 + vertex_count:1 + vertex_count + face_count]
+    vertex_rows = rows[1 : 1 + vertex_count]
+    face_rows = rows[1 + vertex_count : 1 + vertex_count + face_count]
     if len(vertex_rows) < vertex_count or len(face_rows) < face_count:
-        raise MeshFileError(f"The OFF header says {vertex_count:,} vertices and {face_count:,} "
-                            f"faces, but the file holds only {len(vertex_rows):,} vertex and "
-                            f"{len(face_rows):,} face lines: it looks truncated.")
+        raise MeshFileError(
+            f"The OFF header says {vertex_count:,} vertices and {face_count:,} "
+            f"faces, but the file holds only {len(vertex_rows):,} vertex and "
+            f"{len(face_rows):,} face lines: it looks truncated."
+        )
     width = 6 if match.group(3) else 3
     table = _table(vertex_rows, width)
     polygon_counts, flat = _faces(face_rows)
     positions, source, notes = fan(polygon_counts)
     lines = np.array([number for number, _ in face_rows], dtype=np.intp)
-    return build("off", table[:, :3], flat[positions], source_faces=face_count,
-                 vertex_normals=table[:, 3:6] if width == 6 else None, notes=notes,
-                 vertex=lambda i: f"vertex {i:,} (counting from 0, line {vertex_rows[i][0]:,})",
-                 face=lambda i: f"the face on line {lines[source[i]]:,}")
+    return build(
+        "off",
+        table[:, :3],
+        flat[positions],
+        source_faces=face_count,
+        vertex_normals=table[:, 3:6] if width == 6 else None,
+        notes=notes,
+        vertex=lambda i: f"vertex {i:,} (counting from 0, line {vertex_rows[i][0]:,})",
+        face=lambda i: f"the face on line {lines[source[i]]:,}",
+    )
 
 
 def _table(rows: list[tuple[int, list[str]]], width: int) -> NDArray[np.float64]:
     for number, words in rows:
         if len(words) < width:
-            raise MeshFileError(f"Line {number}: an OFF vertex needs {width} numbers, but has "
-                                f"{len(words)}.")
+            raise MeshFileError(
+                f"Line {number}: an OFF vertex needs {width} numbers, but has {len(words)}."
+            )
     try:
         return np.array([words[:width] for _, words in rows], dtype=np.float64).reshape(-1, width)
     except ValueError:
@@ -83,10 +96,12 @@ def _faces(rows: list[tuple[int, list[str]]]) -> tuple[NDArray[np.intp], NDArray
     for row, (number, words) in enumerate(rows):
         size = _number(words[0], number, int)
         if size < 0 or len(words) < 1 + size:
-            raise MeshFileError(f"Line {number}: the face says it has {size} corners, but "
-                                f"{len(words) - 1} numbers follow.")
+            raise MeshFileError(
+                f"Line {number}: the face says it has {size} corners, but "
+                f"{len(words) - 1} numbers follow."
+            )
         counts[row] = size
-        flat += [_number(word, number, int) for word in words[1:1 + size]]
+        flat += [_number(word, number, int) for word in words[1 : 1 + size]]
     return counts, np.array(flat, dtype=np.intp)
 
 

@@ -20,10 +20,24 @@ from mesh_normal.files.errors import MeshFileError
 from mesh_normal.files.loaded import LoadedMesh, build
 from mesh_normal.files.polygons import fan
 
-_TYPES = {"char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2",
-          "int16": "i2", "ushort": "u2", "uint16": "u2", "int": "i4", "int32": "i4",
-          "uint": "u4", "uint32": "u4", "float": "f4", "float32": "f4", "double": "f8",
-          "float64": "f8"}
+_TYPES = {
+    "char": "i1",
+    "int8": "i1",
+    "uchar": "u1",
+    "uint8": "u1",
+    "short": "i2",
+    "int16": "i2",
+    "ushort": "u2",
+    "uint16": "u2",
+    "int": "i4",
+    "int32": "i4",
+    "uint": "u4",
+    "uint32": "u4",
+    "float": "f4",
+    "float32": "f4",
+    "double": "f8",
+    "float64": "f8",
+}
 _ENDIAN = {"binary_little_endian": "<", "binary_big_endian": ">", "ascii": "="}
 _NORMAL = ("nx", "ny", "nz")
 
@@ -51,8 +65,9 @@ def read_ply(data: bytes) -> LoadedMesh:
 def _header(data: bytes) -> tuple[str, list[_Element], int]:
     end = data.find(b"end_header")
     if end < 0:
-        raise MeshFileError("The PLY header has no 'end_header' line: the file is cut short or "
-                            "not PLY.")
+        raise MeshFileError(
+            "The PLY header has no 'end_header' line: the file is cut short or not PLY."
+        )
     body = data.find(b"\n", end) + 1 or len(data)
     lines = data[:end].decode("latin-1").splitlines()[1:]
     encoding, elements = None, []
@@ -64,8 +79,10 @@ def _header(data: bytes) -> tuple[str, list[_Element], int]:
             if words[0] == "format":
                 encoding = words[1]
                 if encoding not in _ENDIAN:
-                    raise MeshFileError(f"Line {number}: the PLY format {encoding[:30]!r} is "
-                                        "not ascii, binary_little_endian or binary_big_endian.")
+                    raise MeshFileError(
+                        f"Line {number}: the PLY format {encoding[:30]!r} is "
+                        "not ascii, binary_little_endian or binary_big_endian."
+                    )
             elif words[0] == "element":
                 elements.append(_Element(words[1], int(words[2])))
             elif words[0] == "property" and words[1] == "list":
@@ -77,8 +94,9 @@ def _header(data: bytes) -> tuple[str, list[_Element], int]:
         except MeshFileError:
             raise
         except (IndexError, ValueError, KeyError):
-            raise MeshFileError(f"Line {number} of the PLY header cannot be read: "
-                                f"{line[:60]!r}.") from None
+            raise MeshFileError(
+                f"Line {number} of the PLY header cannot be read: {line[:60]!r}."
+            ) from None
     if encoding is None:
         raise MeshFileError("The PLY header has no 'format' line.")
     if any(element.count < 0 for element in elements):
@@ -105,8 +123,10 @@ def _frombuffer(element: _Element, data: bytes, dtype: np.dtype, offset: int) ->
     size = dtype.itemsize * element.count
     if offset + size > len(data):
         held = (len(data) - offset) // max(dtype.itemsize, 1)
-        raise MeshFileError(f"The PLY header says {element.count:,} {element.name} elements, "
-                            f"but the file holds only {max(held, 0):,}: it looks truncated.")
+        raise MeshFileError(
+            f"The PLY header says {element.count:,} {element.name} elements, "
+            f"but the file holds only {max(held, 0):,}: it looks truncated."
+        )
     records = np.frombuffer(data, dtype, element.count, offset)
     element.data = {name: records[name] for name in dtype.names or ()}
     return offset + size
@@ -116,16 +136,27 @@ def _binary_lists(element: _Element, data: bytes, offset: int, endian: str) -> i
     """Lists of one size read at once; mixed sizes record by record."""
     first = _list_sizes(element, data, offset, endian) if element.count else None
     if first is not None:
-        dtype = np.dtype([(name, endian + _kind(element, name)) if name not in element.lists
-                          else (name, [("count", endian + element.lists[name][0]),
-                                       ("items", endian + element.lists[name][1],
-                                        (first[name],))])
-                          for name in element.order])
+        dtype = np.dtype(
+            [
+                (name, endian + _kind(element, name))
+                if name not in element.lists
+                else (
+                    name,
+                    [
+                        ("count", endian + element.lists[name][0]),
+                        ("items", endian + element.lists[name][1], (first[name],)),
+                    ],
+                )
+                for name in element.order
+            ]
+        )
         if offset + dtype.itemsize * element.count <= len(data):
             records = np.frombuffer(data, dtype, element.count, offset)
             if all(np.all(records[name]["count"] == first[name]) for name in element.lists):
-                element.data = {name: records[name]["items"] if name in element.lists
-                                else records[name] for name in element.order}
+                element.data = {
+                    name: records[name]["items"] if name in element.lists else records[name]
+                    for name in element.order
+                }
                 return offset + dtype.itemsize * element.count
     return _binary_records(element, data, offset, endian)
 
@@ -134,8 +165,7 @@ def _kind(element: _Element, name: str) -> str:
     return dict(element.scalars)[name]
 
 
-def _list_sizes(element: _Element, data: bytes, offset: int,
-                endian: str) -> dict[str, int] | None:
+def _list_sizes(element: _Element, data: bytes, offset: int, endian: str) -> dict[str, int] | None:
     """The list sizes of the first record, or ``None`` when the file ends inside it."""
     sizes = {}
     try:
@@ -153,8 +183,9 @@ def _list_sizes(element: _Element, data: bytes, offset: int,
 
 
 def _struct(kind: str) -> str:
-    return {"i1": "b", "u1": "B", "i2": "h", "u2": "H", "i4": "i", "u4": "I", "f4": "f",
-            "f8": "d"}[kind]
+    return {"i1": "b", "u1": "B", "i2": "h", "u2": "H", "i4": "i", "u4": "I", "f4": "f", "f8": "d"}[
+        kind
+    ]
 
 
 def _binary_records(element: _Element, data: bytes, offset: int, endian: str) -> int:
@@ -163,8 +194,14 @@ def _binary_records(element: _Element, data: bytes, offset: int, endian: str) ->
     for name in element.order:
         if name in element.lists:
             count_type, item_type = element.lists[name]
-            readers.append((name, struct.Struct(endian + _struct(count_type)),
-                            endian + _struct(item_type), np.dtype(item_type).itemsize))
+            readers.append(
+                (
+                    name,
+                    struct.Struct(endian + _struct(count_type)),
+                    endian + _struct(item_type),
+                    np.dtype(item_type).itemsize,
+                )
+            )
         else:
             readers.append((name, struct.Struct(endian + _struct(_kind(element, name))), "", 0))
     try:
@@ -173,16 +210,20 @@ def _binary_records(element: _Element, data: bytes, offset: int, endian: str) ->
                 (value,) = scalar.unpack_from(data, offset)
                 offset += scalar.size
                 if item:
-                    columns[name].append(struct.unpack_from(f"{endian}{value}{item[1:]}", data,
-                                                            offset))
+                    columns[name].append(
+                        struct.unpack_from(f"{endian}{value}{item[1:]}", data, offset)
+                    )
                     offset += value * size
                 else:
                     columns[name].append(value)
     except struct.error:
-        raise MeshFileError(f"The PLY file ends inside its {element.name} elements: it looks "
-                            "truncated.") from None
-    element.data = {name: column if name in element.lists else np.array(column)
-                    for name, column in columns.items()}
+        raise MeshFileError(
+            f"The PLY file ends inside its {element.name} elements: it looks truncated."
+        ) from None
+    element.data = {
+        name: column if name in element.lists else np.array(column)
+        for name, column in columns.items()
+    }
     return offset
 
 
@@ -197,16 +238,19 @@ def _read_ascii(elements: list[_Element], body: bytes) -> None:
                 raise _short(element, (len(tokens) - position) // max(width, 1))
             values = _floats(tokens[position:end]).reshape(element.count, width)
             # As declared: a float32 property holds the float32 nearest to its text.
-            element.data = {name: values[:, i].astype(kind)
-                            for i, (name, kind) in enumerate(element.scalars)}
+            element.data = {
+                name: values[:, i].astype(kind) for i, (name, kind) in enumerate(element.scalars)
+            }
             position = end
         else:
             position = _ascii_lists(element, tokens, position)
 
 
 def _short(element: _Element, held: int) -> MeshFileError:
-    return MeshFileError(f"The PLY header says {element.count:,} {element.name} elements, but "
-                         f"the file holds only {max(held, 0):,}: it looks truncated.")
+    return MeshFileError(
+        f"The PLY header says {element.count:,} {element.name} elements, but "
+        f"the file holds only {max(held, 0):,}: it looks truncated."
+    )
 
 
 def _floats(tokens: list[bytes]) -> NDArray[np.float64]:
@@ -214,8 +258,9 @@ def _floats(tokens: list[bytes]) -> NDArray[np.float64]:
         return np.array(tokens, dtype=np.float64)
     except ValueError:
         bad = next(token for token in tokens if not _is_number(token))
-        raise MeshFileError(f"The PLY file has {bad[:40].decode('latin-1')!r} where a number "
-                            "should be.") from None
+        raise MeshFileError(
+            f"The PLY file has {bad[:40].decode('latin-1')!r} where a number should be."
+        ) from None
 
 
 def _is_number(token: bytes) -> bool:
@@ -241,7 +286,7 @@ def _ascii_lists(element: _Element, tokens: list[bytes], position: int) -> int:
             for name in element.order:
                 if name in element.lists:
                     count = int(tokens[position])
-                    columns[name].append(tokens[position + 1:position + 1 + count])
+                    columns[name].append(tokens[position + 1 : position + 1 + count])
                     if position + 1 + count > len(tokens):
                         raise IndexError
                     position += 1 + count
@@ -251,10 +296,14 @@ def _ascii_lists(element: _Element, tokens: list[bytes], position: int) -> int:
     except IndexError:
         raise _short(element, len(columns[element.order[0]]) - 1) from None
     except ValueError:
-        raise MeshFileError(f"The PLY file has {tokens[position][:40].decode('latin-1')!r} "
-                            "where a list length should be.") from None
-    element.data = {name: column if name in element.lists else _floats(column)  # type: ignore[arg-type]
-                    for name, column in columns.items()}
+        raise MeshFileError(
+            f"The PLY file has {tokens[position][:40].decode('latin-1')!r} "
+            "where a list length should be."
+        ) from None
+    element.data = {
+        name: column if name in element.lists else _floats(column)  # type: ignore[arg-type]
+        for name, column in columns.items()
+    }
     return position
 
 
@@ -263,12 +312,17 @@ def _mesh(elements: list[_Element]) -> LoadedMesh:
     vertex = named.get("vertex")
     if vertex is None or not {"x", "y", "z"} <= vertex.data.keys():
         raise MeshFileError("The PLY file has no vertex element with x, y and z.")
-    vertices = np.stack([np.asarray(vertex.data[axis], dtype=np.float64)
-                         for axis in "xyz"], axis=1)
+    vertices = np.stack([np.asarray(vertex.data[axis], dtype=np.float64) for axis in "xyz"], axis=1)
     notes = []
     face = named.get("face")
-    key = next((name for name in ("vertex_indices", "vertex_index")
-                if face is not None and name in face.lists), None)
+    key = next(
+        (
+            name
+            for name in ("vertex_indices", "vertex_index")
+            if face is not None and name in face.lists
+        ),
+        None,
+    )
     if face is None or key is None:
         counts, flat = np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp)
     else:
@@ -276,13 +330,23 @@ def _mesh(elements: list[_Element]) -> LoadedMesh:
     positions, source, fan_notes = fan(counts)
     notes += fan_notes
     faces = flat[positions]
-    others = [f"{element.name} ({element.count:,})" for element in elements
-              if element.name not in ("vertex", "face")]
+    others = [
+        f"{element.name} ({element.count:,})"
+        for element in elements
+        if element.name not in ("vertex", "face")
+    ]
     if others:
         notes.append(f"Ignored elements this reader does not use: {', '.join(others)}.")
-    return build("ply", vertices, faces, source_faces=len(counts),
-                 vertex_normals=_normals(vertex), face_normals=_face_normals(face, source),
-                 notes=notes, face=lambda i: f"face {source[i]:,} (counting from 0)")
+    return build(
+        "ply",
+        vertices,
+        faces,
+        source_faces=len(counts),
+        vertex_normals=_normals(vertex),
+        face_normals=_face_normals(face, source),
+        notes=notes,
+        face=lambda i: f"face {source[i]:,} (counting from 0)",
+    )
 
 
 def _polygons(column: object) -> tuple[NDArray[np.intp], NDArray[np.int64]]:
@@ -307,11 +371,9 @@ def _polygons(column: object) -> tuple[NDArray[np.intp], NDArray[np.int64]]:
 def _normals(element: _Element | None) -> NDArray[np.float64] | None:
     if element is None or not set(_NORMAL) <= element.data.keys():
         return None
-    return np.stack([np.asarray(element.data[axis], dtype=np.float64) for axis in _NORMAL],
-                    axis=1)
+    return np.stack([np.asarray(element.data[axis], dtype=np.float64) for axis in _NORMAL], axis=1)
 
 
 def _face_normals(face: _Element | None, source: NDArray[np.intp]) -> NDArray[np.float64] | None:
     normals = _normals(face)
     return None if normals is None else normals[source]
-

@@ -15,14 +15,23 @@ from mesh_normal.files.ply import read_ply
 from mesh_normal.files.stl import is_binary, looks_ascii, read_stl
 
 #: File extension (lower case, with the dot) to format.
-SUFFIXES: dict[str, str] = {".stl": "stl", ".obj": "obj", ".ply": "ply", ".off": "off",
-                            ".glb": "glb", ".gltf": "gltf"}
+SUFFIXES: dict[str, str] = {
+    ".stl": "stl",
+    ".obj": "obj",
+    ".ply": "ply",
+    ".off": "off",
+    ".glb": "glb",
+    ".gltf": "gltf",
+}
 
-NAMES = {"stl": "STL", "obj": "OBJ", "ply": "PLY", "off": "OFF", "glb": "GLB",
-         "gltf": "glTF"}
+NAMES = {"stl": "STL", "obj": "OBJ", "ply": "PLY", "off": "OFF", "glb": "GLB", "gltf": "glTF"}
 
 READERS: dict[str, Callable[[bytes], LoadedMesh]] = {
-    "stl": read_stl, "obj": read_obj, "ply": read_ply, "off": read_off, "glb": read_glb,
+    "stl": read_stl,
+    "obj": read_obj,
+    "ply": read_ply,
+    "off": read_off,
+    "glb": read_glb,
     "gltf": read_gltf,
 }
 
@@ -44,20 +53,23 @@ def read_mesh(data: bytes, filename: str | None = None) -> LoadedMesh:
     if data.startswith(b"\xef\xbb\xbf"):  # a UTF-8 byte order mark: text formats only
         data = data[3:]
     named = suffix_format(filename)
-    format = sniff(data) or named
-    if format is None:
+    found = sniff(data) or named
+    if found is None:
         raise unknown_format(filename)
     try:
-        mesh = READERS[format](data)
+        mesh = READERS[found](data)
     except MeshFileError:
         raise
     except Exception as error:  # a library's own exception: never a 500
         reason = str(error).strip().rstrip(".") or type(error).__name__
-        raise MeshFileError(f"The file could not be read as {NAMES[format]}: "
-                            f"{reason[:200]}.") from error
-    if named is not None and named != format:
-        note = (f"The file is named as {NAMES[named]} but holds {NAMES[format]}; it was read as "
-                f"{NAMES[format]}.")
+        raise MeshFileError(
+            f"The file could not be read as {NAMES[found]}: {reason[:200]}."
+        ) from error
+    if named is not None and named != found:
+        note = (
+            f"The file is named as {NAMES[named]} but holds {NAMES[found]}; it was read as "
+            f"{NAMES[found]}."
+        )
         mesh = dataclasses.replace(mesh, notes=(note, *mesh.notes))
     return mesh
 
@@ -91,7 +103,10 @@ def unknown_format(filename: str | None) -> MeshFileError:
     formats = ", ".join(sorted(SUFFIXES))
     if filename and "." in filename:
         suffix = filename.rsplit(".", 1)[-1][:20]
-        return unsupported(f"The format of this .{suffix} file is not supported; the formats "
-                           f"are {formats}.")
-    return unsupported(f"The file's format was not recognised from its content; the formats "
-                       f"are {formats} (a file name with its extension helps).")
+        return unsupported(
+            f"The format of this .{suffix} file is not supported; the formats are {formats}."
+        )
+    return unsupported(
+        f"The file's format was not recognised from its content; the formats "
+        f"are {formats} (a file name with its extension helps)."
+    )

@@ -45,8 +45,11 @@ def is_binary(data: bytes) -> bool:
 def looks_ascii(data: bytes) -> bool:
     """Whether the file reads as ASCII STL: ``solid``, then text with a ``facet`` or the end."""
     head = data[:4096]
-    return (head.lstrip()[:5].lower() == b"solid" and b"\0" not in head
-            and (b"facet" in head or b"endsolid" in head))
+    return (
+        head.lstrip()[:5].lower() == b"solid"
+        and b"\0" not in head
+        and (b"facet" in head or b"endsolid" in head)
+    )
 
 
 def read_stl(data: bytes) -> LoadedMesh:
@@ -59,19 +62,25 @@ def read_stl(data: bytes) -> LoadedMesh:
 def _read_binary(data: bytes) -> LoadedMesh:
     count = triangle_count(data)
     if count is None:
-        raise MeshFileError(f"The file is {len(data)} bytes long, too short for a binary STL "
-                            f"(its header alone is {HEADER} bytes).")
+        raise MeshFileError(
+            f"The file is {len(data)} bytes long, too short for a binary STL "
+            f"(its header alone is {HEADER} bytes)."
+        )
     held, extra = divmod(len(data) - HEADER, RECORD.itemsize)
     notes = []
     if count > held:
-        raise MeshFileError(f"The binary STL header says {count:,} triangles, but the file holds "
-                            f"only {held:,}: it looks truncated.")
+        raise MeshFileError(
+            f"The binary STL header says {count:,} triangles, but the file holds "
+            f"only {held:,}: it looks truncated."
+        )
     if count == 0 and held and not extra:
         count = held
         notes.append(f"The binary STL header says 0 triangles; read the {held:,} the file holds.")
     elif count < held or extra:
-        notes.append(f"Ignored {len(data) - HEADER - RECORD.itemsize * count:,} bytes after the "
-                     f"last of the {count:,} triangles the header announces.")
+        notes.append(
+            f"Ignored {len(data) - HEADER - RECORD.itemsize * count:,} bytes after the "
+            f"last of the {count:,} triangles the header announces."
+        )
     records = np.frombuffer(data, RECORD, count, HEADER)
     return _welded(records["corners"].reshape(-1, 3), records["normal"], notes)
 
@@ -81,9 +90,11 @@ def _read_ascii(data: bytes) -> LoadedMesh:
     normals = _numbers(_NORMAL.findall(data), "facet normal")
     facets = len(_FACET.findall(data))
     if len(corners) != 3 * facets or len(normals) != facets:
-        raise MeshFileError(f"The ASCII STL has {facets:,} facets, {len(normals):,} facet "
-                            f"normals and {len(corners):,} vertices; each facet needs one normal "
-                            "and exactly three vertices (is the file cut short?).")
+        raise MeshFileError(
+            f"The ASCII STL has {facets:,} facets, {len(normals):,} facet "
+            f"normals and {len(corners):,} vertices; each facet needs one normal "
+            "and exactly three vertices (is the file cut short?)."
+        )
     return _welded(corners, normals, [])
 
 
@@ -96,24 +107,38 @@ def _numbers(matches: list[tuple[bytes, bytes, bytes]], keyword: str) -> NDArray
                 float(number)
             except ValueError:
                 text = number[:40].decode("ascii", "replace")
-                raise MeshFileError(f"The ASCII STL has {text!r} after '{keyword}' where a "
-                                    "number should be.") from None
+                raise MeshFileError(
+                    f"The ASCII STL has {text!r} after '{keyword}' where a number should be."
+                ) from None
         raise
 
 
-def _welded(corners: NDArray[np.floating], normals: NDArray[np.floating],
-            notes: list[str]) -> LoadedMesh:
+def _welded(
+    corners: NDArray[np.floating], normals: NDArray[np.floating], notes: list[str]
+) -> LoadedMesh:
     bad = first_bad_vertex(corners)
     if bad is not None:
-        raise MeshFileError(f"Triangle {bad // 3 + 1:,} (counting from 1) has a corner "
-                            "coordinate that is not a finite number.")
+        raise MeshFileError(
+            f"Triangle {bad // 3 + 1:,} (counting from 1) has a corner "
+            "coordinate that is not a finite number."
+        )
     vertices, index = weld(corners)
-    notes.append(f"Welded {len(corners):,} STL corners into {len(vertices):,} vertices "
-                 "(identical coordinates merged, in order of first appearance).")
+    notes.append(
+        f"Welded {len(corners):,} STL corners into {len(vertices):,} vertices "
+        "(identical coordinates merged, in order of first appearance)."
+    )
     face_normals: NDArray[np.floating] | None = normals
     if len(normals) and not np.any(normals):
         face_normals = None
-        notes.append("Every facet normal in the file is zero (meaning \"not given\"), so there "
-                     "are none to compare with.")
-    return build("stl", vertices, index.reshape(-1, 3), source_faces=len(normals),
-                 face_normals=face_normals, notes=notes)
+        notes.append(
+            'Every facet normal in the file is zero (meaning "not given"), so there '
+            "are none to compare with."
+        )
+    return build(
+        "stl",
+        vertices,
+        index.reshape(-1, 3),
+        source_faces=len(normals),
+        face_normals=face_normals,
+        notes=notes,
+    )

@@ -16,8 +16,11 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-_MULTIPLIERS = (np.uint64(0x9E3779B97F4A7C15), np.uint64(0xC2B2AE3D27D4EB4F),
-                np.uint64(0x165667B19E3779F9))
+_MULTIPLIERS = (
+    np.uint64(0x9E3779B97F4A7C15),
+    np.uint64(0xC2B2AE3D27D4EB4F),
+    np.uint64(0x165667B19E3779F9),
+)
 
 
 def weld(corners: NDArray[np.floating]) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
@@ -82,8 +85,9 @@ def _hash_groups(
     return order, starts
 
 
-def _number(order: NDArray[np.intp],
-            starts: NDArray[np.bool_]) -> tuple[NDArray[np.bool_], NDArray[np.intp]]:
+def _number(
+    order: NDArray[np.intp], starts: NDArray[np.bool_]
+) -> tuple[NDArray[np.bool_], NDArray[np.intp]]:
     """Which rows lead their group, and each row's group numbered by its leader's position."""
     leaders = order[starts]  # the first row of each group (groups are in index order)
     is_leader = np.zeros(len(order), dtype=bool)
@@ -101,8 +105,10 @@ def _index_type(count: int) -> type[np.signedinteger]:
 
 
 def _split_collisions(
-    words: list[NDArray[np.unsignedinteger]], is_leader: NDArray[np.bool_],
-    index: NDArray[np.intp], wrong: NDArray[np.bool_],
+    words: list[NDArray[np.unsignedinteger]],
+    is_leader: NDArray[np.bool_],
+    index: NDArray[np.intp],
+    wrong: NDArray[np.bool_],
 ) -> tuple[NDArray[np.bool_], NDArray[np.intp]]:
     """Regroup exactly the rows of the groups that mixed different points (a shared hash)."""
     rows = np.flatnonzero(np.isin(index, index[wrong]))  # in index order

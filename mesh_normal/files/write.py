@@ -20,7 +20,7 @@ WRITABLE = ("ply", "stl", "obj")
 _MAKER = "Mesh Normal Calculator"
 
 
-def write_mesh(vertices: ArrayLike, faces: ArrayLike, format: str) -> bytes:
+def write_mesh(vertices: ArrayLike, faces: ArrayLike, file_format: str) -> bytes:
     """The bytes of a mesh file.
 
     Parameters
@@ -29,7 +29,7 @@ def write_mesh(vertices: ArrayLike, faces: ArrayLike, format: str) -> bytes:
         Finite coordinates, written as given (as float32 in STL, which has nothing wider).
     faces : (m, 3) int
         Indices into ``vertices``.
-    format : str
+    file_format : str
         ``"ply"`` (binary little endian, float64), ``"stl"`` (binary, with our facet normals)
         or ``"obj"`` (1-based indices, exact float64 text).
 
@@ -37,17 +37,18 @@ def write_mesh(vertices: ArrayLike, faces: ArrayLike, format: str) -> bytes:
     :class:`~mesh_normal.files.MeshFileError` (415) for another format.
     """
     points, triangles = check_mesh(vertices, faces)
-    if format == "ply":
+    if file_format == "ply":
         return ply_bytes(points, triangles)
-    if format == "stl":
+    if file_format == "stl":
         return _stl(points, triangles)
-    if format == "obj":
+    if file_format == "obj":
         return _obj(points, triangles)
-    raise unsupported(f"Cannot write {format!r} files; the formats are {', '.join(WRITABLE)}.")
+    raise unsupported(f"Cannot write {file_format!r} files; the formats are {', '.join(WRITABLE)}.")
 
 
 def ply_bytes(
-    points: NDArray[np.float64], triangles: NDArray[np.intp],
+    points: NDArray[np.float64],
+    triangles: NDArray[np.intp],
     vertex_normals: NDArray[np.float64] | None = None,
     face_normals: NDArray[np.float64] | None = None,
 ) -> bytes:
@@ -63,10 +64,15 @@ def ply_bytes(
     """
     normal_fields = [("nx", "<f8"), ("ny", "<f8"), ("nz", "<f8")]
     normal_lines = "".join(f"property double {name}\n" for name, _ in normal_fields)
-    vertices = np.empty(len(points), dtype=[("xyz", "<f8", (3,))]
-                        + (normal_fields if vertex_normals is not None else []))
-    faces = np.empty(len(triangles), dtype=[("count", "u1"), ("indices", "<i4", (3,))]
-                     + (normal_fields if face_normals is not None else []))
+    vertices = np.empty(
+        len(points),
+        dtype=[("xyz", "<f8", (3,))] + (normal_fields if vertex_normals is not None else []),
+    )
+    faces = np.empty(
+        len(triangles),
+        dtype=[("count", "u1"), ("indices", "<i4", (3,))]
+        + (normal_fields if face_normals is not None else []),
+    )
     vertices["xyz"] = points
     faces["count"] = 3
     faces["indices"] = triangles
@@ -74,19 +80,24 @@ def ply_bytes(
         if normals is not None:
             for axis, (name, _) in enumerate(normal_fields):
                 records[name] = normals[:, axis]
-    header = (f"ply\nformat binary_little_endian 1.0\ncomment written by {_MAKER}\n"
-              f"element vertex {len(points)}\nproperty double x\nproperty double y\n"
-              f"property double z\n{normal_lines if vertex_normals is not None else ''}"
-              f"element face {len(triangles)}\nproperty list uchar int vertex_indices\n"
-              f"{normal_lines if face_normals is not None else ''}end_header\n")
+    header = (
+        f"ply\nformat binary_little_endian 1.0\ncomment written by {_MAKER}\n"
+        f"element vertex {len(points)}\nproperty double x\nproperty double y\n"
+        f"property double z\n{normal_lines if vertex_normals is not None else ''}"
+        f"element face {len(triangles)}\nproperty list uchar int vertex_indices\n"
+        f"{normal_lines if face_normals is not None else ''}end_header\n"
+    )
     return header.encode() + vertices.tobytes() + faces.tobytes()
 
 
 def _stl(points: NDArray[np.float64], triangles: NDArray[np.intp]) -> bytes:
     largest = float(np.abs(points).max(initial=0.0))
     if largest > float(np.finfo(np.float32).max):
-        raise MeshFileError(f"Coordinates up to {largest:.3g} do not fit in STL, which stores "
-                            "32-bit floats (up to about 3.4e38); choose PLY or OBJ.", 422)
+        raise MeshFileError(
+            f"Coordinates up to {largest:.3g} do not fit in STL, which stores "
+            "32-bit floats (up to about 3.4e38); choose PLY or OBJ.",
+            422,
+        )
     records = np.zeros(len(triangles), dtype=RECORD)
     records["normal"] = face_normals(points, triangles).normals
     records["corners"] = points[triangles]

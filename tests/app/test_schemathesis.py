@@ -18,8 +18,16 @@ from app.main import create_app
 
 schema = schemathesis.openapi.from_asgi("/openapi.json", create_app())
 
-OPERATIONS = {"POST /api/normal", "GET /api/normal", "GET /api/normal.csv", "POST /api/normals",
-              "GET /api/chart", "POST /api/mesh", "POST /api/mesh/normals", "POST /api/mesh/fix"}
+OPERATIONS = {
+    "POST /api/normal",
+    "GET /api/normal",
+    "GET /api/normal.csv",
+    "POST /api/normals",
+    "GET /api/chart",
+    "POST /api/mesh",
+    "POST /api/mesh/normals",
+    "POST /api/mesh/fix",
+}
 
 #: The query-string operations, whose coordinates are decimal *text*.
 QUERY_OPERATIONS = {"GET /api/normal", "GET /api/normal.csv", "GET /api/chart"}
@@ -66,8 +74,12 @@ def statuses(request: pytest.FixtureRequest) -> Iterator[Counter[int]]:
     max_examples=60,
     deadline=None,
     # The function-scoped `statuses` fixture deliberately spans all examples of one operation.
-    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow,
-                           HealthCheck.filter_too_much, HealthCheck.data_too_large],
+    suppress_health_check=[
+        HealthCheck.function_scoped_fixture,
+        HealthCheck.too_slow,
+        HealthCheck.filter_too_much,
+        HealthCheck.data_too_large,
+    ],
 )
 def test_api(case, statuses: Counter[int]) -> None:  # type: ignore[no-untyped-def]
     label = case.operation.label

@@ -40,8 +40,13 @@ from tests.paths import ROOT
 
 CHROMIUM = Path(os.environ.get("CHROMIUM", "/usr/bin/chromium"))
 CHROMIUM_ARGS = [
-    "--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
-    "--disable-component-update", "--disable-sync", "--no-first-run",
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--no-first-run",
 ]
 #: Playwright's default timeout (ms) for waits and expect(); the page answers in well under this.
 TIMEOUT_MS = 10_000
@@ -72,27 +77,46 @@ def base_url(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
     log_path = tmp_path_factory.mktemp("uvicorn") / "server.log"
     with log_path.open("wb") as log:
         process = subprocess.Popen(
-            [sys.executable, "-m", "uvicorn", "app.main:app", "--host", "127.0.0.1",
-             "--port", str(port), "--log-level", "warning"],
-            cwd=ROOT, stdout=log, stderr=subprocess.STDOUT,
+            [
+                sys.executable,
+                "-m",
+                "uvicorn",
+                "app.main:app",
+                "--host",
+                "127.0.0.1",
+                "--port",
+                str(port),
+                "--log-level",
+                "warning",
+            ],
+            cwd=ROOT,
+            stdout=log,
+            stderr=subprocess.STDOUT,
         )
         url = f"http://127.0.0.1:{port}"
         try:
             deadline = time.monotonic() + SERVER_START_S
             while True:
                 if process.poll() is not None:
-                    pytest.fail(f"uvicorn exited with {process.returncode}:\n"
-                                f"{log_path.read_text(errors='replace')}", pytrace=False)
+                    pytest.fail(
+                        f"uvicorn exited with {process.returncode}:\n"
+                        f"{log_path.read_text(errors='replace')}",
+                        pytrace=False,
+                    )
                 try:
-                    with urllib.request.urlopen(f"{url}/api/normal?ax=0&ay=0&az=0&bx=1&by=0"
-                                                "&bz=0&cx=0&cy=1&cz=0", timeout=1) as answer:
+                    with urllib.request.urlopen(
+                        f"{url}/api/normal?ax=0&ay=0&az=0&bx=1&by=0&bz=0&cx=0&cy=1&cz=0", timeout=1
+                    ) as answer:
                         if answer.status == 200:
                             break
                 except (urllib.error.URLError, OSError):
                     pass
                 if time.monotonic() > deadline:
-                    pytest.fail(f"uvicorn did not answer on {url} within {SERVER_START_S} s:\n"
-                                f"{log_path.read_text(errors='replace')}", pytrace=False)
+                    pytest.fail(
+                        f"uvicorn did not answer on {url} within {SERVER_START_S} s:\n"
+                        f"{log_path.read_text(errors='replace')}",
+                        pytrace=False,
+                    )
                 time.sleep(0.05)
             yield url
         finally:
@@ -107,18 +131,20 @@ def base_url(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
 class _FramingHost(BaseHTTPRequestHandler):
     """``GET /frame?src=URL``: a page of another origin that puts URL in an iframe."""
 
-    def do_GET(self) -> None:  # noqa: N802 - the name http.server calls
+    def do_GET(self) -> None:
         parts = urlsplit(self.path)
         sources = parse_qs(parts.query).get("src", [])
         if parts.path != "/frame" or not sources:
             self.send_error(404)
             return
-        body = ("<!doctype html><html lang='en'><head><meta charset='utf-8'>"
-                "<title>Someone else's page</title><link rel='icon' href='data:,'></head>"
-                "<body><h1>A blog post with an embedded chart</h1>"
-                f"<iframe id='framed' name='framed' src='{html.escape(sources[0])}' "
-                "width='560' height='380' style='border:0' title='Framed page'></iframe>"
-                "</body></html>").encode()
+        body = (
+            "<!doctype html><html lang='en'><head><meta charset='utf-8'>"
+            "<title>Someone else's page</title><link rel='icon' href='data:,'></head>"
+            "<body><h1>A blog post with an embedded chart</h1>"
+            f"<iframe id='framed' name='framed' src='{html.escape(sources[0])}' "
+            "width='560' height='380' style='border:0' title='Framed page'></iframe>"
+            "</body></html>"
+        ).encode()
         self.send_response(200)
         self.send_header("content-type", "text/html; charset=utf-8")
         self.send_header("content-length", str(len(body)))
@@ -176,7 +202,8 @@ class ConsoleWatch:
 
     messages: list[str] = field(default_factory=list)
     allowed: list[re.Pattern[str]] = field(
-        default_factory=lambda: [re.compile(pattern) for pattern in WEBGL_WARNINGS])
+        default_factory=lambda: [re.compile(pattern) for pattern in WEBGL_WARNINGS]
+    )
 
     def attach(self, page: Page) -> None:
         page.on("console", self._on_console)
@@ -192,8 +219,11 @@ class ConsoleWatch:
         self.allowed.append(re.compile(pattern))
 
     def unexpected(self) -> list[str]:
-        return [text for text in self.messages
-                if not any(pattern.search(text) for pattern in self.allowed)]
+        return [
+            text
+            for text in self.messages
+            if not any(pattern.search(text) for pattern in self.allowed)
+        ]
 
     def matching(self, pattern: str) -> list[str]:
         return [text for text in self.messages if re.search(pattern, text)]
@@ -208,7 +238,9 @@ NewPage = Callable[..., Page]
 
 #: Every context starts like this unless a test asks otherwise.
 CONTEXT_DEFAULTS: dict[str, Any] = {
-    "color_scheme": "light", "locale": "en-US", "viewport": {"width": 1280, "height": 900},
+    "color_scheme": "light",
+    "locale": "en-US",
+    "viewport": {"width": 1280, "height": 900},
 }
 
 
@@ -239,8 +271,7 @@ def new_page(
 
     def open_page(**options: Any) -> Page:
         if options:
-            context = browser.new_context(**{"base_url": base_url, **CONTEXT_DEFAULTS,
-                                              **options})
+            context = browser.new_context(**{"base_url": base_url, **CONTEXT_DEFAULTS, **options})
             context.set_default_timeout(TIMEOUT_MS)
             contexts.append(context)
         else:

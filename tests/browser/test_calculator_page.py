@@ -53,7 +53,7 @@ def test_typing_a_triangle_updates_result_chart_and_address(page: Page) -> None:
     query = triangle_query(*RIGHT)
     expect(page).to_have_url(query_pattern(*RIGHT))
     expect(page.locator("#json-link")).to_have_attribute("href", f"/api/normal?{query}")
-    expect(page.locator("#embed-code")).to_have_value(re.compile(re.escape(f"/embed?{query}\"")))
+    expect(page.locator("#embed-code")).to_have_value(re.compile(re.escape(f'/embed?{query}"')))
 
     # The address is a permalink: loading it renders the same result on the server.
     response = page.reload()
@@ -129,7 +129,8 @@ def test_typing_mistake_is_named_beside_the_field_and_clears_when_fixed(page: Pa
     # A second mistake: an empty field; the notice counts both.
     page.locator("#cz").fill("")
     expect(page.locator('[data-error-for="cz"]')).to_have_text(
-        "cz is empty; enter a decimal number such as 1.5.")
+        "cz is empty; enter a decimal number such as 1.5."
+    )
     expect(page.locator("#cz")).to_have_attribute("aria-invalid", "true")
     expect(cell(page, "invalid")).to_have_text("Fix the highlighted fields to see the normal.")
 
@@ -179,15 +180,23 @@ def test_copy_button_copies_the_embed_code(new_page: NewPage, base_url: str) -> 
 
 NUMBER_CASES = {
     # Tiny, huge and negative values: JavaScript's String(x) exponent layout.
-    "tiny": ((("0", "0", "0"), ("1e-4", "0", "0"), ("0", "1e-4", "0")),
-             {"normal": "(0, 0, 1e-8)", "area": "5e-9", "u": "(0.0001, 0, 0)"}),
-    "huge": ((("0", "0", "0"), ("1e11", "0", "0"), ("0", "-1e11", "0")),
-             {"normal": "(0, 0, -1e+22)", "magnitude": "1e+22", "area": "5e+21"}),
-    "decimals": ((("0.1", "0.2", "0.3"), ("1.5", "-2.25", "3"), ("-1", "0.5", "2e3")),
-                 {"u": "(1.4, -2.45, 2.7)"}),
+    "tiny": (
+        (("0", "0", "0"), ("1e-4", "0", "0"), ("0", "1e-4", "0")),
+        {"normal": "(0, 0, 1e-8)", "area": "5e-9", "u": "(0.0001, 0, 0)"},
+    ),
+    "huge": (
+        (("0", "0", "0"), ("1e11", "0", "0"), ("0", "-1e11", "0")),
+        {"normal": "(0, 0, -1e+22)", "magnitude": "1e+22", "area": "5e+21"},
+    ),
+    "decimals": (
+        (("0.1", "0.2", "0.3"), ("1.5", "-2.25", "3"), ("-1", "0.5", "2e3")),
+        {"u": "(1.4, -2.45, 2.7)"},
+    ),
     # Beyond the double range: said in words, never Infinity.
-    "out of range": ((("0", "0", "0"), ("1e200", "0", "0"), ("0", "1e200", "0")),
-                     {"normal": "(0, 0, out of range)", "magnitude": "out of range"}),
+    "out of range": (
+        (("0", "0", "0"), ("1e200", "0", "0"), ("0", "1e200", "0")),
+        {"normal": "(0, 0, out of range)", "magnitude": "out of range"},
+    ),
 }
 RESULT_KEYS = ("order", "u", "v", "normal", "magnitude", "unit_normal", "area", "message")
 
@@ -241,7 +250,8 @@ def test_a_slow_answer_does_not_overwrite_a_later_typing_mistake(page: Page) -> 
     # The result must not claim to be the answer for what is in the form.
     assert cell(page, "invalid").is_visible(), (
         "the late answer for bx=5 replaced the 'Fix the highlighted field' notice; the table "
-        f"shows normal {cell(page, 'normal').inner_text()} while bx holds '5..'")
+        f"shows normal {cell(page, 'normal').inner_text()} while bx holds '5..'"
+    )
     assert "stale" in (page.locator("#result").get_attribute("class") or "")
 
 

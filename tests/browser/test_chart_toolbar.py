@@ -11,12 +11,16 @@ from tests.browser.helpers import RIGHT, triangle_query
 pytestmark = pytest.mark.browser
 
 
-@pytest.mark.parametrize(("title", "name", "start"), [
-    ("Download plot as a PNG", "triangle-normal.png", b"\x89PNG"),
-    ("Download plot as SVG", "triangle-normal.svg", b"<svg"),
-])
-def test_toolbar_downloads_the_chart(new_page: NewPage, title: str, name: str,
-                                     start: bytes) -> None:
+@pytest.mark.parametrize(
+    ("title", "name", "start"),
+    [
+        ("Download plot as a PNG", "triangle-normal.png", b"\x89PNG"),
+        ("Download plot as SVG", "triangle-normal.svg", b"<svg"),
+    ],
+)
+def test_toolbar_downloads_the_chart(
+    new_page: NewPage, title: str, name: str, start: bytes
+) -> None:
     page = new_page(viewport={"width": 1280, "height": 900}, accept_downloads=True)
     page.goto(f"/?{triangle_query(*RIGHT)}")
     page.locator("#chart[data-drawn] .main-svg").first.wait_for()
@@ -41,8 +45,10 @@ def test_toolbar_has_no_outside_sharing(new_page: NewPage) -> None:
     page.locator("#chart[data-drawn] .main-svg").first.wait_for()
     page.locator("#chart").hover()
     expect(page.locator('#chart .modebar-btn[data-title="Download plot as SVG"]')).to_have_count(
-        1, timeout=10_000)
+        1, timeout=10_000
+    )
     titles = page.locator("#chart .modebar-btn").evaluate_all(
-        "buttons => buttons.map(b => b.dataset.title)")
+        "buttons => buttons.map(b => b.dataset.title)"
+    )
     assert "Download plot as a PNG" in titles
     assert not [t for t in titles if "Share" in t or "Cloud" in t], titles

@@ -9,8 +9,15 @@ from tests.browser.helpers import FIELDS
 
 pytestmark = pytest.mark.browser
 
-PATHS = {"/api/normal", "/api/normal.csv", "/api/normals", "/api/chart", "/api/mesh",
-         "/api/mesh/normals", "/api/mesh/fix"}
+PATHS = {
+    "/api/normal",
+    "/api/normal.csv",
+    "/api/normals",
+    "/api/chart",
+    "/api/mesh",
+    "/api/mesh/normals",
+    "/api/mesh/fix",
+}
 
 
 def test_docs_show_the_operations_and_try_them(page: Page, base_url: str) -> None:
@@ -35,10 +42,12 @@ def test_docs_show_the_operations_and_try_them(page: Page, base_url: str) -> Non
     operation.locator(".opblock-summary").click()
     for name in FIELDS:
         operation.locator(f'tr[data-param-name="{name}"] input').fill(
-            {"bx": "1", "cy": "1"}.get(name, "0"))
+            {"bx": "1", "cy": "1"}.get(name, "0")
+        )
     operation.get_by_role("button", name="Execute").click()
-    expect(operation.locator(".live-responses-table tbody .response-col_status").first) \
-        .to_have_text("200")
+    expect(
+        operation.locator(".live-responses-table tbody .response-col_status").first
+    ).to_have_text("200")
     expect(operation.locator(".live-responses-table .microlight").first).to_contain_text('"bar"')
 
     # Everything came from the app itself: no CDN, no validator badge, no fonts from elsewhere.

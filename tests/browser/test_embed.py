@@ -47,16 +47,15 @@ def test_embed_with_a_typo_shows_the_error_and_no_chart(page: Page, console: Con
     expect(page.locator("#chart")).to_have_count(0)
 
 
-def test_another_site_can_frame_the_embed(
-    page: Page, framing_host: str, base_url: str
-) -> None:
+def test_another_site_can_frame_the_embed(page: Page, framing_host: str, base_url: str) -> None:
     src = f"{base_url}/embed?{triangle_query(*RIGHT, swap=True)}"
     response = page.goto(f"{framing_host}/frame?src={quote(src, safe='')}")
     assert response is not None and response.status == 200
     framed = page.frame_locator("#framed")
     framed.locator("#chart[data-drawn] .main-svg").first.wait_for()
-    expect(framed.get_by_role("link", name=re.compile("Open in Mesh Normal Calculator"))) \
-        .to_be_visible()
+    expect(
+        framed.get_by_role("link", name=re.compile("Open in Mesh Normal Calculator"))
+    ).to_be_visible()
     frame = page.frame(name="framed")
     assert frame is not None and frame.url == src
     assert frame.evaluate("document.getElementById('chart').data[0].y") == [0, 0, -1, 1, 0.5]
@@ -76,7 +75,9 @@ def test_the_calculator_page_refuses_to_be_framed(
                        try { url = f && f.contentWindow && f.contentWindow.location.href; }
                        catch (error) { return true; }  // cross-origin: not the calculator
                        return Boolean(url) && !url.startsWith(base); }""",
-        arg=base_url, timeout=10_000)
+        arg=base_url,
+        timeout=10_000,
+    )
     # An error page, not the calculator (Chromium may drop the blocked frame's name, so the
     # frame is found as the page's child, not by name).
     frames = page.main_frame.child_frames

@@ -98,8 +98,7 @@ def test_downloads_send_the_file_again(page: Page) -> None:
     normals = np.load(io.BytesIO(Path(download.path()).read_bytes()))
     expected = vertex_normals(mesh.vertices, mesh.faces, "angle").normals
     assert normals.shape == (8, 3) and np.array_equal(normals, expected)
-    expect(page.locator("#mesh-download-status")).to_have_text(
-        "Saved cube-vertex-normals.npy.")
+    expect(page.locator("#mesh-download-status")).to_have_text("Saved cube-vertex-normals.npy.")
 
     page.select_option("#fix-format", "obj")
     with page.expect_download() as info:
@@ -120,7 +119,8 @@ def test_downloads_send_the_file_again(page: Page) -> None:
 
 
 def test_a_bad_crease_angle_and_a_broken_file_are_said_inline(
-        page: Page, console: ConsoleWatch) -> None:
+    page: Page, console: ConsoleWatch
+) -> None:
     console.allow(r"status of 400 \(Bad Request\) \(http://[^)]*/mesh\?part=report\)$")
     open_mesh_page(page)
     page.set_input_files("#mesh-file", files=[cube_file()])
@@ -130,8 +130,10 @@ def test_a_bad_crease_angle_and_a_broken_file_are_said_inline(
     page.get_by_role("button", name="Download normals").click()
     expect(page.locator("#mesh-download-status")).to_contain_text("from 0 to 180")
 
-    page.set_input_files("#mesh-file", files=[
-        {"name": "broken.obj", "mimeType": "text/plain", "buffer": b"f 1 2 3\n"}])
+    page.set_input_files(
+        "#mesh-file",
+        files=[{"name": "broken.obj", "mimeType": "text/plain", "buffer": b"f 1 2 3\n"}],
+    )
     expect(page.locator("#mesh-error [data-error]")).to_be_visible()
     expect(page.locator("#mesh-status")).to_have_class("mesh-status message error")
     expect(page.locator("#mesh-report-title")).to_have_count(0)
@@ -142,8 +144,9 @@ def test_dropping_a_file_uploads_it(page: Page) -> None:
     page.evaluate(DROP, ["dropped.obj", CUBE_ONE_FLIPPED])
     wait_for_report(page)
     expect(page.locator(".mesh-filename")).to_have_text("dropped.obj")
-    assert page.evaluate("() => document.getElementById('mesh-file').files[0].name") \
-        == "dropped.obj"
+    assert (
+        page.evaluate("() => document.getElementById('mesh-file').files[0].name") == "dropped.obj"
+    )
 
 
 def problem_mesh() -> bytes:
@@ -171,8 +174,10 @@ def test_phone_layout_and_desktop_screenshot(new_page: NewPage) -> None:
 
     page = new_page(viewport={"width": 1280, "height": 1000})
     open_mesh_page(page)
-    page.set_input_files("#mesh-file", files=[
-        {"name": "ant.obj", "mimeType": "text/plain", "buffer": problem_mesh()}])
+    page.set_input_files(
+        "#mesh-file",
+        files=[{"name": "ant.obj", "mimeType": "text/plain", "buffer": problem_mesh()}],
+    )
     wait_for_report(page)
     wait_for_view(page)
     page.evaluate("() => window.scrollTo(0, 0)")

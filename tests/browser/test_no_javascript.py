@@ -74,7 +74,8 @@ def test_typo_is_named_beside_the_field_and_kept(no_js_page: Page, console: Cons
     expect(page.locator("#bx")).to_have_value("1..2")
     expect(page.locator("#bx")).to_have_attribute("aria-invalid", "true")
     expect(page.locator('[data-error-for="cz"]')).to_have_text(
-        "cz is empty; enter a decimal number such as 1.5.")
+        "cz is empty; enter a decimal number such as 1.5."
+    )
     expect(page.locator("#cz")).to_have_attribute("aria-invalid", "true")
     expect(page.locator("#ax")).not_to_have_attribute("aria-invalid", "true")
     expect(cell(page, "invalid")).to_have_text("Fix the highlighted fields to see the normal.")

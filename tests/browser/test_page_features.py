@@ -106,8 +106,9 @@ def test_3d_view_draws_the_normal_and_follows_the_swap(page: Page) -> None:
 
     # The gl3d bundle did not replace the page's Plotly: the bar chart still redraws.
     assert page.evaluate("() => window.Plotly === window.__basicPlotly")
-    assert not page.evaluate(
-        "() => 'scatter3d' in window.Plotly.PlotSchema.get().traces"), "window.Plotly is gl3d"
+    assert not page.evaluate("() => 'scatter3d' in window.Plotly.PlotSchema.get().traces"), (
+        "window.Plotly is gl3d"
+    )
     fill_triangle(page, *RIGHT)  # swap still on: n = (0, 0, -1)
     wait_for_chart_y(page, [0, 0, -1, 1, 0.5])
     wait_for_arrow(page, [0, 0, -1], "Front: A → C → B counter-clockwise")
@@ -128,9 +129,11 @@ def test_worked_steps_show_the_users_numbers_and_follow_live_edits(page: Page) -
     open_calculator(page, triangle_query(("1", "0", "0"), ("0", "2", "0"), ("0", "0", "3")))
     mark_window(page)
     expect(step(page, "cross")).to_contain_text(
-        "n_x = u_y·v_z − u_z·v_y = (2)(3) − (0)(0) = 6 − 0 = 6")
+        "n_x = u_y·v_z − u_z·v_y = (2)(3) − (0)(0) = 6 − 0 = 6"
+    )
     expect(step(page, "cross")).to_contain_text(
-        "n_y = u_z·v_x − u_x·v_z = (0)(-1) − (-1)(3) = 0 − (-3) = 3")
+        "n_y = u_z·v_x − u_x·v_z = (0)(-1) − (-1)(3) = 0 − (-3) = 3"
+    )
     expect(step(page, "edges")).to_contain_text("u = (-1, 2, 0)")
     expect(step(page, "magnitude")).to_contain_text("sqrt(49) = 7")
     expect(step(page, "plane")).to_contain_text("6x + 3y + 2z = 6")
@@ -139,7 +142,8 @@ def test_worked_steps_show_the_users_numbers_and_follow_live_edits(page: Page) -
     # New points: the steps follow without a reload.
     fill_triangle(page, ("0", "0", "0"), ("2", "0", "0"), ("0", "5", "0"))
     expect(step(page, "cross")).to_contain_text(
-        "n_z = u_x·v_y − u_y·v_x = (2)(5) − (0)(0) = 10 − 0 = 10")
+        "n_z = u_x·v_y − u_y·v_x = (2)(5) − (0)(0) = 10 − 0 = 10"
+    )
     expect(step(page, "plane")).not_to_contain_text("6x + 3y + 2z = 6")
     expect(step(page, "area")).to_contain_text("area = |n| / 2 = 10 / 2 = 5")
     assert_not_reloaded(page)
@@ -147,7 +151,8 @@ def test_worked_steps_show_the_users_numbers_and_follow_live_edits(page: Page) -
     # Degenerate: the steps explain why there is no normal and no plane.
     fill_triangle(page, *COLLINEAR)
     expect(step(page, "cross")).to_contain_text(
-        "The three points lie on one line, so the triangle has no area and no normal direction.")
+        "The three points lie on one line, so the triangle has no area and no normal direction."
+    )
     expect(step(page, "unit")).to_contain_text("There is no unit normal")
     expect(step(page, "plane")).to_contain_text("There is no plane")
     expect(step(page, "plane").locator(".message.warn")).to_be_visible()
@@ -179,9 +184,7 @@ def api_payload(page: Page, query: str) -> dict:
     return answer.json()
 
 
-def test_snippets_copy_exactly_follow_live_edits_and_keep_open_sections(
-    new_page: NewPage
-) -> None:
+def test_snippets_copy_exactly_follow_live_edits_and_keep_open_sections(new_page: NewPage) -> None:
     page = new_page(**CLIPBOARD)
     query = triangle_query(("1", "0", "0"), ("0", "2", "0"), ("0", "0", "3"), swap=True)
     open_calculator(page, query)
@@ -233,8 +236,11 @@ PRESET_CHECKS = {
     "swapped": {"unit_normal": "(0, 0, -1)", "order": "order A, C, B"},
     "collinear": {"unit_normal": "none (degenerate triangle)", "normal": "(0, 0, 0)"},
     "sliver": {"unit_normal": "(0, 0, -1)", "normal": "(0, 0, -1.3552527156068805e-20)"},
-    "huge": {"magnitude": "out of range", "normal": "(0, 0, out of range)",
-             "unit_normal": "(0, 0, 1)"},
+    "huge": {
+        "magnitude": "out of range",
+        "normal": "(0, 0, out of range)",
+        "unit_normal": "(0, 0, 1)",
+    },
 }
 PRESET_PARAMS = {key: params for key, _, _, params in PRESETS}
 
@@ -293,8 +299,10 @@ def test_downloads_carry_the_pages_numbers(new_page: NewPage) -> None:
     api = api_payload(page, query)
     assert shown == api
     # The numbers in the table are the same doubles.
-    assert float(cell(page, "magnitude").locator(".num").get_attribute("data-num") or "") \
+    assert (
+        float(cell(page, "magnitude").locator(".num").get_attribute("data-num") or "")
         == api["magnitude"]
+    )
 
     button = page.locator('button[data-copy="result-json"]')
     expect(button).to_have_accessible_name("Copy as JSON")
@@ -321,7 +329,8 @@ def test_downloads_carry_the_pages_numbers(new_page: NewPage) -> None:
         **{f"{p}{axis}": api[p][i] for p in "uv" for i, axis in enumerate("xyz")},
         **{f"n{axis}": api["normal"][i] for i, axis in enumerate("xyz")},
         **{f"unit_{axis}": api["unit_normal"][i] for i, axis in enumerate("xyz")},
-        "magnitude": api["magnitude"], "area": api["area"],
+        "magnitude": api["magnitude"],
+        "area": api["area"],
     }
     for column, value in numbers.items():
         assert float(row[column]) == value, column
@@ -334,7 +343,8 @@ def test_downloads_carry_the_pages_numbers(new_page: NewPage) -> None:
     with page.expect_download() as info:
         page.locator("#download-json").click()
     assert json.loads(Path(info.value.path()).read_text()) == api_payload(
-        page, triangle_query(*RIGHT))
+        page, triangle_query(*RIGHT)
+    )
 
 
 # --- 6. Display precision ---------------------------------------------------------------------
@@ -367,8 +377,9 @@ def test_display_precision_rounds_the_text_only_and_persists(new_page: NewPage) 
     with page.expect_download() as info:
         page.locator("#download-json").click()
     saved = json.loads(Path(info.value.path()).read_text())
-    assert saved == api_payload(page, triangle_query(("0", "0", "0"), ("3", "0", "0"),
-                                                     ("0", "7", "1")))
+    assert saved == api_payload(
+        page, triangle_query(("0", "0", "0"), ("3", "0", "0"), ("0", "7", "1"))
+    )
     assert saved["unit_normal"][1] == -3 / math.sqrt(450)
     expect(unit).to_have_text("(0, -0.1414, 0.9899)")
 
@@ -379,13 +390,16 @@ def test_display_precision_rounds_the_text_only_and_persists(new_page: NewPage) 
 def check_phone_layout(page: Page, width: int) -> None:
     page.evaluate("() => window.scrollTo(0, document.documentElement.scrollHeight)")
     scroll_width, inner = page.evaluate(
-        "() => [document.documentElement.scrollWidth, window.innerWidth]")
+        "() => [document.documentElement.scrollWidth, window.innerWidth]"
+    )
     assert inner == width
     assert scroll_width <= width, f"the page scrolls sideways at {width}: {scroll_width}"
     too_wide = page.evaluate(
         """(width) => [...document.querySelectorAll('section, .card, pre, .math, .js-plotly-plot')]
               .filter((el) => el.getBoundingClientRect().right > width + 0.5)
-              .map((el) => el.id || el.className)""", width)
+              .map((el) => el.id || el.className)""",
+        width,
+    )
     assert not too_wide, (width, too_wide)
     for locator in (page.locator("a.preset"), page.locator("button.copy")):
         assert locator.count() >= 5
@@ -395,8 +409,12 @@ def check_phone_layout(page: Page, width: int) -> None:
 
 
 def test_phone_layout_has_no_sideways_scroll_and_big_targets(new_page: NewPage) -> None:
-    page = new_page(viewport={"width": 390, "height": 844}, device_scale_factor=2,
-                    is_mobile=True, has_touch=True)
+    page = new_page(
+        viewport={"width": 390, "height": 844},
+        device_scale_factor=2,
+        is_mobile=True,
+        has_touch=True,
+    )
     open_calculator(page)
     page.evaluate("() => document.querySelectorAll('#code details').forEach(d => d.open = true)")
     page.evaluate("() => window.scrollTo(0, document.documentElement.scrollHeight)")
@@ -442,6 +460,7 @@ def test_keyboard_reaches_the_controls_and_enter_loads_a_preset(page: Page) -> N
     assert page.evaluate(FOCUSED) == "preset:sliver"
     page.keyboard.press("Enter")
     check_preset(page, "sliver")
-    expect(page).to_have_url(query_pattern(*(
-        tuple(SLIVER[f"{p}{a}"] for a in "xyz") for p in "abc")))
+    expect(page).to_have_url(
+        query_pattern(*(tuple(SLIVER[f"{p}{a}"] for a in "xyz") for p in "abc"))
+    )
     assert_not_reloaded(page)

@@ -13,8 +13,12 @@ from tests.browser.helpers import cell
 pytestmark = pytest.mark.browser
 
 DOCS = ROOT / "docs"
-PHONE = {"viewport": {"width": 390, "height": 844}, "device_scale_factor": 2,
-         "is_mobile": True, "has_touch": True}
+PHONE = {
+    "viewport": {"width": 390, "height": 844},
+    "device_scale_factor": 2,
+    "is_mobile": True,
+    "has_touch": True,
+}
 #: Largest screenshot we are willing to commit.
 MAX_BYTES = 1_500_000
 README_ADDRESS = "http://127.0.0.1:8000"
@@ -50,9 +54,7 @@ def save(page: Page, name: str, base_url: str) -> Path:
 
 
 def no_horizontal_scroll(page: Page) -> tuple[int, int]:
-    return page.evaluate(
-        "() => [document.documentElement.scrollWidth, window.innerWidth]"
-    )
+    return page.evaluate("() => [document.documentElement.scrollWidth, window.innerWidth]")
 
 
 def test_desktop_screenshot(page: Page, base_url: str) -> None:

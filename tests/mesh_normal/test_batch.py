@@ -322,7 +322,7 @@ def test_wrong_shape_raises_value_error(shape: tuple[int, ...]) -> None:
 
 
 def test_ragged_input_raises_value_error() -> None:
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="shape"):
         triangle_normals([[[0, 0, 0], [1, 0, 0], [0, 1]]])
 
 

@@ -17,14 +17,14 @@ from mesh_normal.files import read_mesh
 from tests.app.mesh.test_api import CUBE, CUBE_ONE_FLIPPED, OPEN_BOX, TETRA
 
 
-@pytest.fixture()
+@pytest.fixture
 def cube(tmp_path: Path) -> Path:
     path = tmp_path / "cube.obj"
     path.write_text(CUBE)
     return path
 
 
-@pytest.fixture()
+@pytest.fixture
 def flipped(tmp_path: Path) -> Path:
     path = tmp_path / "flipped.obj"
     path.write_text(CUBE_ONE_FLIPPED)
@@ -38,8 +38,9 @@ def test_analyze_clean_mesh(cube: Path, capsys: pytest.CaptureFixture[str]) -> N
     assert "No problems found." in out
 
 
-def test_analyze_json_and_exit_code_for_errors(flipped: Path,
-                                               capsys: pytest.CaptureFixture[str]) -> None:
+def test_analyze_json_and_exit_code_for_errors(
+    flipped: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     assert main(["analyze", str(flipped), "--json"]) == 1
     report = json.loads(capsys.readouterr().out)
     assert report["winding_consistent"] is False
@@ -69,8 +70,9 @@ def test_normals_each_output(cube: Path, tmp_path: Path, suffix: str) -> None:
         trimesh = pytest.importorskip("trimesh")
         loaded = trimesh.load(out, process=False)
         np.testing.assert_array_equal(loaded.vertices, mesh.vertices)
-        np.testing.assert_allclose(loaded.metadata["_ply_raw"]["vertex"]["data"]["nx"],
-                                   expected[:, 0])
+        np.testing.assert_allclose(
+            loaded.metadata["_ply_raw"]["vertex"]["data"]["nx"], expected[:, 0]
+        )
 
 
 def test_face_normals_npy(tmp_path: Path) -> None:
@@ -82,22 +84,26 @@ def test_face_normals_npy(tmp_path: Path) -> None:
     np.testing.assert_array_equal(np.load(out), face_normals(mesh.vertices, mesh.faces).normals)
 
 
-def test_fix_writes_the_fixed_mesh(flipped: Path, tmp_path: Path,
-                                   capsys: pytest.CaptureFixture[str]) -> None:
+def test_fix_writes_the_fixed_mesh(
+    flipped: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     out = tmp_path / "fixed.ply"
     assert main(["fix", str(flipped), str(out)]) == 0
     assert "flipped 1 of 12 faces" in capsys.readouterr().out
     assert main(["analyze", str(out)]) == 0
 
 
-@pytest.mark.parametrize("argv, code, words", [
-    (["analyze", "missing.obj"], 3, "cannot read missing.obj"),
-    (["normals", "{cube}", "-o", "out.txt"], 2, "must end in"),
-    (["normals", "{cube}", "--kind", "corner", "-o", "out.ply"], 2, "corner normals"),
-    (["normals", "{cube}", "--crease-angle", "200", "-o", "o.npy"], 2, "between 0 and 180"),
-    (["fix", "{cube}", "out.off"], 2, "output format"),
-    (["fix", "{cube}", "/nonexistent-dir/out.ply"], 4, "cannot write"),
-])
+@pytest.mark.parametrize(
+    ("argv", "code", "words"),
+    [
+        (["analyze", "missing.obj"], 3, "cannot read missing.obj"),
+        (["normals", "{cube}", "-o", "out.txt"], 2, "must end in"),
+        (["normals", "{cube}", "--kind", "corner", "-o", "out.ply"], 2, "corner normals"),
+        (["normals", "{cube}", "--crease-angle", "200", "-o", "o.npy"], 2, "between 0 and 180"),
+        (["fix", "{cube}", "out.off"], 2, "output format"),
+        (["fix", "{cube}", "/nonexistent-dir/out.ply"], 4, "cannot write"),
+    ],
+)
 def test_failures_have_exit_codes_and_messages(
     cube: Path, capsys: pytest.CaptureFixture[str], argv: list[str], code: int, words: str
 ) -> None:
@@ -120,8 +126,9 @@ def test_usage_error_exit_code() -> None:
     assert stop.value.code == 2
 
 
-def test_progress_goes_to_stderr(cube: Path, tmp_path: Path,
-                                 capsys: pytest.CaptureFixture[str]) -> None:
+def test_progress_goes_to_stderr(
+    cube: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     out = tmp_path / "n.npy"
     assert main(["--progress", "normals", str(cube), "-o", str(out)]) == 0
     err = capsys.readouterr().err
@@ -131,8 +138,9 @@ def test_progress_goes_to_stderr(cube: Path, tmp_path: Path,
 def test_installed_entry_point(cube: Path) -> None:
     command = shutil.which("mesh-normal", path=str(Path(sys.executable).parent))
     assert command is not None, "the mesh-normal script is not installed in the venv"
-    result = subprocess.run([command, "analyze", str(cube)], capture_output=True, text=True,
-                            check=False)
+    result = subprocess.run(
+        [command, "analyze", str(cube)], capture_output=True, text=True, check=False
+    )
     assert result.returncode == 0, result.stderr
     assert "No problems found." in result.stdout
 
@@ -143,8 +151,9 @@ def test_fix_in_place_writes_through_a_temporary_file(flipped: Path) -> None:
     assert sorted(path.name for path in flipped.parent.iterdir()) == ["flipped.obj"]
 
 
-def test_fix_to_stl_beyond_float32_fails_cleanly(tmp_path: Path,
-                                                 capsys: pytest.CaptureFixture[str]) -> None:
+def test_fix_to_stl_beyond_float32_fails_cleanly(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     path = tmp_path / "big.obj"
     path.write_text("v 0 0 0\nv 1e300 0 0\nv 0 1e300 0\nf 1 2 3\n")
     assert main(["fix", str(path), str(tmp_path / "big.stl")]) == 4
@@ -159,5 +168,6 @@ def test_face_normals_ply_carries_them_per_face(cube: Path, tmp_path: Path) -> N
     mesh = read_mesh(CUBE.encode(), "cube.obj")
     np.testing.assert_array_equal(written.vertices, mesh.vertices)
     np.testing.assert_array_equal(written.faces, mesh.faces)
-    np.testing.assert_array_equal(written.file_face_normals,
-                                  face_normals(mesh.vertices, mesh.faces).normals)
+    np.testing.assert_array_equal(
+        written.file_face_normals, face_normals(mesh.vertices, mesh.faces).normals
+    )

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -41,8 +42,9 @@ def unit(*xyz: float) -> np.ndarray:
 
 
 def octahedron() -> tuple[np.ndarray, np.ndarray]:
-    vertices = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]],
-                        dtype=np.float64)
+    vertices = np.array(
+        [[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], dtype=np.float64
+    )
     faces = []
     for x in (0, 1):
         for y in (2, 3):
@@ -126,29 +128,33 @@ def test_reversing_every_face_negates_every_normal(name: str, weighting: str) ->
 
 
 # Degenerate faces: 0-4 are degenerate, 5-7 are valid but would fool an absolute tolerance.
-SLIVERS = np.array([
-    [0.0, 0.0, 0.0],  # 0
-    [1.0, 0.0, 0.0],  # 1
-    [0.5, 0.0, 0.0],  # 2: on the segment 0-1
-    [0.5, 1e-14, 0.0],  # 3: 1e-14 off it (largest angle's sine about 4e-14)
-    [0.0, 0.0, 0.0],  # 4: same point as 0, another index
-    [0.5, 1e-9, 0.0],  # 5: 1e-9 off the segment: flat, yet a clear normal
-    [1.0, 1e-13, 0.0],  # 6: a needle: 1e-13 angle at 0, right angle at 1
-    [1e-7, 0.0, 0.0],  # 7
-    [0.0, 1e-7, 0.0],  # 8
-    [7.0, 7.0, 7.0],  # 9: used only by a degenerate face
-    [9.0, 9.0, 9.0],  # 10: unused
-])
-SLIVER_FACES = np.array([
-    [0, 0, 1],  # repeated index
-    [0, 1, 2],  # collinear
-    [0, 1, 3],  # numerically collinear
-    [4, 1, 0],  # coincident points
-    [9, 9, 9],  # one point
-    [0, 1, 5],  # flat sliver, above the bound
-    [0, 1, 6],  # needle
-    [0, 7, 8],  # right triangle with 1e-7 legs
-])
+SLIVERS = np.array(
+    [
+        [0.0, 0.0, 0.0],  # 0
+        [1.0, 0.0, 0.0],  # 1
+        [0.5, 0.0, 0.0],  # 2: on the segment 0-1
+        [0.5, 1e-14, 0.0],  # 3: 1e-14 off it (largest angle's sine about 4e-14)
+        [0.0, 0.0, 0.0],  # 4: same point as 0, another index
+        [0.5, 1e-9, 0.0],  # 5: 1e-9 off the segment: flat, yet a clear normal
+        [1.0, 1e-13, 0.0],  # 6: a needle: 1e-13 angle at 0, right angle at 1
+        [1e-7, 0.0, 0.0],  # 7
+        [0.0, 1e-7, 0.0],  # 8
+        [7.0, 7.0, 7.0],  # 9: used only by a degenerate face
+        [9.0, 9.0, 9.0],  # 10: unused
+    ]
+)
+SLIVER_FACES = np.array(
+    [
+        [0, 0, 1],  # repeated index
+        [0, 1, 2],  # collinear
+        [0, 1, 3],  # numerically collinear
+        [4, 1, 0],  # coincident points
+        [9, 9, 9],  # one point
+        [0, 1, 5],  # flat sliver, above the bound
+        [0, 1, 6],  # needle
+        [0, 7, 8],  # right triangle with 1e-7 legs
+    ]
+)
 SLIVER_DEGENERATE = [True, True, True, True, True, False, False, False]
 
 
@@ -208,8 +214,10 @@ def test_the_degenerate_verdict_does_not_depend_on_the_unit(factor: float) -> No
     if math.frexp(factor)[0] == 0.5:  # a power of two: every step is exact, so the same bits
         assert np.array_equal(scaled.normals, base.normals)
     for weighting in WEIGHTINGS:
-        a, b = vertex_normals(vertices, faces, weighting), vertex_normals(vertices * factor, faces,
-                                                                           weighting)
+        a, b = (
+            vertex_normals(vertices, faces, weighting),
+            vertex_normals(vertices * factor, faces, weighting),
+        )
         assert np.array_equal(a.missing, b.missing)
         assert np.allclose(a.normals, b.normals, atol=1e-12, rtol=0)
 
@@ -224,11 +232,13 @@ def test_areas_beyond_the_double_range_are_infinite_not_nan() -> None:
 
 def random_rotation(quaternion: tuple[float, float, float, float]) -> np.ndarray:
     w, x, y, z = np.array(quaternion) / np.linalg.norm(quaternion)
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-    ])
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
 
 
 quaternions = st.tuples(*[st.floats(-1, 1)] * 4).filter(lambda q: np.linalg.norm(q) > 0.1)
@@ -240,19 +250,28 @@ def test_rotating_the_mesh_rotates_its_normals(quaternion: tuple[float, ...]) ->
     rotation = random_rotation(quaternion)
     vertices, faces = load("nut.ply")
     turned = vertices @ rotation.T
-    assert np.allclose(face_normals(turned, faces).normals,
-                       face_normals(vertices, faces).normals @ rotation.T, atol=1e-12, rtol=0)
+    assert np.allclose(
+        face_normals(turned, faces).normals,
+        face_normals(vertices, faces).normals @ rotation.T,
+        atol=1e-12,
+        rtol=0,
+    )
     for weighting in ("area", "angle"):
-        assert np.allclose(vertex_normals(turned, faces, weighting).normals,
-                           vertex_normals(vertices, faces, weighting).normals @ rotation.T,
-                           atol=1e-12, rtol=0)
+        assert np.allclose(
+            vertex_normals(turned, faces, weighting).normals,
+            vertex_normals(vertices, faces, weighting).normals @ rotation.T,
+            atol=1e-12,
+            rtol=0,
+        )
 
 
-small_meshes = st.integers(1, 12).flatmap(lambda n: st.tuples(
-    st.lists(st.tuples(*[st.integers(-2, 2)] * 3), min_size=n, max_size=n),
-    st.lists(st.tuples(*[st.integers(0, n - 1)] * 3), min_size=0, max_size=16),
-    st.sampled_from([1.0, 1e-9, 3e7]),
-))
+small_meshes = st.integers(1, 12).flatmap(
+    lambda n: st.tuples(
+        st.lists(st.tuples(*[st.integers(-2, 2)] * 3), min_size=n, max_size=n),
+        st.lists(st.tuples(*[st.integers(0, n - 1)] * 3), min_size=0, max_size=16),
+        st.sampled_from([1.0, 1e-9, 3e7]),
+    )
+)
 
 
 @settings(max_examples=200, deadline=None)
@@ -290,11 +309,15 @@ def test_tetrahedron_vertex_normals_by_hand() -> None:
     expected = {
         "angle": [unit(-1, -1, -1), unit(*(quarter * np.array([0, -1, -1]) + third * slanted))],
         "uniform": [unit(-1, -1, -1), unit(*(np.array([0, -1, -1]) + slanted))],
-        "area": [unit(-1, -1, -1), unit(*(0.5 * np.array([0, -1, -1]) + 0.5 * np.sqrt(3)
-                                          * slanted))],
+        "area": [
+            unit(-1, -1, -1),
+            unit(*(0.5 * np.array([0, -1, -1]) + 0.5 * np.sqrt(3) * slanted)),
+        ],
         # sin(90)/(1*1) at vertex 0; sin(45)/(1*sqrt2) = 1/2 and sin(60)/(sqrt2*sqrt2) at 1.
-        "max": [unit(-1, -1, -1), unit(*(0.5 * np.array([0, -1, -1])
-                                         + math.sin(third) / 2 * slanted))],
+        "max": [
+            unit(-1, -1, -1),
+            unit(*(0.5 * np.array([0, -1, -1]) + math.sin(third) / 2 * slanted)),
+        ],
     }
     for weighting, (first, second) in expected.items():
         r = vertex_normals(TETRAHEDRON, TETRAHEDRON_FACES, weighting)
@@ -339,8 +362,9 @@ def test_angle_and_max_weighting_ignore_how_the_cube_is_triangulated() -> None:
     vertices, faces = load("cube.obj")
     diagonal = vertices / np.linalg.norm(vertices, axis=1, keepdims=True)
     for weighting in ("angle", "max"):
-        assert np.allclose(vertex_normals(vertices, faces, weighting).normals, diagonal,
-                           atol=1e-15, rtol=0)
+        assert np.allclose(
+            vertex_normals(vertices, faces, weighting).normals, diagonal, atol=1e-15, rtol=0
+        )
     # A corner with two triangles of one side counts that side twice by faces or area.
     assert not np.allclose(vertex_normals(vertices, faces, "uniform").normals, diagonal)
 
@@ -373,16 +397,18 @@ def test_face_normals_match_trimesh(name: str) -> None:
 
 
 @pytest.mark.parametrize("name", SAMPLES)
-def test_vertex_normals_match_trimesh(name: str, caplog: pytest.LogCaptureFixture) -> None:
+def test_vertex_normals_match_trimesh(name: str) -> None:
     vertices, faces = load(name)
     theirs = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
     # trimesh's vertex_normals weigh by corner angle (geometry.weighted_vertex_normals); its
     # mean_vertex_normals sum what they are given: unit normals (uniform) or crosses (area).
     angle = theirs.vertex_normals
     uniform = trimesh.util.unitize(
-        trimesh.geometry.mean_vertex_normals(len(vertices), faces, theirs.face_normals))
+        trimesh.geometry.mean_vertex_normals(len(vertices), faces, theirs.face_normals)
+    )
     area = trimesh.util.unitize(
-        trimesh.geometry.mean_vertex_normals(len(vertices), faces, theirs.triangles_cross))
+        trimesh.geometry.mean_vertex_normals(len(vertices), faces, theirs.triangles_cross)
+    )
     for weighting, expected in (("angle", angle), ("uniform", uniform), ("area", area)):
         ours = vertex_normals(vertices, faces, weighting)
         assert not ours.missing.any()
@@ -412,8 +438,14 @@ def test_cube_corners_take_the_vertex_normal_from_90_degrees() -> None:
 def test_a_roof_is_smooth_below_its_crease_and_sharp_above() -> None:
     # Two faces sharing the ridge 0-1, their normals 20 degrees apart.
     tilt = math.radians(10)
-    vertices = np.array([[0, 0, 0], [1, 0, 0], [0, -math.cos(tilt), -math.sin(tilt)],
-                         [0, math.cos(tilt), -math.sin(tilt)]])
+    vertices = np.array(
+        [
+            [0, 0, 0],
+            [1, 0, 0],
+            [0, -math.cos(tilt), -math.sin(tilt)],
+            [0, math.cos(tilt), -math.sin(tilt)],
+        ]
+    )
     faces = np.array([[0, 2, 1], [0, 1, 3]])
     flat = face_normals(vertices, faces).normals
     assert math.isclose(math.degrees(math.acos(flat[0] @ flat[1])), 20.0)
@@ -424,8 +456,9 @@ def test_a_roof_is_smooth_below_its_crease_and_sharp_above() -> None:
     assert np.allclose(sharp, np.repeat(flat[:, None], 3, axis=1), atol=1e-15, rtol=0)
 
 
-def reference_corner_normals(vertices: np.ndarray, faces: np.ndarray,
-                             crease: float) -> tuple[np.ndarray, float]:
+def reference_corner_normals(
+    vertices: np.ndarray, faces: np.ndarray, crease: float
+) -> tuple[np.ndarray, float]:
     """Angle-weighted corner normals by the documented rule, one corner at a time.
 
     Also returns how close any pair of faces at a vertex came to the crease (in cosine).
@@ -463,8 +496,9 @@ def test_corner_normals_follow_the_documented_rule(crease: float) -> None:
 
 
 @pytest.mark.parametrize("chunk", [40, 4])
-def test_corner_normals_in_small_chunks_are_the_same(chunk: int,
-                                                      monkeypatch: pytest.MonkeyPatch) -> None:
+def test_corner_normals_in_small_chunks_are_the_same(
+    chunk: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
     vertices, faces = load("ant.ply")
     whole = corner_normals(vertices, faces, 5.0)
     # 40 pairs: one valence-6 vertex at a time, and valence 7 and up a few rows at a time;
@@ -478,8 +512,9 @@ def test_corner_normals_in_small_chunks_are_the_same(chunk: int,
 def test_smooth_sample_corners_are_their_vertex_normals() -> None:
     vertices, faces = load("sphere.ply")
     r = corner_normals(vertices, faces, 60.0, "area")
-    assert np.allclose(r.normals, vertex_normals(vertices, faces, "area").normals[faces],
-                       atol=1e-15, rtol=0)
+    assert np.allclose(
+        r.normals, vertex_normals(vertices, faces, "area").normals[faces], atol=1e-15, rtol=0
+    )
 
 
 # --- grouping and gathering ---------------------------------------------------------------------
@@ -515,25 +550,31 @@ def test_take_rows_is_fancy_indexing() -> None:
         (np.zeros((3, 3), dtype=bool), [[0, 1, 2]], "vertices must hold real numbers, not bool"),
         (np.zeros((3, 3), dtype=complex), [[0, 1, 2]], "real numbers, not complex128"),
         ([["a", "b", "c"]] * 3, [[0, 1, 2]], "vertices must hold real numbers"),
-        ([[0, 0, 0], [1, 0, np.nan], [0, 1, 0]], [[0, 1, 2]],
-         "vertices[1] has a coordinate that is not a finite number"),
+        (
+            [[0, 0, 0], [1, 0, np.nan], [0, 1, 0]],
+            [[0, 1, 2]],
+            "vertices[1] has a coordinate that is not a finite number",
+        ),
         ([[0, 0, 0], [1, 0, 0], [0, np.inf, 0]], [[0, 1, 2]], "vertices[2]"),
         (TETRAHEDRON, [[0.0, 1.0, 2.0]], "faces must hold integer vertex indices, not float64"),
         (TETRAHEDRON, [[0, 1, 2, 3]], "faces must have shape (m, 3), not (1, 4)"),
         (TETRAHEDRON, [0, 1, 2], "faces must have shape (m, 3), not (3,)"),
         (TETRAHEDRON, [[0, 1, 2], [3, -1, 2]], "faces[1] has a negative vertex index, -1"),
-        (TETRAHEDRON, [[0, 1, 2], [0, 1, 3], [0, 4, 1]],
-         "faces[2] refers to vertex 4, but there are only 4 vertices (indices 0 to 3)"),
+        (
+            TETRAHEDRON,
+            [[0, 1, 2], [0, 1, 3], [0, 4, 1]],
+            "faces[2] refers to vertex 4, but there are only 4 vertices (indices 0 to 3)",
+        ),
         (np.empty((0, 3)), [[0, 1, 2]], "faces[0] refers to vertex 0, but there are no vertices"),
         (TETRAHEDRON, np.array([[0, 1, 2**40]], dtype=np.uint64), "refers to vertex 1099511627776"),
     ],
 )
-def test_bad_input_is_refused_with_a_clear_message(vertices: object, faces: object,
-                                                   words: str) -> None:
+def test_bad_input_is_refused_with_a_clear_message(
+    vertices: object, faces: object, words: str
+) -> None:
     for call in (face_normals, vertex_normals, corner_normals, check_mesh):
-        with pytest.raises(ValueError) as error:
+        with pytest.raises(ValueError, match=re.escape(words)) as error:
             call(vertices, faces)  # type: ignore[operator]
-        assert words in str(error.value)
         assert str(error.value).endswith(".")
 
 
@@ -554,13 +595,16 @@ def test_inputs_are_converted_and_not_modified() -> None:
     before = vertices.copy(), faces.copy()
     points, indices = check_mesh(vertices, faces)
     assert points.dtype == np.float64 and indices.dtype == np.intp
-    assert np.allclose(face_normals(vertices, faces).normals,
-                       face_normals(TETRAHEDRON, TETRAHEDRON_FACES).normals)
+    assert np.allclose(
+        face_normals(vertices, faces).normals, face_normals(TETRAHEDRON, TETRAHEDRON_FACES).normals
+    )
     assert vertex_normals(vertices.tolist(), faces.tolist()).normals.shape == (4, 3)
     assert np.array_equal(vertices, before[0]) and np.array_equal(faces, before[1])
     fortran = np.asfortranarray(TETRAHEDRON)
-    assert np.array_equal(face_normals(fortran, np.asfortranarray(TETRAHEDRON_FACES)).normals,
-                          face_normals(TETRAHEDRON, TETRAHEDRON_FACES).normals)
+    assert np.array_equal(
+        face_normals(fortran, np.asfortranarray(TETRAHEDRON_FACES)).normals,
+        face_normals(TETRAHEDRON, TETRAHEDRON_FACES).normals,
+    )
 
 
 def test_an_empty_mesh_gives_empty_results() -> None:

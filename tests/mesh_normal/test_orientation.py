@@ -92,8 +92,15 @@ def test_tetrahedron_outward() -> None:
     assert r.volume == pytest.approx(1 / 6, rel=1e-15)
     (component,) = r.components
     assert component == ComponentOrientation(
-        index=0, faces=4, closed=True, orientable=True, method="volume", flipped=0,
-        volume=component.volume, orientation="outward")
+        index=0,
+        faces=4,
+        closed=True,
+        orientable=True,
+        method="volume",
+        flipped=0,
+        volume=component.volume,
+        orientation="outward",
+    )
     assert component.volume == pytest.approx(1 / 6, rel=1e-15)
     assert_same_topology(r.topology, t)
 
@@ -148,8 +155,7 @@ def test_open_box_is_decided_by_the_heuristic() -> None:
         assert r.flipped.sum() == flips
         assert r.volume is None
         (component,) = r.components
-        assert (component.closed, component.method, component.volume) == (False, "heuristic",
-                                                                          None)
+        assert (component.closed, component.method, component.volume) == (False, "heuristic", None)
         assert np.array_equal(np.sort(r.faces, axis=1), np.sort(box, axis=1))
         assert orient(CUBE, r.faces).orientation == "outward"
 
@@ -226,7 +232,7 @@ def test_nonmanifold_fin() -> None:
 
 
 def test_two_cubes_sharing_an_edge_are_oriented_each_on_its_own() -> None:
-    vertices = np.concatenate([CUBE, CUBE + [1, 1, 0]])
+    vertices = np.concatenate([CUBE, CUBE + np.array([1, 1, 0])])
     faces = np.concatenate([CUBE_FACES, CUBE_FACES + 8])
     # Weld the second cube's edge (0, 0)-(0, 0, 1) onto the first cube's (1, 1)-(1, 1, 1).
     faces[faces == 8], faces[faces == 12] = 3, 7
@@ -327,7 +333,7 @@ def test_the_slower_sorts_agree(monkeypatch: pytest.MonkeyPatch, limit: int) -> 
 
 
 def variants(name: str) -> list[tuple[str, np.ndarray]]:
-    vertices, faces = load(name)
+    _vertices, faces = load(name)
     rng = np.random.default_rng(len(faces))
     holes = np.delete(faces, rng.choice(len(faces), 5, replace=False), axis=0)
     flipped = reversed_rows(faces, rng.choice(len(faces), 7, replace=False))
@@ -340,8 +346,9 @@ def edge_connected_components(mesh: trimesh.Trimesh) -> int:
     m = len(mesh.faces)
     edge = mesh.edges_unique_inverse + m
     face = np.repeat(np.arange(m), 3)
-    graph = scipy.sparse.coo_matrix((np.ones(3 * m), (face, edge)),
-                                    shape=(m + len(mesh.edges_unique),) * 2)
+    graph = scipy.sparse.coo_matrix(
+        (np.ones(3 * m), (face, edge)), shape=(m + len(mesh.edges_unique),) * 2
+    )
     _, labels = scipy.sparse.csgraph.connected_components(graph, directed=False)
     return len(np.unique(labels[:m]))
 
@@ -359,8 +366,9 @@ def test_against_trimesh(name: str) -> None:
         assert t.winding_consistent == mesh.is_winding_consistent, label
         assert t.components == edge_connected_components(mesh), label
         if not t.nonmanifold_edges:  # trimesh's face adjacency skips non-manifold edges
-            pieces = trimesh.graph.connected_components(mesh.face_adjacency,
-                                                        nodes=np.arange(len(faces)))
+            pieces = trimesh.graph.connected_components(
+                mesh.face_adjacency, nodes=np.arange(len(faces))
+            )
             assert t.components == len(pieces), label
         r = orient(vertices, faces)
         assert (r.volume is None) == (not t.watertight or not t.winding_consistent), label
@@ -411,8 +419,7 @@ def test_rigid_motions_and_scaling_change_no_verdict(
     assert_same_topology(before.topology, after.topology)
     assert np.array_equal(before.flipped, after.flipped)
     assert before.orientation == after.orientation
-    assert after.components.volume == pytest.approx(before.components.volume * scale**3,
-                                                    rel=1e-9)
+    assert after.components.volume == pytest.approx(before.components.volume * scale**3, rel=1e-9)
 
 
 @pytest.mark.parametrize("name", SAMPLES)

@@ -1,4 +1,4 @@
-"""The library stays free of web imports: no fastapi, starlette, jinja2 or plotly in mesh_normal/."""
+"""The library stays free of web imports: no fastapi, starlette, jinja2 or plotly."""
 
 from __future__ import annotations
 

@@ -36,7 +36,14 @@ def test_parallel_kernels_from_several_threads_under_the_workqueue_layer() -> No
     # container) aborts the process on concurrent launches unless the kernels are serialised.
     root = ROOT
     environment = {**os.environ, "NUMBA_THREADING_LAYER": "workqueue"}
-    result = subprocess.run([sys.executable, "-c", SCRIPT], cwd=root, env=environment,
-                            capture_output=True, text=True, timeout=300, check=False)
+    result = subprocess.run(
+        [sys.executable, "-c", SCRIPT],
+        cwd=root,
+        env=environment,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
     assert result.returncode == 0, result.stderr[-2000:]
     assert result.stdout.strip() == "done"

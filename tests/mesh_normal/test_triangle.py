@@ -529,7 +529,7 @@ def test_invalid_input_raises_value_error(a, b, c, match: str, swap: bool) -> No
 
 
 def test_integer_too_large_for_a_double_raises_value_error() -> None:
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="ax must be a finite number"):
         triangle_normal((10**400, 0, 0), (1, 0, 0), (0, 1, 0))
 
 

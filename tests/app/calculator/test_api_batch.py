@@ -93,10 +93,18 @@ def test_exact_rows_are_exact(client) -> None:  # type: ignore[no-untyped-def]
     results = post_batch(client, MIXED)
     sliver, tiny, huge = results[4], results[5], results[6]
     assert [float.hex(x) for x in sliver["normal"]] == [
-        float.hex(0.0), float.hex(0.0), float.hex(2**-53 - 2**-105)]
+        float.hex(0.0),
+        float.hex(0.0),
+        float.hex(2**-53 - 2**-105),
+    ]
     assert sliver["unit_normal"] == [0.0, 0.0, 1.0]
-    assert tiny == {"normal": [0.0, 0.0, None], "unit_normal": [0.0, 0.0, 1.0],
-                    "magnitude": None, "area": None, "degenerate": False}
+    assert tiny == {
+        "normal": [0.0, 0.0, None],
+        "unit_normal": [0.0, 0.0, 1.0],
+        "magnitude": None,
+        "area": None,
+        "degenerate": False,
+    }
     assert huge == tiny
     assert results[2]["degenerate"] is True and results[2]["unit_normal"] is None
     assert results[3]["degenerate"] is True and results[3]["normal"] == [0.0, 0.0, 0.0]

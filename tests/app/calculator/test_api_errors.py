@@ -92,8 +92,14 @@ def test_unknown_field_named_like_a_location(client, name: str) -> None:  # type
 
 @pytest.mark.parametrize(
     "text",
-    [b'{"a": [0, 0, 0], "b": [1, 0, 0], "c": [0, 1, 0]', b"{'a': [0, 0, 0]}", b"{", b"[1, 2,]",
-     b'{"a": [0, 0, 0],}', b"\xff\xfe"],
+    [
+        b'{"a": [0, 0, 0], "b": [1, 0, 0], "c": [0, 1, 0]',
+        b"{'a': [0, 0, 0]}",
+        b"{",
+        b"[1, 2,]",
+        b'{"a": [0, 0, 0],}',
+        b"\xff\xfe",
+    ],
 )
 def test_malformed_json_is_400(client, text: bytes) -> None:  # type: ignore[no-untyped-def]
     response = client.post("/api/normal", content=text, headers=JSON)
@@ -102,9 +108,15 @@ def test_malformed_json_is_400(client, text: bytes) -> None:  # type: ignore[no-
 
 @pytest.mark.parametrize(
     ("text", "words"),
-    [(b"[1, 2]", ["JSON object", "list of 2"]), (b'"x"', ["JSON object", "string"]),
-     (b"1", ["JSON object"]), (b"null", ["JSON object", "null"]),
-     (b"true", ["JSON object"]), (b"", ["JSON object"]), (b"  \n", ["JSON object"])],
+    [
+        (b"[1, 2]", ["JSON object", "list of 2"]),
+        (b'"x"', ["JSON object", "string"]),
+        (b"1", ["JSON object"]),
+        (b"null", ["JSON object", "null"]),
+        (b"true", ["JSON object"]),
+        (b"", ["JSON object"]),
+        (b"  \n", ["JSON object"]),
+    ],
 )
 def test_body_that_is_not_an_object(client, text: bytes, words: list[str]) -> None:  # type: ignore[no-untyped-def]
     response = client.post("/api/normal", content=text, headers=JSON)
@@ -157,7 +169,7 @@ def test_oversized_body_of_nonsense(client) -> None:  # type: ignore[no-untyped-
 def chunks(total: int, size: int = 4096):  # type: ignore[no-untyped-def]
     body = padded(total)
     for start in range(0, total, size):
-        yield body[start:start + size]
+        yield body[start : start + size]
 
 
 def test_oversized_chunked_body(client) -> None:  # type: ignore[no-untyped-def]
@@ -245,12 +257,25 @@ def test_oversized_batch_body(client) -> None:  # type: ignore[no-untyped-def]
 # --- GET /api/normal and /api/chart: query strings ---------------------------------------------
 
 BAD_TEXT = [
-    ("abc", "decimal number"), ("", "empty"), ("   ", "empty"), ("1e999", "double range"),
-    ("-1e999", "double range"), ("0x10", "decimal number"), ("nan", "decimal number"),
-    ("NaN", "decimal number"), ("inf", "decimal number"), ("-inf", "decimal number"),
-    ("Infinity", "decimal number"), ("1,5", "decimal number"), ("1_000", "decimal number"),
-    ("1e", "decimal number"), ("e5", "decimal number"), ("--1", "decimal number"),
-    ("1.2.3", "decimal number"), ("1" * 65, "longer than"), ("<script>", "decimal number"),
+    ("abc", "decimal number"),
+    ("", "empty"),
+    ("   ", "empty"),
+    ("1e999", "double range"),
+    ("-1e999", "double range"),
+    ("0x10", "decimal number"),
+    ("nan", "decimal number"),
+    ("NaN", "decimal number"),
+    ("inf", "decimal number"),
+    ("-inf", "decimal number"),
+    ("Infinity", "decimal number"),
+    ("1,5", "decimal number"),
+    ("1_000", "decimal number"),
+    ("1e", "decimal number"),
+    ("e5", "decimal number"),
+    ("--1", "decimal number"),
+    ("1.2.3", "decimal number"),
+    ("1" * 65, "longer than"),
+    ("<script>", "decimal number"),
 ]
 
 
@@ -299,8 +324,15 @@ def test_unknown_api_path_is_json_404(client) -> None:  # type: ignore[no-untype
     assert_error(client.get("/api/nope"), 404, None, "no page")
 
 
-@pytest.mark.parametrize(("method", "path"), [("DELETE", "/api/normal"), ("PUT", "/api/normals"),
-                                              ("POST", "/api/chart"), ("GET", "/api/normals")])
+@pytest.mark.parametrize(
+    ("method", "path"),
+    [
+        ("DELETE", "/api/normal"),
+        ("PUT", "/api/normals"),
+        ("POST", "/api/chart"),
+        ("GET", "/api/normals"),
+    ],
+)
 def test_wrong_method_is_json_405(client, method: str, path: str) -> None:  # type: ignore[no-untyped-def]
     response = client.request(method, path)
     assert_error(response, 405, None, "method")

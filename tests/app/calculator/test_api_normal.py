@@ -11,8 +11,19 @@ from hypothesis import strategies as st
 
 from tests.conftest import EXAMPLE_QUERY
 
-RESULT_KEYS = {"a", "b", "c", "order", "u", "v", "normal", "magnitude", "unit_normal", "area",
-               "degenerate"}
+RESULT_KEYS = {
+    "a",
+    "b",
+    "c",
+    "order",
+    "u",
+    "v",
+    "normal",
+    "magnitude",
+    "unit_normal",
+    "area",
+    "degenerate",
+}
 
 #: A sliver a naive float cross product calls flat: n_z = 2**-53 - 2**-105 exactly.
 SLIVER = ([0.0, 0.0, 0.0], [1 + 2**-52, 1.0, 0.0], [1.0, 1 - 2**-53, 0.0])
@@ -118,8 +129,9 @@ def test_sliver_is_exact_over_the_query_string(client) -> None:  # type: ignore[
 
 
 def test_tiny_triangle_keeps_its_direction(client) -> None:  # type: ignore[no-untyped-def]
-    response = client.post("/api/normal", json={"a": [0, 0, 0], "b": [1e-200, 0, 0],
-                                                "c": [0, 1e-200, 0]})
+    response = client.post(
+        "/api/normal", json={"a": [0, 0, 0], "b": [1e-200, 0, 0], "c": [0, 1e-200, 0]}
+    )
     assert response.status_code == 200
     assert "Infinity" not in response.text and "NaN" not in response.text
     body = strict_json(response.text)
@@ -133,8 +145,9 @@ def test_tiny_triangle_keeps_its_direction(client) -> None:  # type: ignore[no-u
 
 
 def test_huge_triangle_is_null_with_a_message(client) -> None:  # type: ignore[no-untyped-def]
-    response = client.post("/api/normal", json={"a": [0, 0, 0], "b": [1e200, 0, 0],
-                                                "c": [0, 1e200, 0]})
+    response = client.post(
+        "/api/normal", json={"a": [0, 0, 0], "b": [1e200, 0, 0], "c": [0, 1e200, 0]}
+    )
     assert response.status_code == 200
     assert "Infinity" not in response.text and "NaN" not in response.text
     body = strict_json(response.text)
@@ -205,9 +218,19 @@ def test_swap_off(client, value: str | None) -> None:  # type: ignore[no-untyped
 
 @pytest.mark.parametrize(
     ("text", "value"),
-    [("1.5", 1.5), ("-2e3", -2000.0), (".5", 0.5), ("5.", 5.0), ("+3", 3.0), ("1E2", 100.0),
-     ("  7 ", 7.0), ("-0", -0.0), ("0.1", 0.1), ("1e-400", 0.0), ("1.7976931348623157e308",
-                                                                    1.7976931348623157e308)],
+    [
+        ("1.5", 1.5),
+        ("-2e3", -2000.0),
+        (".5", 0.5),
+        ("5.", 5.0),
+        ("+3", 3.0),
+        ("1E2", 100.0),
+        ("  7 ", 7.0),
+        ("-0", -0.0),
+        ("0.1", 0.1),
+        ("1e-400", 0.0),
+        ("1.7976931348623157e308", 1.7976931348623157e308),
+    ],
 )
 def test_decimal_text_in_the_query(client, text: str, value: float) -> None:  # type: ignore[no-untyped-def]
     response = client.get("/api/normal", params={**EXAMPLE_QUERY, "ay": text})
@@ -219,8 +242,9 @@ finite = st.floats(allow_nan=False, allow_infinity=False)
 points = st.lists(finite, min_size=3, max_size=3)
 
 
-@settings(max_examples=40, deadline=None,
-          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
 @given(a=points, b=points, c=points, swap=st.booleans())
 def test_any_finite_triangle(client, a, b, c, swap) -> None:  # type: ignore[no-untyped-def]
     """Any doubles: 200, valid JSON without NaN or Infinity, nulls explained, GET == POST."""

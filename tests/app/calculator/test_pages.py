@@ -26,8 +26,9 @@ def vec(values) -> str:  # type: ignore[no-untyped-def]
 
 def figure_data(html: Page):  # type: ignore[no-untyped-def]
     """The parsed JSON of the page's one <script type="application/json" id="figure-data">."""
-    found = [(attrs, content) for attrs, content in html.scripts
-             if attrs.get("id") == "figure-data"]
+    found = [
+        (attrs, content) for attrs, content in html.scripts if attrs.get("id") == "figure-data"
+    ]
     assert len(found) == 1, found
     attrs, content = found[0]
     assert attrs.get("type") == "application/json"
@@ -117,8 +118,12 @@ def test_degenerate_triangle_says_so(client) -> None:  # type: ignore[no-untyped
 
 @pytest.mark.parametrize(
     ("name", "typed", "words"),
-    [("ax", "abc", "decimal number"), ("by", "", "empty"), ("cz", "1e999", "double range"),
-     ("bx", "0x10", "decimal number")],
+    [
+        ("ax", "abc", "decimal number"),
+        ("by", "", "empty"),
+        ("cz", "1e999", "double range"),
+        ("bx", "0x10", "decimal number"),
+    ],
 )
 def test_bad_value_is_shown_beside_its_field(client, name, typed, words) -> None:  # type: ignore[no-untyped-def]
     query = {**EXAMPLE_QUERY, name: typed}
@@ -161,8 +166,9 @@ def test_typed_markup_is_escaped(client) -> None:  # type: ignore[no-untyped-def
     assert html.one("input", name="ay")["value"] == evil
     assert "<script>alert(1)" not in response.text
     assert not html.find("img", src="x")
-    assert all(attrs.get("src") or attrs.get("type") == "application/json"
-               for attrs, _ in html.scripts)
+    assert all(
+        attrs.get("src") or attrs.get("type") == "application/json" for attrs, _ in html.scripts
+    )
 
 
 def test_figure_data_matches_the_chart_api(client) -> None:  # type: ignore[no-untyped-def]
@@ -170,7 +176,7 @@ def test_figure_data_matches_the_chart_api(client) -> None:  # type: ignore[no-u
     chart = client.get("/api/chart", params={**EXAMPLE_QUERY, "bz": "-4"}).json()
     assert figure_data(html) == chart == response.context["figure"]
     # "<" inside the JSON is escaped, so no "</script>" can end the block early.
-    (_, raw), = [(a, c) for a, c in html.scripts if a.get("id") == "figure-data"]
+    ((_, raw),) = [(a, c) for a, c in html.scripts if a.get("id") == "figure-data"]
     assert "<" not in raw and "\\u003c" in raw
 
 
@@ -253,7 +259,7 @@ def test_embed_with_a_bad_value_says_why(client) -> None:  # type: ignore[no-unt
 
 
 def test_embed_without_parameters_shows_the_example(client) -> None:  # type: ignore[no-untyped-def]
-    response, html = page(client, "/embed")
+    _response, html = page(client, "/embed")
     assert figure_data(html)["data"][0]["y"] == [6.0, 3.0, 2.0, 7.0, 3.5]
 
 
@@ -292,8 +298,15 @@ def test_docs_script_fetches_nothing_from_elsewhere(client) -> None:  # type: ig
 
 def test_openapi_lists_the_api_and_not_the_pages(client) -> None:  # type: ignore[no-untyped-def]
     spec = client.get("/openapi.json").json()
-    assert set(spec["paths"]) == {"/api/normal", "/api/normal.csv", "/api/normals", "/api/chart",
-                                  "/api/mesh", "/api/mesh/normals", "/api/mesh/fix"}
+    assert set(spec["paths"]) == {
+        "/api/normal",
+        "/api/normal.csv",
+        "/api/normals",
+        "/api/chart",
+        "/api/mesh",
+        "/api/mesh/normals",
+        "/api/mesh/fix",
+    }
     assert set(spec["paths"]["/api/normal"]) == {"get", "post"}
 
 
@@ -308,9 +321,15 @@ def test_unknown_page_is_an_html_404(client) -> None:  # type: ignore[no-untyped
 
 
 PAGES = [
-    ("GET", "/", 200), ("GET", "/?ax=abc", 422), ("GET", "/?" + urlencode(EXAMPLE_QUERY), 200),
-    ("GET", "/embed", 200), ("GET", "/embed?ax=abc", 422), ("GET", "/docs", 200),
-    ("GET", "/nope", 404), ("POST", "/", 405), ("GET", "/static/nope.js", 404),
+    ("GET", "/", 200),
+    ("GET", "/?ax=abc", 422),
+    ("GET", "/?" + urlencode(EXAMPLE_QUERY), 200),
+    ("GET", "/embed", 200),
+    ("GET", "/embed?ax=abc", 422),
+    ("GET", "/docs", 200),
+    ("GET", "/nope", 404),
+    ("POST", "/", 405),
+    ("GET", "/static/nope.js", 404),
 ]
 
 

@@ -1,4 +1,4 @@
-"""app.calculator.snippets: the code to paste runs and prints the page's numbers for the user's points.
+"""The code to paste runs and prints the page's numbers for the user's points.
 
 The NumPy, pure-Python and trimesh snippets run here in a fresh interpreter (``-W error``, so a
 division by zero in a degenerate case would fail); Open3D and Blender are only checked as text.
@@ -61,8 +61,13 @@ IDS = [case.name for case in CASES]
 
 def run(code: str) -> dict[str, Any]:
     """Run a snippet in a fresh interpreter; its ``name = value`` lines, parsed."""
-    result = subprocess.run([sys.executable, "-W", "error", "-c", code],
-                            capture_output=True, text=True, timeout=60, check=False)
+    result = subprocess.run(
+        [sys.executable, "-W", "error", "-c", code],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
     assert result.returncode == 0, result.stderr
     printed: dict[str, Any] = {}
     for line in result.stdout.splitlines():
@@ -117,8 +122,12 @@ def test_snippet_prints_the_page_numbers(case: Case, key: str) -> None:
     assert_close(printed["magnitude"], payload["magnitude"], rel)
     assert_close(printed["area"], payload["area"], rel)
     if payload["degenerate"]:
-        assert printed == {"normal": (0.0, 0.0, 0.0), "magnitude": 0.0, "area": 0.0,
-                           "degenerate": True}
+        assert printed == {
+            "normal": (0.0, 0.0, 0.0),
+            "magnitude": 0.0,
+            "area": 0.0,
+            "degenerate": True,
+        }
     else:
         assert_close(printed["unit_normal"], payload["unit_normal"], rel)
 
@@ -166,8 +175,13 @@ def test_coordinates_keep_every_digit() -> None:
 
 def test_acb_order_is_honoured() -> None:
     plain, swapped = by_key(CASES[0].payload()), by_key(CASES[1].payload())
-    marks = {"numpy": "u = c - a", "python": "u = tuple(c[i] - a[i]", "trimesh": "[[0, 2, 1]]",
-             "open3d": "[[0, 2, 1]]", "blender": "normal(a, c, b)"}
+    marks = {
+        "numpy": "u = c - a",
+        "python": "u = tuple(c[i] - a[i]",
+        "trimesh": "[[0, 2, 1]]",
+        "open3d": "[[0, 2, 1]]",
+        "blender": "normal(a, c, b)",
+    }
     for key, mark in marks.items():
         assert "Winding A, C, B" in swapped[key].code, key
         assert mark in swapped[key].code, key
@@ -186,9 +200,14 @@ def test_blender_notes_its_unit_normal_and_precision() -> None:
 
 def test_open3d_uses_its_mesh_api() -> None:
     code = by_key(CASES[0].payload())["open3d"].code
-    for text in ("o3d.geometry.TriangleMesh()", "o3d.utility.Vector3dVector(vertices)",
-                 "o3d.utility.Vector3iVector(triangles)", "compute_triangle_normals()",
-                 "np.asarray(mesh.triangle_normals)[0]", "mesh.get_surface_area()"):
+    for text in (
+        "o3d.geometry.TriangleMesh()",
+        "o3d.utility.Vector3dVector(vertices)",
+        "o3d.utility.Vector3iVector(triangles)",
+        "compute_triangle_normals()",
+        "np.asarray(mesh.triangle_normals)[0]",
+        "mesh.get_surface_area()",
+    ):
         assert text in code, text
     compile(code, "<open3d>", "exec")
     compile(by_key(CASES[0].payload())["blender"].code, "<blender>", "exec")
@@ -268,10 +287,19 @@ def test_partial_renders_each_snippet_with_a_copy_button() -> None:
     for snippet in found:
         element_id = f"code-{snippet.key}"
         assert html.code[element_id] == snippet.code  # what the Copy button copies
-        buttons = [attrs for tag, attrs in html.elements
-                   if tag == "button" and attrs.get("data-copy") == element_id]
-        assert buttons == [{"type": "button", "class": "copy", "data-copy": element_id,
-                            "aria-describedby": f"{element_id}-title"}]
+        buttons = [
+            attrs
+            for tag, attrs in html.elements
+            if tag == "button" and attrs.get("data-copy") == element_id
+        ]
+        assert buttons == [
+            {
+                "type": "button",
+                "class": "copy",
+                "data-copy": element_id,
+                "aria-describedby": f"{element_id}-title",
+            }
+        ]
         assert ("h3", {"id": f"{element_id}-title"}) in html.elements
     details = [attrs for tag, attrs in html.elements if tag == "details"]
     assert [attrs["id"] for attrs in details if "open" in attrs] == ["snippet-numpy"]

@@ -1,4 +1,4 @@
-"""Tests for app.calculator.steps: the worked steps, with hand-computed numbers, and their partial."""
+"""The worked steps, with hand-computed numbers, and their partial."""
 
 from __future__ import annotations
 
@@ -93,8 +93,10 @@ def test_example_length_area_and_unit_normal() -> None:
     # 6/7, 3/7 and 2/7 are not doubles: the step says "≈", and says what "≈" means.
     assert line_starting(unit, "n̂_x") == f"n̂_x = n_x / |n| = 6 / 7 ≈ {js_number(6 / 7)}"
     assert line_starting(unit, "n̂_z") == f"n̂_z = n_z / |n| = 2 / 7 ≈ {js_number(2 / 7)}"
-    assert line_starting(unit, "n̂ = ") == f"n̂ = ({js_number(6 / 7)}, {js_number(3 / 7)}, " \
-                                           f"{js_number(2 / 7)})"
+    assert (
+        line_starting(unit, "n̂ = ") == f"n̂ = ({js_number(6 / 7)}, {js_number(3 / 7)}, "
+        f"{js_number(2 / 7)})"
+    )
     assert any("≈" in note for note in unit.notes)
 
 
@@ -111,7 +113,8 @@ def test_example_plane() -> None:
 def test_example_angle_between_u_and_v() -> None:
     angle = steps_of(*EXAMPLE)["angle"]
     assert line_starting(angle, "u · v") == (
-        "u · v = u_x·v_x + u_y·v_y + u_z·v_z = (-1)(-1) + (2)(0) + (0)(3) = 1 + 0 + 0 = 1")
+        "u · v = u_x·v_x + u_y·v_y + u_z·v_z = (-1)(-1) + (2)(0) + (0)(3) = 1 + 0 + 0 = 1"
+    )
     assert line_starting(angle, "|u × v|") == "|u × v| = |n| = 7"
     assert "atan2(7, 1) ≈" in line_starting(angle, "θ")
     expected = math.degrees(math.acos(1 / (math.sqrt(5) * math.sqrt(10))))
@@ -194,13 +197,18 @@ def test_sliver_explains_why_naive_floats_get_zero() -> None:
     assert exact.notes[0] == (
         "A naive float computation gives n = (0, 0, 0) because the products round before they "
         "are subtracted; this calculator works with the exact values and rounds once. Plain "
-        "floats would call this triangle flat.")
-    assert ("n_z in floats: (1.0000000000000002)(0.9999999999999999) − (1)(1) → 1 − 1 → 0"
-            in exact.lines)
+        "floats would call this triangle flat."
+    )
+    assert (
+        "n_z in floats: (1.0000000000000002)(0.9999999999999999) − (1)(1) → 1 − 1 → 0"
+        in exact.lines
+    )
     assert f"exact n, rounded once = (0, 0, {js_number(exact_z)})" in exact.lines
     # The cross product itself marks the rounded products with "≈".
-    assert steps[1].lines[3] == (f"n_z = u_x·v_y − u_y·v_x = (1.0000000000000002)"
-                                 f"(0.9999999999999999) − (1)(1) ≈ 1 − 1 ≈ {js_number(exact_z)}")
+    assert steps[1].lines[3] == (
+        f"n_z = u_x·v_y − u_y·v_x = (1.0000000000000002)"
+        f"(0.9999999999999999) − (1)(1) ≈ 1 − 1 ≈ {js_number(exact_z)}"
+    )
 
 
 def test_no_exact_step_when_floats_agree() -> None:
@@ -242,8 +250,9 @@ def test_huge_values_are_explained_and_the_unit_normal_shown() -> None:
 
 def test_sum_of_squares_too_large_but_length_fits() -> None:
     magnitude = steps_of((0, 0, 0), (1e100, 0, 0), (0, 1e100, 0))["magnitude"]
-    assert magnitude.lines == ("|n| = sqrt(n_x² + n_y² + n_z²) ≈ sqrt(0² + 0² + (1e+200)²) "
-                               "≈ 1e+200",)
+    assert magnitude.lines == (
+        "|n| = sqrt(n_x² + n_y² + n_z²) ≈ sqrt(0² + 0² + (1e+200)²) ≈ 1e+200",
+    )
     assert "the sum of squares" in magnitude.notes[0]
     assert "does not fit a double, but its square root does" in magnitude.notes[1]
 
@@ -259,8 +268,11 @@ def test_angle_of_a_huge_sliver_comes_from_exact_values() -> None:
 
 # --- Every triangle ---------------------------------------------------------------------------
 
-coordinates = st.one_of(st.floats(allow_nan=False, allow_infinity=False),
-                        st.integers(-20, 20).map(float), st.floats(-10, 10))
+coordinates = st.one_of(
+    st.floats(allow_nan=False, allow_infinity=False),
+    st.integers(-20, 20).map(float),
+    st.floats(-10, 10),
+)
 points = st.tuples(coordinates, coordinates, coordinates)
 
 
@@ -315,14 +327,20 @@ def test_partial_shows_the_users_numbers(env: Environment) -> None:
     assert [attrs["data-step"] for attrs in page.find("li", class_="step")] == KEYS
     assert len(page.find("h3")) == len(KEYS)
     text = plain_text(markup)
-    for expected in ("u_x = b_x − a_x = 0 − 1 = -1", "(2)(3) − (0)(0) = 6 − 0 = 6",
-                     "sqrt(36 + 9 + 4) = sqrt(49) = 7", "area = |n| / 2 = 7 / 2 = 3.5",
-                     "6x + 3y + 2z = 6", "A, C, B: n = −(6, 3, 2) = (-6, -3, -2)"):
+    for expected in (
+        "u_x = b_x − a_x = 0 − 1 = -1",
+        "(2)(3) − (0)(0) = 6 − 0 = 6",
+        "sqrt(36 + 9 + 4) = sqrt(49) = 7",
+        "area = |n| / 2 = 7 / 2 = 3.5",
+        "6x + 3y + 2z = 6",
+        "A, C, B: n = −(6, 3, 2) = (-6, -3, -2)",
+    ):
         assert expected in text, expected
     # One math box a step, each line its own block in <code>.
     assert len(page.find("div", class_="math")) == len(KEYS)
     assert len(page.find("code")) == sum(
-        len(step.lines) for step in worked_steps(triangle_normal(*EXAMPLE)))
+        len(step.lines) for step in worked_steps(triangle_normal(*EXAMPLE))
+    )
 
 
 def test_partial_has_no_scripts_handlers_or_inline_styles(env: Environment) -> None:

@@ -22,11 +22,13 @@ CASES: dict[str, tuple[Point, Point, Point]] = {
     "example": EXAMPLE,
     "right": ((0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0)),
     "thin": ((0.0, 0.0, 0.0), (10.0, 0.0, 0.0), (5.0, 0.3, 0.2)),
-    "sliver far out": ((1e6, 1e6, 0.0), (1000003.0000000001, 1000003.0, 0.0),
-                       (1000003.0, 1000002.9999999999, 0.0)),
+    "sliver far out": (
+        (1e6, 1e6, 0.0),
+        (1000003.0000000001, 1000003.0, 0.0),
+        (1000003.0, 1000002.9999999999, 0.0),
+    ),
     "huge": ((0.0, 0.0, 0.0), (1e200, 0.0, 0.0), (0.0, 1e200, 0.0)),
-    "differences overflow": ((-1.7e308, 0.0, 0.0), (1.7e308, 1e308, 0.0),
-                             (0.0, -1.7e308, 1.7e308)),
+    "differences overflow": ((-1.7e308, 0.0, 0.0), (1.7e308, 1e308, 0.0), (0.0, -1.7e308, 1.7e308)),
     "tiny": ((0.0, 0.0, 0.0), (1e-300, 0.0, 0.0), (0.0, 0.0, 1e-300)),
     "subnormal": ((0.0, 0.0, 0.0), (5e-324, 0.0, 0.0), (0.0, 5e-324, 0.0)),
     "vertical": ((0.0, 0.0, 0.0), (0.0, 0.0, 1.0), (-1.0, -1.0, 0.5)),
@@ -45,8 +47,11 @@ def payload_of(points: tuple[Point, Point, Point], swap: bool = False) -> dict[s
 
 
 def traces(figure: dict[str, Any], name: str, kind: str | None = None) -> list[dict[str, Any]]:
-    return [trace for trace in figure["data"]
-            if trace["name"] == name and (kind is None or trace["type"] == kind)]
+    return [
+        trace
+        for trace in figure["data"]
+        if trace["name"] == name and (kind is None or trace["type"] == kind)
+    ]
 
 
 def only(figure: dict[str, Any], name: str, kind: str) -> dict[str, Any]:
@@ -90,10 +95,19 @@ def test_a_valid_plotly_figure_of_plain_finite_numbers(name: str, swap: bool) ->
 def test_the_traces_drawn_for_a_triangle() -> None:
     figure = view3d_figure(payload_of(EXAMPLE))
     kinds = {(trace["name"], trace["type"]) for trace in figure["data"]}
-    assert kinds == {("face", "mesh3d"), ("u", "scatter3d"), ("v", "scatter3d"),
-                     ("edge", "scatter3d"), ("normal", "scatter3d"), ("normal", "cone"),
-                     ("front", "scatter3d"), ("turn", "scatter3d"), ("turn", "cone"),
-                     ("corners", "scatter3d"), ("axes", "scatter3d")}
+    assert kinds == {
+        ("face", "mesh3d"),
+        ("u", "scatter3d"),
+        ("v", "scatter3d"),
+        ("edge", "scatter3d"),
+        ("normal", "scatter3d"),
+        ("normal", "cone"),
+        ("front", "scatter3d"),
+        ("turn", "scatter3d"),
+        ("turn", "cone"),
+        ("corners", "scatter3d"),
+        ("axes", "scatter3d"),
+    }
     face = only(figure, "face", "mesh3d")
     assert (face["i"], face["j"], face["k"]) == ([0], [1], [2])
     assert face["color"] == "#4f5bd5" and 0 < face["opacity"] < 1
@@ -130,8 +144,9 @@ def test_the_arrow_is_the_unit_normal_from_the_centroid(name: str, swap: bool) -
 def test_swapping_the_winding_flips_the_arrow_and_the_turn(name: str) -> None:
     plain, swapped = (view3d_figure(payload_of(CASES[name], swap)) for swap in (False, True))
     for axis in "uvw":
-        assert only(swapped, "normal", "cone")[axis] == \
-            [-x for x in only(plain, "normal", "cone")[axis]]
+        assert only(swapped, "normal", "cone")[axis] == [
+            -x for x in only(plain, "normal", "cone")[axis]
+        ]
     assert swapped["layout"]["title"]["text"] == "Front: A → C → B counter-clockwise"
     for figure in (plain, swapped):
         cone = only(figure, "normal", "cone")

@@ -23,8 +23,20 @@ TETRA_POINTS = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
 TETRA = TETRA_POINTS + "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
 CUBE_POINTS = "".join(f"v {x} {y} {z}\n" for x in (0, 1) for y in (0, 1) for z in (0, 1))
 #: A unit cube, 12 triangles wound outward (vertex i has coordinates from the bits of i).
-CUBE_FACES = [(0, 1, 3), (0, 3, 2), (4, 6, 7), (4, 7, 5), (0, 4, 5), (0, 5, 1),
-              (2, 3, 7), (2, 7, 6), (0, 2, 6), (0, 6, 4), (1, 5, 7), (1, 7, 3)]
+CUBE_FACES = [
+    (0, 1, 3),
+    (0, 3, 2),
+    (4, 6, 7),
+    (4, 7, 5),
+    (0, 4, 5),
+    (0, 5, 1),
+    (2, 3, 7),
+    (2, 7, 6),
+    (0, 2, 6),
+    (0, 6, 4),
+    (1, 5, 7),
+    (1, 7, 3),
+]
 
 
 def obj(points: str, faces: list[tuple[int, ...]]) -> str:
@@ -36,8 +48,7 @@ CUBE_ONE_FLIPPED = obj(CUBE_POINTS, [CUBE_FACES[0][::-1], *CUBE_FACES[1:]])
 OPEN_BOX = obj(CUBE_POINTS, [face for face in CUBE_FACES if face not in ((1, 5, 7), (1, 7, 3))])
 
 
-def upload(client: TestClient, path: str, text: str | bytes, name: str = "mesh.obj",
-           **params: str):  # type: ignore[no-untyped-def]
+def upload(client: TestClient, path: str, text: str | bytes, name: str = "mesh.obj", **params: str):  # type: ignore[no-untyped-def]
     data = text.encode() if isinstance(text, str) else text
     return client.post(path, params=params, files={"file": (name, data)})
 
@@ -53,7 +64,10 @@ def test_cube_is_clean(client: TestClient) -> None:
     assert report["watertight"] is True and report["winding_consistent"] is True
     assert report["orientation"] == "outward"
     assert (report["boundary_edges"], report["nonmanifold_edges"], report["components"]) == (
-        0, 0, 1)
+        0,
+        0,
+        1,
+    )
     assert report["degenerate_faces"] == 0 and report["degenerate_face_indices"] == []
     assert report["fix"]["faces_flipped"] == 0
     assert report["problems"] == []
@@ -118,8 +132,12 @@ def test_two_components_and_an_unused_vertex(client: TestClient) -> None:
 
 
 def test_raw_body_with_a_filename(client: TestClient) -> None:
-    response = client.post("/api/mesh", params={"filename": "cube.obj"}, content=CUBE.encode(),
-                           headers={"content-type": "application/octet-stream"})
+    response = client.post(
+        "/api/mesh",
+        params={"filename": "cube.obj"},
+        content=CUBE.encode(),
+        headers={"content-type": "application/octet-stream"},
+    )
     assert response.status_code == 200, response.text
     assert response.json()["file"]["name"] == "cube.obj"
 
@@ -149,8 +167,9 @@ def test_stored_face_normals_are_compared(client: TestClient) -> None:
     assert report["vertices"] == 8  # STL corners are welded
 
 
-@pytest.mark.parametrize("kind, shape", [("face", (12, 3)), ("vertex", (8, 3)),
-                                         ("corner", (12, 3, 3))])
+@pytest.mark.parametrize(
+    ("kind", "shape"), [("face", (12, 3)), ("vertex", (8, 3)), ("corner", (12, 3, 3))]
+)
 def test_normals_as_npy(client: TestClient, kind: str, shape: tuple[int, ...]) -> None:
     response = upload(client, "/api/mesh/normals", CUBE, "cube.obj", kind=kind, format="npy")
     assert response.status_code == 200, response.text
@@ -171,8 +190,11 @@ def test_normals_as_json_and_csv(client: TestClient) -> None:
     body = upload(client, "/api/mesh/normals", TETRA, kind="vertex", weighting="area").json()
     assert body["kind"] == "vertex" and body["weighting"] == "area"
     assert body["shape"] == [4, 3] and body["missing"] == 0
-    expected = vertex_normals(read_mesh(TETRA.encode(), "t.obj").vertices,
-                              read_mesh(TETRA.encode(), "t.obj").faces, "area").normals
+    expected = vertex_normals(
+        read_mesh(TETRA.encode(), "t.obj").vertices,
+        read_mesh(TETRA.encode(), "t.obj").faces,
+        "area",
+    ).normals
     assert body["normals"] == expected.tolist()
     csv = upload(client, "/api/mesh/normals", TETRA, kind="face", format="csv")
     assert csv.headers["content-type"].startswith("text/csv")
@@ -184,10 +206,15 @@ def test_normals_as_json_and_csv(client: TestClient) -> None:
 def test_normals_query_errors(client: TestClient) -> None:
     assert_error(upload(client, "/api/mesh/normals", TETRA, kind="edge"), 422, "kind")
     assert_error(upload(client, "/api/mesh/normals", TETRA, weighting="mean"), 422, "weighting")
-    assert_error(upload(client, "/api/mesh/normals", TETRA, crease_angle="200"), 422,
-                 "crease_angle", "at most 180")
-    assert_error(upload(client, "/api/mesh/normals", TETRA, crease_angle="nan"), 422,
-                 "crease_angle")
+    assert_error(
+        upload(client, "/api/mesh/normals", TETRA, crease_angle="200"),
+        422,
+        "crease_angle",
+        "at most 180",
+    )
+    assert_error(
+        upload(client, "/api/mesh/normals", TETRA, crease_angle="nan"), 422, "crease_angle"
+    )
     assert_error(upload(client, "/api/mesh/normals", TETRA, format="xml"), 422, "format")
 
 
@@ -214,26 +241,34 @@ def test_fix_writes_each_format(client: TestClient, fmt: str) -> None:
 
 
 def test_missing_and_empty_file(client: TestClient) -> None:
-    assert_error(client.post("/api/mesh", files={"other": ("a.obj", b"v 0 0 0")}), 422, "file",
-                 "multipart")
+    assert_error(
+        client.post("/api/mesh", files={"other": ("a.obj", b"v 0 0 0")}), 422, "file", "multipart"
+    )
     assert_error(client.post("/api/mesh", data={"file": "v 0 0 0"}), 422, "file")
     assert_error(upload(client, "/api/mesh", b"", "empty.obj"), 422, "file", "empty")
-    assert_error(client.post("/api/mesh", content=b"",
-                             headers={"content-type": "application/octet-stream"}),
-                 422, "file", "empty")
+    assert_error(
+        client.post("/api/mesh", content=b"", headers={"content-type": "application/octet-stream"}),
+        422,
+        "file",
+        "empty",
+    )
 
 
-@pytest.mark.parametrize("name, data, status", [
-    ("mesh.xyz", b"1 2 3\n", 415),
-    ("mesh.stl", b"\0" * 80 + (1000).to_bytes(4, "little") + b"\0" * 50, 400),
-    ("mesh.obj", TETRA_POINTS + "f 1 2 9\n", 400),
-    ("mesh.obj", TETRA_POINTS + "f 1 2 -9\n", 400),
-    ("mesh.obj", "v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", 400),
-    ("mesh.obj", TETRA_POINTS, 400),
-    ("mesh.ply", b"ply\nformat ascii 1.0\nelement vertex 3\n", 400),
-])
-def test_broken_files_are_4xx_naming_the_problem(client: TestClient, name: str,
-                                                 data: str | bytes, status: int) -> None:
+@pytest.mark.parametrize(
+    ("name", "data", "status"),
+    [
+        ("mesh.xyz", b"1 2 3\n", 415),
+        ("mesh.stl", b"\0" * 80 + (1000).to_bytes(4, "little") + b"\0" * 50, 400),
+        ("mesh.obj", TETRA_POINTS + "f 1 2 9\n", 400),
+        ("mesh.obj", TETRA_POINTS + "f 1 2 -9\n", 400),
+        ("mesh.obj", "v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", 400),
+        ("mesh.obj", TETRA_POINTS, 400),
+        ("mesh.ply", b"ply\nformat ascii 1.0\nelement vertex 3\n", 400),
+    ],
+)
+def test_broken_files_are_4xx_naming_the_problem(
+    client: TestClient, name: str, data: str | bytes, status: int
+) -> None:
     for path in ("/api/mesh", "/api/mesh/normals", "/api/mesh/fix"):
         assert_error(upload(client, path, data, name), status, "file")
 
@@ -257,8 +292,9 @@ def test_upload_limit_streamed(small_limit: TestClient) -> None:
         for _ in range(10):
             yield b"# padding\n" * 50
 
-    response = small_limit.post("/api/mesh", content=chunks(),
-                                headers={"content-type": "application/octet-stream"})
+    response = small_limit.post(
+        "/api/mesh", content=chunks(), headers={"content-type": "application/octet-stream"}
+    )
     assert_error(response, 413, None, "larger than")
 
 
@@ -300,7 +336,8 @@ def test_mesh_work_runs_off_the_event_loop(monkeypatch: pytest.MonkeyPatch) -> N
         transport = httpx.ASGITransport(app=create_app())
         async with httpx.AsyncClient(transport=transport, base_url="http://test") as client:
             pending = asyncio.create_task(
-                client.post("/api/mesh", files={"file": ("cube.obj", CUBE.encode())}))
+                client.post("/api/mesh", files={"file": ("cube.obj", CUBE.encode())})
+            )
             assert await asyncio.to_thread(started.wait, 10)
             quick = await client.get("/api/normal", params=EXAMPLE_QUERY)
             assert quick.status_code == 200
@@ -367,28 +404,36 @@ def test_a_byte_order_mark_is_not_part_of_the_first_line(client: TestClient) -> 
 
 
 def test_an_ascii_stl_may_name_its_solid_with_keywords(client: TestClient) -> None:
-    text = ("solid part with vertex colors and facet data\nfacet normal 0 0 1\nouter loop\n"
-            "vertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\n"
-            "endsolid part with vertex colors and facet data\n")
+    text = (
+        "solid part with vertex colors and facet data\nfacet normal 0 0 1\nouter loop\n"
+        "vertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\n"
+        "endsolid part with vertex colors and facet data\n"
+    )
     assert upload(client, "/api/mesh", text, "a.stl").json()["faces"] == 1
 
 
 def test_ascii_ply_face_indices_must_be_whole_numbers(client: TestClient) -> None:
-    ply = ("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-           "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
-           "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 1.9\n")
+    ply = (
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+        "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+        "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 1.9\n"
+    )
     assert_error(upload(client, "/api/mesh", ply, "p.ply"), 400, "file", "whole number")
 
 
 def test_other_multipart_fields_do_not_get_in_the_way(client: TestClient) -> None:
-    response = client.post("/api/mesh", files=[("file", ("t.obj", TETRA.encode())),
-                                                ("other", ("b.txt", b"x"))])
+    response = client.post(
+        "/api/mesh", files=[("file", ("t.obj", TETRA.encode())), ("other", ("b.txt", b"x"))]
+    )
     assert response.status_code == 200 and response.json()["faces"] == 4
 
 
 def test_a_malformed_multipart_body_is_one_sentence(client: TestClient) -> None:
-    response = client.post("/api/mesh", content=b"--x\r\nnot a part",
-                           headers={"content-type": "multipart/form-data; boundary=x"})
+    response = client.post(
+        "/api/mesh",
+        content=b"--x\r\nnot a part",
+        headers={"content-type": "multipart/form-data; boundary=x"},
+    )
     assert response.status_code in (400, 422)
     assert_error(response, response.status_code, "file")
 
@@ -410,15 +455,18 @@ def test_a_one_sided_part_is_not_offered_a_winding_fix(client: TestClient) -> No
     assert "nonorientable" in codes and "winding" not in codes
 
 
-@pytest.mark.parametrize("size, area, title", [
-    ("1e120", True, "The total volume is beyond the double range"),
-    ("1e200", False, "The total area and volume are beyond the double range"),
-])
+@pytest.mark.parametrize(
+    ("size", "area", "title"),
+    [
+        ("1e120", True, "The total volume is beyond the double range"),
+        ("1e200", False, "The total area and volume are beyond the double range"),
+    ],
+)
 def test_values_beyond_the_double_range_are_null_and_explained(
     client: TestClient, size: str, area: bool, title: str
 ) -> None:
     points = f"v 0 0 0\nv {size} 0 0\nv 0 {size} 0\nv 0 0 {size}\n"
-    report = upload(client, "/api/mesh", points + TETRA[len(TETRA_POINTS):]).json()
+    report = upload(client, "/api/mesh", points + TETRA[len(TETRA_POINTS) :]).json()
     assert report["volume"] is None and (report["area"] is not None) == area
     assert report["watertight"] and report["orientation"] == "outward"
     assert [(item["code"], item["title"]) for item in report["problems"]] == [("overflow", title)]
@@ -447,8 +495,10 @@ def test_stored_corner_and_vertex_normals_are_compared(client: TestClient) -> No
     mesh = read_mesh(CUBE.encode(), "cube.obj")
     flat = face_normals(mesh.vertices, mesh.faces).normals  # a cube's corners: its faces'
     vn = "".join(f"vn {x!r} {y!r} {z!r}\n" for x, y, z in flat.tolist())
-    faces = "".join(f"f {a + 1}//{k + 1} {b + 1}//{k + 1} {c + 1}//{k + 1}\n"
-                    for k, (a, b, c) in enumerate(mesh.faces.tolist()))
+    faces = "".join(
+        f"f {a + 1}//{k + 1} {b + 1}//{k + 1} {c + 1}//{k + 1}\n"
+        for k, (a, b, c) in enumerate(mesh.faces.tolist())
+    )
     corner = upload(client, "/api/mesh", CUBE_POINTS + vn + faces).json()["file_normals"]
     assert corner["kind"] == "corner" and corner["compared"] == 36
     assert corner["agreeing"] == 36 and corner["opposite"] == 0

@@ -28,11 +28,17 @@ from tests.app.mesh.test_api import CUBE, CUBE_ONE_FLIPPED, OPEN_BOX
 from tests.conftest import Page
 
 
-def post(client: TestClient, text: str | bytes, name: str = "cube.obj", part: str | None = None,
-         status: int = 200):  # type: ignore[no-untyped-def]
+def post(
+    client: TestClient,
+    text: str | bytes,
+    name: str = "cube.obj",
+    part: str | None = None,
+    status: int = 200,
+):  # type: ignore[no-untyped-def]
     data = text.encode() if isinstance(text, str) else text
-    response = client.post("/mesh", params={"part": part} if part else None,
-                           files={"file": (name, data)})
+    response = client.post(
+        "/mesh", params={"part": part} if part else None, files={"file": (name, data)}
+    )
     assert response.status_code == status, response.text[:800]
     assert response.headers["content-type"] == "text/html; charset=utf-8"
     return response, Page(response.text)
@@ -53,7 +59,10 @@ def test_form_posts_the_file_without_javascript(client: TestClient) -> None:
     html = Page(response.text)
     form = html.one("form", id="mesh-form")
     assert (form["method"], form["action"], form["enctype"]) == (
-        "post", "/mesh", "multipart/form-data")
+        "post",
+        "/mesh",
+        "multipart/form-data",
+    )
     field = html.one("input", id="mesh-file")
     assert (field["type"], field["name"]) == ("file", "file")
     assert ".obj" in (field["accept"] or "") and ".stl" in (field["accept"] or "")
@@ -112,16 +121,21 @@ def test_curl_command_quotes_an_awkward_name(client: TestClient) -> None:
     assert html.text("mesh-curl").startswith("curl -F 'file=@my cube'\"'\"'s.obj' ")
 
 
-@pytest.mark.parametrize(("data", "name", "status", "words"), [
-    (b"this is not a mesh", "broken.obj", None, ""),
-    (bytes(range(256)), "thing.xyz", 415, "not supported"),
-    (b"", "empty.obj", 422, "empty"),
-])
-def test_a_file_it_cannot_read_is_a_4xx_page(client: TestClient, data: bytes, name: str,
-                                              status: int | None, words: str) -> None:
+@pytest.mark.parametrize(
+    ("data", "name", "status", "words"),
+    [
+        (b"this is not a mesh", "broken.obj", None, ""),
+        (bytes(range(256)), "thing.xyz", 415, "not supported"),
+        (b"", "empty.obj", 422, "empty"),
+    ],
+)
+def test_a_file_it_cannot_read_is_a_4xx_page(
+    client: TestClient, data: bytes, name: str, status: int | None, words: str
+) -> None:
     for part in (None, "report"):
-        response = client.post("/mesh", params={"part": part} if part else None,
-                               files={"file": (name, data)})
+        response = client.post(
+            "/mesh", params={"part": part} if part else None, files={"file": (name, data)}
+        )
         assert 400 <= response.status_code < 500, response.text[:500]
         if status is not None:
             assert response.status_code == status
@@ -175,8 +189,12 @@ def grid(size: int) -> tuple[np.ndarray, np.ndarray]:
     x, y = np.meshgrid(np.arange(size + 1.0), np.arange(size + 1.0))
     vertices = np.column_stack([x.ravel(), y.ravel(), np.zeros(x.size)])
     corner = (np.arange(size)[:, None] * (size + 1) + np.arange(size)).ravel()
-    faces = np.concatenate([np.column_stack([corner, corner + 1, corner + size + 2]),
-                            np.column_stack([corner, corner + size + 2, corner + size + 1])])
+    faces = np.concatenate(
+        [
+            np.column_stack([corner, corner + 1, corner + size + 2]),
+            np.column_stack([corner, corner + size + 2, corner + size + 1]),
+        ]
+    )
     return vertices, faces
 
 
@@ -186,8 +204,9 @@ def test_view_colours_faces_and_caps_a_large_mesh() -> None:
     classes = np.full(len(faces), OK, dtype=np.int8)
     classes[[3, 7]] = FLIPPED
     classes[11] = DEGENERATE
-    view = build_view(vertices, faces, normals, classes, np.zeros((0, 2), int),
-                      np.zeros((0, 2), int))
+    view = build_view(
+        vertices, faces, normals, classes, np.zeros((0, 2), int), np.zeros((0, 2), int)
+    )
     assert (view["shown_faces"], view["total_faces"]) == (mesh_view.DISPLAY_FACES, len(faces))
     traces = {trace["name"]: trace for trace in view["figure"]["data"]}
     mesh = traces["faces"]
@@ -198,23 +217,35 @@ def test_view_colours_faces_and_caps_a_large_mesh() -> None:
     assert view["arrows"] == mesh_view.ARROW_FACES
     flipped_heads = traces["flipped normals"]  # the cone trace comes after the shafts
     assert flipped_heads["type"] == "cone" and len(flipped_heads["u"]) == 2
-    assert view["counts"] == {"degenerate": 1, "flipped": 2, "nonmanifold": 0, "boundary": 0,
-                              "ok": len(faces) - 3}
+    assert view["counts"] == {
+        "degenerate": 1,
+        "flipped": 2,
+        "nonmanifold": 0,
+        "boundary": 0,
+        "ok": len(faces) - 3,
+    }
     cones = [t for t in view["figure"]["data"] if t["type"] == "cone"]
     assert all(w > 0 for t in cones for w in t["w"]), "arrows point along the normals"
     json.dumps(view, allow_nan=False)  # plain JSON: no NaN, no NumPy types
 
 
 def test_view_draws_huge_and_far_meshes_in_float32_range() -> None:
-    for vertices in (np.array([[1e300, -1e300, 0], [-1e300, 1e300, 1e300], [0, 0, -1e300]]),
-                     np.array([[1e6, 1e6, 0], [1e6 + 1e-3, 1e6, 0], [1e6, 1e6 + 1e-3, 0]])):
+    for vertices in (
+        np.array([[1e300, -1e300, 0], [-1e300, 1e300, 1e300], [0, 0, -1e300]]),
+        np.array([[1e6, 1e6, 0], [1e6 + 1e-3, 1e6, 0], [1e6, 1e6 + 1e-3, 0]]),
+    ):
         space = view_space(vertices)
         assert space.transformed
         assert np.abs(space.points).max() < 2.0**21
         assert len(np.unique(space.points.astype(np.float32), axis=0)) == 3, "shape kept"
-        view = build_view(vertices, np.array([[0, 1, 2]]), np.array([[0.0, 0.0, 1.0]]),
-                          np.array([OK], dtype=np.int8), np.zeros((0, 2), int),
-                          np.zeros((0, 2), int))
+        view = build_view(
+            vertices,
+            np.array([[0, 1, 2]]),
+            np.array([[0.0, 0.0, 1.0]]),
+            np.array([OK], dtype=np.int8),
+            np.zeros((0, 2), int),
+            np.zeros((0, 2), int),
+        )
         assert view["note"] and "the file's" in view["note"]
         json.dumps(view, allow_nan=False)
     assert not view_space(np.eye(3)).transformed

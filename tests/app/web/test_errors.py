@@ -35,8 +35,12 @@ def test_field_name(location, name: str | None) -> None:  # type: ignore[no-unty
 
 @pytest.mark.parametrize(
     ("location", "name"),
-    [(("body", "query"), "query"), (("body", "path"), "path"), (("body", "body"), "body"),
-     (("body", "outer", "query"), "outer.query")],
+    [
+        (("body", "query"), "query"),
+        (("body", "path"), "path"),
+        (("body", "body"), "body"),
+        (("body", "outer", "query"), "outer.query"),
+    ],
 )
 def test_field_name_keeps_fields_named_like_locations(location, name: str) -> None:  # type: ignore[no-untyped-def]
     assert field_name(location) == name
@@ -44,8 +48,15 @@ def test_field_name_keeps_fields_named_like_locations(location, name: str) -> No
 
 @pytest.mark.parametrize(
     ("value", "words"),
-    [(None, "null"), (True, "a boolean"), (False, "a boolean"), ("1", "the string '1'"),
-     ([1, 2], "a list of 2"), ({"x": 1}, "an object"), (1.5, "1.5")],
+    [
+        (None, "null"),
+        (True, "a boolean"),
+        (False, "a boolean"),
+        ("1", "the string '1'"),
+        ([1, 2], "a list of 2"),
+        ({"x": 1}, "an object"),
+        (1.5, "1.5"),
+    ],
 )
 def test_describe(value, words: str) -> None:  # type: ignore[no-untyped-def]
     assert describe(value) == words
@@ -67,10 +78,18 @@ def error(kind: str, loc: tuple, given: object = None, **ctx: object) -> dict:  
         ([error("float_type", ("body", "a", 0), "1")], 422, "a[0]", "JSON number"),
         ([error("finite_number", ("body", "c", 2), float("nan"))], 422, "c[2]", "finite"),
         ([error("too_short", ("body", "b"), [1], actual_length=1)], 422, "b", "3 numbers"),
-        ([error("too_short", ("body", "triangles", 4), [], actual_length=0)], 422,
-         "triangles[4]", "3 points"),
-        ([error("too_long", ("body", "triangles"), [], actual_length=100_001)], 413,
-         "triangles", "100,001"),
+        (
+            [error("too_short", ("body", "triangles", 4), [], actual_length=0)],
+            422,
+            "triangles[4]",
+            "3 points",
+        ),
+        (
+            [error("too_long", ("body", "triangles"), [], actual_length=100_001)],
+            413,
+            "triangles",
+            "100,001",
+        ),
         ([error("extra_forbidden", ("body", "zz"), 1)], 422, "zz", "not a field"),
         ([error("json_invalid", ("body", 7), error="Expecting value")], 400, None, "character 7"),
         ([error("model_attributes_type", ("body",), [1, 2])], 422, None, "list of 2"),

@@ -75,7 +75,11 @@ def assert_security_headers(response, *, frameable: bool = False) -> None:  # ty
     headers = response.headers
     assert headers.get("x-content-type-options") == "nosniff"
     assert headers.get("referrer-policy") in {
-        "no-referrer", "same-origin", "strict-origin", "strict-origin-when-cross-origin"}
+        "no-referrer",
+        "same-origin",
+        "strict-origin",
+        "strict-origin-when-cross-origin",
+    }
     policy = csp(response)
     scripts = policy.get("script-src", policy.get("default-src"))
     assert scripts, policy
@@ -101,8 +105,12 @@ def test_every_response_has_security_headers(client, name: str) -> None:  # type
 
 @pytest.mark.parametrize(
     ("params", "status"),
-    [({}, 200), (EXAMPLE_QUERY, 200), ({**EXAMPLE_QUERY, "swap": "on"}, 200),
-     ({**EXAMPLE_QUERY, "ax": "x"}, 422)],
+    [
+        ({}, 200),
+        (EXAMPLE_QUERY, 200),
+        ({**EXAMPLE_QUERY, "swap": "on"}, 200),
+        ({**EXAMPLE_QUERY, "ax": "x"}, 422),
+    ],
 )
 def test_embed_may_be_framed_by_anyone(client, params, status: int) -> None:  # type: ignore[no-untyped-def]
     response = client.get("/embed", params=params)

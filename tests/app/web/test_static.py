@@ -11,16 +11,27 @@ import pytest
 from app.web.static import STATIC_DIR, static_url
 from tests.conftest import EXAMPLE_QUERY, Page
 
-TEXT_ASSETS = ["js/calculator.js", "js/chart.js", "js/embed.js", "js/docs.js", "css/app.css",
-               "img/favicon.svg", "vendor/swagger-ui/swagger-ui.css",
-               "vendor/plotly/plotly-basic.min.js"]
-CONTENT_TYPES = {".js": "text/javascript", ".css": "text/css", ".svg": "image/svg+xml",
-                 ".png": "image/png"}
+TEXT_ASSETS = [
+    "js/calculator.js",
+    "js/chart.js",
+    "js/embed.js",
+    "js/docs.js",
+    "css/app.css",
+    "img/favicon.svg",
+    "vendor/swagger-ui/swagger-ui.css",
+    "vendor/plotly/plotly-basic.min.js",
+]
+CONTENT_TYPES = {
+    ".js": "text/javascript",
+    ".css": "text/css",
+    ".svg": "image/svg+xml",
+    ".png": "image/png",
+}
 IMMUTABLE = "public, max-age=31536000, immutable"
 
 
 def content_type(name: str) -> str:
-    return CONTENT_TYPES[name[name.rindex("."):]]
+    return CONTENT_TYPES[name[name.rindex(".") :]]
 
 
 @pytest.mark.parametrize("name", TEXT_ASSETS)
@@ -80,8 +91,14 @@ def test_etag_revalidation(client) -> None:  # type: ignore[no-untyped-def]
 def page_assets(client) -> set[str]:  # type: ignore[no-untyped-def]
     """Every /static/ URL that the HTML pages reference."""
     urls: set[str] = set()
-    for path, params in [("/", None), ("/", EXAMPLE_QUERY), ("/embed", None), ("/docs", None),
-                         ("/nope", None), ("/", {"ax": "x"})]:
+    for path, params in [
+        ("/", None),
+        ("/", EXAMPLE_QUERY),
+        ("/embed", None),
+        ("/docs", None),
+        ("/nope", None),
+        ("/", {"ax": "x"}),
+    ]:
         html = Page(client.get(path, params=params).text)
         urls |= {url for url in html.urls() if url.startswith("/static/")}
     return urls
@@ -104,8 +121,14 @@ def test_hashed_urls_in_pages_resolve(client) -> None:  # type: ignore[no-untype
 
 @pytest.mark.parametrize(
     "path",
-    ["/static/../app/config.py", "/static/%2e%2e/app/config.py", "/static/..%2fapp/config.py",
-     "/static/%2e%2e%2f%2e%2e%2fetc/passwd", "/static/js/", "/static/js/nope.js"],
+    [
+        "/static/../app/config.py",
+        "/static/%2e%2e/app/config.py",
+        "/static/..%2fapp/config.py",
+        "/static/%2e%2e%2f%2e%2e%2fetc/passwd",
+        "/static/js/",
+        "/static/js/nope.js",
+    ],
 )
 def test_nothing_outside_the_static_folder(client, path: str) -> None:  # type: ignore[no-untyped-def]
     response = client.get(path)

@@ -49,11 +49,11 @@ def test_keeps_unused_vertices_and_order_and_does_not_split_at_seams() -> None:
     f 2/5 4/4 5/3
     """)
     mesh = read_mesh(data, "seam.obj")
-    np.testing.assert_array_equal(mesh.vertices, [[9, 9, 9], [0, 0, 0], [1, 0, 0], [1, 1, 0],
-                                                  [0, 1, 0]])
+    np.testing.assert_array_equal(
+        mesh.vertices, [[9, 9, 9], [0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]
+    )
     np.testing.assert_array_equal(mesh.faces, [[1, 2, 3], [1, 3, 4]])
-    trimesh_mesh = trimesh.load(trimesh.util.wrap_as_stream(data), file_type="obj",
-                                process=False)
+    trimesh_mesh = trimesh.load(trimesh.util.wrap_as_stream(data), file_type="obj", process=False)
     assert len(trimesh_mesh.vertices) != 5  # why we parse OBJ ourselves
 
 
@@ -77,8 +77,9 @@ def test_polygons_negative_indices_and_statements() -> None:
       3 5
     """)
     mesh = read_mesh(data, "poly.obj")
-    np.testing.assert_array_equal(mesh.faces, [[0, 1, 2], [0, 2, 3], [0, 1, 2], [0, 2, 3],
-                                               [0, 3, 4], [0, 2, 4]])
+    np.testing.assert_array_equal(
+        mesh.faces, [[0, 1, 2], [0, 2, 3], [0, 1, 2], [0, 2, 3], [0, 3, 4], [0, 2, 4]]
+    )
     assert mesh.source_faces == 3
     assert mesh.notes == (
         "Triangulated 1 quad and 1 larger polygon as fans from each one's first corner.",
@@ -116,18 +117,23 @@ def test_exact_floats() -> None:
     assert mesh.vertices[0].tolist() == [value, 1e-300, -2.5]
 
 
-@pytest.mark.parametrize(("text", "message"), [
-    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4", "Line 4: vertex index 4 is out of range; the file "
-                                            "has 3 vertex statements."),
-    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 0", "Line 4: vertex index 0 is not valid"),
-    ("v 0 0 0\nf -1 -2 -3\nv 1 0 0\nv 0 1 0", "Line 2: vertex index -2 reaches back before"),
-    ("v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3", "vertex 2 (line 2) include nan"),
-    ("v 0 0 0\nv 1 0\nv 0 1 0\nf 1 2 3", "Line 2: 'v' needs 3 numbers, but has 2."),
-    ("v 0 0 0\nv 1 x 0\nv 0 1 0\nf 1 2 3", "Line 2: 'x' is not a number."),
-    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 a", "The face corner 'a' is not an index"),
-    ("v 0 0 0\nv 1 0 0\nv 0 1 0", "The file holds no faces."),
-    ("# nothing\n", "The file holds no vertices and no faces."),
-])
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        (
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4",
+            "Line 4: vertex index 4 is out of range; the file has 3 vertex statements.",
+        ),
+        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 0", "Line 4: vertex index 0 is not valid"),
+        ("v 0 0 0\nf -1 -2 -3\nv 1 0 0\nv 0 1 0", "Line 2: vertex index -2 reaches back before"),
+        ("v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3", "vertex 2 (line 2) include nan"),
+        ("v 0 0 0\nv 1 0\nv 0 1 0\nf 1 2 3", "Line 2: 'v' needs 3 numbers, but has 2."),
+        ("v 0 0 0\nv 1 x 0\nv 0 1 0\nf 1 2 3", "Line 2: 'x' is not a number."),
+        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 a", "The face corner 'a' is not an index"),
+        ("v 0 0 0\nv 1 0 0\nv 0 1 0", "The file holds no faces."),
+        ("# nothing\n", "The file holds no vertices and no faces."),
+    ],
+)
 def test_errors_name_the_line(text: str, message: str) -> None:
     with pytest.raises(MeshFileError) as error:
         read_mesh(text.encode(), "bad.obj")
@@ -136,7 +142,8 @@ def test_errors_name_the_line(text: str, message: str) -> None:
 
 
 def test_comments_may_follow_vertices_and_faces() -> None:
-    mesh = read_mesh(b"v 0 0 0 # origin\nv 1 0 0\nv 0 1 0\nf 1 2 3 # the lid\nf 1 3 2#under\n",
-                     "c.obj")
+    mesh = read_mesh(
+        b"v 0 0 0 # origin\nv 1 0 0\nv 0 1 0\nf 1 2 3 # the lid\nf 1 3 2#under\n", "c.obj"
+    )
     assert mesh.faces.tolist() == [[0, 1, 2], [0, 2, 1]]
     assert mesh.vertices.tolist() == [[0, 0, 0], [1, 0, 0], [0, 1, 0]]

@@ -32,14 +32,20 @@ def test_noff_normals_and_counts_on_the_keyword_line() -> None:
     np.testing.assert_array_equal(mesh.file_vertex_normals, [[0, 0, 1]] * 3)
 
 
-@pytest.mark.parametrize(("data", "message", "status"), [
-    (SQUARE.replace(b"5 3 0", b"5 30 0"), "says 5 vertices and 30 faces", 400),
-    (SQUARE.replace(b"3 1 4 2", b"3 1 4 7"), "the face on line 11 refers to vertex 7", 400),
-    (SQUARE.replace(b"1 1 0", b"1 inf 0"), "vertex 2 (counting from 0, line 6) include inf",
-     400),
-    (SQUARE.replace(b"3 0 4 1", b"3 0 4"), "Line 10: the face says it has 3 corners", 400),
-    (b"OFF BINARY\n1 2 3", "Binary OFF files are not supported", 415),
-])
+@pytest.mark.parametrize(
+    ("data", "message", "status"),
+    [
+        (SQUARE.replace(b"5 3 0", b"5 30 0"), "says 5 vertices and 30 faces", 400),
+        (SQUARE.replace(b"3 1 4 2", b"3 1 4 7"), "the face on line 11 refers to vertex 7", 400),
+        (
+            SQUARE.replace(b"1 1 0", b"1 inf 0"),
+            "vertex 2 (counting from 0, line 6) include inf",
+            400,
+        ),
+        (SQUARE.replace(b"3 0 4 1", b"3 0 4"), "Line 10: the face says it has 3 corners", 400),
+        (b"OFF BINARY\n1 2 3", "Binary OFF files are not supported", 415),
+    ],
+)
 def test_errors(data: bytes, message: str, status: int) -> None:
     with pytest.raises(MeshFileError) as error:
         read_mesh(data, "s.off")

@@ -35,26 +35,29 @@ SQUARE = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0.5, 0.5, 1), (9, 9, 9)]
 POLYGONS = [[0, 1, 2, 3], [0, 2, 3], [1, 0, 4, 3, 2]]
 
 
-def polygon_ply(format: str) -> bytes:
-    header = HEADER.format(format=format, vertices=len(SQUARE), faces=len(POLYGONS)).encode()
-    if format == "ascii":
+def polygon_ply(file_format: str) -> bytes:
+    header = HEADER.format(format=file_format, vertices=len(SQUARE), faces=len(POLYGONS)).encode()
+    if file_format == "ascii":
         body = "".join(f"{x} {y} {z} 0 0 1 5\n" for x, y, z in SQUARE)
-        body += "".join(f"{len(p)} {' '.join(map(str, p))} 0 0 {i}\n"
-                        for i, p in enumerate(POLYGONS))
+        body += "".join(
+            f"{len(p)} {' '.join(map(str, p))} 0 0 {i}\n" for i, p in enumerate(POLYGONS)
+        )
         return header + (body + "0 1\n").encode()
-    e = ">" if format == "binary_big_endian" else "<"
+    e = ">" if file_format == "binary_big_endian" else "<"
     body = b"".join(struct.pack(f"{e}6fB", x, y, z, 0, 0, 1, 5) for x, y, z in SQUARE)
-    body += b"".join(struct.pack(f"{e}B{len(p)}i3f", len(p), *p, 0, 0, i)
-                     for i, p in enumerate(POLYGONS))
+    body += b"".join(
+        struct.pack(f"{e}B{len(p)}i3f", len(p), *p, 0, 0, i) for i, p in enumerate(POLYGONS)
+    )
     return header + body + struct.pack(f"{e}2i", 0, 1)
 
 
-@pytest.mark.parametrize("format", ["ascii", "binary_little_endian", "binary_big_endian"])
-def test_polygons_normals_and_extra_properties(format: str) -> None:
-    mesh = read_mesh(polygon_ply(format), "p.ply")
+@pytest.mark.parametrize("file_format", ["ascii", "binary_little_endian", "binary_big_endian"])
+def test_polygons_normals_and_extra_properties(file_format: str) -> None:
+    mesh = read_mesh(polygon_ply(file_format), "p.ply")
     np.testing.assert_array_equal(mesh.vertices, SQUARE)  # the unused vertex 5 is kept
-    np.testing.assert_array_equal(mesh.faces, [[0, 1, 2], [0, 2, 3], [0, 2, 3], [1, 0, 4],
-                                               [1, 4, 3], [1, 3, 2]])
+    np.testing.assert_array_equal(
+        mesh.faces, [[0, 1, 2], [0, 2, 3], [0, 2, 3], [1, 0, 4], [1, 4, 3], [1, 3, 2]]
+    )
     np.testing.assert_array_equal(mesh.file_vertex_normals, [[0, 0, 1]] * 6)
     np.testing.assert_array_equal(mesh.file_face_normals[:, 2], [0, 0, 1, 2, 2, 2])
     assert mesh.source_faces == 3
@@ -81,9 +84,11 @@ def test_trimesh_reorders_mixed_polygons() -> None:
 
 
 def test_tetrahedron_ascii() -> None:
-    text = ("ply\nformat ascii 1.0\nelement vertex 4\nproperty double x\nproperty double y\n"
-            "property double z\nelement face 4\nproperty list uchar uint vertex_index\n"
-            "end_header\n")
+    text = (
+        "ply\nformat ascii 1.0\nelement vertex 4\nproperty double x\nproperty double y\n"
+        "property double z\nelement face 4\nproperty list uchar uint vertex_index\n"
+        "end_header\n"
+    )
     text += "".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in TETRA_VERTICES.tolist())
     text += "".join(f"3 {a} {b} {c}\n" for a, b, c in TETRA_FACES.tolist())
     mesh = read_mesh(text.encode())
@@ -92,25 +97,38 @@ def test_tetrahedron_ascii() -> None:
     np.testing.assert_array_equal(mesh.faces, TETRA_FACES)
 
 
-@pytest.mark.parametrize(("edit", "message"), [
-    (lambda d: d[:-60], "ends inside its face elements"),
-    (lambda d: d.replace(b"element vertex 6", b"element vertex 600"), "600 vertex elements"),
-    (lambda d: d.replace(b"format binary_little_endian", b"format binary_middle"),
-     "not ascii, binary_little_endian or binary_big_endian"),
-    (lambda d: d.replace(b"end_header", b"end_heade"), "no 'end_header'"),
-    (lambda d: d.replace(b"property float x", b"property quad x"), "Line 5 of the PLY header"),
-])
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (lambda d: d[:-60], "ends inside its face elements"),
+        (lambda d: d.replace(b"element vertex 6", b"element vertex 600"), "600 vertex elements"),
+        (
+            lambda d: d.replace(b"format binary_little_endian", b"format binary_middle"),
+            "not ascii, binary_little_endian or binary_big_endian",
+        ),
+        (lambda d: d.replace(b"end_header", b"end_heade"), "no 'end_header'"),
+        (lambda d: d.replace(b"property float x", b"property quad x"), "Line 5 of the PLY header"),
+    ],
+)
 def test_broken_binary(edit, message: str) -> None:  # type: ignore[no-untyped-def]
     with pytest.raises(MeshFileError, match=message):
         read_mesh(edit(polygon_ply("binary_little_endian")), "p.ply")
 
 
-@pytest.mark.parametrize(("polygon", "message"), [
-    ("3 0 1 7", "Face 0 \\(counting from 0\\) refers to vertex 7 \\(counting from 0\\), but the "
-                "file has only 6."),
-    ("3 0 -1 2", "Face 0 \\(counting from 0\\) refers to vertex -1; vertex indices cannot be "
-                 "negative."),
-])
+@pytest.mark.parametrize(
+    ("polygon", "message"),
+    [
+        (
+            "3 0 1 7",
+            "Face 0 \\(counting from 0\\) refers to vertex 7 \\(counting from 0\\), but the "
+            "file has only 6.",
+        ),
+        (
+            "3 0 -1 2",
+            "Face 0 \\(counting from 0\\) refers to vertex -1; vertex indices cannot be negative.",
+        ),
+    ],
+)
 def test_index_out_of_range(polygon: str, message: str) -> None:
     data = polygon_ply("ascii").replace(b"4 0 1 2 3 0 0 0", polygon.encode() + b" 0 0 0")
     with pytest.raises(MeshFileError, match=message):

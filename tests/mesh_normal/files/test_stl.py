@@ -10,8 +10,9 @@ CORNERS = TETRA_VERTICES[TETRA_FACES]
 NORMALS = np.array([[0.0, 0, -1], [0, -1, 0], [-1, 0, 0], [1, 1, 1]])
 
 
-@pytest.mark.parametrize("data", [binary_stl(CORNERS, NORMALS), ascii_stl(CORNERS, NORMALS)],
-                         ids=["binary", "ascii"])
+@pytest.mark.parametrize(
+    "data", [binary_stl(CORNERS, NORMALS), ascii_stl(CORNERS, NORMALS)], ids=["binary", "ascii"]
+)
 def test_tetrahedron_is_welded_in_first_appearance_order(data: bytes) -> None:
     mesh = read_mesh(data, "tetra.stl")
     assert mesh.format == "stl"
@@ -20,8 +21,10 @@ def test_tetrahedron_is_welded_in_first_appearance_order(data: bytes) -> None:
     np.testing.assert_array_equal(mesh.vertices[mesh.faces], CORNERS)
     np.testing.assert_array_equal(mesh.file_face_normals, NORMALS)
     assert mesh.source_faces == 4
-    assert mesh.notes == ("Welded 12 STL corners into 4 vertices (identical coordinates merged, "
-                          "in order of first appearance).",)
+    assert mesh.notes == (
+        "Welded 12 STL corners into 4 vertices (identical coordinates merged, "
+        "in order of first appearance).",
+    )
 
 
 def test_binary_header_starting_with_solid_is_still_binary() -> None:
@@ -71,19 +74,19 @@ def test_shorter_than_a_header() -> None:
 def test_nan_corner_names_the_triangle() -> None:
     corners = CORNERS.copy()
     corners[2, 1, 0] = np.nan
-    with pytest.raises(MeshFileError, match="Triangle 3 .* not a finite number"):
+    with pytest.raises(MeshFileError, match=r"Triangle 3 .* not a finite number"):
         read_mesh(binary_stl(corners), "t.stl")
 
 
 def test_ascii_stl_cut_short() -> None:
     data = ascii_stl(CORNERS, NORMALS)
     with pytest.raises(MeshFileError, match="4 facets, 4 facet normals and 11 vertices"):
-        read_mesh(data[:data.rindex(b"vertex")], "t.stl")
+        read_mesh(data[: data.rindex(b"vertex")], "t.stl")
 
 
 def test_ascii_stl_bad_number() -> None:
     data = ascii_stl(CORNERS, NORMALS).replace(b"vertex 1.0", b"vertex 1.0q", 1)
-    with pytest.raises(MeshFileError, match="'1.0q' after 'vertex'"):
+    with pytest.raises(MeshFileError, match=r"'1\.0q' after 'vertex'"):
         read_mesh(data, "t.stl")
 
 

@@ -12,9 +12,9 @@ VERTICES = RNG.standard_normal((50, 3)) * 10.0 ** RNG.integers(-30, 30, (50, 1))
 FACES = RNG.integers(0, 50, (80, 3))
 
 
-@pytest.mark.parametrize("format", ["ply", "obj"])
-def test_round_trip_is_exact(format: str) -> None:
-    mesh = read_mesh(write_mesh(VERTICES, FACES, format), f"m.{format}")
+@pytest.mark.parametrize("file_format", ["ply", "obj"])
+def test_round_trip_is_exact(file_format: str) -> None:
+    mesh = read_mesh(write_mesh(VERTICES, FACES, file_format), f"m.{file_format}")
     np.testing.assert_array_equal(mesh.vertices, VERTICES)  # bit for bit, unused ones too
     np.testing.assert_array_equal(mesh.faces, FACES)
 
