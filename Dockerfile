@@ -3,8 +3,9 @@
 #   docker build -t mesh-normal-calculator .
 #   docker run --rm -p 8000:8000 mesh-normal-calculator
 #
-# Two stages: the builder installs the locked runtime dependencies (uv.lock, without the `test`
-# extra) into /opt/venv; the final image gets that venv plus app/, templates/ and static/ in /app.
+# Two stages: the builder installs the locked runtime dependencies (uv.lock: the library's own and
+# the `web` group) into /opt/venv; the final image gets that venv plus mesh_normal/, app/,
+# templates/ and static/ in /app.
 
 FROM python:3.11-slim AS builder
 
@@ -30,9 +31,10 @@ WORKDIR /app
 
 # Dependencies first, from the lock file alone: this layer stays cached until
 # pyproject.toml or uv.lock change. --frozen: exactly the locked versions;
-# no extras, so the `test` extra (pytest, playwright, ...) is not installed.
+# the `web` group only, so the `test` group (pytest, playwright, ...) is not installed.
 COPY pyproject.toml uv.lock ./
-RUN /opt/uv/bin/uv sync --frozen --no-dev --no-install-project --python python3
+RUN /opt/uv/bin/uv sync --frozen --no-default-groups --group web --no-install-project \
+    --python python3
 
 
 FROM python:3.11-slim
@@ -50,13 +52,14 @@ RUN groupadd --gid 10001 app \
 
 COPY --from=builder /opt/venv /opt/venv
 
-# The app reads templates/ and static/ next to the package (Path(__file__).parent.parent),
-# so it runs from the source folder; uvicorn puts the working directory on sys.path.
+# The app reads templates/ and static/ from the checkout's layout, so it runs from the source
+# folder; uvicorn puts the working directory on sys.path (for both app and mesh_normal).
 WORKDIR /app
+COPY mesh_normal ./mesh_normal
 COPY app ./app
 COPY templates ./templates
 COPY static ./static
-RUN python -m compileall -q app \
+RUN python -m compileall -q mesh_normal app \
     && python -c "import mesh_normal.vertices as m; m.compile_kernels()" \
     && chown -R 10001:10001 /var/cache/numba
 
