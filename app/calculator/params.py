@@ -14,7 +14,7 @@ from typing import Annotated
 
 from pydantic import BaseModel, Field
 
-from app.config import COORDINATE_FIELDS
+from app.calculator.presets import COORDINATE_FIELDS
 from app.web.errors import ApiError, clip
 
 DECIMAL = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")

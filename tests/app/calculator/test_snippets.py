@@ -16,10 +16,10 @@ from typing import Any, NamedTuple
 
 import pytest
 
-from app.calculator.pages import templates
 from app.calculator.payloads import normal_payload
+from app.calculator.presets import PRESETS
 from app.calculator.snippets import Snippet, snippets
-from app.config import PRESETS
+from app.web.templating import templates
 from mesh_normal.triangle import triangle_normal
 
 GENERAL = ((1.5, -2.25, 0.1), (4.0, 0.5, -3.0), (0.3, 7.0, 2.5))
