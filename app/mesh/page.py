@@ -16,8 +16,9 @@ from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import HTMLResponse
 
 from app.mesh.api import load, stem
+from app.mesh.classes import CLASSES
+from app.mesh.figures import mesh_figures
 from app.mesh.uploads import Upload, read_upload
-from app.mesh.view import CLASSES, mesh_figures
 from app.web.errors import ApiError
 from app.web.middleware import size_text
 from app.web.templating import templates
