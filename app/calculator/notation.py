@@ -105,7 +105,7 @@ def sub(text: str, *operands: Shown) -> Segment | None:
 
 def chain(*segments: Segment | None) -> str:
     """``first = second = third``, with "≈" from the first segment holding a rounded number."""
-    exact, parts = True, []
+    exact, parts = True, list[str]()
     for segment in segments:
         if segment is None:
             continue

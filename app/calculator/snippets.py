@@ -62,7 +62,7 @@ def _coordinates(point: Sequence[float]) -> str:
 
 
 def _swapped(payload: dict[str, Any]) -> bool:
-    return payload["order"] == "ACB"
+    return bool(payload["order"] == "ACB")
 
 
 def _code(*parts: str | None) -> str:

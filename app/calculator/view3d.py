@@ -33,7 +33,7 @@ TRIAD_COLOR = MUTED
 #: Within these sizes (of the largest offset from the centroid) the view keeps true scale.
 TRUE_SCALE = (Fraction(1, 2**20), Fraction(2**20))
 ARROW = 0.6  # the normal arrow's length, times the longest edge
-DEFAULT_EYE = np.array([1.0, 1.0, 1.0]) / np.sqrt(3.0)
+DEFAULT_EYE: np.ndarray = np.array([1.0, 1.0, 1.0]) / np.sqrt(3.0)
 EYE_DISTANCE = 1.35
 
 
@@ -221,7 +221,8 @@ def _perpendicular(normal: np.ndarray, hint: np.ndarray) -> np.ndarray:
         flat = candidate - np.dot(candidate, normal) * normal
         size = float(np.linalg.norm(flat))
         if size > 1e-6 * float(np.linalg.norm(candidate)):
-            return flat / size
+            unit: np.ndarray = flat / size
+            return unit
     raise AssertionError("unreachable: z and x cannot both be parallel to a unit vector")
 
 
@@ -264,14 +265,18 @@ def _eye(normal: np.ndarray | None, points: np.ndarray) -> np.ndarray:
         eye = normal + lean
         if np.hypot(eye[0], eye[1]) < 0.25 * np.linalg.norm(eye):
             eye = eye + 0.5 * DEFAULT_EYE * [1, 1, 0]  # turntable needs an eye off the z axis
-        return eye / np.linalg.norm(eye)
+        return _unit(eye)
     if not line.any():
         return DEFAULT_EYE
-    line = line / np.linalg.norm(line)
+    line = _unit(line)
     side = _perpendicular(line, np.cross(line, up)) if abs(line[2]) < 0.99 else up[[2, 0, 1]]
     side = side if side @ DEFAULT_EYE >= 0 else -side
-    eye = side + 0.5 * _perpendicular(line, up)
-    return eye / np.linalg.norm(eye)
+    return _unit(side + 0.5 * _perpendicular(line, up))
+
+
+def _unit(vector: np.ndarray) -> np.ndarray:
+    """``vector`` scaled to length 1; it must not be zero."""
+    return np.asarray(vector / np.linalg.norm(vector), dtype=np.float64)
 
 
 def _longest_edge(points: np.ndarray) -> tuple[int, int]:

@@ -50,7 +50,7 @@ def faces_on_edges(
         return np.zeros(len(faces), dtype=bool)
     sides = np.stack([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]], axis=1)
     keys = edge_keys(sides, vertex_count).reshape(-1, 3)
-    return np.isin(keys, edge_keys(edges, vertex_count)).any(axis=1)
+    return np.asarray(np.isin(keys, edge_keys(edges, vertex_count)).any(axis=1), dtype=np.bool_)
 
 
 def face_classes(
