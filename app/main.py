@@ -13,7 +13,8 @@ from app.calculator import api as calculator_api
 from app.calculator import pages
 from app.mesh import api as mesh_api
 from app.mesh import page as mesh_page
-from app.web import errors
+from app.web import handlers
+from app.web.jsonio import FastJSONResponse
 from app.web.middleware import BodyLimit, PageCompression, SecurityHeaders
 from app.web.static import STATIC_DIR, CompressedStaticFiles
 from mesh_normal.vertices import compile_kernels
@@ -50,15 +51,18 @@ def create_app(upload_limit: int | None = None) -> FastAPI:
         docs_url=None,
         redoc_url=None,
         lifespan=lifespan,
+        default_response_class=FastJSONResponse,
     )
-    errors.install(app)
+    handlers.install(app)
     app.include_router(calculator_api.router)
     app.include_router(mesh_api.router)
     app.include_router(pages.router)
     app.include_router(mesh_page.router)
     app.mount("/static", CompressedStaticFiles(directory=STATIC_DIR), name="static")
     app.add_middleware(PageCompression)
-    app.state.upload_limit = config.upload_limit() if upload_limit is None else upload_limit
+    app.state.upload_limit = (
+        config.load_settings().upload_limit if upload_limit is None else upload_limit
+    )
     app.add_middleware(BodyLimit, upload_limit=app.state.upload_limit)
     app.add_middleware(SecurityHeaders)
     return app

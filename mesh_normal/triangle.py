@@ -24,6 +24,7 @@ from mesh_normal.tolerances import LARGEST_DOUBLE_TEXT
 
 Vector = tuple[float, float, float]
 MaybeVector = tuple[float | None, float | None, float | None]
+IntVector = tuple[int, int, int]
 
 AXES = ("x", "y", "z")
 
@@ -50,6 +51,68 @@ class TriangleNormal:
     message: str | None
 
 
+@dataclass(frozen=True, slots=True)
+class ExactTriangle:
+    """The exact u, v and n of a triangle, as integers over one power-of-two scale.
+
+    With the points in the chosen order (``points``: A, B, C or A, C, B), the exact edge
+    ``u = B - A`` is ``u_i * 2**-scale`` (the same for ``v``), and the exact normal
+    ``n = u x v`` is ``n_i * 2**(-2 * scale)``. Nothing here is rounded: :func:`triangle_normal`
+    rounds these values once, and the calculator's worked steps show them.
+    """
+
+    points: tuple[Vector, Vector, Vector]
+    order: str
+    scale: int
+    u: IntVector
+    v: IntVector
+    n: IntVector
+
+    @property
+    def square(self) -> int:
+        """``|n|**2`` times ``2**(4 * scale)``: zero exactly when the triangle is degenerate."""
+        return sum(ni * ni for ni in self.n)
+
+    @property
+    def dot(self) -> int:
+        """``u . v`` times ``2**(2 * scale)``."""
+        return sum(ui * vi for ui, vi in zip(self.u, self.v, strict=True))
+
+
+def exact_triangle(
+    a: Sequence[float],
+    b: Sequence[float],
+    c: Sequence[float],
+    *,
+    swap_winding: bool = False,
+) -> ExactTriangle:
+    """Return the exact u, v and n of triangle ABC (or ACB with ``swap_winding``).
+
+    Parameters
+    ----------
+    a, b, c : (3,) float
+        The corners, finite numbers (checked as :func:`triangle_normal` checks them).
+
+    Examples
+    --------
+    >>> exact = exact_triangle((0, 0, 0), (0.5, 0, 0), (0, 0.5, 0))
+    >>> exact.scale, exact.u, exact.n
+    (1, (1, 0, 0), (0, 0, 1))
+    """
+    pa, pb, pc = _as_point("A", a), _as_point("B", b), _as_point("C", c)
+    return _exact(pa, pb, pc, swap_winding)
+
+
+def _exact(pa: Vector, pb: Vector, pc: Vector, swap_winding: bool) -> ExactTriangle:
+    p, q, r = (pa, pc, pb) if swap_winding else (pa, pb, pc)
+    fixed, k = to_fixed([*p, *q, *r])
+    ux, uy, uz = (fixed[3 + i] - fixed[i] for i in range(3))
+    vx, vy, vz = (fixed[6 + i] - fixed[i] for i in range(3))
+    n = (uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx)
+    order = "ACB" if swap_winding else "ABC"
+    return ExactTriangle((p, q, r), order, k, (ux, uy, uz), (vx, vy, vz), n)
+
+
 def _as_point(name: str, point: Sequence[float]) -> Vector:
     """Check one point up front, the way trimesh checks its inputs."""
     if type(point) in (list, tuple) and len(point) == 3:  # the common case, quickly
@@ -69,7 +132,7 @@ def _as_point(name: str, point: Sequence[float]) -> Vector:
         raise ValueError(f"Point {name} must be a sequence of 3 numbers.") from None
     if len(values) != 3:
         raise ValueError(f"Point {name} must have 3 coordinates, not {len(values)}.")
-    floats = []
+    floats: list[float] = []
     for axis, value in zip(AXES, values, strict=True):
         if isinstance(value, bool) or not isinstance(value, Real):
             raise ValueError(f"{name.lower()}{axis} must be a number.")
@@ -160,7 +223,7 @@ def _pronoun(items: list[tuple[str, str]]) -> str:
 
 
 def _degenerate_message(p: Vector, q: Vector, r: Vector, order: str) -> str:
-    first, second, third = order
+    first, second, third = order[0], order[1], order[2]
     if p == q == r:
         return "All three points are the same, so the triangle has no area and no normal."
     for (x, y), (nx, ny) in (
@@ -206,18 +269,13 @@ def triangle_normal(
     (0.0, 0.0, 1.0)
     """
     pa, pb, pc = _as_point("A", a), _as_point("B", b), _as_point("C", c)
-    order = "ACB" if swap_winding else "ABC"
-    p, q, r = (pa, pc, pb) if swap_winding else (pa, pb, pc)
-
-    fixed, k = to_fixed([*p, *q, *r])
-    ux, uy, uz = (fixed[3 + i] - fixed[i] for i in range(3))
-    vx, vy, vz = (fixed[6 + i] - fixed[i] for i in range(3))
-    n = (uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx)
-    square = n[0] * n[0] + n[1] * n[1] + n[2] * n[2]
+    exact = _exact(pa, pb, pc, swap_winding)
+    order, k, n, square = exact.order, exact.scale, exact.n, exact.square
+    p, q, r = exact.points
 
     rounder = _Rounder()
-    u = rounder.vector("u", (ux, uy, uz), k)
-    v = rounder.vector("v", (vx, vy, vz), k)
+    u = rounder.vector("u", exact.u, k)
+    v = rounder.vector("v", exact.v, k)
     degenerate = square == 0
     if degenerate:
         return TriangleNormal(

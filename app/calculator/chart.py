@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from app.web.formatting import js_number
+from app.web.plotly import FONT, MUTED, TRANSPARENT
 
 LABELS = ["n<sub>x</sub>", "n<sub>y</sub>", "n<sub>z</sub>", "|n|", "area"]
 COLORS = ["#e4572e", "#29a36a", "#2e86de", "#6c5ce7", "#f2a541"]
@@ -36,16 +37,12 @@ def bar_figure(payload: dict[str, Any]) -> dict[str, Any]:
             "margin": {"l": 48, "r": 16, "t": 44, "b": 36},
             "height": 320,
             "bargap": 0.35,
-            "paper_bgcolor": "rgba(0,0,0,0)",
-            "plot_bgcolor": "rgba(0,0,0,0)",
-            "font": {
-                "family": "system-ui, -apple-system, Segoe UI, Roboto, sans-serif",
-                "size": 13,
-                "color": "#56607a",
-            },
+            "paper_bgcolor": TRANSPARENT,
+            "plot_bgcolor": TRANSPARENT,
+            "font": FONT,
             "yaxis": {
                 "zeroline": True,
-                "zerolinecolor": "#8a93a8",
+                "zerolinecolor": MUTED,
                 "gridcolor": "#d9deea",
                 "exponentformat": "e",
             },

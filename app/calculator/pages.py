@@ -1,44 +1,25 @@
-"""HTML pages: the calculator, the embeddable chart, the API docs and the error page."""
+"""HTML pages: the calculator, its live parts, the embeddable chart and the API docs."""
 
 from __future__ import annotations
 
-import json
-from pathlib import Path
 from typing import Any
 from urllib.parse import urlencode
 
 from fastapi import APIRouter, Request
-from fastapi.responses import HTMLResponse, JSONResponse
-from fastapi.templating import Jinja2Templates
-from markupsafe import Markup
+from fastapi.responses import HTMLResponse
 
 from app.calculator.chart import bar_figure
 from app.calculator.params import read_triangle
 from app.calculator.payloads import normal_payload
+from app.calculator.presets import COORDINATE_FIELDS, EXAMPLE, PRESETS
 from app.calculator.snippets import snippets
 from app.calculator.steps import worked_steps
 from app.calculator.view3d import view3d_figure
-from app.config import COORDINATE_FIELDS, EXAMPLE, PRESETS
-from app.web.errors import ApiError
-from app.web.formatting import js_number
-from app.web.static import static_url
+from app.web.jsonio import FastJSONResponse
+from app.web.templating import templates
 from mesh_normal.triangle import triangle_normal
 
-TEMPLATES_DIR = Path(__file__).resolve().parents[2] / "templates"
-templates = Jinja2Templates(directory=TEMPLATES_DIR)
-templates.env.globals["static_url"] = static_url
-templates.env.filters["num"] = lambda x: "out of range" if x is None else js_number(x)
-
 router = APIRouter(include_in_schema=False)
-
-
-def json_script(value: Any) -> Markup:
-    """JSON that is safe inside ``<script type="application/json">``."""
-    text = json.dumps(value, separators=(",", ":"))
-    return Markup(text.replace("<", "\\u003c").replace(">", "\\u003e").replace("&", "\\u0026"))
-
-
-templates.env.filters["json_script"] = json_script
 
 
 def _calculation(request: Request) -> dict[str, Any]:
@@ -99,7 +80,7 @@ PARTS = {"result": "_result.html", "steps": "_steps.html", "code": "_code.html"}
 
 
 @router.get("/partials")
-def partials(request: Request) -> JSONResponse:
+def partials(request: Request) -> FastJSONResponse:
     """The page's live parts for a query: HTML from the same templates, plus the figures.
 
     Always 200, so that a typing mistake is data for the page, not a failed request.
@@ -109,7 +90,7 @@ def partials(request: Request) -> JSONResponse:
         element: templates.get_template(name).render({**context, "request": request})
         for element, name in PARTS.items()
     }
-    return JSONResponse(
+    return FastJSONResponse(
         {
             "query": context["query"],
             "errors": context["errors"],
@@ -130,9 +111,3 @@ def embed(request: Request) -> HTMLResponse:
 def docs(request: Request) -> HTMLResponse:
     """Swagger UI from our own files, started by an external script (no inline script)."""
     return templates.TemplateResponse(request, "docs.html", {"openapi_url": "/openapi.json"})
-
-
-def error_page(request: Request, error: ApiError) -> HTMLResponse:
-    return templates.TemplateResponse(
-        request, "error.html", {"error": error}, status_code=error.status_code
-    )

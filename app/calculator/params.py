@@ -12,9 +12,9 @@ from dataclasses import dataclass, field
 from math import isfinite
 from typing import Annotated
 
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, Field, JsonValue
 
-from app.config import COORDINATE_FIELDS
+from app.calculator.presets import COORDINATE_FIELDS
 from app.web.errors import ApiError, clip
 
 DECIMAL = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
@@ -54,7 +54,7 @@ class TriangleParams(BaseModel):
     swap: str | None = Field(
         None,
         description="`on`, `true` or `1` uses the order A, C, B.",
-        json_schema_extra={"enum": sorted(SWAP_ON | SWAP_OFF)},
+        json_schema_extra={"enum": list[JsonValue](sorted(SWAP_ON | SWAP_OFF))},
     )
 
 

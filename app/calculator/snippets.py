@@ -47,6 +47,7 @@ def snippets(payload: dict[str, Any]) -> list[Snippet]:
     """The snippets for one result of :func:`~app.calculator.payloads.normal_payload`."""
     return [
         Snippet("numpy", "NumPy", "python", _numpy(payload), True),
+        Snippet("mesh_normal", "mesh_normal", "python", _mesh_normal(payload), True),
         Snippet("python", "Pure Python", "python", _python(payload), True),
         Snippet("trimesh", "trimesh", "python", _trimesh(payload), True),
         Snippet("open3d", "Open3D", "python", _open3d(payload), False),
@@ -62,7 +63,7 @@ def _coordinates(point: Sequence[float]) -> str:
 
 
 def _swapped(payload: dict[str, Any]) -> bool:
-    return payload["order"] == "ACB"
+    return bool(payload["order"] == "ACB")
 
 
 def _code(*parts: str | None) -> str:
@@ -178,6 +179,37 @@ def _numpy(payload: dict[str, Any]) -> str:
         magnitude = float(np.linalg.norm(n))
         """,
         _report("tuple(n.tolist())", "tuple((n / magnitude).tolist())"),
+    )
+
+
+def _mesh_normal(payload: dict[str, Any]) -> str:
+    """This project's library: the page's own computation, so its numbers to the last bit."""
+    a, b, c = (_coordinates(payload[name]) for name in "abc")
+    lines = [
+        "# Triangle normal with mesh_normal, the library behind this page: exact and",
+        "# rounded once, so it prints the page's numbers to the last digit.",
+    ]
+    if _out_of_range(payload):
+        lines.append("# A value beyond the double range prints as None (the page's out of range).")
+    swap = ", swap_winding=True)  # winding A, C, B: the normal flips" if _swapped(payload) else ")"
+    return _code(
+        "\n".join(lines),
+        f"""
+        import mesh_normal as mn
+
+        a = ({a})
+        b = ({b})
+        c = ({c})
+
+        r = mn.triangle_normal(a, b, c{swap}
+        print("normal =", r.normal)
+        print("magnitude =", r.magnitude)
+        if r.unit_normal is None:
+            print("degenerate: no unit normal")
+        else:
+            print("unit_normal =", r.unit_normal)
+        print("area =", r.area)
+        """,
     )
 
 

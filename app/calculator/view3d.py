@@ -22,25 +22,19 @@ from typing import Any
 import numpy as np
 
 from app.web.formatting import js_number
+from app.web.plotly import ACCENT, DEEP_ACCENT, FONT, INK, MUTED, TRANSPARENT, Trace, cone_trace
 
-FACE_COLOR = "#4f5bd5"  # the page's accent
+FACE_COLOR = ACCENT
 POINT_COLORS = ["#c2410c", "#15803d", "#1d4ed8"]  # the page's badges for A, B and C
-EDGE_COLOR = "#56607a"
+EDGE_COLOR = INK
 NORMAL_COLOR = "#e8590c"
-TURN_COLOR = "#3a44b0"
-TRIAD_COLOR = "#8a93a8"
-FONT = {
-    "family": "system-ui, -apple-system, Segoe UI, Roboto, sans-serif",
-    "size": 13,
-    "color": "#56607a",
-}
+TURN_COLOR = DEEP_ACCENT
+TRIAD_COLOR = MUTED
 #: Within these sizes (of the largest offset from the centroid) the view keeps true scale.
 TRUE_SCALE = (Fraction(1, 2**20), Fraction(2**20))
 ARROW = 0.6  # the normal arrow's length, times the longest edge
-DEFAULT_EYE = np.array([1.0, 1.0, 1.0]) / np.sqrt(3.0)
+DEFAULT_EYE: np.ndarray = np.array([1.0, 1.0, 1.0]) / np.sqrt(3.0)
 EYE_DISTANCE = 1.35
-
-Trace = dict[str, Any]
 
 
 def view3d_figure(payload: dict[str, Any]) -> dict[str, Any]:
@@ -102,23 +96,8 @@ def _line(points: np.ndarray, **style: Any) -> Trace:
 
 def _cone(name: str, tip: np.ndarray, vector: np.ndarray, color: str, hover: str) -> Trace:
     """An arrowhead whose tip is at ``tip``; its length is the length of ``vector``."""
-    x, y, z = ([float(value)] for value in tip)
-    u, v, w = ([float(value)] for value in vector)
     return {
-        "type": "cone",
-        "name": name,
-        "x": x,
-        "y": y,
-        "z": z,
-        "u": u,
-        "v": v,
-        "w": w,
-        "anchor": "tip",
-        "sizemode": "raw",
-        "sizeref": 1,
-        "colorscale": [[0, color], [1, color]],
-        "showscale": False,
-        "lighting": {"ambient": 0.9, "diffuse": 0.3, "specular": 0.1},
+        **cone_trace(name, np.array([tip]), np.array([vector]), color),
         "hovertemplate": f"{hover}<extra></extra>",
     }
 
@@ -242,7 +221,8 @@ def _perpendicular(normal: np.ndarray, hint: np.ndarray) -> np.ndarray:
         flat = candidate - np.dot(candidate, normal) * normal
         size = float(np.linalg.norm(flat))
         if size > 1e-6 * float(np.linalg.norm(candidate)):
-            return flat / size
+            unit: np.ndarray = flat / size
+            return unit
     raise AssertionError("unreachable: z and x cannot both be parallel to a unit vector")
 
 
@@ -285,14 +265,18 @@ def _eye(normal: np.ndarray | None, points: np.ndarray) -> np.ndarray:
         eye = normal + lean
         if np.hypot(eye[0], eye[1]) < 0.25 * np.linalg.norm(eye):
             eye = eye + 0.5 * DEFAULT_EYE * [1, 1, 0]  # turntable needs an eye off the z axis
-        return eye / np.linalg.norm(eye)
+        return _unit(eye)
     if not line.any():
         return DEFAULT_EYE
-    line = line / np.linalg.norm(line)
+    line = _unit(line)
     side = _perpendicular(line, np.cross(line, up)) if abs(line[2]) < 0.99 else up[[2, 0, 1]]
     side = side if side @ DEFAULT_EYE >= 0 else -side
-    eye = side + 0.5 * _perpendicular(line, up)
-    return eye / np.linalg.norm(eye)
+    return _unit(side + 0.5 * _perpendicular(line, up))
+
+
+def _unit(vector: np.ndarray) -> np.ndarray:
+    """``vector`` scaled to length 1; it must not be zero."""
+    return np.asarray(vector / np.linalg.norm(vector), dtype=np.float64)
 
 
 def _longest_edge(points: np.ndarray) -> tuple[int, int]:
@@ -395,7 +379,7 @@ def _layout(payload: dict[str, Any], traces: list[Trace], eye: np.ndarray) -> di
         "title": {"text": title, "x": 0.02, "xanchor": "left", "font": {"size": 14}},
         "margin": {"l": 0, "r": 0, "t": 40, "b": 0},
         "height": 360,
-        "paper_bgcolor": "rgba(0,0,0,0)",
+        "paper_bgcolor": TRANSPARENT,
         "font": FONT,
         "showlegend": False,
         "uirevision": "view3d",
@@ -403,7 +387,7 @@ def _layout(payload: dict[str, Any], traces: list[Trace], eye: np.ndarray) -> di
             "aspectmode": "cube",
             "camera": camera,
             "dragmode": "turntable",
-            "bgcolor": "rgba(0,0,0,0)",
+            "bgcolor": TRANSPARENT,
             "xaxis": _axis(reach),
             "yaxis": _axis(reach),
             "zaxis": _axis(reach),

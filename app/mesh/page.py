@@ -15,12 +15,13 @@ from fastapi import APIRouter, Request
 from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import HTMLResponse
 
-from app.calculator.pages import templates
 from app.mesh.api import load, stem
+from app.mesh.classes import CLASSES
+from app.mesh.figures import mesh_figures
 from app.mesh.uploads import Upload, read_upload
-from app.mesh.view import CLASSES, mesh_figures
 from app.web.errors import ApiError
 from app.web.middleware import size_text
+from app.web.templating import templates
 from mesh_normal.exports import FORMATS, KINDS
 from mesh_normal.files import SUFFIXES
 from mesh_normal.report import analyse, report_payload

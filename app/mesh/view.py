@@ -1,28 +1,26 @@
-"""The mesh page's figures as plain Plotly dicts: the 3D view and the histogram of face areas.
+"""The mesh page's 3D view as a plain Plotly figure dict.
 
-The 3D view colours each face by its worst problem (no area, flipped by the fix, on a
-non-manifold edge, on a boundary edge) and draws unit normals as arrows on a sample of
-faces. A large mesh is decimated for display: every problem face is kept (up to a cap) and
-the rest of the budget goes to a deterministic sample of the others, so the same file always
-draws the same way. Degenerate faces have no area to fill, so they are drawn as dots.
+The view colours each face by its worst problem (:mod:`app.mesh.classes`: no area, flipped by
+the fix, on a non-manifold edge, on a boundary edge) and draws unit normals as arrows on a
+sample of faces. A large mesh is decimated for display: every problem face is kept (up to a
+cap) and the rest of the budget goes to a deterministic sample of the others, so the same file
+always draws the same way. Degenerate faces have no area to fill, so they are drawn as dots.
 
 WebGL draws in 32-bit floats, so a mesh far from the origin is shifted to its centre, and a
-very large or very small one is scaled by a power of two (exact), as in app/view3d.py; the
-axes then lose their numbers and the page says so.
+very large or very small one is scaled by a power of two (exact), as in
+app/calculator/view3d.py; the axes then lose their numbers and the page says so.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from app.calculator.view3d import FONT  # the calculator's 3D view: one look for both
-
-if TYPE_CHECKING:
-    from mesh_normal.report import MeshAnalysis
+from app.mesh.classes import CLASSES, COLORS, DEGENERATE, FLIPPED, OK, IntArray
+from app.web.plotly import DEEP_ACCENT, FONT, TRANSPARENT, Trace, cone_trace
 
 #: Most faces the 3D view draws; a larger mesh is decimated.
 DISPLAY_FACES = 20_000
@@ -39,73 +37,11 @@ ARROW_LENGTH = 0.04
 TRUE_SCALE = (2.0**-20, 2.0**20)
 #: A mesh whose centre is this many half-extents from the origin is shifted to it.
 FAR_AWAY = 1e3
-#: Bins of the area histogram, and the span (max / min) beyond which they are log-spaced.
-HISTOGRAM_BINS = 30
-LOG_SPAN = 100.0
 SEED = 20240607  # the sample is random but fixed: the same file draws the same faces
 
-OK, BOUNDARY, NONMANIFOLD, FLIPPED, DEGENERATE = range(5)
-
-
-@dataclass(frozen=True, slots=True)
-class FaceClass:
-    code: int
-    key: str
-    color: str
-    label: str
-
-
-#: What each colour means, worst first; the page's HTML legend is built from this.
-CLASSES = (
-    FaceClass(DEGENERATE, "degenerate", "#e03131", "No area (degenerate), drawn as dots"),
-    FaceClass(FLIPPED, "flipped", "#f76707", "Wound against its neighbours: the fix flips it"),
-    FaceClass(NONMANIFOLD, "nonmanifold", "#9c36b5", "On an edge shared by 3 or more faces"),
-    FaceClass(BOUNDARY, "boundary", "#f2c94c", "On a boundary edge (a hole or border)"),
-    FaceClass(OK, "ok", "#aab4cc", "No problem"),
-)
-COLORS = {item.code: item.color for item in CLASSES}
-ARROW_COLOR = "#3a44b0"
+ARROW_COLOR = DEEP_ACCENT
 BOUNDARY_LINE = "#c99a06"
 NONMANIFOLD_LINE = "#862e9c"
-AREA_COLOR = "#4f5bd5"
-GRID = "rgba(138, 147, 168, 0.35)"
-
-Trace = dict[str, Any]
-IntArray = NDArray[np.intp]
-
-
-def edge_keys(edges: NDArray[np.integer[Any]], vertex_count: int) -> NDArray[np.int64]:
-    """One integer per undirected edge: ``min * n + max`` for (k, 2) vertex pairs."""
-    pairs = np.sort(np.asarray(edges, dtype=np.int64).reshape(-1, 2), axis=1)
-    return pairs[:, 0] * max(vertex_count, 1) + pairs[:, 1]
-
-
-def faces_on_edges(
-    faces: IntArray, vertex_count: int, edges: NDArray[np.integer[Any]]
-) -> NDArray[np.bool_]:
-    """For (m, 3) faces, whether each has one of the (k, 2) ``edges`` as a side."""
-    if not len(edges) or not len(faces):
-        return np.zeros(len(faces), dtype=bool)
-    sides = np.stack([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]], axis=1)
-    keys = edge_keys(sides, vertex_count).reshape(-1, 3)
-    return np.isin(keys, edge_keys(edges, vertex_count)).any(axis=1)
-
-
-def face_classes(
-    faces: IntArray,
-    vertex_count: int,
-    degenerate: NDArray[np.bool_],
-    flipped: NDArray[np.bool_],
-    boundary_edges: NDArray[np.integer[Any]],
-    nonmanifold_edges: NDArray[np.integer[Any]],
-) -> NDArray[np.int8]:
-    """Each face's worst problem, as one of the codes OK .. DEGENERATE; shape (m,)."""
-    classes = np.full(len(faces), OK, dtype=np.int8)
-    classes[faces_on_edges(faces, vertex_count, boundary_edges)] = BOUNDARY
-    classes[faces_on_edges(faces, vertex_count, nonmanifold_edges)] = NONMANIFOLD
-    classes[np.asarray(flipped, dtype=bool)] = FLIPPED
-    classes[np.asarray(degenerate, dtype=bool)] = DEGENERATE
-    return classes
 
 
 def _sample(indices: IntArray, count: int, rng: np.random.Generator) -> IntArray:
@@ -243,20 +179,7 @@ def _arrows(
             "hoverinfo": "skip",
         },
         {
-            "type": "cone",
-            "name": name,
-            "x": tips[:, 0].tolist(),
-            "y": tips[:, 1].tolist(),
-            "z": tips[:, 2].tolist(),
-            "u": heads[:, 0].tolist(),
-            "v": heads[:, 1].tolist(),
-            "w": heads[:, 2].tolist(),
-            "anchor": "tip",
-            "sizemode": "raw",
-            "sizeref": 1,
-            "colorscale": [[0, color], [1, color]],
-            "showscale": False,
-            "lighting": {"ambient": 0.9, "diffuse": 0.3, "specular": 0.1},
+            **cone_trace(name, tips, heads, color),
             "hovertext": hover,
             "hovertemplate": "%{hovertext}<extra></extra>",
         },
@@ -389,7 +312,7 @@ def _layout() -> dict[str, Any]:
     return {
         "margin": {"l": 0, "r": 0, "t": 0, "b": 0},
         "height": 460,
-        "paper_bgcolor": "rgba(0,0,0,0)",
+        "paper_bgcolor": TRANSPARENT,
         "font": FONT,
         "showlegend": False,
         "scene": {
@@ -411,149 +334,3 @@ def _note(space: ViewSpace) -> str | None:
         f"Drawn centred on ({centre}){scale}, so that WebGL's 32-bit floats can show "
         "it; the report's numbers are the file's."
     )
-
-
-def area_histogram(
-    areas: NDArray[np.float64], degenerate: NDArray[np.bool_], bins: int = HISTOGRAM_BINS
-) -> dict[str, Any]:
-    """Bins of the face areas: ``{"edges", "counts", "log", "zero_area", "beyond_range"}``.
-
-    Degenerate (and zero) areas are counted apart as ``zero_area``, infinite ones (coordinates
-    beyond about 1e154) as ``beyond_range``; the counts and those two add up to the faces.
-    Bins are log-spaced when the areas span more than LOG_SPAN.
-    """
-    areas = np.asarray(areas, dtype=np.float64)
-    zero = np.asarray(degenerate, dtype=bool) | (areas == 0)
-    finite = np.isfinite(areas)
-    values = areas[~zero & finite]
-    result: dict[str, Any] = {
-        "edges": [],
-        "counts": [],
-        "log": False,
-        "zero_area": int(np.count_nonzero(zero)),
-        "beyond_range": int(np.count_nonzero(~zero & ~finite)),
-    }
-    if not len(values):
-        return result
-    low, high = float(values.min()), float(values.max())
-    log = high > LOG_SPAN * low
-    count = max(1, min(bins, int(np.ceil(np.sqrt(len(values))))))
-    if low == high:
-        edges = np.array([low * (1 - 1 / 16), min(high * (1 + 1 / 16), np.finfo(float).max)])
-    elif log:
-        edges = np.geomspace(low, high, count + 1)
-    else:
-        edges = np.linspace(low, high, count + 1)
-    edges[0], edges[-1] = min(edges[0], low), max(edges[-1], high)
-    counts, _ = np.histogram(values, bins=edges)
-    return {**result, "edges": edges.tolist(), "counts": counts.tolist(), "log": bool(log)}
-
-
-def histogram_figure(histogram: dict[str, Any]) -> dict[str, Any]:
-    """A bar chart of :func:`area_histogram`; log bins are drawn on a log10 axis."""
-    edges = np.array(histogram["edges"], dtype=np.float64)
-    log = histogram["log"]
-    at = np.log10(edges) if log else edges
-    # Halves first: near the double maximum a sum of two edges would overflow.
-    centres, widths = at[:-1] / 2 + at[1:] / 2, np.diff(at)
-    hover = [
-        f"{a:.3g} to {b:.3g}: {n:,} faces"
-        for a, b, n in zip(edges[:-1], edges[1:], histogram["counts"], strict=True)
-    ]
-    traces: list[Trace] = [
-        {
-            "type": "bar",
-            "name": "faces",
-            "x": centres.tolist(),
-            "y": histogram["counts"],
-            "width": (widths * 0.92).tolist(),
-            "marker": {"color": AREA_COLOR},
-            "hovertext": hover,
-            "hovertemplate": "%{hovertext}<extra></extra>",
-        }
-    ]
-    xaxis: dict[str, Any] = {
-        "title": {"text": "face area" + (" (log scale)" if log else "")},
-        "gridcolor": GRID,
-        "zeroline": False,
-        "exponentformat": "e",
-    }
-    zero = histogram["zero_area"]
-    if zero and len(centres):
-        step = float(widths.mean()) or 1.0
-        spot = float(at[0]) - 1.5 * step
-        traces.append(
-            {
-                "type": "bar",
-                "name": "zero area",
-                "x": [spot],
-                "y": [zero],
-                "width": [0.92 * step],
-                "marker": {"color": COLORS[DEGENERATE]},
-                "hovertext": [f"zero area (degenerate): {zero:,} faces"],
-                "hovertemplate": "%{hovertext}<extra></extra>",
-            }
-        )
-    if log and len(at):
-        xaxis.update(_log_ticks(float(at[0]), float(at[-1])))
-    if zero and len(centres):
-        xaxis.setdefault("tickvals", []).insert(0, spot)
-        xaxis.setdefault("ticktext", []).insert(0, "zero")
-        if not log:
-            xaxis["tickmode"] = "array"
-            ticks = np.linspace(edges[0], edges[-1], 5)
-            xaxis["tickvals"] += ticks.tolist()
-            xaxis["ticktext"] += [f"{t:.3g}" for t in ticks]
-    return {
-        "data": traces,
-        "layout": {
-            "margin": {"l": 56, "r": 16, "t": 12, "b": 48},
-            "height": 300,
-            "bargap": 0,
-            "paper_bgcolor": "rgba(0,0,0,0)",
-            "plot_bgcolor": "rgba(0,0,0,0)",
-            "font": FONT,
-            "showlegend": False,
-            "xaxis": xaxis,
-            "yaxis": {"title": {"text": "faces"}, "gridcolor": GRID, "rangemode": "tozero"},
-        },
-    }
-
-
-def _log_ticks(low: float, high: float) -> dict[str, Any]:
-    """Ticks at powers of ten (every few when the span is wide), written as 1e-3."""
-    first, last = int(np.floor(low)), int(np.ceil(high))
-    step = max(1, (last - first) // 6)
-    powers = list(range(first, last + 1, step))
-    return {
-        "tickmode": "array",
-        "tickvals": [float(p) for p in powers],
-        "ticktext": [f"1e{p}" for p in powers],
-    }
-
-
-def mesh_figures(analysis: MeshAnalysis) -> dict[str, Any]:
-    """The page's figures for one analysed mesh: ``{"view", "histogram", "histogram_figure"}``."""
-    mesh, topology = analysis.mesh, analysis.topology
-    classes = face_classes(
-        mesh.faces,
-        len(mesh.vertices),
-        analysis.faces.degenerate,
-        analysis.orientation.flipped,
-        topology.boundary_edge_list,
-        topology.nonmanifold_edge_list,
-    )
-    view = build_view(
-        mesh.vertices,
-        mesh.faces,
-        analysis.faces.normals,
-        classes,
-        topology.boundary_edge_list,
-        topology.nonmanifold_edge_list,
-    )
-    histogram = area_histogram(analysis.faces.areas, analysis.faces.degenerate)
-    return {
-        "view": view,
-        "histogram": histogram,
-        "histogram_figure": histogram_figure(histogram) if histogram["counts"] else None,
-    }

@@ -1,26 +1,17 @@
 """One error shape for every bad request: ``{"error": "<one sentence>", "field": ...}``.
 
 Every failure, whatever raised it (our own checks, pydantic, Starlette's routing, the body
-limit), ends here as an :class:`ApiError`, and :func:`install` registers the one handler
-that renders it: JSON for API paths, an HTML page elsewhere.
+limit), becomes an :class:`ApiError`. This module only says what went wrong, in one
+sentence; :mod:`app.web.handlers` renders it (JSON for API paths, an HTML page elsewhere), so
+the exception knows nothing of pages.
 """
 
 from __future__ import annotations
 
-import logging
 from collections.abc import Sequence
 from typing import Any
 
-from fastapi import FastAPI, Request
-from fastapi.exceptions import RequestValidationError
-from fastapi.responses import JSONResponse, Response
-from starlette.exceptions import HTTPException as StarletteHTTPException
-from starlette.routing import Match
-
 from app.config import BATCH_LIMIT
-from app.web.headers import security_headers
-
-logger = logging.getLogger(__name__)
 
 
 class ApiError(Exception):
@@ -156,70 +147,3 @@ def _sentence(kind: str, field: str, given: Any, context: dict[str, Any]) -> str
     if kind in ("model_type", "dict_type", "model_attributes_type"):
         return f"{field} must be a JSON object, not {describe(given)}."
     return f"{field} is not valid ({kind.replace('_', ' ')})."
-
-
-def _is_api(request: Request) -> bool:
-    path = request.url.path
-    return path.startswith("/api/") or path == "/openapi.json"
-
-
-async def _render(request: Request, error: ApiError) -> Response:
-    if _is_api(request):
-        return JSONResponse(error.body(), status_code=error.status_code)
-    from app.calculator.pages import (
-        error_page,  # the page layer renders HTML; imported late to avoid a cycle
-    )
-
-    return error_page(request, error)
-
-
-_HTTP_SENTENCES = {
-    404: "There is no page at this address.",
-    405: "This address does not take that method.",
-    413: "The request body is too large.",
-}
-
-
-def _allowed_methods(request: Request) -> list[str]:
-    """Every method some route takes at this path (Starlette names only the first route's)."""
-    routes = request.app.router.routes
-    return [
-        method
-        for method in ("GET", "HEAD", "POST", "PUT", "PATCH", "DELETE")
-        if any(
-            route.matches({**request.scope, "method": method})[0] == Match.FULL for route in routes
-        )
-    ]
-
-
-def install(app: FastAPI) -> None:
-    """Register the one set of handlers that turns every failure into an ApiError."""
-
-    async def on_api_error(request: Request, exc: Exception) -> Response:
-        assert isinstance(exc, ApiError)
-        return await _render(request, exc)
-
-    async def on_validation(request: Request, exc: Exception) -> Response:
-        assert isinstance(exc, RequestValidationError)
-        return await _render(request, from_validation(exc.errors()))
-
-    async def on_http(request: Request, exc: Exception) -> Response:
-        assert isinstance(exc, StarletteHTTPException)
-        sentence = _HTTP_SENTENCES.get(exc.status_code) or str(exc.detail)
-        response = await _render(request, ApiError(exc.status_code, sentence))
-        response.headers.update(exc.headers or {})
-        if exc.status_code == 405:
-            response.headers["allow"] = ", ".join(_allowed_methods(request))
-        return response
-
-    async def on_crash(request: Request, _exc: Exception) -> Response:
-        logger.exception("unhandled error on %s", request.url.path)
-        response = await _render(request, ApiError(500, "Something went wrong on our side."))
-        # Starlette answers a crash outside every middleware, so the headers come from here.
-        response.headers.update(security_headers(request.url.path))
-        return response
-
-    app.add_exception_handler(ApiError, on_api_error)
-    app.add_exception_handler(RequestValidationError, on_validation)
-    app.add_exception_handler(StarletteHTTPException, on_http)
-    app.add_exception_handler(Exception, on_crash)

@@ -3,6 +3,13 @@
 Bodies are read as raw bytes and validated straight from JSON (no ``json.loads`` pass and no
 Python-side copy); responses are rendered with ``pydantic_core.to_json``. For a full batch of
 100,000 triangles this is several times faster than the standard library.
+
+NaN and ±Infinity have no JSON spelling: ``to_json`` would write them as bare words, which
+``JSON.parse`` and Python's strict parsers refuse, and Starlette's ``JSONResponse`` raises on
+them. Every JSON text the app writes goes through :func:`json_bytes`, which writes them as
+``null``: the product's rule for any value it cannot give as a double ("out of range is
+null", with a message where a sentence is due). A NaN reaching a response is still a bug, and
+the tests that parse responses strictly are where it shows; a user never gets invalid JSON.
 """
 
 from __future__ import annotations
@@ -19,9 +26,16 @@ from app.web.errors import ApiError, from_validation
 Model = TypeVar("Model", bound=BaseModel)
 
 
+def json_bytes(content: Any) -> bytes:
+    """Compact UTF-8 JSON, with NaN and ±Infinity written as ``null`` (never bare words)."""
+    return to_json(content, inf_nan_mode="null")
+
+
 class FastJSONResponse(JSONResponse):
+    """The app's one JSON response: pydantic-core's speed, never invalid JSON."""
+
     def render(self, content: Any) -> bytes:
-        return to_json(content)
+        return json_bytes(content)
 
 
 def request_body_spec(model: type[BaseModel]) -> dict[str, Any]:

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import gzip
 import hashlib
+import os
 from functools import lru_cache
+from os import PathLike
 from pathlib import Path
 
 from starlette.datastructures import Headers
@@ -37,9 +39,9 @@ class CompressedStaticFiles(StaticFiles):
 
     def file_response(
         self,
-        full_path: str | Path,
-        stat_result,
-        scope: Scope,  # type: ignore[no-untyped-def]
+        full_path: str | PathLike[str],
+        stat_result: os.stat_result,
+        scope: Scope,
         status_code: int = 200,
     ) -> Response:
         response = super().file_response(full_path, stat_result, scope, status_code)

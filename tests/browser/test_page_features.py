@@ -14,8 +14,8 @@ from urllib.parse import urlencode
 import pytest
 from playwright.sync_api import Page, expect
 
+from app.calculator.presets import PRESETS
 from app.calculator.snippets import snippets
-from app.config import PRESETS
 from tests.browser.conftest import NewPage
 from tests.browser.helpers import (
     COLLINEAR,

@@ -12,6 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from mesh_normal import TriangleNormal, triangle_normal
+from mesh_normal import triangle as core
 from tests.mesh_normal._reference import (
     exact_triangle,
     is_rounded_sqrt,
@@ -537,3 +538,43 @@ def test_result_is_frozen() -> None:
     r = triangle_normal((0, 0, 0), (1, 0, 0), (0, 1, 0))
     with pytest.raises(dataclasses.FrozenInstanceError):
         r.area = 1.0  # type: ignore[misc]
+
+
+# --- The exact values behind the rounding (what the worked steps show) ------------------------
+
+
+def _fractions(values: tuple[int, int, int], exponent: int) -> list[Fraction]:
+    return [Fraction(value, 2**exponent) for value in values]
+
+
+@given(points, points, points, st.booleans())
+@settings(max_examples=300, deadline=None)
+def test_exact_values_are_the_exact_edges_and_cross_product(a, b, c, swap: bool) -> None:  # type: ignore[no-untyped-def]
+    exact = core.exact_triangle(a, b, c, swap_winding=swap)
+    u, v, n, square = exact_triangle(a, b, c, swap=swap)  # the reference, in Fractions
+    assert _fractions(exact.u, exact.scale) == u
+    assert _fractions(exact.v, exact.scale) == v
+    assert _fractions(exact.n, 2 * exact.scale) == n
+    assert Fraction(exact.square, 2 ** (4 * exact.scale)) == square
+    assert Fraction(exact.dot, 2 ** (2 * exact.scale)) == sum(
+        x * y for x, y in zip(u, v, strict=True)
+    )
+    assert exact.order == ("ACB" if swap else "ABC")
+
+
+@given(points, points, points, st.booleans())
+@settings(max_examples=200, deadline=None)
+def test_the_normal_is_the_exact_values_rounded_once(a, b, c, swap: bool) -> None:  # type: ignore[no-untyped-def]
+    exact = core.exact_triangle(a, b, c, swap_winding=swap)
+    result = triangle_normal(a, b, c, swap_winding=swap)
+    assert result.u == tuple(round_or_none(x) for x in _fractions(exact.u, exact.scale))
+    assert result.degenerate is (exact.square == 0)
+    if not result.degenerate:
+        assert result.normal == tuple(
+            round_or_none(x) for x in _fractions(exact.n, 2 * exact.scale)
+        )
+
+
+def test_exact_values_check_their_input_like_the_normal() -> None:
+    with pytest.raises(ValueError, match="finite"):
+        core.exact_triangle((0, 0, math.inf), (1, 0, 0), (0, 1, 0))

@@ -16,11 +16,12 @@ from typing import Any, NamedTuple
 
 import pytest
 
-from app.calculator.pages import templates
 from app.calculator.payloads import normal_payload
+from app.calculator.presets import PRESETS
 from app.calculator.snippets import Snippet, snippets
-from app.config import PRESETS
+from app.web.templating import templates
 from mesh_normal.triangle import triangle_normal
+from tests.paths import ROOT
 
 GENERAL = ((1.5, -2.25, 0.1), (4.0, 0.5, -3.0), (0.3, 7.0, 2.5))
 UNIT_RIGHT = ((0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0))
@@ -60,9 +61,13 @@ IDS = [case.name for case in CASES]
 
 
 def run(code: str) -> dict[str, Any]:
-    """Run a snippet in a fresh interpreter; its ``name = value`` lines, parsed."""
+    """Run a snippet in a fresh interpreter; its ``name = value`` lines, parsed.
+
+    The working directory is the checkout, so that ``import mesh_normal`` finds the library.
+    """
     result = subprocess.run(
         [sys.executable, "-W", "error", "-c", code],
+        cwd=ROOT,
         capture_output=True,
         text=True,
         timeout=60,
@@ -99,10 +104,11 @@ def assert_close(got: Any, want: Any, rel: float) -> None:
 # --- The API ---------------------------------------------------------------------------------
 
 
-def test_five_flavours_numpy_first() -> None:
+def test_six_flavours_numpy_first_then_the_library() -> None:
     found = snippets(CASES[0].payload())
-    assert [s.key for s in found] == ["numpy", "python", "trimesh", "open3d", "blender"]
-    assert [s.runs_in_tests for s in found] == [True, True, True, False, False]
+    keys = ["numpy", "mesh_normal", "python", "trimesh", "open3d", "blender"]
+    assert [s.key for s in found] == keys
+    assert [s.runs_in_tests for s in found] == [True, True, True, True, False, False]
     assert {s.language for s in found} == {"python"}
     assert all(s.title and s.code.endswith("\n") for s in found)
     with pytest.raises(FrozenInstanceError):
@@ -130,6 +136,34 @@ def test_snippet_prints_the_page_numbers(case: Case, key: str) -> None:
         }
     else:
         assert_close(printed["unit_normal"], payload["unit_normal"], rel)
+
+
+PRESET_KEYS = [key for key, *_ in PRESETS]
+
+
+@pytest.mark.parametrize("key", PRESET_KEYS)
+def test_mesh_normal_snippet_prints_the_page_numbers_exactly(key: str) -> None:
+    """The library is the page's own computation: every number equal, out of range None."""
+    payload = preset(key)
+    code = by_key(payload)["mesh_normal"].code
+    assert "import mesh_normal as mn" in code and "mn.triangle_normal(a, b, c" in code
+    printed = run(code)
+    assert printed["normal"] == tuple(payload["normal"])
+    assert printed["magnitude"] == payload["magnitude"]
+    assert printed["area"] == payload["area"]
+    if payload["degenerate"]:
+        assert printed.get("degenerate") is True and "unit_normal" not in printed
+    else:
+        assert printed["unit_normal"] == tuple(payload["unit_normal"])
+
+
+@pytest.mark.parametrize("case", CASES, ids=IDS)
+def test_mesh_normal_snippet_matches_every_case(case: Case) -> None:
+    payload = case.payload()
+    printed = run(by_key(payload)["mesh_normal"].code)
+    assert_close(printed["normal"], payload["normal"], 0.0)
+    assert printed["area"] == payload["area"]
+    assert ("swap_winding=True" in by_key(payload)["mesh_normal"].code) is case.swap
 
 
 @pytest.mark.parametrize("case", CASES, ids=IDS)
@@ -225,6 +259,10 @@ NOTE = "# Note: the page's numbers are exact, rounded once; the floats here may 
 @pytest.mark.parametrize("key", ["sliver", "huge"])
 def test_pathological_points_get_a_note(key: str) -> None:
     for snippet in snippets(preset(key)):
+        if snippet.key == "mesh_normal":  # exact like the page: nothing may differ
+            assert NOTE not in snippet.code
+            compile(snippet.code, snippet.key, "exec")
+            continue
         assert NOTE in snippet.code, snippet.key
         compile(snippet.code, snippet.key, "exec")
 
@@ -303,7 +341,7 @@ def test_partial_renders_each_snippet_with_a_copy_button() -> None:
         assert ("h3", {"id": f"{element_id}-title"}) in html.elements
     details = [attrs for tag, attrs in html.elements if tag == "details"]
     assert [attrs["id"] for attrs in details if "open" in attrs] == ["snippet-numpy"]
-    assert len(details) == 5
+    assert len(details) == 6
 
 
 def test_partial_without_snippets_says_when_they_come() -> None:

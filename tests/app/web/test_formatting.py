@@ -12,8 +12,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from app.calculator.pages import templates
 from app.web.formatting import js_number
+from app.web.templating import templates
 
 TABLE = [
     (1e21, "1e+21"),

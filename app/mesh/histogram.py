@@ -1,0 +1,136 @@
+"""The mesh page's histogram of face areas: the bins, and their bar chart as a Plotly dict."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from app.mesh.classes import COLORS, DEGENERATE
+from app.web.plotly import ACCENT, FONT, TRANSPARENT, Trace
+
+#: Bins of the area histogram, and the span (max / min) beyond which they are log-spaced.
+HISTOGRAM_BINS = 30
+LOG_SPAN = 100.0
+AREA_COLOR = ACCENT
+GRID = "rgba(138, 147, 168, 0.35)"
+
+
+def area_histogram(
+    areas: NDArray[np.float64], degenerate: NDArray[np.bool_], bins: int = HISTOGRAM_BINS
+) -> dict[str, Any]:
+    """Bins of the face areas: ``{"edges", "counts", "log", "zero_area", "beyond_range"}``.
+
+    Degenerate (and zero) areas are counted apart as ``zero_area``, infinite ones (coordinates
+    beyond about 1e154) as ``beyond_range``; the counts and those two add up to the faces.
+    Bins are log-spaced when the areas span more than LOG_SPAN.
+    """
+    areas = np.asarray(areas, dtype=np.float64)
+    zero = np.asarray(degenerate, dtype=bool) | (areas == 0)
+    finite = np.isfinite(areas)
+    values = areas[~zero & finite]
+    result: dict[str, Any] = {
+        "edges": [],
+        "counts": [],
+        "log": False,
+        "zero_area": int(np.count_nonzero(zero)),
+        "beyond_range": int(np.count_nonzero(~zero & ~finite)),
+    }
+    if not len(values):
+        return result
+    low, high = float(values.min()), float(values.max())
+    log = high > LOG_SPAN * low
+    count = max(1, min(bins, int(np.ceil(np.sqrt(len(values))))))
+    if low == high:
+        edges = np.array([low * (1 - 1 / 16), min(high * (1 + 1 / 16), np.finfo(float).max)])
+    elif log:
+        edges = np.geomspace(low, high, count + 1)
+    else:
+        edges = np.linspace(low, high, count + 1)
+    edges[0], edges[-1] = min(edges[0], low), max(edges[-1], high)
+    counts, _ = np.histogram(values, bins=edges)
+    return {**result, "edges": edges.tolist(), "counts": counts.tolist(), "log": bool(log)}
+
+
+def histogram_figure(histogram: dict[str, Any]) -> dict[str, Any]:
+    """A bar chart of :func:`area_histogram`; log bins are drawn on a log10 axis."""
+    edges = np.array(histogram["edges"], dtype=np.float64)
+    log = histogram["log"]
+    at = np.log10(edges) if log else edges
+    # Halves first: near the double maximum a sum of two edges would overflow.
+    centres, widths = at[:-1] / 2 + at[1:] / 2, np.diff(at)
+    hover = [
+        f"{a:.3g} to {b:.3g}: {n:,} faces"
+        for a, b, n in zip(edges[:-1], edges[1:], histogram["counts"], strict=True)
+    ]
+    traces: list[Trace] = [
+        {
+            "type": "bar",
+            "name": "faces",
+            "x": centres.tolist(),
+            "y": histogram["counts"],
+            "width": (widths * 0.92).tolist(),
+            "marker": {"color": AREA_COLOR},
+            "hovertext": hover,
+            "hovertemplate": "%{hovertext}<extra></extra>",
+        }
+    ]
+    xaxis: dict[str, Any] = {
+        "title": {"text": "face area" + (" (log scale)" if log else "")},
+        "gridcolor": GRID,
+        "zeroline": False,
+        "exponentformat": "e",
+    }
+    zero = histogram["zero_area"]
+    if zero and len(centres):
+        step = float(widths.mean()) or 1.0
+        spot = float(at[0]) - 1.5 * step
+        traces.append(
+            {
+                "type": "bar",
+                "name": "zero area",
+                "x": [spot],
+                "y": [zero],
+                "width": [0.92 * step],
+                "marker": {"color": COLORS[DEGENERATE]},
+                "hovertext": [f"zero area (degenerate): {zero:,} faces"],
+                "hovertemplate": "%{hovertext}<extra></extra>",
+            }
+        )
+    if log and len(at):
+        xaxis.update(_log_ticks(float(at[0]), float(at[-1])))
+    if zero and len(centres):
+        xaxis.setdefault("tickvals", []).insert(0, spot)
+        xaxis.setdefault("ticktext", []).insert(0, "zero")
+        if not log:
+            xaxis["tickmode"] = "array"
+            ticks = np.linspace(edges[0], edges[-1], 5)
+            xaxis["tickvals"] += ticks.tolist()
+            xaxis["ticktext"] += [f"{t:.3g}" for t in ticks]
+    return {
+        "data": traces,
+        "layout": {
+            "margin": {"l": 56, "r": 16, "t": 12, "b": 48},
+            "height": 300,
+            "bargap": 0,
+            "paper_bgcolor": TRANSPARENT,
+            "plot_bgcolor": TRANSPARENT,
+            "font": FONT,
+            "showlegend": False,
+            "xaxis": xaxis,
+            "yaxis": {"title": {"text": "faces"}, "gridcolor": GRID, "rangemode": "tozero"},
+        },
+    }
+
+
+def _log_ticks(low: float, high: float) -> dict[str, Any]:
+    """Ticks at powers of ten (every few when the span is wide), written as 1e-3."""
+    first, last = int(np.floor(low)), int(np.ceil(high))
+    step = max(1, (last - first) // 6)
+    powers = list(range(first, last + 1, step))
+    return {
+        "tickmode": "array",
+        "tickvals": [float(p) for p in powers],
+        "ticktext": [f"1e{p}" for p in powers],
+    }

@@ -1,0 +1,36 @@
+"""The one Jinja environment every page renders with, and its filters.
+
+Pages call ``templates.TemplateResponse(request, name, context)``; tests read
+``response.template.name`` and ``response.context`` instead of scraping the HTML.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from fastapi.templating import Jinja2Templates
+from markupsafe import Markup
+
+from app.web.formatting import js_number
+from app.web.jsonio import json_bytes
+from app.web.static import static_url
+
+TEMPLATES_DIR = Path(__file__).resolve().parents[2] / "templates"
+
+
+def json_script(value: Any) -> Markup:
+    """JSON that is safe inside ``<script type="application/json">`` (NaN as null, as the API)."""
+    text = json_bytes(value).decode()
+    return Markup(text.replace("<", "\\u003c").replace(">", "\\u003e").replace("&", "\\u0026"))
+
+
+def number_text(value: float | None) -> str:
+    """A number as JavaScript's ``String(x)`` writes it; None is out of the double range."""
+    return "out of range" if value is None else js_number(value)
+
+
+templates = Jinja2Templates(directory=TEMPLATES_DIR)
+templates.env.globals["static_url"] = static_url
+templates.env.filters["num"] = number_text
+templates.env.filters["json_script"] = json_script

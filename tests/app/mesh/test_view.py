@@ -1,0 +1,98 @@
+"""app/mesh/view.py: the mesh's 3D view, its decimation and its float32-safe coordinates."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+
+from app.mesh import view as mesh_view
+from app.mesh.classes import COLORS, DEGENERATE, FLIPPED, OK
+from app.mesh.view import build_view, select_faces, view_space
+
+
+def test_decimation_keeps_every_problem_face_and_is_deterministic() -> None:
+    classes = np.full(100_000, OK, dtype=np.int8)
+    problems = np.arange(5, 100_000, 97)
+    classes[problems] = FLIPPED
+    shown = select_faces(classes)
+    assert len(shown) == mesh_view.DISPLAY_FACES
+    assert np.isin(problems, shown).all()
+    assert (np.diff(shown) > 0).all()
+    assert np.array_equal(shown, select_faces(classes))
+
+
+def test_decimation_caps_the_problem_faces() -> None:
+    classes = np.full(50_000, FLIPPED, dtype=np.int8)
+    classes[:10_000] = OK
+    shown = select_faces(classes)
+    assert len(shown) == mesh_view.DISPLAY_FACES
+    assert np.count_nonzero(classes[shown] != OK) == mesh_view.PROBLEM_FACES
+    assert len(select_faces(classes[:500])) == 500
+
+
+def grid(size: int) -> tuple[np.ndarray, np.ndarray]:
+    """A flat size x size grid of squares, two triangles each, wound counter-clockwise."""
+    x, y = np.meshgrid(np.arange(size + 1.0), np.arange(size + 1.0))
+    vertices = np.column_stack([x.ravel(), y.ravel(), np.zeros(x.size)])
+    corner = (np.arange(size)[:, None] * (size + 1) + np.arange(size)).ravel()
+    faces = np.concatenate(
+        [
+            np.column_stack([corner, corner + 1, corner + size + 2]),
+            np.column_stack([corner, corner + size + 2, corner + size + 1]),
+        ]
+    )
+    return vertices, faces
+
+
+def test_view_colours_faces_and_caps_a_large_mesh() -> None:
+    vertices, faces = grid(120)  # 28,800 faces
+    normals = np.tile([0.0, 0.0, 1.0], (len(faces), 1))
+    classes = np.full(len(faces), OK, dtype=np.int8)
+    classes[[3, 7]] = FLIPPED
+    classes[11] = DEGENERATE
+    view = build_view(
+        vertices, faces, normals, classes, np.zeros((0, 2), int), np.zeros((0, 2), int)
+    )
+    assert (view["shown_faces"], view["total_faces"]) == (mesh_view.DISPLAY_FACES, len(faces))
+    traces = {trace["name"]: trace for trace in view["figure"]["data"]}
+    mesh = traces["faces"]
+    assert len(mesh["i"]) == len(mesh["facecolor"]) == mesh_view.DISPLAY_FACES - 1
+    assert mesh["facecolor"].count(COLORS[FLIPPED]) == 2
+    assert set(mesh["facecolor"]) == {COLORS[OK], COLORS[FLIPPED]}
+    assert traces["degenerate"]["x"] and len(traces["degenerate"]["x"]) == 1
+    assert view["arrows"] == mesh_view.ARROW_FACES
+    flipped_heads = traces["flipped normals"]  # the cone trace comes after the shafts
+    assert flipped_heads["type"] == "cone" and len(flipped_heads["u"]) == 2
+    assert view["counts"] == {
+        "degenerate": 1,
+        "flipped": 2,
+        "nonmanifold": 0,
+        "boundary": 0,
+        "ok": len(faces) - 3,
+    }
+    cones = [t for t in view["figure"]["data"] if t["type"] == "cone"]
+    assert all(w > 0 for t in cones for w in t["w"]), "arrows point along the normals"
+    json.dumps(view, allow_nan=False)  # plain JSON: no NaN, no NumPy types
+
+
+def test_view_draws_huge_and_far_meshes_in_float32_range() -> None:
+    for vertices in (
+        np.array([[1e300, -1e300, 0], [-1e300, 1e300, 1e300], [0, 0, -1e300]]),
+        np.array([[1e6, 1e6, 0], [1e6 + 1e-3, 1e6, 0], [1e6, 1e6 + 1e-3, 0]]),
+    ):
+        space = view_space(vertices)
+        assert space.transformed
+        assert np.abs(space.points).max() < 2.0**21
+        assert len(np.unique(space.points.astype(np.float32), axis=0)) == 3, "shape kept"
+        view = build_view(
+            vertices,
+            np.array([[0, 1, 2]]),
+            np.array([[0.0, 0.0, 1.0]]),
+            np.array([OK], dtype=np.int8),
+            np.zeros((0, 2), int),
+            np.zeros((0, 2), int),
+        )
+        assert view["note"] and "the file's" in view["note"]
+        json.dumps(view, allow_nan=False)
+    assert not view_space(np.eye(3)).transformed

@@ -1,0 +1,37 @@
+"""app/config.py: the settings object, read from the environment."""
+
+from __future__ import annotations
+
+import pytest
+
+from app.config import DEFAULT_UPLOAD_LIMIT_MB, Settings, load_settings, upload_limit
+from app.main import create_app
+
+
+def test_the_default_limit(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.delenv("MESH_UPLOAD_LIMIT_MB", raising=False)
+    assert Settings().upload_limit_mb == DEFAULT_UPLOAD_LIMIT_MB == 200
+    assert upload_limit() == 200 * 1024 * 1024
+
+
+@pytest.mark.parametrize(("text", "size"), [("0.5", 512 * 1024), (" 3 ", 3 << 20), ("", 200 << 20)])
+def test_the_environment_sets_the_limit(
+    monkeypatch: pytest.MonkeyPatch, text: str, size: int
+) -> None:
+    monkeypatch.setenv("MESH_UPLOAD_LIMIT_MB", text)
+    assert load_settings().upload_limit == size
+    assert create_app().state.upload_limit == size
+
+
+@pytest.mark.parametrize("text", ["abc", "0", "-1", "nan", "inf"])
+def test_a_bad_limit_is_one_clear_sentence(monkeypatch: pytest.MonkeyPatch, text: str) -> None:
+    monkeypatch.setenv("MESH_UPLOAD_LIMIT_MB", text)
+    with pytest.raises(
+        ValueError, match=r"^MESH_UPLOAD_LIMIT_MB must be a positive number of megabytes"
+    ):
+        load_settings()
+
+
+def test_create_app_takes_the_limit_in_bytes(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("MESH_UPLOAD_LIMIT_MB", "abc")  # not read when the limit is given
+    assert create_app(upload_limit=2000).state.upload_limit == 2000

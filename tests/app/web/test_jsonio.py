@@ -1,0 +1,72 @@
+"""app/web/jsonio.py: every JSON text the app writes is valid JSON, NaN and Infinity included."""
+
+from __future__ import annotations
+
+import json
+import math
+from typing import Any
+
+import pytest
+from fastapi import FastAPI
+from fastapi.testclient import TestClient
+
+from app.main import create_app
+from app.web.jsonio import FastJSONResponse, json_bytes
+from app.web.templating import json_script
+
+
+def strict(text: str | bytes) -> Any:
+    """``json.loads`` that refuses NaN, Infinity and -Infinity, as browsers' JSON.parse does."""
+
+    def refuse(word: str) -> None:
+        raise ValueError(f"not JSON: {word}")
+
+    return json.loads(text, parse_constant=refuse)
+
+
+def test_the_strict_parser_refuses_bare_words() -> None:
+    with pytest.raises(ValueError, match="NaN"):
+        strict('{"x": NaN}')
+
+
+@pytest.mark.parametrize("value", [math.nan, math.inf, -math.inf])
+def test_non_finite_numbers_are_written_as_null(value: float) -> None:
+    content = {"normal": [value, 1.0, -0.0], "nested": {"area": value}, "items": (value,)}
+    expected = {"normal": [None, 1.0, -0.0], "nested": {"area": None}, "items": [None]}
+    assert strict(json_bytes(content)) == expected
+    assert strict(FastJSONResponse(content).body) == expected
+    assert strict(json_script(content)) == expected
+
+
+def test_finite_numbers_keep_every_bit() -> None:
+    values = [5e-324, 1.7976931348623157e308, 0.1, -2.5e-7]
+    assert strict(json_bytes(values)) == values
+
+
+@pytest.fixture(scope="module")
+def nan_client() -> TestClient:
+    """The real app with one extra route whose payload holds NaN and Infinity."""
+    app: FastAPI = create_app()
+
+    @app.get("/api/test-non-finite")
+    def non_finite() -> dict[str, float]:
+        return {"nan": math.nan, "inf": math.inf, "one": 1.0}
+
+    return TestClient(app, raise_server_exceptions=False)
+
+
+def test_a_route_that_returns_nan_answers_valid_json(nan_client: TestClient) -> None:
+    """FastAPI routes default to FastJSONResponse, so NaN becomes null, not a bare word."""
+    response = nan_client.get("/api/test-non-finite")
+    assert response.status_code == 200
+    assert strict(response.text) == {"nan": None, "inf": None, "one": 1.0}
+
+
+def test_errors_and_the_partials_twin_are_strict_json(client: TestClient) -> None:
+    for response in (
+        client.get("/api/nowhere"),
+        client.get("/partials", params={"ax": "1e200", "by": "1e200", "cz": "1e-300"}),
+        client.get("/api/normal", params={"ax": "1e308", "by": "1e308", "cz": "1e308"}),
+    ):
+        assert response.headers["content-type"].startswith("application/json")
+        strict(response.text)
