@@ -1,4 +1,4 @@
-"""OBJ, read by our own parser: every ``v`` kept, in file order.
+"""OBJ, read by our own parser (every ``v`` kept, in file order) and written exactly.
 
 trimesh's OBJ loader, even with ``process=False``, drops vertices no face uses and splits
 vertices where texture coordinates differ (a seam), so its arrays no longer line up with the
@@ -21,6 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mesh_normal.files.errors import MeshFileError
+from mesh_normal.files.formats import MAKER
 from mesh_normal.files.loaded import LoadedMesh, build
 from mesh_normal.files.polygons import fan
 
@@ -347,3 +348,19 @@ def _skipped(other: Counter[str]) -> list[str]:
         names = ", ".join(f"'{key[:20]}' ({count:,})" for key, count in other.most_common(5))
         notes.append(f"Ignored statements this reader does not use: {names}.")
     return notes
+
+
+def write_obj(points: NDArray[np.float64], triangles: NDArray[np.intp]) -> bytes:
+    """OBJ text: ``v`` lines in the shortest text that reads back as the same float64
+    (Python's ``repr``), then 1-based ``f`` lines.
+
+    Parameters
+    ----------
+    points : (n, 3) float64
+    triangles : (m, 3) intp
+    """
+    lines = [f"# written by {MAKER}"]
+    lines += [f"v {x!r} {y!r} {z!r}" for x, y, z in points.tolist()]
+    lines += [f"f {a} {b} {c}" for a, b, c in (triangles + 1).tolist()]
+    lines.append("")
+    return "\n".join(lines).encode()
