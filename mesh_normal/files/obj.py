@@ -185,10 +185,10 @@ def _numbers(lines: list[str], numbers: NDArray[np.intp], key: str) -> NDArray[n
     except ValueError:
         pass
     for line, number in zip(lines, numbers, strict=True):
-        values = line.split()[1:4]
-        if len(values) < 3:
-            raise MeshFileError(f"Line {number:,}: '{key}' needs 3 numbers, but has {len(values)}.")
-        for value in values:
+        words = line.split()[1:4]
+        if len(words) < 3:
+            raise MeshFileError(f"Line {number:,}: '{key}' needs 3 numbers, but has {len(words)}.")
+        for value in words:
             try:
                 float(value)
             except ValueError:
@@ -233,7 +233,11 @@ def _corner_indices(found: _Statements) -> tuple[NDArray[np.intp], NDArray[np.in
     return vertex_ids, normal_ids
 
 
-def _fields(corners: list[str]) -> list[NDArray[np.int64] | None]:
+#: Vertex, texture and normal index of every corner.
+_Fields = tuple[NDArray[np.int64], NDArray[np.int64] | None, NDArray[np.int64] | None]
+
+
+def _fields(corners: list[str]) -> _Fields:
     """Vertex, texture and normal index of every corner as written (0 where a field is empty,
     ``None`` for the normal unless every corner has one, and for texture indices when the
     form is uniform: they are not used)."""
@@ -241,20 +245,17 @@ def _fields(corners: list[str]) -> list[NDArray[np.int64] | None]:
     slashes, count = text.count("/"), len(corners)
     try:
         if not slashes:
-            return [_ints(text.split()), None, None]
+            return _ints(text.split()), None, None
         doubles = text.count("//")
         if slashes == 2 * count and doubles == count:  # v//vn
             tokens = text.replace("//", " ").split()
-            return [_ints(tokens[0::2]), None, _ints(tokens[1::2])]
+            return _ints(tokens[0::2]), None, _ints(tokens[1::2])
         if slashes in (count, 2 * count) and not doubles:  # v/vt or v/vt/vn
             width = slashes // count + 1
             tokens = text.replace("/", " ").split()
             if len(tokens) == width * count:
-                return [
-                    _ints(tokens[0::width]),
-                    None,
-                    _ints(tokens[2::width]) if width == 3 else None,
-                ]
+                normal_ids = _ints(tokens[2::width]) if width == 3 else None
+                return _ints(tokens[0::width]), None, normal_ids
     except ValueError:
         pass
     return _mixed_fields(corners)
@@ -264,7 +265,7 @@ def _ints(tokens: list[str]) -> NDArray[np.int64]:
     return np.array(tokens, dtype=np.int64)
 
 
-def _mixed_fields(corners: list[str]) -> list[NDArray[np.int64] | None]:
+def _mixed_fields(corners: list[str]) -> _Fields:
     columns: list[list[int]] = [[], [], []]
     has_normal = True
     for corner in corners:
@@ -281,7 +282,7 @@ def _mixed_fields(corners: list[str]) -> list[NDArray[np.int64] | None]:
         if not parts[0]:
             raise _BadCorner(corner)
     arrays = [np.array(column, dtype=np.int64) for column in columns]
-    return [arrays[0], arrays[1], arrays[2] if has_normal else None]
+    return arrays[0], arrays[1], arrays[2] if has_normal else None
 
 
 class _BadCorner(MeshFileError):

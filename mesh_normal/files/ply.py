@@ -362,9 +362,9 @@ def _polygons(column: object) -> tuple[NDArray[np.intp], NDArray[np.int64]]:
         return np.full(len(column), column.shape[1], dtype=np.intp), flat.astype(np.int64)
     rows = list(column)  # type: ignore[call-overload]
     counts = np.fromiter(map(len, rows), dtype=np.intp, count=len(rows))
-    flat = [value for row in rows for value in row]
+    listed = [value for row in rows for value in row]
     try:
-        values = np.array(flat, dtype=np.float64) if flat else np.zeros(0)
+        values = np.array(listed, dtype=np.float64) if listed else np.zeros(0)
     except ValueError:
         raise MeshFileError("The PLY file has a face index that is not a number.") from None
     if not np.all(values == np.round(values)):
