@@ -8,6 +8,7 @@ from contextlib import asynccontextmanager
 
 from fastapi import FastAPI
 
+import mesh_normal
 from app import config
 from app.calculator import api as calculator_api
 from app.calculator import pages
@@ -46,7 +47,7 @@ def create_app(upload_limit: int | None = None) -> FastAPI:
     """The app; ``upload_limit`` (bytes) overrides ``$MESH_UPLOAD_LIMIT_MB`` for mesh files."""
     app = FastAPI(
         title="Mesh Normal Calculator",
-        version="0.1.0",
+        version=mesh_normal.__version__,
         description=DESCRIPTION,
         docs_url=None,
         redoc_url=None,

@@ -4,9 +4,12 @@
 >>> mesh = mn.read_mesh("bunny.obj")           # a path, bytes or a binary file object
 >>> mn.face_normals(mesh.vertices, mesh.faces).normals.shape
 (69451, 3)
+>>> fixed = mn.orient(mesh.vertices, mesh.faces)
+>>> mn.write_mesh(mesh.vertices, fixed.faces, path="bunny-fixed.ply")   # or "ply": the bytes
 
 Every name below is loaded on first use, so that ``import mesh_normal`` (and the command line's
-``--help``) does not pay for numba until a kernel is needed.
+``--help``) does not pay for numba until a kernel is needed. The command line is
+``mesh-normal`` (or ``python -m mesh_normal``).
 """
 
 from __future__ import annotations
@@ -14,6 +17,8 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING, Any
 
+#: The one version: the wheel's metadata (hatch reads it here), ``mesh-normal --version``
+#: and the web app's OpenAPI document.
 __version__ = "0.2.0"
 
 if TYPE_CHECKING:

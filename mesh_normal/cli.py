@@ -1,4 +1,4 @@
-"""The ``mesh-normal`` command: analyse, export normals, fix winding, or serve the web app.
+"""The ``mesh-normal`` command: analyse, export normals, fix winding.
 
 Exit codes a script can use:
 
@@ -7,27 +7,33 @@ Exit codes a script can use:
 - 2: bad usage (an unknown option, a missing argument, an unsupported output type).
 - 3: the input file cannot be read or is not a valid mesh (the message names the problem).
 - 4: the output file cannot be written.
+
+It starts fast: this module imports only the standard library and the format table, and each
+command imports the library (numpy, numba, pydantic) when it runs, so ``--help`` and usage
+errors answer at once.
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import os
 import sys
 import time
+from collections.abc import Collection, Iterator
 from pathlib import Path
-from typing import Any, TextIO
+from typing import TYPE_CHECKING, Any, TextIO
 
-from mesh_normal.exports import KINDS, compute_normals, normals_file, normals_ply
-from mesh_normal.files import SUFFIXES, LoadedMesh, MeshFileError, read_mesh, write_mesh
-from mesh_normal.orientation import orient
-from mesh_normal.report import analyse, flips_by_component, report_payload
-from mesh_normal.vertices import WEIGHTINGS
+from mesh_normal import __version__
+from mesh_normal.files.formats import SUFFIXES, WRITABLE
+
+if TYPE_CHECKING:
+    from mesh_normal.files import LoadedMesh
 
 EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE, EXIT_INPUT, EXIT_OUTPUT = 0, 1, 2, 3, 4
 NORMAL_SUFFIXES = (".npy", ".csv", ".json", ".ply")
-FIX_FORMATS = ("ply", "stl", "obj")
+FIX_FORMATS = WRITABLE
 
 
 class Failure(Exception):
@@ -57,6 +63,8 @@ class Progress:
 
 
 def load(path: str, progress: Progress) -> tuple[LoadedMesh, int]:
+    from mesh_normal.files import MeshFileError, read_mesh
+
     progress.step(f"reading {path}")
     try:
         data = Path(path).read_bytes()
@@ -82,6 +90,8 @@ def write(path: str, data: bytes) -> None:
 
 
 def analyze(args: argparse.Namespace, progress: Progress) -> int:
+    from mesh_normal.report import analyse, report_payload
+
     mesh, size = load(args.file, progress)
     progress.step("checking faces, edges and winding")
     report = report_payload(analyse(mesh, Path(args.file).name, size))
@@ -118,6 +128,8 @@ def summary(report: dict[str, Any]) -> str:
 
 
 def normals(args: argparse.Namespace, progress: Progress) -> int:
+    from mesh_normal.exports import compute_normals, normals_file, normals_ply
+
     suffix = Path(args.output).suffix.lower()
     if suffix not in NORMAL_SUFFIXES:
         raise Failure(
@@ -150,6 +162,10 @@ def normals(args: argparse.Namespace, progress: Progress) -> int:
 
 
 def fix(args: argparse.Namespace, progress: Progress) -> int:
+    from mesh_normal.files import MeshFileError, write_mesh
+    from mesh_normal.orientation import orient
+    from mesh_normal.report import flips_by_component
+
     chosen = args.format or Path(args.output).suffix.lower().lstrip(".")
     if chosen not in FIX_FORMATS:
         raise Failure(
@@ -183,8 +199,33 @@ SERVE_HINT = (
 
 
 def serve(_args: argparse.Namespace, _progress: Progress) -> int:
+    """Say how to start the web app, which the package does not hold."""
     print(f"mesh-normal: {SERVE_HINT}", file=sys.stderr)
     return EXIT_USAGE
+
+
+class Choices(Collection[str]):
+    """An argument's choices named by the module that defines them, imported on first use.
+
+    ``mesh-normal --help`` never looks at a subcommand's choices (given a ``metavar``), so it
+    does not import the module (and numba behind it); ``mesh-normal normals --help`` and
+    parsing do.
+    """
+
+    def __init__(self, module: str, name: str) -> None:
+        self.module, self.name = module, name
+
+    def values(self) -> tuple[str, ...]:
+        return tuple(getattr(importlib.import_module(self.module), self.name))
+
+    def __contains__(self, value: object) -> bool:
+        return value in self.values()
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.values())
+
+    def __len__(self) -> int:
+        return len(self.values())
 
 
 def parser() -> argparse.ArgumentParser:
@@ -195,6 +236,7 @@ def parser() -> argparse.ArgumentParser:
         epilog="Exit codes: 0 done, 1 analyze found errors, 2 usage, 3 unreadable input, "
         "4 unwritable output.",
     )
+    main_parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     main_parser.add_argument(
         "--progress",
         action=argparse.BooleanOptionalAction,
@@ -203,42 +245,55 @@ def parser() -> argparse.ArgumentParser:
     )
     commands = main_parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
-    one = commands.add_parser(
+    analyze_parser = commands.add_parser(
         "analyze", help="report on a mesh file", description=f"Report on a mesh file ({formats})."
     )
-    one.add_argument("file")
-    one.add_argument("--json", action="store_true", help="the full report as JSON")
-    one.set_defaults(run=analyze)
+    analyze_parser.add_argument("file")
+    analyze_parser.add_argument("--json", action="store_true", help="the full report as JSON")
+    analyze_parser.set_defaults(run=analyze)
 
-    two = commands.add_parser("normals", help="write face, vertex or corner normals")
-    two.add_argument("file")
-    two.add_argument("--kind", choices=KINDS, default="vertex")
-    two.add_argument("--weighting", choices=WEIGHTINGS, default="angle")
-    two.add_argument("--crease-angle", type=float, default=30.0, metavar="DEGREES")
-    two.add_argument(
+    normals_parser = commands.add_parser("normals", help="write face, vertex or corner normals")
+    normals_parser.add_argument("file")
+    # A metavar, because argparse formats a metavar from the choices as each is added.
+    normals_parser.add_argument(
+        "--kind",
+        choices=Choices("mesh_normal.exports", "KINDS"),
+        default="vertex",
+        metavar="KIND",
+        help="%(choices)s (default: %(default)s)",
+    )
+    normals_parser.add_argument(
+        "--weighting",
+        choices=Choices("mesh_normal.vertices", "WEIGHTINGS"),
+        default="angle",
+        metavar="WEIGHTING",
+        help="of vertex normals: %(choices)s (default: %(default)s)",
+    )
+    normals_parser.add_argument("--crease-angle", type=float, default=30.0, metavar="DEGREES")
+    normals_parser.add_argument(
         "-o",
         "--output",
         required=True,
         help="OUT.npy (float64), OUT.csv, OUT.json or OUT.ply (face/vertex)",
     )
-    two.set_defaults(run=normals)
+    normals_parser.set_defaults(run=normals)
 
-    three = commands.add_parser("fix", help="write the mesh with consistent, outward winding")
-    three.add_argument("input")
-    three.add_argument("output", help="OUT.ply, OUT.stl or OUT.obj")
-    three.add_argument("--format", choices=FIX_FORMATS)
-    three.set_defaults(run=fix)
+    fix_parser = commands.add_parser("fix", help="write the mesh with consistent, outward winding")
+    fix_parser.add_argument("input")
+    fix_parser.add_argument("output", help=f"OUT.{', OUT.'.join(FIX_FORMATS)}")
+    fix_parser.add_argument("--format", choices=FIX_FORMATS)
+    fix_parser.set_defaults(run=fix)
 
-    four = commands.add_parser("serve", help="run the web app")
-    four.add_argument("--host", default="127.0.0.1")
-    four.add_argument("--port", type=int, default=8000)
-    four.add_argument(
-        "--upload-limit-mb",
-        type=float,
-        default=None,
-        help="largest mesh upload (default: $MESH_UPLOAD_LIMIT_MB or 200)",
+    serve_parser = commands.add_parser(
+        "serve",
+        help="say how to start the web app (not part of this package)",
+        description=SERVE_HINT,
     )
-    four.set_defaults(run=serve)
+    # The old options are accepted and ignored, so that old scripts get the sentence.
+    serve_parser.add_argument("--host", help=argparse.SUPPRESS)
+    serve_parser.add_argument("--port", help=argparse.SUPPRESS)
+    serve_parser.add_argument("--upload-limit-mb", help=argparse.SUPPRESS)
+    serve_parser.set_defaults(run=serve)
     return main_parser
 
 

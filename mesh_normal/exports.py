@@ -11,7 +11,7 @@ from pydantic_core import to_json
 
 from mesh_normal.faces import face_normals
 from mesh_normal.files import LoadedMesh
-from mesh_normal.files.write import ply_bytes
+from mesh_normal.files.ply import ply_bytes
 from mesh_normal.vertices import Weighting, corner_normals, vertex_normals
 
 NormalsKind = Literal["face", "vertex", "corner"]

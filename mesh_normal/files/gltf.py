@@ -101,7 +101,7 @@ def _flatten(scene: dict[str, Any], file_format: str) -> LoadedMesh:
     faces = np.concatenate([part[1] + offset for part, offset in zip(parts, offsets, strict=False)])
     normals = None
     if all(part[2] is not None and len(part[2]) == len(part[0]) for part in parts):
-        normals = np.concatenate([part[2] for part in parts])  # type: ignore[misc]
+        normals = np.concatenate([part[2] for part in parts])
     return build(
         file_format, vertices, faces, source_faces=len(faces), vertex_normals=normals, notes=notes
     )

@@ -101,7 +101,7 @@ def _nth(kind: str) -> Describe:
     return lambda index: f"{kind} {index:,} (counting from 0)"
 
 
-def first_bad_vertex(points: FloatArray) -> int | None:
+def first_bad_vertex(points: NDArray[np.floating]) -> int | None:
     """The index of the first row with a NaN or infinite coordinate, or ``None``."""
     if not points.size or (np.isfinite(points.min()) and np.isfinite(points.max())):
         return None  # NaN propagates through min and max: two fast passes settle most files

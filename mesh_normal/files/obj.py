@@ -1,4 +1,4 @@
-"""OBJ, read by our own parser: every ``v`` kept, in file order.
+"""OBJ, read by our own parser (every ``v`` kept, in file order) and written exactly.
 
 trimesh's OBJ loader, even with ``process=False``, drops vertices no face uses and splits
 vertices where texture coordinates differ (a seam), so its arrays no longer line up with the
@@ -21,6 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mesh_normal.files.errors import MeshFileError
+from mesh_normal.files.formats import MAKER
 from mesh_normal.files.loaded import LoadedMesh, build
 from mesh_normal.files.polygons import fan
 
@@ -184,10 +185,10 @@ def _numbers(lines: list[str], numbers: NDArray[np.intp], key: str) -> NDArray[n
     except ValueError:
         pass
     for line, number in zip(lines, numbers, strict=True):
-        values = line.split()[1:4]
-        if len(values) < 3:
-            raise MeshFileError(f"Line {number:,}: '{key}' needs 3 numbers, but has {len(values)}.")
-        for value in values:
+        words = line.split()[1:4]
+        if len(words) < 3:
+            raise MeshFileError(f"Line {number:,}: '{key}' needs 3 numbers, but has {len(words)}.")
+        for value in words:
             try:
                 float(value)
             except ValueError:
@@ -232,7 +233,11 @@ def _corner_indices(found: _Statements) -> tuple[NDArray[np.intp], NDArray[np.in
     return vertex_ids, normal_ids
 
 
-def _fields(corners: list[str]) -> list[NDArray[np.int64] | None]:
+#: Vertex, texture and normal index of every corner.
+_Fields = tuple[NDArray[np.int64], NDArray[np.int64] | None, NDArray[np.int64] | None]
+
+
+def _fields(corners: list[str]) -> _Fields:
     """Vertex, texture and normal index of every corner as written (0 where a field is empty,
     ``None`` for the normal unless every corner has one, and for texture indices when the
     form is uniform: they are not used)."""
@@ -240,20 +245,17 @@ def _fields(corners: list[str]) -> list[NDArray[np.int64] | None]:
     slashes, count = text.count("/"), len(corners)
     try:
         if not slashes:
-            return [_ints(text.split()), None, None]
+            return _ints(text.split()), None, None
         doubles = text.count("//")
         if slashes == 2 * count and doubles == count:  # v//vn
             tokens = text.replace("//", " ").split()
-            return [_ints(tokens[0::2]), None, _ints(tokens[1::2])]
+            return _ints(tokens[0::2]), None, _ints(tokens[1::2])
         if slashes in (count, 2 * count) and not doubles:  # v/vt or v/vt/vn
             width = slashes // count + 1
             tokens = text.replace("/", " ").split()
             if len(tokens) == width * count:
-                return [
-                    _ints(tokens[0::width]),
-                    None,
-                    _ints(tokens[2::width]) if width == 3 else None,
-                ]
+                normal_ids = _ints(tokens[2::width]) if width == 3 else None
+                return _ints(tokens[0::width]), None, normal_ids
     except ValueError:
         pass
     return _mixed_fields(corners)
@@ -263,7 +265,7 @@ def _ints(tokens: list[str]) -> NDArray[np.int64]:
     return np.array(tokens, dtype=np.int64)
 
 
-def _mixed_fields(corners: list[str]) -> list[NDArray[np.int64] | None]:
+def _mixed_fields(corners: list[str]) -> _Fields:
     columns: list[list[int]] = [[], [], []]
     has_normal = True
     for corner in corners:
@@ -280,7 +282,7 @@ def _mixed_fields(corners: list[str]) -> list[NDArray[np.int64] | None]:
         if not parts[0]:
             raise _BadCorner(corner)
     arrays = [np.array(column, dtype=np.int64) for column in columns]
-    return [arrays[0], arrays[1], arrays[2] if has_normal else None]
+    return arrays[0], arrays[1], arrays[2] if has_normal else None
 
 
 class _BadCorner(MeshFileError):
@@ -347,3 +349,19 @@ def _skipped(other: Counter[str]) -> list[str]:
         names = ", ".join(f"'{key[:20]}' ({count:,})" for key, count in other.most_common(5))
         notes.append(f"Ignored statements this reader does not use: {names}.")
     return notes
+
+
+def write_obj(points: NDArray[np.float64], triangles: NDArray[np.intp]) -> bytes:
+    """OBJ text: ``v`` lines in the shortest text that reads back as the same float64
+    (Python's ``repr``), then 1-based ``f`` lines.
+
+    Parameters
+    ----------
+    points : (n, 3) float64
+    triangles : (m, 3) intp
+    """
+    lines = [f"# written by {MAKER}"]
+    lines += [f"v {x!r} {y!r} {z!r}" for x, y, z in points.tolist()]
+    lines += [f"f {a} {b} {c}" for a, b, c in (triangles + 1).tolist()]
+    lines.append("")
+    return "\n".join(lines).encode()

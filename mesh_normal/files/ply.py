@@ -6,6 +6,9 @@ element is read as the header declares it (fixed-size elements with one ``np.fro
 lists of one size too; mixed sizes record by record), vertices keep their order, faces are
 fan-triangulated in file order, and ``nx ny nz`` on vertices or faces are kept. Elements other
 than ``vertex`` and ``face`` are read past and named in a note.
+
+Written as binary little-endian PLY with float64 coordinates (:func:`write_ply`), and with
+vertex or face normals beside them (:func:`ply_bytes`).
 """
 
 from __future__ import annotations
@@ -17,6 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mesh_normal.files.errors import MeshFileError
+from mesh_normal.files.formats import MAKER
 from mesh_normal.files.loaded import LoadedMesh, build
 from mesh_normal.files.polygons import fan
 
@@ -358,9 +362,9 @@ def _polygons(column: object) -> tuple[NDArray[np.intp], NDArray[np.int64]]:
         return np.full(len(column), column.shape[1], dtype=np.intp), flat.astype(np.int64)
     rows = list(column)  # type: ignore[call-overload]
     counts = np.fromiter(map(len, rows), dtype=np.intp, count=len(rows))
-    flat = [value for row in rows for value in row]
+    listed = [value for row in rows for value in row]
     try:
-        values = np.array(flat, dtype=np.float64) if flat else np.zeros(0)
+        values = np.array(listed, dtype=np.float64) if listed else np.zeros(0)
     except ValueError:
         raise MeshFileError("The PLY file has a face index that is not a number.") from None
     if not np.all(values == np.round(values)):
@@ -377,3 +381,58 @@ def _normals(element: _Element | None) -> NDArray[np.float64] | None:
 def _face_normals(face: _Element | None, source: NDArray[np.intp]) -> NDArray[np.float64] | None:
     normals = _normals(face)
     return None if normals is None else normals[source]
+
+
+def write_ply(points: NDArray[np.float64], triangles: NDArray[np.intp]) -> bytes:
+    """Binary little-endian PLY with float64 coordinates: it reads back bit for bit.
+
+    Parameters
+    ----------
+    points : (n, 3) float64
+    triangles : (m, 3) intp
+    """
+    return ply_bytes(points, triangles)
+
+
+def ply_bytes(
+    points: NDArray[np.float64],
+    triangles: NDArray[np.intp],
+    vertex_normals: NDArray[np.float64] | None = None,
+    face_normals: NDArray[np.float64] | None = None,
+) -> bytes:
+    """Binary little-endian PLY: float64 ``x y z`` and int32 triangles, and ``nx ny nz``
+    (float64) of the vertices or of the faces where those normals are given.
+
+    Parameters
+    ----------
+    points : (n, 3) float64
+    triangles : (m, 3) intp
+    vertex_normals : (n, 3) float64, optional
+    face_normals : (m, 3) float64, optional
+    """
+    normal_fields = [("nx", "<f8"), ("ny", "<f8"), ("nz", "<f8")]
+    normal_lines = "".join(f"property double {name}\n" for name, _ in normal_fields)
+    vertices = np.empty(
+        len(points),
+        dtype=[("xyz", "<f8", (3,))] + (normal_fields if vertex_normals is not None else []),
+    )
+    faces = np.empty(
+        len(triangles),
+        dtype=[("count", "u1"), ("indices", "<i4", (3,))]
+        + (normal_fields if face_normals is not None else []),
+    )
+    vertices["xyz"] = points
+    faces["count"] = 3
+    faces["indices"] = triangles
+    for records, normals in ((vertices, vertex_normals), (faces, face_normals)):
+        if normals is not None:
+            for axis, (name, _) in enumerate(normal_fields):
+                records[name] = normals[:, axis]
+    header = (
+        f"ply\nformat binary_little_endian 1.0\ncomment written by {MAKER}\n"
+        f"element vertex {len(points)}\nproperty double x\nproperty double y\n"
+        f"property double z\n{normal_lines if vertex_normals is not None else ''}"
+        f"element face {len(triangles)}\nproperty list uchar int vertex_indices\n"
+        f"{normal_lines if face_normals is not None else ''}end_header\n"
+    )
+    return header.encode() + vertices.tobytes() + faces.tobytes()

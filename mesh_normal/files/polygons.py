@@ -36,7 +36,7 @@ def fan(counts: NDArray[np.integer]) -> tuple[NDArray[np.intp], NDArray[np.intp]
     return corners, source, _notes(counts)
 
 
-def _notes(counts: NDArray[np.intp]) -> list[str]:
+def _notes(counts: NDArray[np.integer]) -> list[str]:
     quads, larger = int(np.sum(counts == 4)), int(np.sum(counts > 4))
     short = int(np.sum(counts < 3))
     notes = []

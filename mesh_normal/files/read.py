@@ -3,51 +3,55 @@
 from __future__ import annotations
 
 import dataclasses
+import io
+import os
 import re
-from collections.abc import Callable
+from pathlib import Path
+from typing import Protocol
 
 from mesh_normal.files.errors import MeshFileError, unsupported
-from mesh_normal.files.gltf import read_glb, read_gltf
+from mesh_normal.files.formats import FORMATS, SUFFIXES, suffix_format
 from mesh_normal.files.loaded import LoadedMesh
-from mesh_normal.files.obj import read_obj
-from mesh_normal.files.off import read_off
-from mesh_normal.files.ply import read_ply
-from mesh_normal.files.stl import is_binary, looks_ascii, read_stl
+from mesh_normal.files.stl import is_binary, looks_ascii
 
-#: File extension (lower case, with the dot) to format.
-SUFFIXES: dict[str, str] = {
-    ".stl": "stl",
-    ".obj": "obj",
-    ".ply": "ply",
-    ".off": "off",
-    ".glb": "glb",
-    ".gltf": "gltf",
-}
 
-NAMES = {"stl": "STL", "obj": "OBJ", "ply": "PLY", "off": "OFF", "glb": "GLB", "gltf": "glTF"}
+class BinaryReadable(Protocol):
+    """A file object opened in binary mode (``open(path, "rb")``, ``io.BytesIO``, an upload)."""
 
-READERS: dict[str, Callable[[bytes], LoadedMesh]] = {
-    "stl": read_stl,
-    "obj": read_obj,
-    "ply": read_ply,
-    "off": read_off,
-    "glb": read_glb,
-    "gltf": read_gltf,
-}
+    def read(self) -> bytes: ...
+
+
+#: What :func:`read_mesh` reads: a path, the file's bytes, or a binary file object.
+MeshSource = str | os.PathLike[str] | bytes | bytearray | memoryview | BinaryReadable
 
 _OFF = re.compile(rb"\s*(?:#[^\n]*\n\s*)*(?:ST)?C?N?4?n?OFF\b")
 _OBJ = re.compile(rb"^[ \t]*(?:v|f)[ \t]", re.MULTILINE)
 
 
-def read_mesh(data: bytes, filename: str | None = None) -> LoadedMesh:
+def read_mesh(source: MeshSource, filename: str | None = None) -> LoadedMesh:
     """Read a mesh file; the format comes from the bytes, else from the file name's extension.
+
+    >>> read_mesh("bunny.obj")                         # a path (str or os.PathLike)
+    >>> read_mesh(data, "bunny.obj")                   # bytes, with the name if known
+    >>> with open("bunny.obj", "rb") as file:          # a binary file object
+    ...     mesh = read_mesh(file)
+
+    ``filename`` only helps tell the format (and names it in notes); for a path or a file object
+    with a ``name`` it defaults to that name.
 
     Raises
     ------
     MeshFileError
         With one sentence naming the problem: 400 for a broken file or bad content, 415 for
         a format that is unknown or not supported.
+    OSError
+        A path that cannot be opened, as Python raises it (``FileNotFoundError``,
+        ``PermissionError``, ``IsADirectoryError``), like ``open`` and ``numpy.load``: the file
+        was never read, so there is no mesh to judge.
+    TypeError
+        A source of another type, or a file object opened in text mode.
     """
+    data, filename = _bytes_of(source, filename)
     if not data:
         raise MeshFileError("The file is empty (0 bytes).")
     if data.startswith(b"\xef\xbb\xbf"):  # a UTF-8 byte order mark: text formats only
@@ -57,28 +61,48 @@ def read_mesh(data: bytes, filename: str | None = None) -> LoadedMesh:
     if found is None:
         raise unknown_format(filename)
     try:
-        mesh = READERS[found](data)
+        mesh = FORMATS[found].read(data)
     except MeshFileError:
         raise
     except Exception as error:  # a library's own exception: never a 500
         reason = str(error).strip().rstrip(".") or type(error).__name__
         raise MeshFileError(
-            f"The file could not be read as {NAMES[found]}: {reason[:200]}."
+            f"The file could not be read as {FORMATS[found].title}: {reason[:200]}."
         ) from error
     if named is not None and named != found:
-        note = (
-            f"The file is named as {NAMES[named]} but holds {NAMES[found]}; it was read as "
-            f"{NAMES[found]}."
-        )
+        named_as, holds = FORMATS[named].title, FORMATS[found].title
+        note = f"The file is named as {named_as} but holds {holds}; it was read as {holds}."
         mesh = dataclasses.replace(mesh, notes=(note, *mesh.notes))
     return mesh
 
 
-def suffix_format(filename: str | None) -> str | None:
-    """The format a file name's extension names, or ``None``."""
-    if not filename or "." not in filename:
-        return None
-    return SUFFIXES.get("." + filename.rsplit(".", 1)[-1].lower())
+def _bytes_of(source: MeshSource, filename: str | None) -> tuple[bytes, str | None]:
+    """The bytes to read and the file name to go by."""
+    if isinstance(source, bytes | bytearray | memoryview):
+        return bytes(source), filename
+    if isinstance(source, str | os.PathLike):
+        path = Path(source)
+        return path.read_bytes(), filename or path.name
+    if isinstance(source, io.TextIOBase):
+        raise TypeError(_TEXT_MODE)
+    read = getattr(source, "read", None)
+    if not callable(read):
+        raise TypeError(
+            "read_mesh reads a path (str or os.PathLike), bytes or a binary file object, "
+            f"not {type(source).__name__}."
+        )
+    data = read()
+    if isinstance(data, str):
+        raise TypeError(_TEXT_MODE)
+    if not isinstance(data, bytes | bytearray | memoryview):
+        raise TypeError(f"The file object's read() gave {type(data).__name__}, not bytes.")
+    name = getattr(source, "name", None)
+    if filename is None and isinstance(name, str | os.PathLike):
+        filename = Path(name).name  # an int name is a file descriptor: nothing to go by
+    return bytes(data), filename
+
+
+_TEXT_MODE = "read_mesh needs a file opened in binary mode: open(path, 'rb'), not 'r'."
 
 
 def sniff(data: bytes) -> str | None:

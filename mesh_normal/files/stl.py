@@ -8,6 +8,8 @@ with ``solid``, so :func:`is_binary` (the ``84 + 50 * count`` rule) is asked bef
 
 Facet normals are kept as stored. Many exporters write zeros for "not given": when every one is
 zero, :attr:`LoadedMesh.file_face_normals` is ``None`` and a note says so.
+
+:func:`write_stl` writes binary STL: float32 corners, our face normals as facet normals.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mesh_normal.files.errors import MeshFileError
+from mesh_normal.files.formats import MAKER
 from mesh_normal.files.loaded import LoadedMesh, build, first_bad_vertex
 from mesh_normal.files.weld import weld
 
@@ -142,3 +145,30 @@ def _welded(
         face_normals=face_normals,
         notes=notes,
     )
+
+
+def write_stl(points: NDArray[np.float64], triangles: NDArray[np.intp]) -> bytes:
+    """Binary STL: float32 corners and our face normals as facet normals (zero for a
+    degenerate face).
+
+    Parameters
+    ----------
+    points : (n, 3) float64
+        Checked; a coordinate beyond float32's range is a :class:`MeshFileError` (422).
+    triangles : (m, 3) intp
+    """
+    # Imported here: reading STL needs no compiled kernel, only writing its normals does.
+    from mesh_normal.faces import face_normals
+
+    largest = float(np.abs(points).max(initial=0.0))
+    if largest > float(np.finfo(np.float32).max):
+        raise MeshFileError(
+            f"Coordinates up to {largest:.3g} do not fit in STL, which stores "
+            "32-bit floats (up to about 3.4e38); choose PLY or OBJ.",
+            422,
+        )
+    records = np.zeros(len(triangles), dtype=RECORD)
+    records["normal"] = face_normals(points, triangles).normals
+    records["corners"] = points[triangles]
+    header = f"binary STL written by {MAKER}".encode().ljust(HEADER - 4, b" ")
+    return header + len(triangles).to_bytes(4, "little") + records.tobytes()

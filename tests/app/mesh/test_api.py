@@ -490,7 +490,7 @@ def test_a_trailing_slash_gets_the_upload_limit_too(client: TestClient) -> None:
 
 def test_stored_corner_and_vertex_normals_are_compared(client: TestClient) -> None:
     from mesh_normal import face_normals
-    from mesh_normal.files.write import ply_bytes
+    from mesh_normal.files.ply import ply_bytes
 
     mesh = read_mesh(CUBE.encode(), "cube.obj")
     flat = face_normals(mesh.vertices, mesh.faces).normals  # a cube's corners: its faces'

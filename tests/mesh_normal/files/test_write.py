@@ -1,5 +1,7 @@
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -39,3 +41,56 @@ def test_unknown_format() -> None:
 def test_bad_mesh_is_a_value_error() -> None:
     with pytest.raises(ValueError, match="refers to vertex 9"):
         write_mesh(TETRA_VERTICES, [[0, 1, 9]], "ply")
+
+
+@pytest.mark.parametrize("suffix", [".ply", ".stl", ".obj", ".OBJ"])
+def test_write_to_a_path_takes_the_format_from_the_suffix(tmp_path: Path, suffix: str) -> None:
+    path = tmp_path / f"tetra{suffix}"
+    assert write_mesh(TETRA_VERTICES, TETRA_FACES, path=path) is None
+    assert path.read_bytes() == write_mesh(TETRA_VERTICES, TETRA_FACES, suffix[1:].lower())
+    assert read_mesh(path).format == suffix[1:].lower()
+
+
+def test_write_to_a_str_path_with_a_format_that_overrides_the_suffix(tmp_path: Path) -> None:
+    path = tmp_path / "tetra.data"
+    write_mesh(TETRA_VERTICES, TETRA_FACES, "stl", path=str(path))
+    assert path.read_bytes() == write_mesh(TETRA_VERTICES, TETRA_FACES, "stl")
+
+
+def test_write_replaces_an_existing_file(tmp_path: Path) -> None:
+    path = tmp_path / "tetra.obj"
+    path.write_bytes(b"old" * 10_000)
+    write_mesh(TETRA_VERTICES, TETRA_FACES, path=path)
+    assert path.read_bytes() == write_mesh(TETRA_VERTICES, TETRA_FACES, "obj")
+
+
+@pytest.mark.parametrize(
+    ("name", "message"),
+    [
+        ("tetra.off", "Cannot write 'off' files; the formats are ply, stl, obj."),
+        ("tetra.dat", "The format cannot be told from the name 'tetra.dat'"),
+        ("tetra", "The format cannot be told from the name 'tetra'"),
+    ],
+)
+def test_a_path_without_a_writable_suffix(tmp_path: Path, name: str, message: str) -> None:
+    with pytest.raises(MeshFileError) as error:
+        write_mesh(TETRA_VERTICES, TETRA_FACES, path=tmp_path / name)
+    assert str(error.value).startswith(message)
+    assert error.value.status_code == 415
+    assert not (tmp_path / name).exists()
+
+
+def test_neither_format_nor_path_is_a_type_error() -> None:
+    with pytest.raises(TypeError, match="a file_format or a path"):
+        write_mesh(TETRA_VERTICES, TETRA_FACES)  # type: ignore[call-overload]
+
+
+def test_a_bad_mesh_writes_no_file(tmp_path: Path) -> None:
+    with pytest.raises(ValueError, match="refers to vertex 9"):
+        write_mesh(TETRA_VERTICES, [[0, 1, 9]], path=tmp_path / "bad.ply")
+    assert not (tmp_path / "bad.ply").exists()
+
+
+def test_a_missing_folder_is_python_s_os_error(tmp_path: Path) -> None:
+    with pytest.raises(FileNotFoundError):
+        write_mesh(TETRA_VERTICES, TETRA_FACES, path=tmp_path / "no" / "such.ply")

@@ -1,0 +1,91 @@
+"""The one table of mesh file formats: name, suffixes, media type, reader and writer.
+
+Everything else that lists formats (:data:`SUFFIXES`, :data:`WRITABLE`, the command line's
+choices, the error sentences) is derived from :data:`FORMATS`. The table names its reader and
+writer instead of importing them, so that reading it (for ``mesh-normal --help``, say) loads
+neither numpy nor any reader: each format's module under ``mesh_normal.files`` is imported on
+its first :meth:`MeshFormat.read` or :meth:`MeshFormat.write`.
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, cast
+
+if TYPE_CHECKING:
+    import numpy as np
+    from numpy.typing import NDArray
+
+    from mesh_normal.files.loaded import LoadedMesh
+
+    Reader = Callable[[bytes], LoadedMesh]
+    #: ``(points, triangles) -> bytes``, both already checked by ``check_mesh``.
+    Writer = Callable[[NDArray[np.float64], NDArray[np.intp]], bytes]
+
+#: What the writers put in the comment of a file's header.
+MAKER = "Mesh Normal Calculator"
+
+
+@dataclass(frozen=True, slots=True)
+class MeshFormat:
+    """One mesh file format.
+
+    ``module`` is the module under ``mesh_normal.files`` that holds ``read_<name>`` and, when
+    ``writable``, ``write_<name>``.
+    """
+
+    name: str
+    title: str
+    suffixes: tuple[str, ...]
+    media_type: str
+    module: str
+    writable: bool = False
+
+    def read(self, data: bytes) -> LoadedMesh:
+        """The mesh in ``data``; raises :class:`~mesh_normal.files.MeshFileError` (or whatever
+        the reader's library raises, which :func:`~mesh_normal.files.read_mesh` rewords)."""
+        reader = cast("Reader", self._function("read"))
+        return reader(data)
+
+    def write(self, points: NDArray[np.float64], triangles: NDArray[np.intp]) -> bytes:
+        """The bytes of the file; ``points`` and ``triangles`` must be checked already."""
+        if not self.writable:
+            raise ValueError(f"{self.title} files cannot be written.")
+        writer = cast("Writer", self._function("write"))
+        return writer(points, triangles)
+
+    def _function(self, verb: str) -> object:
+        module = importlib.import_module(f"mesh_normal.files.{self.module}")
+        return getattr(module, f"{verb}_{self.name}")
+
+
+#: Format name to format, in order of preference for writing (PLY keeps float64 exactly).
+FORMATS: dict[str, MeshFormat] = {
+    entry.name: entry
+    for entry in (
+        # PLY and OFF have no registered media type.
+        MeshFormat("ply", "PLY", (".ply",), "application/octet-stream", "ply", writable=True),
+        MeshFormat("stl", "STL", (".stl",), "model/stl", "stl", writable=True),
+        MeshFormat("obj", "OBJ", (".obj",), "model/obj", "obj", writable=True),
+        MeshFormat("off", "OFF", (".off",), "application/octet-stream", "off"),
+        MeshFormat("glb", "GLB", (".glb",), "model/gltf-binary", "gltf"),
+        MeshFormat("gltf", "glTF", (".gltf",), "model/gltf+json", "gltf"),
+    )
+}
+
+#: File extension (lower case, with the dot) to format name.
+SUFFIXES: dict[str, str] = {
+    suffix: entry.name for entry in FORMATS.values() for suffix in entry.suffixes
+}
+
+#: The formats :func:`~mesh_normal.files.write_mesh` can write, in order of preference.
+WRITABLE: tuple[str, ...] = tuple(name for name, entry in FORMATS.items() if entry.writable)
+
+
+def suffix_format(filename: str | None) -> str | None:
+    """The format a file name's extension names, or ``None``."""
+    if not filename or "." not in filename:
+        return None
+    return SUFFIXES.get("." + filename.rsplit(".", 1)[-1].lower())
