@@ -80,8 +80,8 @@ def test_report_names_the_flipped_face_and_offers_the_fix(client: TestClient) ->
     response, html = post(client, CUBE_ONE_FLIPPED)
     assert response.template.name == "mesh.html"  # type: ignore[attr-defined]
     report = response.context["report"]  # type: ignore[attr-defined]
-    assert [p["code"] for p in report["problems"]] == ["winding"]
-    assert report["fix"]["flipped_face_indices"] == [0]
+    assert [p.code for p in report.problems] == ["winding"]
+    assert report.fix.flipped_face_indices == [0]
     winding = html.text("problem-winding")
     assert "wound against their neighbours" in winding
     assert "Faces the fix flips (0-based): 0." in winding
