@@ -82,7 +82,9 @@ class FileInfo(_Model):
 
     name: str | None = Field(description="The file's name as uploaded, or null without one.")
     format: MeshFormat = Field(description="The format read from the bytes (else the name).")
-    bytes: int = Field(ge=0, description="The file's size in bytes.")
+    bytes: int = Field(
+        ge=0, description="The file's size in bytes (0 for a mesh handed over already read)."
+    )
 
 
 class Bounds(_Model):
@@ -185,9 +187,7 @@ class MeshReport(_Model):
         description="How the normals stored in the file agree with ours; null without any."
     )
     notes: list[str] = Field(description="What the reader noticed about the file, in words.")
-    problems: list[Problem] = Field(
-        default_factory=list, description="Each problem found, the most serious first."
-    )
+    problems: list[Problem] = Field(description="Each problem found, the most serious first.")
 
 
 @dataclass(frozen=True, slots=True)
@@ -290,6 +290,7 @@ def build_report(analysis: MeshAnalysis) -> MeshReport:
         fix=_fix(orientation),
         file_normals=file_normal_agreement(analysis),
         notes=list(mesh.notes),
+        problems=[],  # the diagnosis reads the rest of the report
     )
     return report.model_copy(update={"problems": problems(report)})
 
