@@ -102,8 +102,9 @@ class ComponentFix(_Model):
     closed: bool = Field(description="Whether every edge of the part joins exactly two faces.")
     orientable: bool = Field(description="Whether the part can be wound consistently at all.")
     method: Method = Field(
-        description="How its outside was decided: by the signed volume (closed parts), by a "
-        "heuristic (open parts), or not at all (one-sided parts)."
+        description="How its outside was chosen: by the sign of its volume (closed parts), by "
+        "a heuristic (open parts), or not at all (one-sided or flat parts, closed parts that "
+        "enclose no volume)."
     )
     faces_flipped: int = Field(ge=0, description="How many of its faces orient() reverses.")
     volume: Measure = Field(
@@ -164,8 +165,10 @@ class MeshReport(_Model):
         description="Whether the two faces of every shared edge run it in opposite directions."
     )
     orientation: Verdict = Field(
-        description="Where the normals point: outward, inward, mixed (parts disagree) or "
-        "undetermined (no part encloses a volume or has a decidable outside)."
+        description="The winding as the file has it: outward (the fix flips no face), inward "
+        "(it flips every face), mixed (it flips some: inconsistent winding, or parts that "
+        "disagree) or undetermined (no part has a decidable outside: no faces, or only flat "
+        "or one-sided parts)."
     )
     degenerate_faces: int = Field(ge=0, description="Faces without area (and so no normal).")
     degenerate_face_indices: list[int] = Field(
