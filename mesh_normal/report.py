@@ -247,6 +247,8 @@ def mesh_report(source: LoadedMesh | MeshSource, filename: str | None = None) ->
         When the file is not a mesh that can be read.
     OSError
         When the path cannot be read.
+    TypeError
+        When a file object gives text, not bytes.
     """
     if isinstance(source, LoadedMesh):
         return build_report(analyse(source, filename, 0))
@@ -261,9 +263,12 @@ def _file_bytes(source: MeshSource, filename: str | None) -> tuple[bytes, str | 
     if isinstance(source, str | os.PathLike):
         path = Path(source)
         return path.read_bytes(), filename or path.name
+    data = source.read()
+    if not isinstance(data, bytes):  # a file opened in text mode
+        raise TypeError(f"read the mesh file in binary mode ('rb'), not {type(data).__name__}")
     attribute = getattr(source, "name", None)
     name = Path(attribute).name if isinstance(attribute, str) else None
-    return source.read(), filename or name
+    return data, filename or name
 
 
 def build_report(analysis: MeshAnalysis) -> MeshReport:

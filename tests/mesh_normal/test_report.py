@@ -250,3 +250,6 @@ def test_an_unreadable_source_raises_the_file_error(tmp_path: Path) -> None:
         mn.analyse(b"not a mesh at all", "broken.obj")
     with pytest.raises(FileNotFoundError):
         mn.analyse(tmp_path / "missing.obj")
+    (tmp_path / "cube.obj").write_text(CUBE)
+    with (tmp_path / "cube.obj").open() as text, pytest.raises(TypeError, match="binary mode"):
+        mn.analyse(text)  # type: ignore[arg-type]
