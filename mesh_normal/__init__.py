@@ -26,7 +26,8 @@ if TYPE_CHECKING:
     from mesh_normal.faces import FaceNormals, face_areas, face_normals
     from mesh_normal.files import LoadedMesh, MeshFileError, read_mesh, write_mesh
     from mesh_normal.orientation import Orientation, mesh_topology, orient, signed_volume
-    from mesh_normal.report import MeshAnalysis, analyse
+    from mesh_normal.report import MeshAnalysis, MeshReport
+    from mesh_normal.report import mesh_report as analyse
     from mesh_normal.triangle import TriangleNormal, triangle_normal
     from mesh_normal.vertices import (
         CornerNormals,
@@ -35,7 +36,7 @@ if TYPE_CHECKING:
         vertex_normals,
     )
 
-#: Public name to the module that defines it.
+#: Public name to the module that defines it (``module:name`` where the name differs there).
 _HOMES = {
     "BatchNormals": "batch",
     "triangle_normals": "batch",
@@ -51,7 +52,8 @@ _HOMES = {
     "orient": "orientation",
     "signed_volume": "orientation",
     "MeshAnalysis": "report",
-    "analyse": "report",
+    "MeshReport": "report",
+    "analyse": "report:mesh_report",  # mn.analyse(path) is the report
     "TriangleNormal": "triangle",
     "triangle_normal": "triangle",
     "CornerNormals": "vertices",
@@ -67,6 +69,7 @@ __all__ = [
     "LoadedMesh",
     "MeshAnalysis",
     "MeshFileError",
+    "MeshReport",
     "Orientation",
     "TriangleNormal",
     "VertexNormals",
@@ -90,7 +93,8 @@ def __getattr__(name: str) -> Any:
     home = _HOMES.get(name)
     if home is None:
         raise AttributeError(f"module 'mesh_normal' has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"mesh_normal.{home}"), name)
+    module, _, attribute = home.partition(":")
+    value = getattr(importlib.import_module(f"mesh_normal.{module}"), attribute or name)
     globals()[name] = value
     return value
 

@@ -23,13 +23,14 @@ import sys
 import time
 from collections.abc import Collection, Iterator
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, TextIO
+from typing import TYPE_CHECKING, TextIO
 
 from mesh_normal import __version__
 from mesh_normal.files.formats import SUFFIXES, WRITABLE
 
 if TYPE_CHECKING:
     from mesh_normal.files import LoadedMesh
+    from mesh_normal.report import MeshReport
 
 EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE, EXIT_INPUT, EXIT_OUTPUT = 0, 1, 2, 3, 4
 NORMAL_SUFFIXES = (".npy", ".csv", ".json", ".ply")
@@ -90,45 +91,41 @@ def write(path: str, data: bytes) -> None:
 
 
 def analyze(args: argparse.Namespace, progress: Progress) -> int:
-    from mesh_normal.report import analyse, report_payload
+    from mesh_normal.report import analyse, build_report
 
     mesh, size = load(args.file, progress)
     progress.step("checking faces, edges and winding")
-    report = report_payload(analyse(mesh, Path(args.file).name, size))
+    report = build_report(analyse(mesh, Path(args.file).name, size))
     progress.done()
-    if args.json:
-        print(json.dumps(report, indent=2))
+    if args.json:  # the JSON of POST /api/mesh, indented; allow_nan=False: never NaN
+        print(json.dumps(report.model_dump(mode="json"), indent=2, allow_nan=False))
     else:
         print(summary(report))
-    serious = any(item["severity"] == "error" for item in report["problems"])
+    serious = any(item.severity == "error" for item in report.problems)
     return EXIT_PROBLEMS if serious else EXIT_OK
 
 
-def summary(report: dict[str, Any]) -> str:
+def summary(report: MeshReport) -> str:
     """The report as a few lines of text: counts, then each problem and what to do."""
-    volume = report["volume"]
+    volume, file = report.volume, report.file
     lines = [
-        f"{report['file']['name']}: {report['vertices']:,} vertices, {report['faces']:,} faces "
-        f"({report['file']['format'].upper()}), {report['components']:,} component(s)",
-        f"area {report['area']!r}, volume {'-' if volume is None else repr(volume)}, "
-        f"orientation {report['orientation']}, "
-        f"{'watertight' if report['watertight'] else 'open'}, "
-        f"winding {'consistent' if report['winding_consistent'] else 'inconsistent'}",
+        f"{file.name}: {report.vertices:,} vertices, {report.faces:,} faces "
+        f"({file.format.upper()}), {report.components:,} component(s)",
+        f"area {report.area!r}, volume {'-' if volume is None else repr(volume)}, "
+        f"orientation {report.orientation}, "
+        f"{'watertight' if report.watertight else 'open'}, "
+        f"winding {'consistent' if report.winding_consistent else 'inconsistent'}",
     ]
-    if not report["problems"]:
+    if not report.problems:
         lines.append("No problems found.")
-    for item in report["problems"]:
-        lines.append(f"{item['severity']}: {item['title']}. {item['action']}")
-    if report["fix"]["faces_flipped"]:
-        lines.append(
-            f"To fix the winding: mesh-normal fix {report['file']['name']} "
-            "FIXED.ply (or .stl, .obj)"
-        )
+    lines.extend(f"{item.severity}: {item.title}. {item.action}" for item in report.problems)
+    if report.fix.faces_flipped:
+        lines.append(f"To fix the winding: mesh-normal fix {file.name} FIXED.ply (or .stl, .obj)")
     return "\n".join(lines)
 
 
 def normals(args: argparse.Namespace, progress: Progress) -> int:
-    from mesh_normal.exports import compute_normals, normals_file, normals_ply
+    from mesh_normal.exports import NormalsFormat, compute_normals, normals_file, normals_ply
 
     suffix = Path(args.output).suffix.lower()
     if suffix not in NORMAL_SUFFIXES:
@@ -147,8 +144,9 @@ def normals(args: argparse.Namespace, progress: Progress) -> int:
     if suffix == ".ply":
         data = normals_ply(mesh, values, args.kind)
     else:  # the same files as POST /api/mesh/normals
+        formats: dict[str, NormalsFormat] = {".npy": "npy", ".csv": "csv", ".json": "json"}
         data = normals_file(
-            values, missing, args.kind, args.weighting, args.crease_angle, suffix[1:]
+            values, missing, args.kind, args.weighting, args.crease_angle, formats[suffix]
         )
     write(args.output, data)
     progress.done()

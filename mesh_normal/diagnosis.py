@@ -1,45 +1,81 @@
 """The report in plain words: each problem found, why it matters and what to do about it.
 
-Built from the report payload alone, so the page, the JSON twin and the CLI say the same.
-Each item is ``{"code", "severity", "title", "detail", "action", "python"}`` with severity
-``"error"`` (normals or volume are wrong as the file stands), ``"warning"`` (some results
-are missing or need care) or ``"info"``.
+Built from the :class:`~mesh_normal.report.MeshReport` alone, so the page, the JSON twin and the
+CLI say the same. Each item is a :class:`Problem` with severity ``"error"`` (normals or volume
+are wrong as the file stands), ``"warning"`` (some results are missing or need care) or
+``"info"``.
 """
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Literal
 
-Problem = dict[str, str | None]
+from pydantic import BaseModel, ConfigDict, Field
+
+if TYPE_CHECKING:  # the report holds the problems: it imports this module, not the reverse
+    from mesh_normal.report import MeshReport
+
+Severity = Literal["error", "warning", "info"]
+ProblemCode = Literal[
+    "winding",
+    "inward",
+    "mixed",
+    "nonmanifold",
+    "nonorientable",
+    "degenerate",
+    "open",
+    "file_normals",
+    "unused_vertices",
+    "components",
+    "overflow",
+]
+
+
+class Problem(BaseModel):
+    """One problem of a mesh in plain words: what it is, why it matters, what to do."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    code: ProblemCode = Field(description="A stable name for the problem, for scripts.")
+    severity: Severity = Field(
+        description="error: normals or volume are wrong as the file stands; warning: some "
+        "results are missing or need care; info: worth knowing."
+    )
+    title: str = Field(description="The problem in one line.")
+    detail: str = Field(description="What it means and why it matters.")
+    action: str = Field(description="What to do about it.")
+    python: str | None = Field(
+        description="The same fix or check in Python with mesh_normal, or null."
+    )
 
 
 def _count(number: int, one: str, many: str | None = None) -> str:
     return f"{number:,} {one if number == 1 else (many or one + 's')}"
 
 
-def problems(report: dict[str, Any]) -> list[Problem]:
+def problems(report: MeshReport) -> list[Problem]:
     """Every problem of the report, the most serious first; empty when the mesh is clean."""
     found = [item for check in CHECKS if (item := check(report)) is not None]
     rank = {"error": 0, "warning": 1, "info": 2}
-    return sorted(found, key=lambda item: rank[str(item["severity"])])
+    return sorted(found, key=lambda item: rank[item.severity])
 
 
 def _problem(
-    code: str, severity: str, title: str, detail: str, action: str, python: str | None = None
+    code: ProblemCode,
+    severity: Severity,
+    title: str,
+    detail: str,
+    action: str,
+    python: str | None = None,
 ) -> Problem:
-    return {
-        "code": code,
-        "severity": severity,
-        "title": title,
-        "detail": detail,
-        "action": action,
-        "python": python,
-    }
+    return Problem(
+        code=code, severity=severity, title=title, detail=detail, action=action, python=python
+    )
 
 
-def _winding(report: dict[str, Any]) -> Problem | None:
-    flipped = report["fix"]["faces_flipped"]
-    if report["winding_consistent"] or (report["nonorientable_components"] and not flipped):
+def _winding(report: MeshReport) -> Problem | None:
+    flipped = report.fix.faces_flipped
+    if report.winding_consistent or (report.nonorientable_components and not flipped):
         return None  # a one-sided part has no consistent winding: see _nonorientable
     return _problem(
         "winding",
@@ -49,13 +85,13 @@ def _winding(report: dict[str, Any]) -> Problem | None:
         f"opposite sides of the surface: shading shows dark patches, and the volume is "
         f"meaningless. Making the winding consistent flips {_count(flipped, 'face')}.",
         "Download the fixed mesh, or call orient() in your own code.",
-        "from mesh_normal import orient\nfixed = orient(vertices, faces)\n"
+        "import mesh_normal as mn\n\nfixed = mn.orient(vertices, faces)\n"
         "faces = fixed.faces  # fixed.flipped marks the faces that were reversed",
     )
 
 
-def _inward(report: dict[str, Any]) -> Problem | None:
-    if report["orientation"] != "inward":
+def _inward(report: MeshReport) -> Problem | None:
+    if report.orientation != "inward":
         return None
     return _problem(
         "inward",
@@ -70,8 +106,8 @@ def _inward(report: dict[str, Any]) -> Problem | None:
     )
 
 
-def _mixed(report: dict[str, Any]) -> Problem | None:
-    if report["orientation"] != "mixed" or not report["winding_consistent"]:
+def _mixed(report: MeshReport) -> Problem | None:
+    if report.orientation != "mixed" or not report.winding_consistent:
         return None
     return _problem(
         "mixed",
@@ -79,15 +115,15 @@ def _mixed(report: dict[str, Any]) -> Problem | None:
         "Some parts point outward, others inward",
         "Each part is wound consistently, but not all of them face out.",
         "Download the fixed mesh: each part is turned to face outward on its own.",
-        "from mesh_normal import orient\nfaces = orient(vertices, faces).faces",
+        "import mesh_normal as mn\n\nfaces = mn.orient(vertices, faces).faces",
     )
 
 
-def _degenerate(report: dict[str, Any]) -> Problem | None:
-    count = report["degenerate_faces"]
+def _degenerate(report: MeshReport) -> Problem | None:
+    count = report.degenerate_faces
     if not count:
         return None
-    repeated = report["repeated_index_faces"]
+    repeated = report.repeated_index_faces
     which = f" ({_count(repeated, 'face')} repeat a vertex index)" if repeated else ""
     return _problem(
         "degenerate",
@@ -97,13 +133,13 @@ def _degenerate(report: dict[str, Any]) -> Problem | None:
         "a zero normal and count for nothing in vertex normals; naive code gets NaN here.",
         "Remove them before export (Blender: Merge by Distance, then Delete Loose / "
         "Degenerate Dissolve; trimesh: update_faces with nondegenerate_faces()).",
-        "from mesh_normal import face_normals\nkeep = ~face_normals(vertices, faces).degenerate\n"
+        "import mesh_normal as mn\n\nkeep = ~mn.face_normals(vertices, faces).degenerate\n"
         "faces = faces[keep]",
     )
 
 
-def _open(report: dict[str, Any]) -> Problem | None:
-    edges = report["boundary_edges"]
+def _open(report: MeshReport) -> Problem | None:
+    edges = report.boundary_edges
     if not edges:
         return None
     return _problem(
@@ -118,8 +154,8 @@ def _open(report: dict[str, Any]) -> Problem | None:
     )
 
 
-def _nonmanifold(report: dict[str, Any]) -> Problem | None:
-    edges = report["nonmanifold_edges"]
+def _nonmanifold(report: MeshReport) -> Problem | None:
+    edges = report.nonmanifold_edges
     if not edges:
         return None
     return _problem(
@@ -134,8 +170,8 @@ def _nonmanifold(report: dict[str, Any]) -> Problem | None:
     )
 
 
-def _nonorientable(report: dict[str, Any]) -> Problem | None:
-    parts = report["nonorientable_components"]
+def _nonorientable(report: MeshReport) -> Problem | None:
+    parts = report.nonorientable_components
     if not parts:
         return None
     return _problem(
@@ -148,26 +184,26 @@ def _nonorientable(report: dict[str, Any]) -> Problem | None:
     )
 
 
-def _file_normals(report: dict[str, Any]) -> Problem | None:
-    stored = report["file_normals"]
-    if not stored or not stored["compared"] or not stored["opposite"]:
+def _file_normals(report: MeshReport) -> Problem | None:
+    stored = report.file_normals
+    if not stored or not stored.compared or not stored.opposite:
         return None
     return _problem(
         "file_normals",
         "warning",
-        f"{_count(stored['opposite'], 'normal')} stored in the file point the other way",
-        f"Of {stored['compared']:,} {stored['kind']} normals in the file, "
-        f"{stored['opposite']:,} differ from {stored['compared_with']} by more than 90°: "
+        f"{_count(stored.opposite, 'normal')} stored in the file point the other way",
+        f"Of {stored.compared:,} {stored.kind} normals in the file, "
+        f"{stored.opposite:,} differ from {stored.compared_with} by more than 90°: "
         "the file's normals and its winding disagree, which renderers show as dark or "
         "inside-out faces.",
         "Recompute the normals from the (fixed) winding and export them again.",
-        "from mesh_normal import vertex_normals\n"
-        'normals = vertex_normals(vertices, faces, weighting="angle").normals',
+        "import mesh_normal as mn\n\n"
+        'normals = mn.vertex_normals(vertices, faces, weighting="angle").normals',
     )
 
 
-def _unused(report: dict[str, Any]) -> Problem | None:
-    count = report["unused_vertices"]
+def _unused(report: MeshReport) -> Problem | None:
+    count = report.unused_vertices
     if not count:
         return None
     return _problem(
@@ -180,8 +216,8 @@ def _unused(report: dict[str, Any]) -> Problem | None:
     )
 
 
-def _components(report: dict[str, Any]) -> Problem | None:
-    count = report["components"]
+def _components(report: MeshReport) -> Problem | None:
+    count = report.components
     if count <= 1:
         return None
     return _problem(
@@ -193,19 +229,19 @@ def _components(report: dict[str, Any]) -> Problem | None:
     )
 
 
-def _area(report: dict[str, Any]) -> Problem | None:
+def _area(report: MeshReport) -> Problem | None:
     volume_lost = (
-        report["volume"] is None
-        and report["watertight"]
-        and report["winding_consistent"]
-        and not report["nonorientable_components"]
+        report.volume is None
+        and report.watertight
+        and report.winding_consistent
+        and not report.nonorientable_components
     )
-    if report["area"] is not None and not volume_lost:
+    if report.area is not None and not volume_lost:
         return None
     which = (
         "area and volume"
-        if report["area"] is None and volume_lost
-        else ("area" if report["area"] is None else "volume")
+        if report.area is None and volume_lost
+        else ("area" if report.area is None else "volume")
     )
     both = " and " in which
     return _problem(

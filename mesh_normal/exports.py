@@ -36,10 +36,10 @@ def compute_normals(
         faces = face_normals(mesh.vertices, mesh.faces)
         return faces.normals, faces.degenerate
     if kind == "vertex":
-        result = vertex_normals(mesh.vertices, mesh.faces, weighting)
-    else:
-        result = corner_normals(mesh.vertices, mesh.faces, crease_angle, weighting)
-    return result.normals, result.missing
+        smooth = vertex_normals(mesh.vertices, mesh.faces, weighting)
+        return smooth.normals, smooth.missing
+    corners = corner_normals(mesh.vertices, mesh.faces, crease_angle, weighting)
+    return corners.normals, corners.missing
 
 
 def export_normals(

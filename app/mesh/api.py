@@ -7,7 +7,7 @@ its work in a worker thread, so other requests keep being served meanwhile.
 from __future__ import annotations
 
 import re
-from typing import Annotated, Any, Literal
+from typing import Annotated, Literal
 
 import numpy as np
 from fastapi import APIRouter, Query, Request
@@ -20,7 +20,7 @@ from app.web.jsonio import FastJSONResponse
 from mesh_normal.exports import NormalsKind, export_normals
 from mesh_normal.files import LoadedMesh, MeshFileError, read_mesh, write_mesh
 from mesh_normal.orientation import orient
-from mesh_normal.report import analyse, flips_by_component, report_payload
+from mesh_normal.report import MeshReport, analyse, build_report, flips_by_component
 from mesh_normal.vertices import Weighting
 
 router = APIRouter(
@@ -65,15 +65,17 @@ def attachment(name: str) -> dict[str, str]:
     return {"content-disposition": f'attachment; filename="{name}"'}
 
 
-@router.post("", openapi_extra=UPLOAD_BODY)
+@router.post("", openapi_extra=UPLOAD_BODY, response_model=MeshReport)
 async def post_mesh(request: Request) -> FastJSONResponse:
     """Report on a mesh file: counts, area, volume, winding, orientation and problems."""
     upload = await read_upload(request)
+    # The model is rendered once, by pydantic-core, with non-finite floats as null; returning
+    # a response skips FastAPI's second validation and encoding of the same model.
     return FastJSONResponse(await run_in_threadpool(_report, upload))
 
 
-def _report(upload: Upload) -> dict[str, Any]:
-    return report_payload(analyse(load(upload), upload.filename, len(upload.data)))
+def _report(upload: Upload) -> MeshReport:
+    return build_report(analyse(load(upload), upload.filename, len(upload.data)))
 
 
 @router.post(

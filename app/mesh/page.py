@@ -8,6 +8,7 @@ downloads send the file again to the JSON API.
 
 from __future__ import annotations
 
+import json
 import shlex
 from typing import Any, get_args
 
@@ -24,7 +25,7 @@ from app.web.middleware import size_text
 from app.web.templating import templates
 from mesh_normal.exports import FORMATS, KINDS
 from mesh_normal.files import SUFFIXES
-from mesh_normal.report import analyse, report_payload
+from mesh_normal.report import analyse, build_report
 from mesh_normal.vertices import Weighting
 
 router = APIRouter(include_in_schema=False)
@@ -49,9 +50,13 @@ def _form_context(request: Request) -> dict[str, Any]:
 def _report_context(upload: Upload, base_url: str) -> dict[str, Any]:
     """Analyse the upload (in a worker thread): the report, its figures and the downloads."""
     analysis = analyse(load(upload), upload.filename, len(upload.data))
+    report = build_report(analysis)
     name = upload.filename or "mesh"
     return {
-        "report": report_payload(analysis),
+        "report": report,
+        # The JSON twin is the API's own JSON (non-finite floats already null), parsed back
+        # so that the template's json_script escapes it for a <script> block.
+        "report_json": json.loads(report.model_dump_json()),
         "figures": mesh_figures(analysis),
         "classes": CLASSES,
         "stem": stem(upload.filename),

@@ -7,6 +7,7 @@ import json
 import math
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -310,6 +311,88 @@ def test_upload_limit_from_the_environment(monkeypatch: pytest.MonkeyPatch) -> N
 def test_report_is_strict_json(client: TestClient) -> None:
     text = upload(client, "/api/mesh", CUBE_ONE_FLIPPED).text
     json.loads(text, parse_constant=lambda name: pytest.fail(f"{name} in the report"))
+
+
+def test_coordinates_near_1e200_give_a_null_area_never_nan(client: TestClient) -> None:
+    huge = "v 0 0 0\nv 1e200 0 0\nv 0 1e200 0\nv 0 0 1e200\n" + TETRA[len(TETRA_POINTS) :]
+    for text in (
+        upload(client, "/api/mesh", huge).text,
+        upload(client, "/api/mesh", huge + "v 5 5 5\n").text,  # and an unused vertex
+    ):
+        report = json.loads(text, parse_constant=lambda name: pytest.fail(f"{name} in the report"))
+        assert report["area"] is None and report["volume"] is None
+        assert report["bounds"]["max"] == [1e200, 1e200, 1e200]
+
+
+# --- the response model: /openapi.json documents every key of POST /api/mesh ---------------
+
+
+def resolve(spec: dict[str, Any], node: dict[str, Any]) -> dict[str, Any]:
+    """``node`` with its ``$ref`` followed, into #/components/schemas."""
+    while "$ref" in node:
+        node = spec["components"]["schemas"][node["$ref"].rsplit("/", 1)[-1]]
+    return node
+
+
+def undocumented(spec: dict[str, Any], node: dict[str, Any], value: Any, where: str) -> list[str]:
+    """Where ``value`` (parsed JSON) has a key that the schema ``node`` does not document, or
+    the schema lists a property or a required key that ``value`` lacks."""
+    node = resolve(spec, node)
+    if "anyOf" in node:  # an optional part: the branch that is not null
+        if value is None:
+            assert {"type": "null"} in node["anyOf"], where
+            return []
+        [node] = [resolve(spec, item) for item in node["anyOf"] if item != {"type": "null"}]
+    if isinstance(value, dict):
+        properties = node.get("properties", {})
+        found = [f"{where}.{key}: not in the schema" for key in set(value) - set(properties)]
+        found += [f"{where}.{key}: not in the report" for key in set(properties) - set(value)]
+        found += [f"{where}.{key}: not required" for key in set(value) - set(node["required"])]
+        for key in set(value) & set(properties):
+            assert properties[key].get("description"), f"{where}.{key} has no description"
+            found += undocumented(spec, properties[key], value[key], f"{where}.{key}")
+        return found
+    if isinstance(value, list):
+        return [
+            problem
+            for index, item in enumerate(value)
+            for problem in undocumented(spec, node["items"], item, f"{where}[{index}]")
+        ]
+    return []
+
+
+def test_openapi_documents_every_key_of_the_report(client: TestClient) -> None:
+    """A report with every optional part filled: bounds, file normals, components, problems."""
+    from mesh_normal.files import write_mesh
+
+    mesh = read_mesh(CUBE_ONE_FLIPPED.encode(), "flipped.obj")
+    stl = write_mesh(mesh.vertices, mesh.faces, "stl")
+    report = upload(client, "/api/mesh", stl, "flipped.stl").json()
+    assert report["bounds"] and report["file_normals"] and report["problems"]
+    assert report["fix"]["components"] and report["notes"]
+    spec = client.get("/openapi.json").json()
+    response = spec["paths"]["/api/mesh"]["post"]["responses"]["200"]
+    schema = response["content"]["application/json"]["schema"]
+    assert resolve(spec, schema)["title"] == "MeshReport"
+    assert undocumented(spec, schema, report, "report") == []
+    # The schema's enumerations are the values the report holds.
+    mesh_report = resolve(spec, schema)["properties"]
+    assert report["orientation"] in mesh_report["orientation"]["enum"]
+    file_info = resolve(spec, mesh_report["file"])["properties"]
+    assert set(file_info["format"]["enum"]) == {"stl", "obj", "ply", "off", "glb", "gltf"}
+
+
+def test_a_wrong_key_is_found_by_the_schema_check(client: TestClient) -> None:
+    """The check above can fail: a renamed or missing key is reported."""
+    spec = client.get("/openapi.json").json()
+    schema = {"$ref": "#/components/schemas/MeshReport"}
+    report = upload(client, "/api/mesh", CUBE).json()
+    report["fix"]["flipped"] = report["fix"].pop("faces_flipped")
+    assert sorted(undocumented(spec, schema, report, "report")) == [
+        "report.fix.faces_flipped: not in the report",
+        "report.fix.flipped: not in the schema",
+        "report.fix.flipped: not required",
+    ]
 
 
 def test_mesh_work_runs_off_the_event_loop(monkeypatch: pytest.MonkeyPatch) -> None:

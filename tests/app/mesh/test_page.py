@@ -32,7 +32,7 @@ def post(
 def json_block(html: Page, element_id: str):  # type: ignore[no-untyped-def]
     found = [content for attrs, content in html.scripts if attrs.get("id") == element_id]
     assert len(found) == 1, element_id
-    return json.loads(found[0])
+    return json.loads(found[0], parse_constant=lambda name: pytest.fail(f"{name} in the page"))
 
 
 # --- The page ---------------------------------------------------------------------------------
@@ -65,8 +65,8 @@ def test_report_names_the_flipped_face_and_offers_the_fix(client: TestClient) ->
     response, html = post(client, CUBE_ONE_FLIPPED)
     assert response.template.name == "mesh.html"  # type: ignore[attr-defined]
     report = response.context["report"]  # type: ignore[attr-defined]
-    assert [p["code"] for p in report["problems"]] == ["winding"]
-    assert report["fix"]["flipped_face_indices"] == [0]
+    assert [p.code for p in report.problems] == ["winding"]
+    assert report.fix.flipped_face_indices == [0]
     winding = html.text("problem-winding")
     assert "wound against their neighbours" in winding
     assert "Faces the fix flips (0-based): 0." in winding
@@ -82,6 +82,16 @@ def test_json_twin_equals_the_api(client: TestClient) -> None:
     for part in (None, "report"):
         _, html = post(client, CUBE_ONE_FLIPPED, part=part)
         assert json_block(html, "mesh-report") == api.json()
+
+
+def test_json_twin_of_an_overflowing_mesh_is_the_api_with_nulls(client: TestClient) -> None:
+    huge = "v 0 0 0\nv 1e200 0 0\nv 0 1e200 0\nv 0 0 1e200\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
+    api = client.post("/api/mesh", files={"file": ("huge.obj", huge.encode())})
+    _, html = post(client, huge, name="huge.obj", part="report")
+    twin = json_block(html, "mesh-report")
+    assert twin == api.json()
+    assert twin["area"] is None and twin["volume"] is None
+    assert "beyond the double range" in html.text("mesh-summary")
 
 
 def test_fragment_is_the_report_alone(client: TestClient) -> None:

@@ -1,0 +1,143 @@
+"""mesh_normal.diagnosis: the problems read from a typed report, and their Python snippets."""
+
+from __future__ import annotations
+
+from typing import Any, get_args
+
+import numpy as np
+import pytest
+
+from mesh_normal.diagnosis import CHECKS, Problem, ProblemCode, problems
+from mesh_normal.files import read_mesh
+from mesh_normal.report import FileNormals, MeshReport, analyse, build_report
+from tests.app.mesh.test_api import CUBE, CUBE_ONE_FLIPPED
+
+
+def clean() -> MeshReport:
+    data = CUBE.encode()
+    return build_report(analyse(read_mesh(data, "cube.obj"), "cube.obj", len(data)))
+
+
+def changed(**update: Any) -> MeshReport:
+    """The clean cube's report with some values changed, validated again."""
+    return MeshReport.model_validate({**clean().model_dump(), **update, "problems": []})
+
+
+def codes(report: MeshReport) -> list[str]:
+    return [item.code for item in problems(report)]
+
+
+def test_a_clean_report_has_no_problem() -> None:
+    assert problems(clean()) == []
+
+
+@pytest.mark.parametrize(
+    ("update", "expected"),
+    [
+        ({"orientation": "inward"}, ["inward"]),
+        ({"orientation": "mixed"}, ["mixed"]),
+        ({"boundary_edges": 3, "watertight": False, "volume": None}, ["open"]),
+        ({"nonmanifold_edges": 2}, ["nonmanifold"]),
+        ({"nonorientable_components": 1}, ["nonorientable"]),
+        ({"degenerate_faces": 2, "repeated_index_faces": 1}, ["degenerate"]),
+        ({"unused_vertices": 1}, ["unused_vertices"]),
+        ({"components": 2}, ["components"]),
+        ({"area": None}, ["overflow"]),
+        ({"volume": None}, ["overflow"]),
+    ],
+)
+def test_each_value_of_the_report_raises_its_problem(
+    update: dict[str, Any], expected: list[str]
+) -> None:
+    assert codes(changed(**update)) == expected
+
+
+def test_the_problems_come_most_serious_first() -> None:
+    report = changed(unused_vertices=1, boundary_edges=3, watertight=False, orientation="inward")
+    found = problems(report)
+    assert [item.severity for item in found] == ["error", "warning", "info"]
+    assert [item.code for item in found] == ["inward", "open", "unused_vertices"]
+
+
+def test_winding_reads_the_fix() -> None:
+    fix = {**clean().fix.model_dump(), "faces_flipped": 3, "flipped_face_indices": [0, 1, 2]}
+    found = problems(changed(winding_consistent=False, volume=None, fix=fix))
+    assert [item.code for item in found] == ["winding"]
+    assert "flips 3 faces" in found[0].detail
+
+
+def test_the_overflow_names_both_measures() -> None:
+    [item] = problems(changed(area=None, volume=None))
+    assert item.title == "The total area and volume are beyond the double range"
+
+
+def test_file_normals_that_point_the_other_way() -> None:
+    stored = FileNormals(
+        kind="vertex",
+        compared_with="our angle-weighted vertex normals",
+        stored=8,
+        compared=8,
+        unusable=0,
+        agreeing=6,
+        opposite=2,
+        agreement_degrees=1.0,
+        median_angle_degrees=0.0,
+        max_angle_degrees=180.0,
+    )
+    [item] = problems(changed(file_normals=stored.model_dump()))
+    assert (item.code, item.severity) == ("file_normals", "warning")
+    assert item.title == "2 normals stored in the file point the other way"
+    assert "Of 8 vertex normals in the file, 2 differ" in item.detail
+
+
+def test_every_check_has_a_code() -> None:
+    assert len(CHECKS) == len(get_args(ProblemCode))
+
+
+def every_problem() -> list[Problem]:
+    """One report that raises every problem that carries a Python snippet."""
+    fix = {**clean().fix.model_dump(), "faces_flipped": 1, "flipped_face_indices": [0]}
+    stored = {
+        "kind": "face",
+        "compared_with": "our face normals",
+        "stored": 12,
+        "compared": 12,
+        "unusable": 0,
+        "agreeing": 11,
+        "opposite": 1,
+        "agreement_degrees": 1.0,
+        "median_angle_degrees": 0.0,
+        "max_angle_degrees": 180.0,
+    }
+    found = [
+        *problems(changed(winding_consistent=False, volume=None, fix=fix)),
+        *problems(changed(orientation="inward")),
+        *problems(changed(orientation="mixed")),
+        *problems(changed(degenerate_faces=1)),
+        *problems(changed(file_normals=stored)),
+    ]
+    assert [item.code for item in found] == [
+        "winding",
+        "inward",
+        "mixed",
+        "degenerate",
+        "file_normals",
+    ]
+    return found
+
+
+@pytest.mark.parametrize("item", every_problem(), ids=lambda item: item.code)
+def test_the_python_snippets_use_the_public_api_and_run(item: Problem) -> None:
+    assert item.python is not None
+    assert "from mesh_normal" not in item.python
+    if "mn." in item.python:
+        assert item.python.startswith("import mesh_normal as mn\n")
+    mesh = read_mesh(CUBE_ONE_FLIPPED.encode(), "flipped.obj")
+    given = {"vertices": mesh.vertices, "faces": mesh.faces}
+    scope: dict[str, Any] = dict(given)
+    exec(item.python, scope)  # the snippet as a reader would paste it
+    made = {name for name, value in scope.items() if given.get(name) is not value}
+    results = made - {"__builtins__", "mn", "fixed", "keep"}
+    assert results, "the snippet assigns faces or normals"
+    assert all(isinstance(scope[name], np.ndarray) for name in results)
+    assert all(len(scope[name]) for name in results)

@@ -1,0 +1,255 @@
+"""mesh_normal.report: the typed report, built from the analysis, and mn.analyse."""
+
+from __future__ import annotations
+
+import io
+import json
+import math
+from pathlib import Path
+from typing import Any, get_args
+
+import pytest
+from pydantic import BaseModel, ValidationError
+
+import mesh_normal as mn
+from mesh_normal.files import SUFFIXES, read_mesh, write_mesh
+from mesh_normal.report import (
+    Bounds,
+    FileInfo,
+    MeshAnalysis,
+    MeshFormat,
+    MeshReport,
+    analyse,
+    build_report,
+    mesh_report,
+)
+from tests.app.mesh.test_api import CUBE, CUBE_ONE_FLIPPED, OPEN_BOX, TETRA
+
+#: The report's keys, in the order the JSON has always had them.
+KEYS = [
+    "file",
+    "vertices",
+    "faces",
+    "source_faces",
+    "unused_vertices",
+    "area",
+    "volume",
+    "watertight",
+    "winding_consistent",
+    "orientation",
+    "degenerate_faces",
+    "degenerate_face_indices",
+    "repeated_index_faces",
+    "boundary_edges",
+    "nonmanifold_edges",
+    "components",
+    "nonorientable_components",
+    "bounds",
+    "fix",
+    "file_normals",
+    "notes",
+    "problems",
+]
+
+#: A tetrahedron with coordinates near 1e200: its area (1e400) and volume overflow.
+HUGE = "v 0 0 0\nv 1e200 0 0\nv 0 1e200 0\nv 0 0 1e200\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
+
+
+def report_of(text: str, name: str = "mesh.obj") -> MeshReport:
+    data = text.encode()
+    return build_report(analyse(read_mesh(data, name), name, len(data)))
+
+
+def strict_json(text: str | bytes) -> Any:
+    """Parse JSON, failing on NaN, Infinity and -Infinity (which json.loads accepts)."""
+
+    def refuse(constant: str) -> None:
+        raise ValueError(f"{constant} in the JSON")
+
+    return json.loads(text, parse_constant=refuse)
+
+
+def test_cube_with_one_flipped_face() -> None:
+    report = report_of(CUBE_ONE_FLIPPED, "flipped.obj")
+    assert report.file == FileInfo(name="flipped.obj", format="obj", bytes=len(CUBE_ONE_FLIPPED))
+    assert (report.vertices, report.faces, report.source_faces) == (8, 12, 12)
+    assert report.area == 6.0
+    assert report.winding_consistent is False and report.watertight is True
+    assert report.orientation == "mixed"
+    assert report.volume is None
+    assert report.fix.faces_flipped == 1 and report.fix.components_changed == 1
+    assert report.fix.flipped_face_indices == [0]
+    [part] = report.fix.components
+    assert (part.component, part.faces, part.closed, part.orientable) == (0, 12, True, True)
+    assert (part.method, part.faces_flipped, part.volume) == ("volume", 1, pytest.approx(1.0))
+    assert report.bounds == Bounds(min=[0.0, 0.0, 0.0], max=[1.0, 1.0, 1.0])
+    assert report.file_normals is None
+    assert [(p.code, p.severity) for p in report.problems] == [("winding", "error")]
+
+
+def test_clean_cube() -> None:
+    report = report_of(CUBE)
+    assert report.orientation == "outward"
+    assert report.volume == pytest.approx(1.0, rel=1e-15)
+    assert report.fix.faces_flipped == 0 and report.fix.flipped_face_indices == []
+    assert report.problems == []
+
+
+def test_open_box_is_a_warning() -> None:
+    report = report_of(OPEN_BOX)
+    assert (report.watertight, report.boundary_edges, report.volume) == (False, 4, None)
+    assert [(p.code, p.severity) for p in report.problems] == [("open", "warning")]
+    assert report.fix.components[0].method == "heuristic"
+
+
+def test_the_json_keys_keep_their_names_and_order() -> None:
+    report = report_of(CUBE_ONE_FLIPPED)
+    data = strict_json(report.model_dump_json())
+    assert list(data) == KEYS
+    assert list(data["file"]) == ["name", "format", "bytes"]
+    assert list(data["fix"]) == [
+        "faces_flipped",
+        "components_changed",
+        "flipped_face_indices",
+        "components",
+    ]
+    assert list(data["fix"]["components"][0]) == [
+        "component",
+        "faces",
+        "closed",
+        "orientable",
+        "method",
+        "faces_flipped",
+        "volume",
+    ]
+    assert list(data["problems"][0]) == ["code", "severity", "title", "detail", "action", "python"]
+
+
+def test_file_normals_of_an_stl() -> None:
+    mesh = read_mesh(TETRA.encode(), "t.obj")
+    data = write_mesh(mesh.vertices, mesh.faces, "stl")
+    stored = build_report(analyse(read_mesh(data, "t.stl"), "t.stl", len(data))).file_normals
+    assert stored is not None
+    data_keys = list(strict_json(stored.model_dump_json()))
+    assert data_keys == [
+        "kind",
+        "compared_with",
+        "stored",
+        "compared",
+        "unusable",
+        "agreeing",
+        "opposite",
+        "agreement_degrees",
+        "median_angle_degrees",
+        "max_angle_degrees",
+    ]
+    assert (stored.kind, stored.stored, stored.compared, stored.agreeing) == ("face", 4, 4, 4)
+    assert stored.opposite == 0 and stored.unusable == 0
+    assert stored.max_angle_degrees is not None and stored.max_angle_degrees < 1e-4
+
+
+def test_an_overflowing_area_is_null_never_nan() -> None:
+    report = report_of(HUGE)
+    assert report.area is None and report.volume is None
+    assert "overflow" in [p.code for p in report.problems]
+    data = strict_json(report.model_dump_json())
+    assert data["area"] is None and data["volume"] is None
+    assert data["bounds"]["max"] == [1e200, 1e200, 1e200]
+
+
+@pytest.mark.parametrize("value", [math.inf, -math.inf, math.nan])
+def test_a_measure_that_is_not_finite_becomes_none(value: float) -> None:
+    report = report_of(CUBE).model_copy(update={"area": value})  # model_copy skips validation
+    assert report.area is not None and not math.isfinite(report.area)
+    assert strict_json(report.model_dump_json())["area"] is None  # the models write null
+    rebuilt = MeshReport.model_validate({**report.model_dump(), "area": value})
+    assert rebuilt.area is None
+    strict_json(rebuilt.model_dump_json())
+
+
+def test_bounds_refuse_coordinates_that_are_not_finite() -> None:
+    with pytest.raises(ValidationError, match="finite"):
+        Bounds(min=[0.0, 0.0, 0.0], max=[math.inf, 0.0, 0.0])
+
+
+def test_the_models_check_what_they_hold() -> None:
+    fields = report_of(CUBE).model_dump()
+    for update in ({"orientation": "sideways"}, {"vertices": -1}, {"surplus": 1}):
+        with pytest.raises(ValidationError):
+            MeshReport.model_validate({**fields, **update})
+    with pytest.raises(ValidationError):
+        FileInfo(name=None, format="xyz", bytes=1)  # type: ignore[arg-type]
+
+
+def test_the_report_is_frozen() -> None:
+    report = report_of(CUBE)
+    with pytest.raises(ValidationError, match="frozen"):
+        report.area = 1.0  # type: ignore[misc]
+
+
+def test_the_format_literal_lists_every_readable_format() -> None:
+    assert set(get_args(MeshFormat)) == set(SUFFIXES.values())
+
+
+def _described(model: type[BaseModel]) -> list[str]:
+    """The fields of ``model`` and its nested models that have no description."""
+    missing = []
+    for name, field in model.model_fields.items():
+        if not field.description:
+            missing.append(f"{model.__name__}.{name}")
+        for argument in _models_in(field.annotation):
+            missing += _described(argument)
+    return missing
+
+
+def _models_in(annotation: Any) -> list[type[BaseModel]]:
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return [annotation]
+    return [model for argument in get_args(annotation) for model in _models_in(argument)]
+
+
+def test_every_field_has_a_description() -> None:
+    assert _described(MeshReport) == []
+
+
+# --- mn.analyse: the report from a path, bytes, a file object or a mesh already read ----------
+
+
+def test_mn_analyse_is_the_report_from_a_path(tmp_path: Path) -> None:
+    path = tmp_path / "flipped.obj"
+    path.write_text(CUBE_ONE_FLIPPED)
+    report = mn.analyse(path)
+    assert isinstance(report, MeshReport)
+    assert report == report_of(CUBE_ONE_FLIPPED, "flipped.obj")
+    assert mn.analyse(str(path)) == report
+    assert mn.analyse(path, filename="other.obj").file.name == "other.obj"
+
+
+def test_mn_analyse_takes_bytes_a_file_object_or_a_loaded_mesh(tmp_path: Path) -> None:
+    data = CUBE.encode()
+    assert mn.analyse(data, "cube.obj") == report_of(CUBE, "cube.obj")
+    assert mn.analyse(io.BytesIO(data), "cube.obj") == report_of(CUBE, "cube.obj")
+    path = tmp_path / "cube.obj"
+    path.write_bytes(data)
+    with path.open("rb") as stream:
+        assert mn.analyse(stream).file.name == "cube.obj"
+    from_mesh = mn.analyse(read_mesh(data, "cube.obj"))
+    assert from_mesh.file == FileInfo(name=None, format="obj", bytes=0)
+    assert from_mesh.model_dump(exclude={"file"}) == report_of(CUBE).model_dump(exclude={"file"})
+
+
+def test_mn_analyse_is_mesh_report_and_the_arrays_stay_available() -> None:
+    assert mn.analyse is mesh_report
+    assert mn.MeshReport is MeshReport and mn.MeshAnalysis is MeshAnalysis
+    analysis = analyse(read_mesh(CUBE.encode(), "cube.obj"))
+    assert analysis.faces.normals.shape == (12, 3)
+
+
+def test_an_unreadable_source_raises_the_file_error(tmp_path: Path) -> None:
+    with pytest.raises(mn.MeshFileError):
+        mn.analyse(b"not a mesh at all", "broken.obj")
+    with pytest.raises(FileNotFoundError):
+        mn.analyse(tmp_path / "missing.obj")
+    (tmp_path / "cube.obj").write_text(CUBE)
+    with (tmp_path / "cube.obj").open() as text, pytest.raises(TypeError, match="binary mode"):
+        mn.analyse(text)  # type: ignore[arg-type]
