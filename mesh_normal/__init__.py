@@ -22,12 +22,13 @@ from typing import TYPE_CHECKING, Any
 __version__ = "0.2.0"
 
 if TYPE_CHECKING:
+    from mesh_normal.analysis import MeshAnalysis
+    from mesh_normal.analysis import mesh_report as analyse
     from mesh_normal.batch import BatchNormals, triangle_normals
     from mesh_normal.faces import FaceNormals, face_areas, face_normals
     from mesh_normal.files import LoadedMesh, MeshFileError, read_mesh, write_mesh
     from mesh_normal.orientation import Orientation, mesh_topology, orient, signed_volume
-    from mesh_normal.report import MeshAnalysis, MeshReport
-    from mesh_normal.report import mesh_report as analyse
+    from mesh_normal.report import MeshReport
     from mesh_normal.triangle import TriangleNormal, triangle_normal
     from mesh_normal.vertices import (
         CornerNormals,
@@ -51,9 +52,9 @@ _HOMES = {
     "mesh_topology": "orientation",
     "orient": "orientation",
     "signed_volume": "orientation",
-    "MeshAnalysis": "report",
+    "MeshAnalysis": "analysis",
     "MeshReport": "report",
-    "analyse": "report:mesh_report",  # mn.analyse(path) is the report
+    "analyse": "analysis:mesh_report",  # mn.analyse(path) is the report
     "TriangleNormal": "triangle",
     "triangle_normal": "triangle",
     "CornerNormals": "vertices",

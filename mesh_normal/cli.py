@@ -91,7 +91,7 @@ def write(path: str, data: bytes) -> None:
 
 
 def analyze(args: argparse.Namespace, progress: Progress) -> int:
-    from mesh_normal.report import analyse, build_report
+    from mesh_normal.analysis import analyse, build_report
 
     mesh, size = load(args.file, progress)
     progress.step("checking faces, edges and winding")
@@ -160,9 +160,9 @@ def normals(args: argparse.Namespace, progress: Progress) -> int:
 
 
 def fix(args: argparse.Namespace, progress: Progress) -> int:
+    from mesh_normal.analysis import flips_by_component
     from mesh_normal.files import MeshFileError, write_mesh
     from mesh_normal.orientation import orient
-    from mesh_normal.report import flips_by_component
 
     chosen = args.format or Path(args.output).suffix.lower().lstrip(".")
     if chosen not in FIX_FORMATS:

@@ -8,45 +8,7 @@ are wrong as the file stands), ``"warning"`` (some results are missing or need c
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Literal
-
-from pydantic import BaseModel, ConfigDict, Field
-
-if TYPE_CHECKING:  # the report holds the problems: it imports this module, not the reverse
-    from mesh_normal.report import MeshReport
-
-Severity = Literal["error", "warning", "info"]
-ProblemCode = Literal[
-    "winding",
-    "inward",
-    "mixed",
-    "nonmanifold",
-    "nonorientable",
-    "degenerate",
-    "open",
-    "file_normals",
-    "unused_vertices",
-    "components",
-    "overflow",
-]
-
-
-class Problem(BaseModel):
-    """One problem of a mesh in plain words: what it is, why it matters, what to do."""
-
-    model_config = ConfigDict(frozen=True, extra="forbid")
-
-    code: ProblemCode = Field(description="A stable name for the problem, for scripts.")
-    severity: Severity = Field(
-        description="error: normals or volume are wrong as the file stands; warning: some "
-        "results are missing or need care; info: worth knowing."
-    )
-    title: str = Field(description="The problem in one line.")
-    detail: str = Field(description="What it means and why it matters.")
-    action: str = Field(description="What to do about it.")
-    python: str | None = Field(
-        description="The same fix or check in Python with mesh_normal, or null."
-    )
+from mesh_normal.report import MeshReport, Problem, ProblemCode, Severity
 
 
 def _count(number: int, one: str, many: str | None = None) -> str:

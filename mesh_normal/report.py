@@ -1,9 +1,9 @@
-"""What we find in a mesh file: one analysis, one typed report (the API, the page, the CLI).
+"""The report on a mesh as typed models: what ``POST /api/mesh`` answers, ``mn.analyse`` returns.
 
-:func:`analyse` runs the core on a :class:`~mesh_normal.files.LoadedMesh` once and keeps the arrays
-(the page draws them); :func:`build_report` turns that into a :class:`MeshReport`, whose JSON
-(``report.model_dump_json()``) is what ``POST /api/mesh`` answers. :func:`mesh_report` does both
-from a file, and is the library's ``mn.analyse``.
+:class:`MeshReport` holds counts, checks, the fix that :func:`~mesh_normal.orient` makes and the
+diagnosis (:class:`Problem` items, written by :mod:`mesh_normal.diagnosis`);
+:mod:`mesh_normal.analysis` builds it from the arrays. ``report.model_dump_json()`` is the JSON of
+``POST /api/mesh``.
 
 Every number of the report is finite or ``None``: a measure that overflows the double range (an
 area or a volume) becomes ``None`` when the model is built, and the models write any non-finite
@@ -13,37 +13,12 @@ float as ``null``, so their JSON never holds ``NaN`` or ``Infinity``.
 from __future__ import annotations
 
 import math
-import os
-from dataclasses import dataclass
-from pathlib import Path
-from typing import IO, Annotated, Literal
+from typing import Annotated, Literal
 
 import numpy as np
-from numpy.typing import NDArray
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
 
-from mesh_normal.diagnosis import Problem, problems
-from mesh_normal.faces import FaceNormals, face_normals
-from mesh_normal.files import LoadedMesh, read_mesh
-from mesh_normal.orientation import MeshTopology, Method, Orientation, Verdict, orient
-from mesh_normal.vertices import corner_normals, vertex_normals
-
-__all__ = [
-    "AGREEMENT_DEGREES",
-    "COMPARISON_CREASE",
-    "INDEX_LIST_LIMIT",
-    "Bounds",
-    "ComponentFix",
-    "FileInfo",
-    "FileNormals",
-    "Fix",
-    "MeshAnalysis",
-    "MeshReport",
-    "Problem",
-    "analyse",
-    "build_report",
-    "mesh_report",
-]
+from mesh_normal.orientation import Method, Verdict
 
 #: How many face indices (or components) a list in the report holds at most; counts are full.
 INDEX_LIST_LIMIT = 100
@@ -54,8 +29,6 @@ COMPARISON_CREASE = 30.0
 
 MeshFormat = Literal["stl", "obj", "ply", "off", "glb", "gltf"]
 StoredKind = Literal["face", "corner", "vertex"]
-#: A path, the file's bytes, or a binary file object open for reading.
-MeshSource = str | os.PathLike[str] | bytes | IO[bytes]
 
 
 def finite(value: object) -> object:
@@ -75,6 +48,38 @@ class _Model(BaseModel):
     # Frozen: the diagnosis and the page read one report and never change it. Any float that
     # is not finite is written as null, so no model's JSON can hold NaN or Infinity.
     model_config = ConfigDict(frozen=True, extra="forbid", ser_json_inf_nan="null")
+
+
+Severity = Literal["error", "warning", "info"]
+ProblemCode = Literal[
+    "winding",
+    "inward",
+    "mixed",
+    "nonmanifold",
+    "nonorientable",
+    "degenerate",
+    "open",
+    "file_normals",
+    "unused_vertices",
+    "components",
+    "overflow",
+]
+
+
+class Problem(_Model):
+    """One problem of a mesh in plain words: what it is, why it matters, what to do."""
+
+    code: ProblemCode = Field(description="A stable name for the problem, for scripts.")
+    severity: Severity = Field(
+        description="error: normals or volume are wrong as the file stands; warning: some "
+        "results are missing or need care; info: worth knowing."
+    )
+    title: str = Field(description="The problem in one line.")
+    detail: str = Field(description="What it means and why it matters.")
+    action: str = Field(description="What to do about it.")
+    python: str | None = Field(
+        description="The same fix or check in Python with mesh_normal, or null."
+    )
 
 
 class FileInfo(_Model):
@@ -191,233 +196,3 @@ class MeshReport(_Model):
     )
     notes: list[str] = Field(description="What the reader noticed about the file, in words.")
     problems: list[Problem] = Field(description="Each problem found, the most serious first.")
-
-
-@dataclass(frozen=True, slots=True)
-class MeshAnalysis:
-    """Everything the report says about one mesh, with the arrays behind it."""
-
-    mesh: LoadedMesh
-    name: str | None
-    size: int
-    faces: FaceNormals
-    topology: MeshTopology
-    orientation: Orientation
-    unused_vertices: int
-
-
-def analyse(mesh: LoadedMesh, name: str | None = None, size: int = 0) -> MeshAnalysis:
-    """Run every check of the core on ``mesh`` (read from a file of ``size`` bytes).
-
-    Returns the arrays (face normals, topology, orientation) that :func:`build_report` sums up
-    and the page draws; for the report alone use :func:`mesh_report`.
-    """
-    faces = mesh.faces
-    used = np.zeros(len(mesh.vertices), dtype=bool)
-    used[faces.ravel()] = True
-    orientation = orient(mesh.vertices, faces)
-    return MeshAnalysis(
-        mesh=mesh,
-        name=name,
-        size=size,
-        faces=face_normals(mesh.vertices, faces),
-        topology=orientation.topology,
-        orientation=orientation,
-        unused_vertices=int(len(used) - np.count_nonzero(used)),
-    )
-
-
-def mesh_report(source: LoadedMesh | MeshSource, filename: str | None = None) -> MeshReport:
-    """The report on a mesh: ``mn.analyse(path)``.
-
-    ``source`` is a mesh already read (:class:`~mesh_normal.files.LoadedMesh`), or a path, the
-    file's bytes or a binary file object; ``filename`` names it in the report (by default the
-    path's or the file object's name) and, for bytes without a recognisable header, gives the
-    format by its extension.
-
-    Returns
-    -------
-    MeshReport
-        Counts, checks, the fix and the diagnosis, as ``POST /api/mesh`` answers them:
-        ``report.model_dump_json()`` is that JSON, ``report.problems`` the diagnosis.
-
-    Raises
-    ------
-    MeshFileError
-        When the file is not a mesh that can be read.
-    OSError
-        When the path cannot be read.
-    TypeError
-        When a file object gives text, not bytes.
-    """
-    if isinstance(source, LoadedMesh):
-        return build_report(analyse(source, filename, 0))
-    data, name = _file_bytes(source, filename)
-    return build_report(analyse(read_mesh(data, name), name, len(data)))
-
-
-def _file_bytes(source: MeshSource, filename: str | None) -> tuple[bytes, str | None]:
-    """The bytes of a path, bytes or binary file, and the name to give them."""
-    if isinstance(source, bytes | bytearray | memoryview):
-        return bytes(source), filename
-    if isinstance(source, str | os.PathLike):
-        path = Path(source)
-        return path.read_bytes(), filename or path.name
-    data = source.read()
-    if not isinstance(data, bytes):  # a file opened in text mode
-        raise TypeError(f"read the mesh file in binary mode ('rb'), not {type(data).__name__}")
-    attribute = getattr(source, "name", None)
-    name = Path(attribute).name if isinstance(attribute, str) else None
-    return data, filename or name
-
-
-def build_report(analysis: MeshAnalysis) -> MeshReport:
-    """The report: counts, checks, the fix that orient() would make, and the diagnosis."""
-    mesh, topology, orientation = analysis.mesh, analysis.topology, analysis.orientation
-    degenerate = analysis.faces.degenerate
-    report = MeshReport(
-        file=FileInfo(name=analysis.name, format=mesh.format, bytes=analysis.size),
-        vertices=len(mesh.vertices),
-        faces=len(mesh.faces),
-        source_faces=mesh.source_faces,
-        unused_vertices=analysis.unused_vertices,
-        area=float(np.sum(analysis.faces.areas)),
-        volume=orientation.volume,
-        watertight=topology.watertight,
-        winding_consistent=topology.winding_consistent,
-        orientation=orientation.orientation,
-        degenerate_faces=int(np.count_nonzero(degenerate)),
-        degenerate_face_indices=first_indices(degenerate),
-        # Faces with a repeated index are the ones outside every component.
-        repeated_index_faces=int(np.count_nonzero(topology.face_component < 0)),
-        boundary_edges=topology.boundary_edges,
-        nonmanifold_edges=topology.nonmanifold_edges,
-        components=topology.components,
-        nonorientable_components=int(np.count_nonzero(~orientation.components.orientable)),
-        bounds=_bounds(mesh.vertices),
-        fix=_fix(orientation),
-        file_normals=file_normal_agreement(analysis),
-        notes=list(mesh.notes),
-        problems=[],  # the diagnosis reads the rest of the report
-    )
-    return report.model_copy(update={"problems": problems(report)})
-
-
-def first_indices(mask: NDArray[np.bool_]) -> list[int]:
-    """The first INDEX_LIST_LIMIT indices where ``mask`` is true, 0-based."""
-    return [int(index) for index in np.flatnonzero(mask)[:INDEX_LIST_LIMIT]]
-
-
-def _bounds(vertices: NDArray[np.float64]) -> Bounds | None:
-    if not len(vertices):
-        return None
-    return Bounds(min=vertices.min(axis=0).tolist(), max=vertices.max(axis=0).tolist())
-
-
-def flips_by_component(orientation: Orientation) -> str:
-    """``"component:faces"`` for the first components with flipped faces, e.g. ``"0:1,3:12"``."""
-    flipped = orientation.components.flipped
-    parts = np.flatnonzero(flipped)[:INDEX_LIST_LIMIT]
-    return ",".join(f"{part}:{flipped[part]}" for part in parts.tolist())
-
-
-def _fix(orientation: Orientation) -> Fix:
-    return Fix(
-        faces_flipped=int(np.count_nonzero(orientation.flipped)),
-        components_changed=int(np.count_nonzero(orientation.components.flipped)),
-        flipped_face_indices=first_indices(orientation.flipped),
-        components=[
-            ComponentFix(
-                component=part.index,
-                faces=part.faces,
-                closed=part.closed,
-                orientable=part.orientable,
-                method=part.method,
-                faces_flipped=part.flipped,
-                volume=part.volume,
-            )
-            for part in orientation.components[:INDEX_LIST_LIMIT]
-        ],
-    )
-
-
-def _stored_normals(
-    analysis: MeshAnalysis,
-) -> tuple[StoredKind, str, NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]] | None:
-    """The file's normals beside ours: kind, our kind in words, theirs, ours, ours missing."""
-    mesh = analysis.mesh
-    if mesh.file_face_normals is not None:
-        faces = analysis.faces
-        return "face", "our face normals", mesh.file_face_normals, faces.normals, faces.degenerate
-    if mesh.file_corner_normals is not None:
-        corners = corner_normals(mesh.vertices, mesh.faces, COMPARISON_CREASE, "angle")
-        return (
-            "corner",
-            f"our corner normals (crease angle {COMPARISON_CREASE:g}°)",
-            mesh.file_corner_normals.reshape(-1, 3),
-            corners.normals.reshape(-1, 3),
-            corners.missing.ravel(),
-        )
-    if mesh.file_vertex_normals is not None:
-        smooth = vertex_normals(mesh.vertices, mesh.faces, "angle")
-        return (
-            "vertex",
-            "our angle-weighted vertex normals",
-            mesh.file_vertex_normals,
-            smooth.normals,
-            smooth.missing,
-        )
-    return None
-
-
-def file_normal_agreement(analysis: MeshAnalysis) -> FileNormals | None:
-    """How well the normals stored in the file agree with ours, or ``None`` without any."""
-    stored = _stored_normals(analysis)
-    if stored is None:
-        return None
-    kind, reference, theirs, ours, missing = stored
-    # A stored normal is usable when it is finite and not zero. Each is first divided by its
-    # largest |component| (so its length can neither overflow nor underflow); ours are unit
-    # vectors, so the cosine is a dot product over that length. Only the cosines are formed
-    # (one pass); the angles of the median and the worst row come from atan2.
-    with np.errstate(invalid="ignore", divide="ignore"):
-        magnitude = np.abs(theirs)  # the max of three columns: axis=1 reductions are slow
-        largest = np.maximum(np.maximum(magnitude[:, 0], magnitude[:, 1]), magnitude[:, 2])
-        usable = np.isfinite(largest) & (largest > 0)
-        theirs = theirs / np.where(usable, largest, 1.0)[:, None]
-        lengths = np.sqrt(np.einsum("ij,ij->i", theirs, theirs))
-        both = usable & ~missing
-        rows = np.flatnonzero(both)
-        cosines = (np.einsum("ij,ij->i", theirs, ours) / lengths)[rows]  # no row copies
-    agree = math.cos(math.radians(AGREEMENT_DEGREES))
-    return FileNormals(
-        kind=kind,
-        compared_with=reference,
-        stored=len(theirs),
-        compared=int(np.count_nonzero(both)),
-        unusable=int(np.count_nonzero(~usable)),
-        agreeing=int(np.count_nonzero(cosines >= agree)),
-        opposite=int(np.count_nonzero(cosines < 0)),
-        agreement_degrees=AGREEMENT_DEGREES,
-        median_angle_degrees=_angle(theirs, ours, rows, cosines, "median"),
-        max_angle_degrees=_angle(theirs, ours, rows, cosines, "max"),
-    )
-
-
-def _angle(
-    theirs: NDArray[np.float64],
-    ours: NDArray[np.float64],
-    rows: NDArray[np.intp],
-    cosines: NDArray[np.float64],
-    which: Literal["median", "max"],
-) -> float | None:
-    """The median or largest angle in degrees, taken accurately (atan2) at that one row."""
-    if not len(cosines):
-        return None
-    if which == "max":
-        row = int(rows[np.argmin(cosines)])
-    else:
-        middle = len(cosines) // 2
-        row = int(rows[np.argpartition(cosines, middle)[middle]])
-    a, b = theirs[row], ours[row]
-    return math.degrees(math.atan2(float(np.linalg.norm(np.cross(a, b))), float(a @ b)))

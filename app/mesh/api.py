@@ -17,10 +17,11 @@ from fastapi.responses import Response
 from app.mesh.uploads import UPLOAD_BODY, Upload, read_upload
 from app.web.errors import ERROR_RESPONSES, ApiError
 from app.web.jsonio import FastJSONResponse
+from mesh_normal.analysis import analyse, build_report, flips_by_component
 from mesh_normal.exports import NormalsKind, export_normals
 from mesh_normal.files import LoadedMesh, MeshFileError, read_mesh, write_mesh
 from mesh_normal.orientation import orient
-from mesh_normal.report import MeshReport, analyse, build_report, flips_by_component
+from mesh_normal.report import MeshReport
 from mesh_normal.vertices import Weighting
 
 router = APIRouter(

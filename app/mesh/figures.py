@@ -9,7 +9,7 @@ from app.mesh.histogram import area_histogram, histogram_figure
 from app.mesh.view import build_view
 
 if TYPE_CHECKING:
-    from mesh_normal.report import MeshAnalysis
+    from mesh_normal.analysis import MeshAnalysis
 
 
 def mesh_figures(analysis: MeshAnalysis) -> dict[str, Any]:

@@ -23,9 +23,9 @@ from app.mesh.uploads import Upload, read_upload
 from app.web.errors import ApiError
 from app.web.middleware import size_text
 from app.web.templating import templates
+from mesh_normal.analysis import analyse, build_report
 from mesh_normal.exports import FORMATS, KINDS
 from mesh_normal.files import SUFFIXES
-from mesh_normal.report import analyse, build_report
 from mesh_normal.vertices import Weighting
 
 router = APIRouter(include_in_schema=False)

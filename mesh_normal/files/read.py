@@ -51,7 +51,7 @@ def read_mesh(source: MeshSource, filename: str | None = None) -> LoadedMesh:
     TypeError
         A source of another type, or a file object opened in text mode.
     """
-    data, filename = _bytes_of(source, filename)
+    data, filename = source_bytes(source, filename)
     if not data:
         raise MeshFileError("The file is empty (0 bytes).")
     if data.startswith(b"\xef\xbb\xbf"):  # a UTF-8 byte order mark: text formats only
@@ -76,7 +76,7 @@ def read_mesh(source: MeshSource, filename: str | None = None) -> LoadedMesh:
     return mesh
 
 
-def _bytes_of(source: MeshSource, filename: str | None) -> tuple[bytes, str | None]:
+def source_bytes(source: MeshSource, filename: str | None) -> tuple[bytes, str | None]:
     """The bytes to read and the file name to go by."""
     if isinstance(source, bytes | bytearray | memoryview):
         return bytes(source), filename

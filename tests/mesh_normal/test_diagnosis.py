@@ -7,9 +7,10 @@ from typing import Any, get_args
 import numpy as np
 import pytest
 
+from mesh_normal.analysis import analyse, build_report
 from mesh_normal.diagnosis import CHECKS, Problem, ProblemCode, problems
 from mesh_normal.files import read_mesh
-from mesh_normal.report import FileNormals, MeshReport, analyse, build_report
+from mesh_normal.report import FileNormals, MeshReport
 from tests.app.mesh.test_api import CUBE, CUBE_ONE_FLIPPED
 
 

@@ -57,6 +57,7 @@ def test_the_core_modules_are_found() -> None:
         "mesh_normal.tolerances",
         "mesh_normal.files",
         "mesh_normal.report",
+        "mesh_normal.analysis",
         "mesh_normal.cli",
     ):
         assert expected in modules

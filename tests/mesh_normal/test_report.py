@@ -12,17 +12,9 @@ import pytest
 from pydantic import BaseModel, ValidationError
 
 import mesh_normal as mn
+from mesh_normal.analysis import MeshAnalysis, analyse, build_report, mesh_report
 from mesh_normal.files import SUFFIXES, read_mesh, write_mesh
-from mesh_normal.report import (
-    Bounds,
-    FileInfo,
-    MeshAnalysis,
-    MeshFormat,
-    MeshReport,
-    analyse,
-    build_report,
-    mesh_report,
-)
+from mesh_normal.report import Bounds, FileInfo, MeshFormat, MeshReport
 from tests.app.mesh.test_api import CUBE, CUBE_ONE_FLIPPED, OPEN_BOX, TETRA
 
 #: The report's keys, in the order the JSON has always had them.
