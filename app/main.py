@@ -16,7 +16,7 @@ from app.mesh import page as mesh_page
 from app.web import errors
 from app.web.middleware import BodyLimit, PageCompression, SecurityHeaders
 from app.web.static import STATIC_DIR, CompressedStaticFiles
-from mesh_normal.vertices import compile_kernels
+from mesh_normal.kernels import compile_kernels
 
 DESCRIPTION = """
 Surface normals of triangles, exact to the last bit.

@@ -9,10 +9,11 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic_core import to_json
 
+from mesh_normal.corners import corner_normals
 from mesh_normal.faces import face_normals
 from mesh_normal.files import LoadedMesh
 from mesh_normal.files.write import ply_bytes
-from mesh_normal.vertices import Weighting, corner_normals, vertex_normals
+from mesh_normal.vertices import Weighting, vertex_normals
 
 NormalsKind = Literal["face", "vertex", "corner"]
 NormalsFormat = Literal["json", "csv", "npy"]

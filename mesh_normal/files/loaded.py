@@ -9,9 +9,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mesh_normal.files.errors import MeshFileError
-
-FloatArray = NDArray[np.float64]
-IndexArray = NDArray[np.intp]
+from mesh_normal.types import FloatArray, IndexArray
 
 #: Describes item ``i`` (0-based) of the built arrays for an error sentence, e.g. "the face on
 #: line 12". The default names the 0-based index.

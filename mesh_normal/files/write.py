@@ -10,7 +10,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from mesh_normal.faces import check_mesh, face_normals
+from mesh_normal.checks import check_mesh
+from mesh_normal.faces import face_normals
 from mesh_normal.files.errors import MeshFileError, unsupported
 from mesh_normal.files.stl import HEADER, RECORD
 
