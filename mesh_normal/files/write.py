@@ -11,7 +11,6 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from mesh_normal.checks import check_mesh
-from mesh_normal.faces import face_normals
 from mesh_normal.files.errors import MeshFileError, unsupported
 from mesh_normal.files.stl import HEADER, RECORD
 
@@ -92,6 +91,8 @@ def ply_bytes(
 
 
 def _stl(points: NDArray[np.float64], triangles: NDArray[np.intp]) -> bytes:
+    from mesh_normal.faces import face_normals  # here: reading and writing need no numba
+
     largest = float(np.abs(points).max(initial=0.0))
     if largest > float(np.finfo(np.float32).max):
         raise MeshFileError(
