@@ -154,8 +154,9 @@ def _index_range(array: np.ndarray) -> tuple[int, int]:
         return array.min(), array.max()
     # One compiled pass for the usual dtype instead of two NumPy reductions; imported here so
     # that checking (and so reading and writing files) needs numba only when it is used.
-    from mesh_normal.kernels import index_range
+    from mesh_normal.kernels import announce_compiling, index_range
 
+    announce_compiling()
     return index_range(array)
 
 
