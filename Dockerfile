@@ -60,7 +60,7 @@ COPY app ./app
 COPY templates ./templates
 COPY static ./static
 RUN python -m compileall -q mesh_normal app \
-    && python -c "import mesh_normal.vertices as m; m.compile_kernels()" \
+    && python -c "import mesh_normal as mn; mn.compile_kernels()" \
     && chown -R 10001:10001 /var/cache/numba
 
 USER 10001:10001

@@ -18,7 +18,7 @@ from app.web import handlers
 from app.web.jsonio import FastJSONResponse
 from app.web.middleware import BodyLimit, PageCompression, SecurityHeaders
 from app.web.static import STATIC_DIR, CompressedStaticFiles
-from mesh_normal.vertices import compile_kernels
+from mesh_normal.precompile import compile_kernels
 
 DESCRIPTION = """
 Surface normals of triangles, exact to the last bit.

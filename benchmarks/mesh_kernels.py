@@ -28,8 +28,9 @@ from collections.abc import Callable
 
 import numpy as np
 
+from mesh_normal.corners import corner_normals
 from mesh_normal.faces import face_normals
-from mesh_normal.vertices import corner_normals, vertex_normals
+from mesh_normal.vertices import vertex_normals
 
 SIZES = (69_451, 871_414, 14_000_000)
 

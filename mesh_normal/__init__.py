@@ -25,59 +25,72 @@ if TYPE_CHECKING:
     from mesh_normal.analysis import MeshAnalysis
     from mesh_normal.analysis import mesh_report as analyse
     from mesh_normal.batch import BatchNormals, triangle_normals
-    from mesh_normal.faces import FaceNormals, face_areas, face_normals
+    from mesh_normal.checks import CheckedMesh, checked_mesh
+    from mesh_normal.corners import CornerNormals, corner_normals
+    from mesh_normal.faces import FaceGeometry, FaceNormals, face_areas, face_geometry, face_normals
     from mesh_normal.files import LoadedMesh, MeshFileError, read_mesh, write_mesh
-    from mesh_normal.orientation import Orientation, mesh_topology, orient, signed_volume
+    from mesh_normal.orientation import Orientation, orient, signed_volume
+    from mesh_normal.precompile import compile_kernels
     from mesh_normal.report import MeshReport
+    from mesh_normal.topology import MeshTopology, mesh_topology
     from mesh_normal.triangle import TriangleNormal, triangle_normal
-    from mesh_normal.vertices import (
-        CornerNormals,
-        VertexNormals,
-        corner_normals,
-        vertex_normals,
-    )
+    from mesh_normal.vertices import VertexNormals, vertex_normals
 
-#: Public name to the module that defines it (``module:name`` where the name differs there).
+#: Public name to the module that defines it (``module:name`` where the name differs there). No
+#: module may be named like a public name: the submodule, once imported, would shadow it as an
+#: attribute of the package.
 _HOMES = {
     "BatchNormals": "batch",
     "triangle_normals": "batch",
+    "CheckedMesh": "checks",
+    "checked_mesh": "checks",
+    "CornerNormals": "corners",
+    "corner_normals": "corners",
+    "FaceGeometry": "faces",
     "FaceNormals": "faces",
     "face_areas": "faces",
+    "face_geometry": "faces",
     "face_normals": "faces",
     "LoadedMesh": "files",
     "MeshFileError": "files",
     "read_mesh": "files",
     "write_mesh": "files",
     "Orientation": "orientation",
-    "mesh_topology": "orientation",
     "orient": "orientation",
     "signed_volume": "orientation",
     "MeshAnalysis": "analysis",
     "MeshReport": "report",
     "analyse": "analysis:mesh_report",  # mn.analyse(path) is the report
+    "MeshTopology": "topology",
+    "mesh_topology": "topology",
+    "compile_kernels": "precompile",
     "TriangleNormal": "triangle",
     "triangle_normal": "triangle",
-    "CornerNormals": "vertices",
     "VertexNormals": "vertices",
-    "corner_normals": "vertices",
     "vertex_normals": "vertices",
 }
 
 __all__ = [
     "BatchNormals",
+    "CheckedMesh",
     "CornerNormals",
+    "FaceGeometry",
     "FaceNormals",
     "LoadedMesh",
     "MeshAnalysis",
     "MeshFileError",
     "MeshReport",
+    "MeshTopology",
     "Orientation",
     "TriangleNormal",
     "VertexNormals",
     "__version__",
     "analyse",
+    "checked_mesh",
+    "compile_kernels",
     "corner_normals",
     "face_areas",
+    "face_geometry",
     "face_normals",
     "mesh_topology",
     "orient",

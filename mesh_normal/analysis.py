@@ -15,11 +15,12 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from mesh_normal.corners import corner_normals
 from mesh_normal.diagnosis import problems
-from mesh_normal.faces import FaceNormals, face_normals
+from mesh_normal.faces import FaceGeometry, FaceNormals, face_geometry, face_normals
 from mesh_normal.files import LoadedMesh, read_mesh
 from mesh_normal.files.read import MeshSource, source_bytes
-from mesh_normal.orientation import MeshTopology, Orientation, orient
+from mesh_normal.orientation import Orientation, orient
 from mesh_normal.report import (
     AGREEMENT_DEGREES,
     COMPARISON_CREASE,
@@ -32,7 +33,8 @@ from mesh_normal.report import (
     MeshReport,
     StoredKind,
 )
-from mesh_normal.vertices import corner_normals, vertex_normals
+from mesh_normal.topology import MeshTopology
+from mesh_normal.vertices import vertex_normals
 
 
 @dataclass(frozen=True, slots=True)
@@ -42,6 +44,7 @@ class MeshAnalysis:
     mesh: LoadedMesh
     name: str | None
     size: int
+    geometry: FaceGeometry
     faces: FaceNormals
     topology: MeshTopology
     orientation: Orientation
@@ -54,15 +57,18 @@ def analyse(mesh: LoadedMesh, name: str | None = None, size: int = 0) -> MeshAna
     Returns the arrays (face normals, topology, orientation) that :func:`build_report` sums up
     and the page draws; for the report alone use :func:`mesh_report`.
     """
-    faces = mesh.faces
+    # One pass: the reader checked the arrays, and the cross products are taken once here for
+    # the face normals, the orientation's volumes and the file-normal comparison alike.
+    geometry = face_geometry(mesh.checked())
+    orientation = orient(geometry)
     used = np.zeros(len(mesh.vertices), dtype=bool)
-    used[faces.ravel()] = True
-    orientation = orient(mesh.vertices, faces)
+    used[mesh.faces.ravel()] = True
     return MeshAnalysis(
         mesh=mesh,
         name=name,
         size=size,
-        faces=face_normals(mesh.vertices, faces),
+        geometry=geometry,
+        faces=face_normals(geometry),
         topology=orientation.topology,
         orientation=orientation,
         unused_vertices=int(len(used) - np.count_nonzero(used)),
@@ -177,7 +183,9 @@ def _stored_normals(
         faces = analysis.faces
         return "face", "our face normals", mesh.file_face_normals, faces.normals, faces.degenerate
     if mesh.file_corner_normals is not None:
-        corners = corner_normals(mesh.vertices, mesh.faces, COMPARISON_CREASE, "angle")
+        corners = corner_normals(
+            analysis.geometry, crease_angle=COMPARISON_CREASE, weighting="angle"
+        )
         return (
             "corner",
             f"our corner normals (crease angle {COMPARISON_CREASE:g}°)",
@@ -186,7 +194,7 @@ def _stored_normals(
             corners.missing.ravel(),
         )
     if mesh.file_vertex_normals is not None:
-        smooth = vertex_normals(mesh.vertices, mesh.faces, "angle")
+        smooth = vertex_normals(analysis.geometry, weighting="angle")
         return (
             "vertex",
             "our angle-weighted vertex normals",

@@ -24,13 +24,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from mesh_normal.tolerances import BATCH_MARGIN, BATCH_TINY, DETERMINANT_ERROR
 from mesh_normal.triangle import TriangleNormal, triangle_normal
-
-FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
+from mesh_normal.types import BoolArray, FloatArray
 
 
 @dataclass(frozen=True, slots=True)

@@ -173,7 +173,7 @@ def fix(args: argparse.Namespace, progress: Progress) -> int:
         )
     mesh, _ = load(args.input, progress)
     progress.step("making the winding consistent and outward")
-    fixed = orient(mesh.vertices, mesh.faces)
+    fixed = orient(mesh.checked())
     progress.step(f"writing {args.output}")
     try:
         data = write_mesh(mesh.vertices, fixed.faces, chosen)

@@ -9,10 +9,11 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic_core import to_json
 
+from mesh_normal.corners import corner_normals
 from mesh_normal.faces import face_normals
 from mesh_normal.files import LoadedMesh
 from mesh_normal.files.ply import ply_bytes
-from mesh_normal.vertices import Weighting, corner_normals, vertex_normals
+from mesh_normal.vertices import Weighting, vertex_normals
 
 NormalsKind = Literal["face", "vertex", "corner"]
 NormalsFormat = Literal["json", "csv", "npy"]
@@ -32,13 +33,14 @@ def compute_normals(
     missing : (m,), (n,) or (m, 3) bool
         Degenerate faces, vertices in no usable face, corners whose sum cancels.
     """
+    checked = mesh.checked()  # the reader checked the arrays
     if kind == "face":
-        faces = face_normals(mesh.vertices, mesh.faces)
+        faces = face_normals(checked)
         return faces.normals, faces.degenerate
     if kind == "vertex":
-        smooth = vertex_normals(mesh.vertices, mesh.faces, weighting)
+        smooth = vertex_normals(checked, weighting=weighting)
         return smooth.normals, smooth.missing
-    corners = corner_normals(mesh.vertices, mesh.faces, crease_angle, weighting)
+    corners = corner_normals(checked, crease_angle=crease_angle, weighting=weighting)
     return corners.normals, corners.missing
 
 

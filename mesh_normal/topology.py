@@ -1,7 +1,28 @@
-"""How the faces of a mesh meet: the corners around each vertex.
+"""How the faces of a triangle mesh hang together: edges, patches, components, corners.
 
-A corner is one vertex of one face, numbered ``3 * face + k`` for ``faces[face, k]``, so
-corner ids follow ``faces.ravel()``.
+Terms. Half-edge ``3 * f + k`` runs from ``faces[f, k]`` to ``faces[f, (k + 1) % 3]``. An
+edge is an unordered pair of vertices, *used* by every face that has it as a half-edge. A
+corner is one vertex of one face, numbered ``3 * face + k`` for ``faces[face, k]``, so corner
+ids follow ``faces.ravel()`` (see :func:`vertex_corners`).
+
+- A face with a repeated index (``[4, 4, 7]``) has no edges here: it is left out of every
+  count and of all adjacency, belongs to no component (label -1) and is never flipped.
+  A face with three distinct indices counts, even if its points are collinear or coincide.
+- A *boundary* edge is used by exactly one face, a *non-manifold* edge by three or more.
+  A mesh is *watertight* when it has at least one face and neither kind of edge.
+- A *component* is a set of faces connected through shared edges, non-manifold ones too.
+  Isolated vertices are in no component. Duplicate faces are faces like any other (two
+  copies of a face on a closed mesh make its edges non-manifold).
+- Winding is *consistent* when the two faces of every manifold edge (used by exactly two
+  faces) traverse it in opposite directions. Non-manifold edges count neither for nor against
+  it, and orientation is not carried across them: they are reported, not judged.
+- A *patch* is a set of faces connected through manifold edges; a component is several
+  patches only where non-manifold edges split it. A patch is *orientable* when flipping some
+  of its faces can make its winding consistent; a Moebius strip is not.
+
+Speed. One integer sort of the 3m half-edges groups them by edge, and a union-find with
+parities (one loop compiled with numba, like the kernels of :mod:`mesh_normal.kernels`; path
+compression, the smaller root wins) labels the patches in nearly O(m) work.
 """
 
 from __future__ import annotations
@@ -9,12 +30,289 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike
 
-IndexArray = NDArray[np.intp]
+from mesh_normal.checks import CheckedMesh, check_faces
+from mesh_normal.faces import FaceGeometry
+from mesh_normal.kernels import announce_compiling, kernel
+from mesh_normal.types import BoolArray, IndexArray
 
-#: Sort keys vertex * 3m + corner must stay below this to fit int64 with room to spare.
+#: Sort keys (edge * 3m + half-edge, vertex * 3m + corner) must stay below this to fit int64
+#: with room to spare.
 KEY_LIMIT = 2**62
+
+
+@dataclass(frozen=True, slots=True)
+class MeshTopology:
+    """Edges, components and winding of a mesh (see the module docstring for the terms).
+
+    Attributes
+    ----------
+    boundary_edges : int
+        Edges used by exactly one face.
+    nonmanifold_edges : int
+        Edges used by three or more faces.
+    components : int
+        Edge-connected components.
+    face_component : (m,) intp
+        The component of each face, numbered 0 .. components - 1 in order of their first
+        face; -1 for a face with a repeated index.
+    watertight : bool
+        At least one face, and no boundary or non-manifold edge.
+    winding_consistent : bool
+        Every manifold edge is traversed in opposite directions by its two faces (true when
+        there is no manifold edge).
+    orientable : bool
+        Every patch can be made consistent by flipping faces.
+    boundary_edge_list : (b, 2) intp
+        The boundary edges, each in the direction its face traverses it, sorted by their
+        smaller vertex, then the larger.
+    nonmanifold_edge_list : (k, 2) intp
+        The non-manifold edges, each as (smaller vertex, larger vertex), sorted.
+    """
+
+    boundary_edges: int
+    nonmanifold_edges: int
+    components: int
+    face_component: IndexArray
+    watertight: bool
+    winding_consistent: bool
+    orientable: bool
+    boundary_edge_list: IndexArray
+    nonmanifold_edge_list: IndexArray
+
+
+@dataclass(frozen=True, slots=True)
+class Structure:
+    """What mesh_topology and orient need: the topology and the patches with their parities."""
+
+    topology: MeshTopology
+    group: IndexArray  # (m,) patch of each face; faces with a repeated index get ``patches``
+    patches: int
+    parity: IndexArray  # (m,) 1 where a face must flip to agree with its patch's first face
+    orientable: BoolArray  # (patches,)
+    patch_component: IndexArray  # (patches,)
+    closed: BoolArray  # (components,)
+
+
+def mesh_topology(
+    faces: ArrayLike | CheckedMesh | FaceGeometry, vertex_count: int | None = None
+) -> MeshTopology:
+    """Count the boundary and non-manifold edges and the components; judge the winding.
+
+    Parameters
+    ----------
+    faces : (m, 3) int, CheckedMesh or FaceGeometry
+        Indices into ``vertex_count`` vertices, or an already checked mesh or its geometry
+        (then no ``vertex_count``).
+    vertex_count : int
+        n, the number of vertices.
+
+    Returns
+    -------
+    MeshTopology
+        See the module docstring for the terms.
+
+    Examples
+    --------
+    >>> t = mesh_topology([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]], 4)
+    >>> t.watertight, t.winding_consistent, t.components
+    (True, True, 1)
+    """
+    if isinstance(faces, FaceGeometry):
+        faces = faces.mesh
+    if isinstance(faces, CheckedMesh):
+        if vertex_count is not None:
+            raise TypeError("a checked mesh holds its vertex count: pass it alone.")
+        return structure(faces.faces, len(faces.vertices)).topology
+    if vertex_count is None:
+        raise TypeError("vertex_count is required with raw faces.")
+    return structure(check_faces(faces, vertex_count), vertex_count).topology
+
+
+# --- edges, patches and components -----------------------------------------------------------
+
+
+def structure(faces: IndexArray, vertex_count: int) -> Structure:
+    valid = (faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2])
+    valid &= faces[:, 2] != faces[:, 0]
+    key, face, forward = _sorted_half_edges(faces, valid, vertex_count)
+    # At each sorted position: is the edge the same as the previous one, the next, the one
+    # after next? Edges used once, twice and more follow.
+    same_as_next = key[1:] == key[:-1]
+    before, after, after_next = (np.zeros(len(key), dtype=bool) for _ in range(3))
+    before[1:] = after[:-1] = same_as_next
+    after_next[:-1] = after[1:]
+    starting = ~before
+    boundary = np.flatnonzero(starting & ~after)
+    paired = np.flatnonzero(starting & after & ~after_next)
+    nonmanifold = np.flatnonzero(starting & after & after_next)
+    # The two faces of each manifold edge, and whether they run along it the same way.
+    one, two = face[paired], face[paired + 1]
+    same = forward[paired] == forward[paired + 1]
+    root, parity = _connected(len(faces), one, two, same)
+    patch, firsts = _numbered(root, valid)
+    patches = len(firsts)
+    orientable = np.ones(patches, dtype=bool)
+    orientable[patch[one[(parity[one] ^ parity[two]) != same]]] = False
+    face_component, components = _merged(patch, patches, face, starting, nonmanifold)
+    closed = np.ones(components, dtype=bool)
+    closed[face_component[face[np.r_[boundary, nonmanifold]]]] = False
+    topology = MeshTopology(
+        boundary_edges=len(boundary),
+        nonmanifold_edges=len(nonmanifold),
+        components=components,
+        face_component=face_component,
+        watertight=components > 0 and bool(closed.all()),
+        winding_consistent=not same.any(),
+        orientable=bool(orientable.all()),
+        boundary_edge_list=_edge_list(key[boundary], forward[boundary], vertex_count),
+        nonmanifold_edge_list=_edge_list(key[nonmanifold], None, vertex_count),
+    )
+    group = np.where(valid, patch, patches)
+    return Structure(topology, group, patches, parity, orientable, face_component[firsts], closed)
+
+
+def _edge_list(key: IndexArray, forward: IndexArray | None, vertex_count: int) -> IndexArray:
+    """(k, 2) vertex pairs of edge keys, smaller vertex first unless ``forward`` is 0."""
+    edges = np.stack(np.divmod(key, max(vertex_count, 1)), axis=1)
+    if forward is not None:
+        edges[forward == 0] = edges[forward == 0, ::-1]
+    return edges
+
+
+def _sorted_half_edges(
+    faces: IndexArray, valid: BoolArray, vertex_count: int
+) -> tuple[IndexArray, IndexArray, IndexArray]:
+    """The half-edges of valid faces sorted by edge, then by face.
+
+    Returns the edge key min * n + max, the face, and 1 where the face runs along the edge
+    from min to max, of each. Sorting unique values key * 2**s + 2 * face + forward is several
+    times faster than an argsort (NumPy sorts integers with SIMD), and the face and direction
+    come out of it without a gather; past ``KEY_LIMIT`` two stable sorts of positions, by
+    max and then by min, do it.
+    """
+    following = faces[:, [1, 2, 0]]
+    low, high = np.minimum(faces, following), np.maximum(faces, following)
+    forward = (faces < following).view(np.int8)
+    face = np.arange(len(faces))[:, None]
+    if not valid.all():
+        low, high, forward, face = low[valid], high[valid], forward[valid], face[valid]
+    bits = len(faces).bit_length() + 1
+    if vertex_count * vertex_count << bits < KEY_LIMIT:
+        packed = low * vertex_count
+        packed += high
+        packed <<= bits
+        packed |= face << 1
+        packed |= forward
+        packed = packed.ravel()
+        packed.sort()
+        return packed >> bits, (packed >> 1) & ((1 << bits - 1) - 1), packed & 1
+    face = np.broadcast_to(face, low.shape)
+    low, high, face, forward = (np.ravel(array) for array in (low, high, face, forward))
+    bits = len(low).bit_length()
+    if vertex_count << bits < KEY_LIMIT:
+        position = np.arange(len(low))
+        mask = (1 << bits) - 1
+        by_high = np.sort(high << bits | position) & mask
+        by_both = by_high[np.sort(low[by_high] << bits | position) & mask]
+    else:
+        by_both = np.lexsort((high, low))
+    return low[by_both] * vertex_count + high[by_both], face[by_both], forward[by_both]
+
+
+def _connected(
+    count: int, one: IndexArray, two: IndexArray, same: IndexArray
+) -> tuple[IndexArray, IndexArray]:
+    """Label the nodes of a graph with the smallest node connected to them.
+
+    Nodes ``one[i]`` and ``two[i]`` are joined, with parity ``same[i]`` (1 when exactly one
+    of them must flip to agree with the other). Returns each node's label and its parity
+    relative to the labelling node; where a cycle has odd parity (not orientable) the
+    parities conflict and are meaningless, but the labels are right regardless.
+    """
+    root = np.empty(count, dtype=np.intp)
+    parity = np.empty(count, dtype=np.intp)
+    announce_compiling()
+    _union_find(
+        count,
+        np.ascontiguousarray(one, dtype=np.intp),
+        np.ascontiguousarray(two, dtype=np.intp),
+        np.ascontiguousarray(same, dtype=np.intp),
+        root,
+        parity,
+    )
+    return root, parity
+
+
+@kernel(error_model="python")
+def _find(parent: IndexArray, relation: IndexArray, node: int) -> tuple[int, int]:
+    """The root of ``node`` and its parity to it; compresses the path on the way."""
+    top, parity = node, 0
+    while parent[top] != top:
+        parity ^= relation[top]
+        top = parent[top]
+    step, step_parity = node, parity
+    while parent[step] != step:
+        following, following_parity = parent[step], step_parity ^ relation[step]
+        parent[step], relation[step] = top, step_parity
+        step, step_parity = following, following_parity
+    return top, parity
+
+
+@kernel(error_model="python")
+def _union_find(
+    count: int,
+    one: IndexArray,
+    two: IndexArray,
+    same: IndexArray,
+    root: IndexArray,
+    parity: IndexArray,
+) -> None:
+    """Union-find with parities, one pass over the edges; the smaller root always wins."""
+    parent = np.arange(count)
+    relation = np.zeros(count, dtype=np.intp)
+    for edge in range(len(one)):
+        a, a_parity = _find(parent, relation, one[edge])
+        b, b_parity = _find(parent, relation, two[edge])
+        if a == b:
+            continue
+        low, high = (a, b) if a < b else (b, a)
+        parent[high] = low
+        relation[high] = a_parity ^ b_parity ^ same[edge]
+    for node in range(count):
+        root[node], parity[node] = _find(parent, relation, node)
+
+
+def _merged(
+    patch: IndexArray,
+    patches: int,
+    face: IndexArray,
+    starting: BoolArray,
+    nonmanifold: IndexArray,
+) -> tuple[IndexArray, int]:
+    """Join the patches around each non-manifold edge into components; number them."""
+    if not len(nonmanifold):
+        return patch, patches
+    # Link each later half-edge of a non-manifold edge to the edge's first half-edge.
+    first = np.flatnonzero(starting)
+    uses = np.diff(np.r_[first, len(face)])[np.searchsorted(first, nonmanifold)]
+    group = np.repeat(nonmanifold, uses)
+    position = group + np.arange(len(group)) - np.repeat(np.cumsum(uses) - uses, uses)
+    one, two = patch[face[group]], patch[face[position]]
+    root, _ = _connected(patches, one, two, np.zeros(len(one), dtype=np.intp))
+    number, firsts = _numbered(root, np.ones(patches, dtype=bool))
+    return np.where(patch >= 0, number[patch], -1), len(firsts)
+
+
+def _numbered(root: IndexArray, valid: BoolArray) -> tuple[IndexArray, IndexArray]:
+    """Number the roots 0, 1, ... in order; -1 for invalid nodes. Also returns the roots."""
+    is_root = valid & (root == np.arange(len(root)))
+    number = np.cumsum(is_root) - 1
+    return np.where(valid, number[root], -1), np.flatnonzero(is_root)
+
+
+# --- corners around vertices ------------------------------------------------------------------
 
 
 @dataclass(frozen=True, slots=True)
@@ -46,7 +344,7 @@ def vertex_corners(
     Parameters
     ----------
     faces : (m, 3) intp
-        Checked indices (see :func:`mesh_normal.faces.check_mesh`).
+        Checked indices (see :func:`mesh_normal.checks.check_mesh`).
     vertex_count : int
         n, the number of vertices.
     corners : (k,) intp, optional

@@ -150,7 +150,7 @@ async def post_mesh_fix(
     def work() -> tuple[bytes, str, dict[str, str]]:
         mesh = load(upload)
         chosen = file_format or (mesh.format if mesh.format in ("ply", "stl", "obj") else "ply")
-        fixed = orient(mesh.vertices, mesh.faces)
+        fixed = orient(mesh.checked())
         headers = {
             "x-faces-flipped": str(int(np.count_nonzero(fixed.flipped))),
             "x-component-faces-flipped": flips_by_component(fixed),

@@ -4,14 +4,16 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
 from mesh_normal.files.errors import MeshFileError
+from mesh_normal.types import FloatArray, IndexArray
 
-FloatArray = NDArray[np.float64]
-IndexArray = NDArray[np.intp]
+if TYPE_CHECKING:
+    from mesh_normal.checks import CheckedMesh
 
 #: Describes item ``i`` (0-based) of the built arrays for an error sentence, e.g. "the face on
 #: line 12". The default names the 0-based index.
@@ -54,6 +56,13 @@ class LoadedMesh:
     file_vertex_normals: FloatArray | None = None
     file_corner_normals: FloatArray | None = None
     notes: tuple[str, ...] = ()
+
+    def checked(self) -> CheckedMesh:
+        """The mesh as the core takes it, not checked again: :func:`build` checked these arrays
+        by the rules of :func:`~mesh_normal.checks.check_mesh` (finite, indices in range)."""
+        from mesh_normal.checks import CheckedMesh, scaling  # numpy only
+
+        return CheckedMesh(self.vertices, self.faces, *scaling(self.vertices))
 
 
 def build(

@@ -14,7 +14,7 @@ from typing import overload
 
 from numpy.typing import ArrayLike
 
-from mesh_normal.faces import check_mesh
+from mesh_normal.checks import check_mesh
 from mesh_normal.files.errors import unsupported
 from mesh_normal.files.formats import FORMATS, WRITABLE, MeshFormat, suffix_format
 

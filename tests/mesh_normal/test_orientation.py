@@ -1,4 +1,5 @@
-"""Tests for mesh_normal.orientation: edges, components, winding, volume and orient()."""
+"""Tests for mesh_normal.topology and mesh_normal.orientation: edges, components, winding,
+volume and orient()."""
 
 from __future__ import annotations
 
@@ -12,16 +13,15 @@ import trimesh
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mesh_normal import orientation
+from mesh_normal import topology
 from mesh_normal.orientation import (
     ComponentOrientation,
     ComponentTable,
-    MeshTopology,
     Orientation,
-    mesh_topology,
     orient,
     signed_volume,
 )
+from mesh_normal.topology import MeshTopology, mesh_topology
 from tests.paths import DATA
 
 SAMPLES = ("sphere.ply", "ant.ply", "nut.ply", "cube.obj")
@@ -323,7 +323,7 @@ def test_the_slower_sorts_agree(monkeypatch: pytest.MonkeyPatch, limit: int) -> 
     faces = reversed_rows(faces, slice(0, 300))
     faces = np.concatenate([faces[:-5], [[1, 1, 2]], faces[:1]])  # boundary, non-manifold
     expected = orient(vertices, faces)
-    monkeypatch.setattr(orientation, "KEY_LIMIT", limit)
+    monkeypatch.setattr(topology, "KEY_LIMIT", limit)
     got = orient(vertices, faces)
     assert_same_topology(got.topology, expected.topology)
     assert np.array_equal(got.flipped, expected.flipped)

@@ -1,0 +1,179 @@
+"""Input conversion and checks, done once at the edge: :class:`CheckedMesh`.
+
+Every public function of the core takes raw arrays (and checks them, with a clear
+``ValueError`` for the first problem) or a :class:`CheckedMesh` made by :func:`checked_mesh`,
+which it trusts. A caller that runs several functions on one mesh checks it once.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from mesh_normal.types import FloatArray, IndexArray
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class CheckedMesh:
+    """A mesh whose arrays passed :func:`check_mesh`, with the scaling the kernels use.
+
+    Attributes
+    ----------
+    vertices : (n, 3) float64
+        C-contiguous, finite; the input itself when it already was.
+    faces : (m, 3) intp
+        C-contiguous, every index in ``0 .. n - 1``.
+    points : (n, 3) float64
+        What the kernels read: ``vertices``, or a copy scaled by ``2**-scale`` when every
+        coordinate is below 2**-1022 (see :func:`scaling`).
+    factor : float
+        The kernels multiply each coordinate they read by this (exact).
+    scale : int
+        The power of two that brings the largest |coordinate| into [0.5, 1).
+    """
+
+    vertices: FloatArray
+    faces: IndexArray
+    points: FloatArray
+    factor: float
+    scale: int
+
+
+def checked_mesh(vertices: ArrayLike, faces: ArrayLike) -> CheckedMesh:
+    """Convert and check a mesh once (see :func:`check_mesh` for the rules).
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64
+        Finite coordinates (any real dtype).
+    faces : (m, 3) int
+        Indices into ``vertices`` (any integer dtype).
+
+    Returns
+    -------
+    CheckedMesh
+        The converted arrays and their scaling.
+    """
+    points = _as_vertices(vertices)
+    indices = check_faces(faces, len(points))
+    return CheckedMesh(points, indices, *scaling(points))
+
+
+def as_checked(vertices: ArrayLike | CheckedMesh, faces: ArrayLike | None) -> CheckedMesh:
+    """``vertices`` itself when it is a :class:`CheckedMesh`, else the checked arrays.
+
+    The two ways to call the core: ``f(vertices, faces)`` or ``f(checked)``.
+    """
+    if isinstance(vertices, CheckedMesh):
+        if faces is not None:
+            raise TypeError("a checked mesh holds its faces: pass it without faces.")
+        return vertices
+    if faces is None:
+        raise TypeError("faces are required with raw vertices.")
+    return checked_mesh(vertices, faces)
+
+
+def check_mesh(vertices: ArrayLike, faces: ArrayLike) -> tuple[FloatArray, IndexArray]:
+    """Convert and check a mesh up front, with a clear ``ValueError`` for the first problem.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64
+        Finite coordinates (any real dtype; converted to float64).
+    faces : (m, 3) int
+        Indices into ``vertices``, each in ``0 .. n - 1`` (any integer dtype).
+
+    Returns
+    -------
+    vertices : (n, 3) float64
+        C-contiguous; the input itself when it already is.
+    faces : (m, 3) intp
+        C-contiguous.
+    """
+    points = _as_vertices(vertices)
+    return points, check_faces(faces, len(points))
+
+
+def _as_vertices(vertices: ArrayLike) -> FloatArray:
+    array = np.asarray(vertices)
+    if array.size == 0 and array.ndim <= 2:
+        array = array.reshape(0, 3)
+    if array.dtype == np.bool_ or array.dtype.kind not in "iuf":
+        raise ValueError(f"vertices must hold real numbers, not {array.dtype}.")
+    if array.ndim != 2 or array.shape[1] != 3:
+        raise ValueError(f"vertices must have shape (n, 3), not {array.shape}.")
+    points = np.ascontiguousarray(array, dtype=np.float64)
+    if not np.isfinite(points).all():  # .all(axis=1) first would take 25 times longer
+        row = int(np.flatnonzero(~np.isfinite(points).all(axis=1))[0])
+        raise ValueError(f"vertices[{row}] has a coordinate that is not a finite number.")
+    return points
+
+
+def check_faces(faces: ArrayLike, vertex_count: int) -> IndexArray:
+    """Convert and check faces alone, for ``vertex_count`` vertices (see :func:`check_mesh`).
+
+    Parameters
+    ----------
+    faces : (m, 3) int
+        Indices, each in ``0 .. vertex_count - 1`` (any integer dtype).
+    vertex_count : int
+        n, the number of vertices.
+
+    Returns
+    -------
+    (m, 3) intp
+        C-contiguous.
+    """
+    array = np.asarray(faces)
+    if array.size == 0 and array.ndim <= 2:
+        return np.empty((0, 3), dtype=np.intp)
+    if array.dtype.kind not in "iu":
+        raise ValueError(f"faces must hold integer vertex indices, not {array.dtype}.")
+    if array.ndim != 2 or array.shape[1] != 3:
+        raise ValueError(f"faces must have shape (m, 3), not {array.shape}.")
+    low, high = _index_range(array)
+    if low < 0:
+        row, column = np.argwhere(array < 0)[0]
+        raise ValueError(f"faces[{row}] has a negative vertex index, {array[row, column]}.")
+    if high >= vertex_count:
+        row, column = np.argwhere(array >= vertex_count)[0]
+        there = (
+            f"there are only {vertex_count} vertices (indices 0 to {vertex_count - 1})"
+            if vertex_count
+            else "there are no vertices"
+        )
+        raise ValueError(f"faces[{row}] refers to vertex {array[row, column]}, but {there}.")
+    return np.ascontiguousarray(array, dtype=np.intp)
+
+
+def _index_range(array: np.ndarray) -> tuple[int, int]:
+    if array.dtype != np.intp:
+        return array.min(), array.max()
+    # One compiled pass for the usual dtype instead of two NumPy reductions; imported here so
+    # that checking (and so reading and writing files) needs numba only when it is used.
+    from mesh_normal.kernels import announce_compiling, index_range
+
+    announce_compiling()
+    return index_range(array)
+
+
+def scaling(vertices: FloatArray) -> tuple[FloatArray, float, int]:
+    """The power of two 2**scale that brings the largest |coordinate| into [0.5, 1).
+
+    Products of up to four edge coordinates then neither over- nor underflow unless the
+    edges are shorter than about 2**-237 (1e-71) times that coordinate. Wherever the
+    unscaled values stay in the double range, scaling by a power of two changes no digit of
+    any normal. The kernels multiply each coordinate they read by ``factor`` = 2**-scale,
+    which rounds exactly as ``ldexp`` does; only when that factor is not a double (all
+    coordinates below 2**-1022) are the points scaled here, into a copy.
+    """
+    largest = float(np.abs(vertices).max(initial=0.0))
+    if largest == 0.0:
+        return vertices, 1.0, 0
+    scale = math.frexp(largest)[1]
+    if scale < -1000:
+        return np.ldexp(vertices, -scale), 1.0, scale
+    return vertices, math.ldexp(1.0, -scale), scale

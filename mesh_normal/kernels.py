@@ -1,0 +1,225 @@
+"""The compiled per-face loops that the face, vertex and corner normals share.
+
+The per-face work is compiled with numba (``cache=True``: compiled on first use, once, then
+loaded from the cache; ``NUMBA_CACHE_DIR`` moves the cache). It is the only implementation:
+NumPy alone measured 3-5 times slower than Open3D, whose times are the target (see the
+README's mesh kernels section). So this part of ``mesh_normal`` is not pure NumPy.
+``error_model="numpy"`` drops Python's zero-division checks (no division here can be by zero,
+and IEEE rules apply); the face kernel runs its blocks of faces on every core
+(``parallel=True``: blocks write disjoint rows, so the bits do not depend on the number of
+cores).
+
+Each kernel goes through the faces in blocks: it first copies the scaled corners of a block
+of faces (independent loads, so their cache misses overlap), then does its work for each
+face, through :func:`face_edges` and :func:`face_cross`. Constants are frozen at compile time.
+
+The first use of a kernel that is not in the cache says so on stderr, once per process
+(:func:`announce_compiling`): the compile takes several seconds.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import threading
+from collections.abc import Callable
+from typing import Any, Literal, TypeVar
+
+import numpy as np
+from numba import njit, prange
+
+from mesh_normal.tolerances import MESH_DEGENERATE_SINE, MESH_RECOMPUTE_SINE
+from mesh_normal.types import BoolArray, Edges, FloatArray, IndexArray, Vector
+
+Function = TypeVar("Function", bound=Callable[..., Any])
+
+#: Faces per block of a kernel.
+BLOCK = 512
+
+#: Held while a parallel kernel runs. numba's thread pools (its "workqueue" layer, the one
+#: left where neither OpenMP nor TBB is installed) abort the process when two threads launch
+#: parallel work at once; the web server calls the kernels from several worker threads.
+PARALLEL_KERNELS = threading.Lock()
+
+#: What :func:`face_cross` found: the product at corner A is good, it was taken again at
+#: the largest corner, or the face is degenerate.
+AT_FIRST_CORNER, AT_LARGEST_CORNER, DEGENERATE = range(3)
+
+#: Measured: ``compile_kernels()`` into an empty cache took 9.7 s on a 2-core machine (loading
+#: them from the cache, 1.8 s).
+COMPILE_SECONDS = 10
+
+_RECOMPUTE = MESH_RECOMPUTE_SINE**2
+_DEGENERATE = MESH_DEGENERATE_SINE**2
+
+# --- the compile announcement -----------------------------------------------------------------
+
+#: Every kernel of the package, in the order its module defined it.
+_KERNELS: list[Any] = []
+_announce = threading.Lock()
+_looked_at = 0
+_announced = False
+
+
+def kernel(
+    *, parallel: bool = False, error_model: Literal["python", "numpy"] = "numpy"
+) -> Callable[[Function], Function]:
+    """``numba.njit(cache=True, ...)``, and remember the kernel for :func:`announce_compiling`."""
+
+    def compiled(function: Function) -> Function:
+        dispatcher = njit(cache=True, error_model=error_model, parallel=parallel)(function)
+        _KERNELS.append(dispatcher)
+        return dispatcher  # type: ignore[return-value]
+
+    return compiled
+
+
+def announce_compiling() -> None:
+    """Say once on stderr that the kernels are being compiled, if one is not in the cache.
+
+    Called before the kernels run. Each kernel defined since the last call is looked up in
+    numba's cache index, as numba itself will: the entry must be for this numba version,
+    this source file (its stamp), this CPU and this bytecode.
+    """
+    global _looked_at, _announced
+    if _announced or _looked_at == len(_KERNELS):
+        return
+    with _announce:
+        fresh, _looked_at = _KERNELS[_looked_at:], len(_KERNELS)
+        if not _announced and not all(map(is_cached, fresh)):
+            _announced = True
+            print(
+                f"mesh-normal: compiling the mesh kernels once, about {COMPILE_SECONDS} s "
+                "(later runs load them from the cache)",
+                file=sys.stderr,
+                flush=True,
+            )
+
+
+def is_cached(dispatcher: Any) -> bool:
+    """Whether numba will load ``dispatcher`` from its cache rather than compile it.
+
+    True when it is compiled already in this process, or when the cache index holds an
+    entry that numba's own lookup (``Cache._index_key``) would accept for one of its
+    signatures. This reads numba internals (``_cache``, ``_cache_file._load_index``);
+    where they are missing, it answers True (no announcement rather than a wrong one).
+    """
+    if dispatcher.overloads:
+        return True
+    try:
+        cache = dispatcher._cache
+        codegen = dispatcher.targetctx.codegen()
+        index = cache._cache_file._load_index()
+        return any(cache._index_key(key[0], codegen) == key for key in index)
+    except (AttributeError, TypeError, IndexError):
+        return True
+
+
+# --- the kernels -------------------------------------------------------------------------------
+
+
+@kernel()
+def index_range(faces: IndexArray) -> tuple[int, int]:
+    """The smallest and largest of the indices and 0, in one pass."""
+    low, high = 0, 0
+    for index in faces.ravel():
+        low, high = min(low, int(index)), max(high, int(index))
+    return low, high
+
+
+@kernel()
+def gather(
+    points: FloatArray, factor: float, faces: IndexArray, start: int, corners: FloatArray
+) -> int:
+    """Copy A, B, C of faces ``start`` on, times ``factor``, into the rows of ``corners``.
+
+    ``corners`` is (block, 9); returns how many rows were filled.
+    """
+    count = min(len(corners), len(faces) - start)
+    for row in range(count):
+        for k in range(3):
+            vertex = faces[start + row, k]
+            corners[row, 3 * k] = points[vertex, 0] * factor
+            corners[row, 3 * k + 1] = points[vertex, 1] * factor
+            corners[row, 3 * k + 2] = points[vertex, 2] * factor
+    return count
+
+
+@kernel()
+def dot(p: Vector, q: Vector) -> float:
+    return p[0] * q[0] + p[1] * q[1] + p[2] * q[2]
+
+
+@kernel()
+def cross(p: Vector, q: Vector) -> Vector:
+    return (p[1] * q[2] - p[2] * q[1], p[2] * q[0] - p[0] * q[2], p[0] * q[1] - p[1] * q[0])
+
+
+@kernel()
+def face_edges(corners: FloatArray, row: int) -> Edges:
+    """The edges B - A, C - B, A - C of one face: corner k lies between edges k - 1 and k."""
+    ax, ay, az = corners[row, 0], corners[row, 1], corners[row, 2]
+    bx, by, bz = corners[row, 3], corners[row, 4], corners[row, 5]
+    cx, cy, cz = corners[row, 6], corners[row, 7], corners[row, 8]
+    return (bx - ax, by - ay, bz - az), (cx - bx, cy - by, cz - bz), (ax - cx, ay - cy, az - cz)
+
+
+@kernel()
+def face_cross(edges: Edges) -> tuple[Vector, float, int]:
+    """(B - A) x (C - A) from its most accurate corner, its squared length, and where from.
+
+    The product is taken at corner A (``AT_FIRST_CORNER``); if that corner's sine is small,
+    again at the largest corner (opposite the longest edge, edge k being opposite corner
+    k + 2; ``AT_LARGEST_CORNER``). There a sine of at most ``MESH_DEGENERATE_SINE`` makes the
+    face degenerate: zero normal, ``DEGENERATE``. At corner A, (A - C) x (B - A) has the same
+    bits as (B - A) x (C - A): negating a difference is exact.
+    """
+    normal = cross(edges[2], edges[0])
+    square = dot(normal, normal)
+    if square > _RECOMPUTE * dot(edges[2], edges[2]) * dot(edges[0], edges[0]):
+        return normal, square, AT_FIRST_CORNER
+    e0, e1, e2 = edges
+    s0, s1, s2 = dot(e0, e0), dot(e1, e1), dot(e2, e2)
+    # The two edges after the longest, by name: a tuple indexed at run time is slow.
+    if s0 >= s1 and s0 >= s2:
+        p, q, sp, sq = e1, e2, s1, s2
+    elif s1 >= s2:
+        p, q, sp, sq = e2, e0, s2, s0
+    else:
+        p, q, sp, sq = e0, e1, s0, s1
+    normal = cross(p, q)
+    square = dot(normal, normal)
+    if square <= _DEGENERATE * sp * sq:
+        return (0.0, 0.0, 0.0), 0.0, DEGENERATE
+    return normal, square, AT_LARGEST_CORNER
+
+
+@kernel(parallel=True)
+def geometry_kernel(
+    points: FloatArray,
+    factor: float,
+    faces: IndexArray,
+    crosses: FloatArray,
+    normals: FloatArray,
+    lengths: FloatArray,
+    degenerate: BoolArray,
+    recomputed: BoolArray,
+) -> None:
+    """Each face's cross product, unit normal, |cross| and flags (see ``FaceGeometry``)."""
+    blocks = (len(faces) + BLOCK - 1) // BLOCK
+    for block in prange(blocks):  # blocks write disjoint rows: they run on every core
+        corners = np.empty((BLOCK, 9))
+        start = block * BLOCK
+        for row in range(gather(points, factor, faces, start, corners)):
+            face = start + row
+            (x, y, z), square, found = face_cross(face_edges(corners, row))
+            length = math.sqrt(square)
+            flat = found == DEGENERATE
+            divisor = 1.0 if flat else length
+            crosses[face, 0], crosses[face, 1], crosses[face, 2] = x, y, z
+            normals[face, 0] = x / divisor + 0.0  # -0.0 becomes 0.0
+            normals[face, 1] = y / divisor + 0.0
+            normals[face, 2] = z / divisor + 0.0
+            lengths[face] = length
+            degenerate[face] = flat
+            recomputed[face] = found != AT_FIRST_CORNER

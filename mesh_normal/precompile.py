@@ -1,0 +1,22 @@
+"""Compile every mesh kernel ahead of use: for an image build or a server's start-up."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mesh_normal.corners import corner_normals
+from mesh_normal.faces import face_geometry, face_normals
+from mesh_normal.orientation import orient
+from mesh_normal.vertices import vertex_normals
+
+
+def compile_kernels() -> None:
+    """Compile every mesh kernel now (into numba's cache), e.g. while building an image."""
+
+    vertices = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    faces = np.array([[0, 1, 2]])
+    geometry = face_geometry(vertices, faces)
+    face_normals(geometry)
+    vertex_normals(geometry)  # one kernel for every weighting
+    corner_normals(geometry, crease_angle=30.0)
+    orient(geometry)

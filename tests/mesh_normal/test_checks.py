@@ -1,0 +1,190 @@
+"""Tests for mesh_normal.checks: bad input is refused clearly, good input converted."""
+
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+import pytest
+
+from mesh_normal import checks
+from mesh_normal import faces as faces_module
+from mesh_normal.checks import check_mesh, checked_mesh
+from mesh_normal.corners import corner_normals
+from mesh_normal.faces import face_geometry, face_normals
+from mesh_normal.orientation import orient, signed_volume
+from mesh_normal.topology import mesh_topology
+from mesh_normal.vertices import WEIGHTINGS, vertex_normals
+from tests.mesh_normal._meshes import (
+    TETRAHEDRON,
+    TETRAHEDRON_FACES,
+)
+
+
+@pytest.mark.parametrize(
+    ("vertices", "faces", "words"),
+    [
+        (np.zeros((3, 2)), [[0, 1, 2]], "vertices must have shape (n, 3), not (3, 2)"),
+        (np.zeros(9), [[0, 1, 2]], "vertices must have shape (n, 3), not (9,)"),
+        (np.zeros((3, 3), dtype=bool), [[0, 1, 2]], "vertices must hold real numbers, not bool"),
+        (np.zeros((3, 3), dtype=complex), [[0, 1, 2]], "real numbers, not complex128"),
+        ([["a", "b", "c"]] * 3, [[0, 1, 2]], "vertices must hold real numbers"),
+        (
+            [[0, 0, 0], [1, 0, np.nan], [0, 1, 0]],
+            [[0, 1, 2]],
+            "vertices[1] has a coordinate that is not a finite number",
+        ),
+        ([[0, 0, 0], [1, 0, 0], [0, np.inf, 0]], [[0, 1, 2]], "vertices[2]"),
+        (TETRAHEDRON, [[0.0, 1.0, 2.0]], "faces must hold integer vertex indices, not float64"),
+        (TETRAHEDRON, [[0, 1, 2, 3]], "faces must have shape (m, 3), not (1, 4)"),
+        (TETRAHEDRON, [0, 1, 2], "faces must have shape (m, 3), not (3,)"),
+        (TETRAHEDRON, [[0, 1, 2], [3, -1, 2]], "faces[1] has a negative vertex index, -1"),
+        (
+            TETRAHEDRON,
+            [[0, 1, 2], [0, 1, 3], [0, 4, 1]],
+            "faces[2] refers to vertex 4, but there are only 4 vertices (indices 0 to 3)",
+        ),
+        (np.empty((0, 3)), [[0, 1, 2]], "faces[0] refers to vertex 0, but there are no vertices"),
+        (TETRAHEDRON, np.array([[0, 1, 2**40]], dtype=np.uint64), "refers to vertex 1099511627776"),
+    ],
+)
+def test_bad_input_is_refused_with_a_clear_message(
+    vertices: object, faces: object, words: str
+) -> None:
+    for call in (face_normals, vertex_normals, corner_normals, check_mesh):
+        with pytest.raises(ValueError, match=re.escape(words)) as error:
+            call(vertices, faces)  # type: ignore[operator]
+        assert str(error.value).endswith(".")
+
+
+def test_unknown_weighting_and_bad_crease_angles_are_refused() -> None:
+    with pytest.raises(ValueError, match="weighting must be one of uniform, area, angle, max"):
+        vertex_normals(TETRAHEDRON, TETRAHEDRON_FACES, "mean")  # type: ignore[arg-type]
+    for crease in (-1.0, 180.5, math.nan, math.inf):
+        with pytest.raises(ValueError, match="between 0 and 180 degrees"):
+            corner_normals(TETRAHEDRON, TETRAHEDRON_FACES, crease)
+    for crease in (True, "30", None):
+        with pytest.raises(ValueError, match="crease_angle must be a number of degrees"):
+            corner_normals(TETRAHEDRON, TETRAHEDRON_FACES, crease)  # type: ignore[arg-type]
+
+
+def test_inputs_are_converted_and_not_modified() -> None:
+    vertices = TETRAHEDRON.astype(np.float32)
+    faces = TETRAHEDRON_FACES.astype(np.uint16)
+    before = vertices.copy(), faces.copy()
+    points, indices = check_mesh(vertices, faces)
+    assert points.dtype == np.float64 and indices.dtype == np.intp
+    assert np.allclose(
+        face_normals(vertices, faces).normals, face_normals(TETRAHEDRON, TETRAHEDRON_FACES).normals
+    )
+    assert vertex_normals(vertices.tolist(), faces.tolist()).normals.shape == (4, 3)
+    assert np.array_equal(vertices, before[0]) and np.array_equal(faces, before[1])
+    fortran = np.asfortranarray(TETRAHEDRON)
+    assert np.array_equal(
+        face_normals(fortran, np.asfortranarray(TETRAHEDRON_FACES)).normals,
+        face_normals(TETRAHEDRON, TETRAHEDRON_FACES).normals,
+    )
+
+
+def test_an_empty_mesh_gives_empty_results() -> None:
+    r = face_normals(np.empty((0, 3)), [])
+    assert r.normals.shape == (0, 3) and r.areas.shape == r.degenerate.shape == (0,)
+    smooth = vertex_normals(TETRAHEDRON, np.empty((0, 3), dtype=int))
+    assert smooth.missing.all() and not smooth.normals.any()
+    corners = corner_normals(TETRAHEDRON, np.empty((0, 3), dtype=int))
+    assert corners.normals.shape == (0, 3, 3) and corners.missing.shape == (0, 3)
+
+
+# --- one check and one cross product per mesh -------------------------------------------------
+
+
+def every_result(source: object, faces: object = None) -> list[np.ndarray]:
+    """Every array the core computes, from raw arrays (with ``faces``) or a checked mesh."""
+    extra = () if faces is None else (faces,)
+    fn = face_normals(source, *extra)  # type: ignore[arg-type]
+    out = [fn.normals, fn.areas, fn.degenerate]
+    for weighting in WEIGHTINGS:
+        vn = vertex_normals(source, *extra, weighting=weighting)  # type: ignore[arg-type]
+        cn = corner_normals(source, *extra, crease_angle=20.0, weighting=weighting)  # type: ignore[arg-type]
+        out += [vn.normals, vn.missing, cn.normals, cn.missing]
+    o = orient(source, *extra)  # type: ignore[arg-type]
+    volume = signed_volume(source, *extra)  # type: ignore[arg-type]
+    out += [o.faces, o.flipped, np.array([volume, math.nan if o.volume is None else o.volume])]
+    out += [o.components.volume, o.topology.face_component]
+    return out
+
+
+def sliver_soup() -> tuple[np.ndarray, np.ndarray]:
+    """Random faces with needles, slivers and repeated indices: every path of face_cross."""
+    rng = np.random.default_rng(3)
+    vertices = rng.normal(size=(400, 3))
+    vertices[10] = vertices[11] + 1e-13 * rng.normal(size=3)  # a needle
+    vertices[12] = (vertices[13] + vertices[14]) / 2 + 1e-9  # a sliver
+    faces = rng.integers(0, 400, size=(900, 3))
+    faces[:4] = [[10, 11, 20], [12, 13, 14], [1, 1, 2], [11, 10, 30]]
+    return vertices, faces
+
+
+@pytest.mark.parametrize("scale", [1.0, 2.0**-1040, 1e150])
+def test_a_checked_mesh_and_its_geometry_give_the_same_bits_as_raw_arrays(scale: float) -> None:
+    vertices, faces = sliver_soup()
+    vertices = vertices * scale
+    raw = every_result(vertices, faces)
+    mesh = checked_mesh(vertices, faces)
+    geometry = face_geometry(mesh)
+    # The sliver is retaken at its largest corner, the repeated index is degenerate.
+    assert geometry.recomputed[[1, 2]].all() and geometry.degenerate[2]
+    assert not geometry.recomputed.all()
+    for given_form in (every_result(mesh), every_result(geometry)):
+        for got, expected in zip(given_form, raw, strict=True):
+            assert got.dtype == expected.dtype and got.shape == expected.shape
+            assert got.tobytes() == expected.tobytes()
+    assert repr(mesh_topology(mesh)) == repr(mesh_topology(faces, len(vertices)))
+
+
+def test_a_checked_mesh_is_checked_once_and_its_cross_products_computed_once(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    vertices, faces = sliver_soup()
+    counts = {"checks": 0, "crosses": 0}
+    real_check, real_kernel = checks._as_vertices, faces_module.geometry_kernel
+
+    def counted_check(array: object) -> np.ndarray:
+        counts["checks"] += 1
+        return real_check(array)  # type: ignore[arg-type]
+
+    def counted_kernel(*arguments: object) -> None:
+        counts["crosses"] += 1
+        real_kernel(*arguments)
+
+    monkeypatch.setattr(checks, "_as_vertices", counted_check)
+    monkeypatch.setattr(faces_module, "geometry_kernel", counted_kernel)
+    geometry = face_geometry(vertices, faces)
+    every_result(geometry)
+    assert counts == {"checks": 1, "crosses": 1}
+    every_result(vertices, faces)  # raw arrays: checked (and crossed) by every call
+    assert counts["checks"] > 10 and counts["crosses"] > 10
+
+
+def test_a_checked_mesh_is_not_given_faces_twice() -> None:
+    mesh = checked_mesh(TETRAHEDRON, TETRAHEDRON_FACES)
+    with pytest.raises(TypeError, match="pass it without faces"):
+        face_normals(mesh, TETRAHEDRON_FACES)
+    with pytest.raises(TypeError, match="pass it without faces"):
+        vertex_normals(face_geometry(mesh), TETRAHEDRON_FACES)
+    with pytest.raises(TypeError, match="faces are required"):
+        orient(TETRAHEDRON)
+    with pytest.raises(TypeError, match="pass it alone"):
+        mesh_topology(mesh, 4)
+    with pytest.raises(TypeError, match="vertex_count is required"):
+        mesh_topology(TETRAHEDRON_FACES)
+
+
+def test_a_checked_mesh_holds_converted_arrays_and_their_scale() -> None:
+    mesh = checked_mesh(TETRAHEDRON.astype(np.float32) * 8, TETRAHEDRON_FACES.astype(np.uint8))
+    assert mesh.vertices.dtype == np.float64 and mesh.faces.dtype == np.intp
+    assert mesh.scale == 4 and mesh.factor == 2.0**-4 and mesh.points is mesh.vertices
+    tiny = checked_mesh(TETRAHEDRON * 2.0**-1040, TETRAHEDRON_FACES)
+    assert tiny.factor == 1.0 and tiny.scale == -1039
+    assert np.array_equal(tiny.points, TETRAHEDRON / 2)
