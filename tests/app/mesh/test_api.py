@@ -7,15 +7,17 @@ import json
 import math
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
+from typing import Any, get_args
 
 import numpy as np
 import pytest
 from fastapi.testclient import TestClient
 
 from app.main import create_app
+from app.mesh.api import FixFormat
+from app.mesh.page import FIX_FORMATS
 from mesh_normal import face_normals, vertex_normals
-from mesh_normal.files import read_mesh
+from mesh_normal.files import FORMATS, WRITABLE, read_mesh
 from tests.conftest import assert_error
 from tests.meshes import (
     CUBE_OBJ,
@@ -223,6 +225,28 @@ def test_fix_writes_each_format(client: TestClient, fmt: str) -> None:
     assert response.status_code == 200, response.text
     again = upload(client, "/api/mesh", response.content, f"fixed.{fmt}").json()
     assert again["faces"] == 10 and again["boundary_edges"] == 4
+
+
+def test_the_fix_formats_are_the_librarys_writable_formats() -> None:
+    # FixFormat stays a Literal for FastAPI and mypy: this keeps it in step with the table.
+    assert get_args(FixFormat) == WRITABLE
+    assert FIX_FORMATS == WRITABLE
+
+
+@pytest.mark.parametrize("fmt", WRITABLE)
+def test_fix_answers_with_the_tables_media_type(client: TestClient, fmt: str) -> None:
+    response = upload(client, "/api/mesh/fix", TETRA_OBJ, format=fmt)
+    assert response.status_code == 200, response.text
+    assert response.headers["content-type"] == FORMATS[fmt].media_type
+    default = upload(client, "/api/mesh/fix", response.content, f"fixed.{fmt}")
+    assert default.headers["content-type"] == FORMATS[fmt].media_type  # the upload's format
+
+
+def test_fix_documents_the_writable_formats(client: TestClient) -> None:
+    fix = client.get("/openapi.json").json()["paths"]["/api/mesh/fix"]["post"]
+    (parameter,) = [p for p in fix["parameters"] if p["name"] == "format"]
+    assert parameter["description"].startswith("ply, stl or obj; default: ")
+    assert list(fix["responses"]["200"]["content"]) == [FORMATS[n].media_type for n in WRITABLE]
 
 
 def test_missing_and_empty_file(client: TestClient) -> None:
