@@ -20,6 +20,7 @@ from app.web.jsonio import FastJSONResponse
 from mesh_normal.analysis import analyse, build_report, flips_by_component
 from mesh_normal.exports import NormalsKind, export_normals
 from mesh_normal.files import LoadedMesh, MeshFileError, read_mesh, write_mesh
+from mesh_normal.files.formats import FORMATS, WRITABLE
 from mesh_normal.orientation import orient
 from mesh_normal.report import MeshReport
 from mesh_normal.vertices import Weighting
@@ -37,14 +38,14 @@ router = APIRouter(
     },
 )
 
+#: The library's WRITABLE, spelled out because FastAPI and mypy need a Literal (a test pins it).
 FixFormat = Literal["ply", "stl", "obj"]
+#: The download's media type: the normals' formats, then the mesh formats from the library's table.
 MEDIA_TYPES = {
     "json": "application/json",
     "csv": "text/csv",
     "npy": "application/octet-stream",
-    "ply": "application/octet-stream",
-    "stl": "model/stl",
-    "obj": "model/obj",
+    **{name: FORMATS[name].media_type for name in WRITABLE},
 }
 
 
@@ -128,7 +129,7 @@ async def post_mesh_normals(
             "X-Faces-Flipped (a count), X-Component-Faces-Flipped (component:faces "
             "for the first 100 components changed) and X-Orientation-Before say "
             "what changed.",
-            "content": {"application/octet-stream": {}, "model/stl": {}, "model/obj": {}},
+            "content": {FORMATS[name].media_type: {} for name in WRITABLE},
         }
     },
 )
@@ -138,9 +139,9 @@ async def post_mesh_fix(
         FixFormat | None,
         Query(
             alias="format",
-            description="ply, stl or obj; default: the "
+            description=f"{', '.join(WRITABLE[:-1])} or {WRITABLE[-1]}; default: the "
             "upload's format where it is one of these, "
-            "else ply",
+            f"else {WRITABLE[0]}",
         ),
     ] = None,
 ) -> Response:
@@ -149,7 +150,7 @@ async def post_mesh_fix(
 
     def work() -> tuple[bytes, str, dict[str, str]]:
         mesh = load(upload)
-        chosen = file_format or (mesh.format if mesh.format in ("ply", "stl", "obj") else "ply")
+        chosen = file_format or (mesh.format if mesh.format in WRITABLE else WRITABLE[0])
         fixed = orient(mesh.checked())
         headers = {
             "x-faces-flipped": str(int(np.count_nonzero(fixed.flipped))),

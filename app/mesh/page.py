@@ -25,12 +25,13 @@ from app.web.middleware import size_text
 from app.web.templating import templates
 from mesh_normal.analysis import analyse, build_report
 from mesh_normal.exports import FORMATS, KINDS
-from mesh_normal.files import SUFFIXES
+from mesh_normal.files import SUFFIXES, WRITABLE
 from mesh_normal.vertices import Weighting
 
 router = APIRouter(include_in_schema=False)
 
-FIX_FORMATS = ("ply", "stl", "obj")
+#: The formats the fixed mesh can be downloaded in: the library's writable ones.
+FIX_FORMATS = WRITABLE
 #: Problems that the fixed mesh (orient()) repairs: their card gets the download button.
 FIXED_BY_ORIENT = frozenset({"winding", "inward", "mixed"})
 

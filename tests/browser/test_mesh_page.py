@@ -13,14 +13,13 @@ from playwright.sync_api import Page, expect
 from mesh_normal import vertex_normals
 from mesh_normal.files import read_mesh, write_mesh
 from mesh_normal.topology import mesh_topology
-from tests.app.mesh.test_api import CUBE_ONE_FLIPPED
 from tests.browser.conftest import ConsoleWatch, NewPage
-from tests.paths import ROOT
+from tests.meshes import CUBE_ONE_FLIPPED_OBJ
+from tests.paths import DATA, ROOT
 
 pytestmark = pytest.mark.browser
 
 DOCS = ROOT / "docs"
-DATA = ROOT / "tests" / "data"
 SCREENSHOT_LIMIT = 400 * 1024
 
 #: Records whether the progress bar showed while the page uploaded (it may be brief).
@@ -44,7 +43,7 @@ DROP = """([name, text]) => {
 
 
 def cube_file(name: str = "cube.obj") -> dict[str, object]:
-    return {"name": name, "mimeType": "text/plain", "buffer": CUBE_ONE_FLIPPED.encode()}
+    return {"name": name, "mimeType": "text/plain", "buffer": CUBE_ONE_FLIPPED_OBJ.encode()}
 
 
 def open_mesh_page(page: Page) -> None:
@@ -87,7 +86,7 @@ def test_downloads_send_the_file_again(page: Page) -> None:
     open_mesh_page(page)
     page.set_input_files("#mesh-file", files=[cube_file()])
     wait_for_report(page)
-    mesh = read_mesh(CUBE_ONE_FLIPPED.encode(), "cube.obj")
+    mesh = read_mesh(CUBE_ONE_FLIPPED_OBJ.encode(), "cube.obj")
 
     page.select_option("#normals-kind", "vertex")
     page.select_option("#normals-format", "npy")
@@ -141,7 +140,7 @@ def test_a_bad_crease_angle_and_a_broken_file_are_said_inline(
 
 def test_dropping_a_file_uploads_it(page: Page) -> None:
     open_mesh_page(page)
-    page.evaluate(DROP, ["dropped.obj", CUBE_ONE_FLIPPED])
+    page.evaluate(DROP, ["dropped.obj", CUBE_ONE_FLIPPED_OBJ])
     wait_for_report(page)
     expect(page.locator(".mesh-filename")).to_have_text("dropped.obj")
     assert (

@@ -7,8 +7,9 @@ from pathlib import Path
 import pytest
 from playwright.sync_api import Page, expect
 
-from tests.browser.conftest import ROOT, NewPage
+from tests.browser.conftest import NewPage
 from tests.browser.helpers import cell
+from tests.paths import ROOT
 
 pytestmark = pytest.mark.browser
 

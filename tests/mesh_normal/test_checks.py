@@ -16,10 +16,7 @@ from mesh_normal.faces import face_geometry, face_normals
 from mesh_normal.orientation import orient, signed_volume
 from mesh_normal.topology import mesh_topology
 from mesh_normal.vertices import WEIGHTINGS, vertex_normals
-from tests.mesh_normal._meshes import (
-    TETRAHEDRON,
-    TETRAHEDRON_FACES,
-)
+from tests.meshes import TETRA_FACES, TETRA_VERTICES
 
 
 @pytest.mark.parametrize(
@@ -36,17 +33,21 @@ from tests.mesh_normal._meshes import (
             "vertices[1] has a coordinate that is not a finite number",
         ),
         ([[0, 0, 0], [1, 0, 0], [0, np.inf, 0]], [[0, 1, 2]], "vertices[2]"),
-        (TETRAHEDRON, [[0.0, 1.0, 2.0]], "faces must hold integer vertex indices, not float64"),
-        (TETRAHEDRON, [[0, 1, 2, 3]], "faces must have shape (m, 3), not (1, 4)"),
-        (TETRAHEDRON, [0, 1, 2], "faces must have shape (m, 3), not (3,)"),
-        (TETRAHEDRON, [[0, 1, 2], [3, -1, 2]], "faces[1] has a negative vertex index, -1"),
+        (TETRA_VERTICES, [[0.0, 1.0, 2.0]], "faces must hold integer vertex indices, not float64"),
+        (TETRA_VERTICES, [[0, 1, 2, 3]], "faces must have shape (m, 3), not (1, 4)"),
+        (TETRA_VERTICES, [0, 1, 2], "faces must have shape (m, 3), not (3,)"),
+        (TETRA_VERTICES, [[0, 1, 2], [3, -1, 2]], "faces[1] has a negative vertex index, -1"),
         (
-            TETRAHEDRON,
+            TETRA_VERTICES,
             [[0, 1, 2], [0, 1, 3], [0, 4, 1]],
             "faces[2] refers to vertex 4, but there are only 4 vertices (indices 0 to 3)",
         ),
         (np.empty((0, 3)), [[0, 1, 2]], "faces[0] refers to vertex 0, but there are no vertices"),
-        (TETRAHEDRON, np.array([[0, 1, 2**40]], dtype=np.uint64), "refers to vertex 1099511627776"),
+        (
+            TETRA_VERTICES,
+            np.array([[0, 1, 2**40]], dtype=np.uint64),
+            "refers to vertex 1099511627776",
+        ),
     ],
 )
 def test_bad_input_is_refused_with_a_clear_message(
@@ -60,39 +61,39 @@ def test_bad_input_is_refused_with_a_clear_message(
 
 def test_unknown_weighting_and_bad_crease_angles_are_refused() -> None:
     with pytest.raises(ValueError, match="weighting must be one of uniform, area, angle, max"):
-        vertex_normals(TETRAHEDRON, TETRAHEDRON_FACES, "mean")  # type: ignore[arg-type]
+        vertex_normals(TETRA_VERTICES, TETRA_FACES, "mean")  # type: ignore[arg-type]
     for crease in (-1.0, 180.5, math.nan, math.inf):
         with pytest.raises(ValueError, match="between 0 and 180 degrees"):
-            corner_normals(TETRAHEDRON, TETRAHEDRON_FACES, crease)
+            corner_normals(TETRA_VERTICES, TETRA_FACES, crease)
     for crease in (True, "30", None):
         with pytest.raises(ValueError, match="crease_angle must be a number of degrees"):
-            corner_normals(TETRAHEDRON, TETRAHEDRON_FACES, crease)  # type: ignore[arg-type]
+            corner_normals(TETRA_VERTICES, TETRA_FACES, crease)  # type: ignore[arg-type]
 
 
 def test_inputs_are_converted_and_not_modified() -> None:
-    vertices = TETRAHEDRON.astype(np.float32)
-    faces = TETRAHEDRON_FACES.astype(np.uint16)
+    vertices = TETRA_VERTICES.astype(np.float32)
+    faces = TETRA_FACES.astype(np.uint16)
     before = vertices.copy(), faces.copy()
     points, indices = check_mesh(vertices, faces)
     assert points.dtype == np.float64 and indices.dtype == np.intp
     assert np.allclose(
-        face_normals(vertices, faces).normals, face_normals(TETRAHEDRON, TETRAHEDRON_FACES).normals
+        face_normals(vertices, faces).normals, face_normals(TETRA_VERTICES, TETRA_FACES).normals
     )
     assert vertex_normals(vertices.tolist(), faces.tolist()).normals.shape == (4, 3)
     assert np.array_equal(vertices, before[0]) and np.array_equal(faces, before[1])
-    fortran = np.asfortranarray(TETRAHEDRON)
+    fortran = np.asfortranarray(TETRA_VERTICES)
     assert np.array_equal(
-        face_normals(fortran, np.asfortranarray(TETRAHEDRON_FACES)).normals,
-        face_normals(TETRAHEDRON, TETRAHEDRON_FACES).normals,
+        face_normals(fortran, np.asfortranarray(TETRA_FACES)).normals,
+        face_normals(TETRA_VERTICES, TETRA_FACES).normals,
     )
 
 
 def test_an_empty_mesh_gives_empty_results() -> None:
     r = face_normals(np.empty((0, 3)), [])
     assert r.normals.shape == (0, 3) and r.areas.shape == r.degenerate.shape == (0,)
-    smooth = vertex_normals(TETRAHEDRON, np.empty((0, 3), dtype=int))
+    smooth = vertex_normals(TETRA_VERTICES, np.empty((0, 3), dtype=int))
     assert smooth.missing.all() and not smooth.normals.any()
-    corners = corner_normals(TETRAHEDRON, np.empty((0, 3), dtype=int))
+    corners = corner_normals(TETRA_VERTICES, np.empty((0, 3), dtype=int))
     assert corners.normals.shape == (0, 3, 3) and corners.missing.shape == (0, 3)
 
 
@@ -168,23 +169,23 @@ def test_a_checked_mesh_is_checked_once_and_its_cross_products_computed_once(
 
 
 def test_a_checked_mesh_is_not_given_faces_twice() -> None:
-    mesh = checked_mesh(TETRAHEDRON, TETRAHEDRON_FACES)
+    mesh = checked_mesh(TETRA_VERTICES, TETRA_FACES)
     with pytest.raises(TypeError, match="pass it without faces"):
-        face_normals(mesh, TETRAHEDRON_FACES)
+        face_normals(mesh, TETRA_FACES)
     with pytest.raises(TypeError, match="pass it without faces"):
-        vertex_normals(face_geometry(mesh), TETRAHEDRON_FACES)
+        vertex_normals(face_geometry(mesh), TETRA_FACES)
     with pytest.raises(TypeError, match="faces are required"):
-        orient(TETRAHEDRON)
+        orient(TETRA_VERTICES)
     with pytest.raises(TypeError, match="pass it alone"):
         mesh_topology(mesh, 4)
     with pytest.raises(TypeError, match="vertex_count is required"):
-        mesh_topology(TETRAHEDRON_FACES)
+        mesh_topology(TETRA_FACES)
 
 
 def test_a_checked_mesh_holds_converted_arrays_and_their_scale() -> None:
-    mesh = checked_mesh(TETRAHEDRON.astype(np.float32) * 8, TETRAHEDRON_FACES.astype(np.uint8))
+    mesh = checked_mesh(TETRA_VERTICES.astype(np.float32) * 8, TETRA_FACES.astype(np.uint8))
     assert mesh.vertices.dtype == np.float64 and mesh.faces.dtype == np.intp
     assert mesh.scale == 4 and mesh.factor == 2.0**-4 and mesh.points is mesh.vertices
-    tiny = checked_mesh(TETRAHEDRON * 2.0**-1040, TETRAHEDRON_FACES)
+    tiny = checked_mesh(TETRA_VERTICES * 2.0**-1040, TETRA_FACES)
     assert tiny.factor == 1.0 and tiny.scale == -1039
-    assert np.array_equal(tiny.points, TETRAHEDRON / 2)
+    assert np.array_equal(tiny.points, TETRA_VERTICES / 2)

@@ -14,20 +14,20 @@ import pytest
 from mesh_normal import face_normals, vertex_normals
 from mesh_normal.cli import main
 from mesh_normal.files import read_mesh
-from tests.app.mesh.test_api import CUBE, CUBE_ONE_FLIPPED, OPEN_BOX, TETRA
+from tests.meshes import CUBE_OBJ, CUBE_ONE_FLIPPED_OBJ, OPEN_BOX_OBJ, TETRA_OBJ
 
 
 @pytest.fixture
 def cube(tmp_path: Path) -> Path:
     path = tmp_path / "cube.obj"
-    path.write_text(CUBE)
+    path.write_text(CUBE_OBJ)
     return path
 
 
 @pytest.fixture
 def flipped(tmp_path: Path) -> Path:
     path = tmp_path / "flipped.obj"
-    path.write_text(CUBE_ONE_FLIPPED)
+    path.write_text(CUBE_ONE_FLIPPED_OBJ)
     return path
 
 
@@ -49,7 +49,7 @@ def test_analyze_json_and_exit_code_for_errors(
 
 def test_analyze_warnings_only_exit_zero(tmp_path: Path) -> None:
     path = tmp_path / "box.obj"
-    path.write_text(OPEN_BOX)
+    path.write_text(OPEN_BOX_OBJ)
     assert main(["analyze", str(path)]) == 0
 
 
@@ -57,7 +57,7 @@ def test_analyze_warnings_only_exit_zero(tmp_path: Path) -> None:
 def test_normals_each_output(cube: Path, tmp_path: Path, suffix: str) -> None:
     out = tmp_path / f"normals{suffix}"
     assert main(["normals", str(cube), "--kind", "vertex", "-o", str(out)]) == 0
-    mesh = read_mesh(CUBE.encode(), "cube.obj")
+    mesh = read_mesh(CUBE_OBJ.encode(), "cube.obj")
     expected = vertex_normals(mesh.vertices, mesh.faces).normals
     if suffix == ".npy":
         np.testing.assert_array_equal(np.load(out), expected)
@@ -77,10 +77,10 @@ def test_normals_each_output(cube: Path, tmp_path: Path, suffix: str) -> None:
 
 def test_face_normals_npy(tmp_path: Path) -> None:
     path = tmp_path / "t.obj"
-    path.write_text(TETRA)
+    path.write_text(TETRA_OBJ)
     out = tmp_path / "faces.npy"
     assert main(["normals", str(path), "--kind", "face", "-o", str(out)]) == 0
-    mesh = read_mesh(TETRA.encode(), "t.obj")
+    mesh = read_mesh(TETRA_OBJ.encode(), "t.obj")
     np.testing.assert_array_equal(np.load(out), face_normals(mesh.vertices, mesh.faces).normals)
 
 
@@ -165,7 +165,7 @@ def test_face_normals_ply_carries_them_per_face(cube: Path, tmp_path: Path) -> N
     out = tmp_path / "faces.ply"
     assert main(["normals", str(cube), "--kind", "face", "-o", str(out)]) == 0
     written = read_mesh(out.read_bytes(), "faces.ply")
-    mesh = read_mesh(CUBE.encode(), "cube.obj")
+    mesh = read_mesh(CUBE_OBJ.encode(), "cube.obj")
     np.testing.assert_array_equal(written.vertices, mesh.vertices)
     np.testing.assert_array_equal(written.faces, mesh.faces)
     np.testing.assert_array_equal(

@@ -12,9 +12,7 @@ from mesh_normal.corners import corner_normals, take_rows
 from mesh_normal.faces import face_normals
 from mesh_normal.topology import vertex_corners
 from mesh_normal.vertices import vertex_normals
-from tests.mesh_normal._meshes import (
-    load,
-)
+from tests.meshes import load
 
 
 def test_cube_corners_take_the_face_normal_below_90_degrees() -> None:

@@ -11,11 +11,11 @@ from mesh_normal.analysis import analyse, build_report
 from mesh_normal.diagnosis import CHECKS, Problem, ProblemCode, problems
 from mesh_normal.files import read_mesh
 from mesh_normal.report import FileNormals, MeshReport
-from tests.app.mesh.test_api import CUBE, CUBE_ONE_FLIPPED
+from tests.meshes import CUBE_OBJ, CUBE_ONE_FLIPPED_OBJ
 
 
 def clean() -> MeshReport:
-    data = CUBE.encode()
+    data = CUBE_OBJ.encode()
     return build_report(analyse(read_mesh(data, "cube.obj"), "cube.obj", len(data)))
 
 
@@ -133,7 +133,7 @@ def test_the_python_snippets_use_the_public_api_and_run(item: Problem) -> None:
     assert "from mesh_normal" not in item.python
     if "mn." in item.python:
         assert item.python.startswith("import mesh_normal as mn\n")
-    mesh = read_mesh(CUBE_ONE_FLIPPED.encode(), "flipped.obj")
+    mesh = read_mesh(CUBE_ONE_FLIPPED_OBJ.encode(), "flipped.obj")
     given = {"vertices": mesh.vertices, "faces": mesh.faces}
     scope: dict[str, Any] = dict(given)
     exec(item.python, scope)  # the snippet as a reader would paste it

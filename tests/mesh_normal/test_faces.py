@@ -14,27 +14,20 @@ from mesh_normal.corners import CornerNormals, corner_normals
 from mesh_normal.faces import FaceNormals, face_areas, face_normals
 from mesh_normal.tolerances import MESH_DEGENERATE_SINE
 from mesh_normal.vertices import WEIGHTINGS, VertexNormals, vertex_normals
-from tests.mesh_normal._meshes import (
-    SAMPLES,
-    TETRAHEDRON,
-    TETRAHEDRON_FACES,
-    assert_clean,
-    assert_unit_or_zero,
-    load,
-    unit,
-)
+from tests.mesh_normal._normals import assert_clean, assert_unit_or_zero, unit
+from tests.meshes import SAMPLES, TETRA_FACES, TETRA_VERTICES, load
 
 # --- face normals and areas -------------------------------------------------------------------
 
 
 def test_tetrahedron_face_normals_and_areas() -> None:
-    r = face_normals(TETRAHEDRON, TETRAHEDRON_FACES)
+    r = face_normals(TETRA_VERTICES, TETRA_FACES)
     assert isinstance(r, FaceNormals) and len(r) == 4
     expected = [[0, 0, -1], [0, -1, 0], [-1, 0, 0], unit(1, 1, 1)]
     assert np.allclose(r.normals, expected, atol=1e-16, rtol=0)
     assert np.allclose(r.areas, [0.5, 0.5, 0.5, math.sqrt(3) / 2], rtol=1e-15)
     assert not r.degenerate.any()
-    assert np.array_equal(face_areas(TETRAHEDRON, TETRAHEDRON_FACES), r.areas)
+    assert np.array_equal(face_areas(TETRA_VERTICES, TETRA_FACES), r.areas)
     assert r.normals.flags.c_contiguous and r.normals.shape == (4, 3)
 
 
@@ -179,10 +172,10 @@ def test_the_degenerate_verdict_does_not_depend_on_the_unit(factor: float) -> No
 
 
 def test_areas_beyond_the_double_range_are_infinite_not_nan() -> None:
-    huge = face_normals(TETRAHEDRON * 1e300, TETRAHEDRON_FACES)
+    huge = face_normals(TETRA_VERTICES * 1e300, TETRA_FACES)
     assert np.isinf(huge.areas).all()
-    assert np.allclose(huge.normals, face_normals(TETRAHEDRON, TETRAHEDRON_FACES).normals)
-    tiny = face_normals(TETRAHEDRON * 1e-300, TETRAHEDRON_FACES)
+    assert np.allclose(huge.normals, face_normals(TETRA_VERTICES, TETRA_FACES).normals)
+    tiny = face_normals(TETRA_VERTICES * 1e-300, TETRA_FACES)
     assert np.array_equal(tiny.areas, np.zeros(4)) and not tiny.degenerate.any()
 
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from mesh_normal import face_normals, vertex_normals
-from tests.mesh_normal.test_faces import SAMPLES, load
+from tests.meshes import SAMPLES, load
 
 igl = pytest.importorskip("igl")
 

@@ -22,23 +22,7 @@ from mesh_normal.orientation import (
     signed_volume,
 )
 from mesh_normal.topology import MeshTopology, mesh_topology
-from tests.paths import DATA
-
-SAMPLES = ("sphere.ply", "ant.ply", "nut.ply", "cube.obj")
-
-TETRAHEDRON = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
-TETRAHEDRON_FACES = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])  # outward
-
-# The unit cube: corner (x, y, z) is vertex x + 2 y + 4 z; each side's quad runs
-# counter-clockwise seen from outside, and is cut into two triangles [a, b, c], [a, c, d].
-CUBE = np.array([[x, y, z] for z in (0, 1) for y in (0, 1) for x in (0, 1)], dtype=np.float64)
-CUBE_QUADS = [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)]
-CUBE_FACES = np.array([t for a, b, c, d in CUBE_QUADS for t in ((a, b, c), (a, c, d))])
-
-
-def load(name: str) -> tuple[np.ndarray, np.ndarray]:
-    mesh = trimesh.load(DATA / name, process=False, force="mesh")
-    return np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces)
+from tests.meshes import CUBE_FACES, CUBE_VERTICES, SAMPLES, TETRA_FACES, TETRA_VERTICES, load
 
 
 def reversed_rows(faces: np.ndarray, rows: np.ndarray | list[int] | slice) -> np.ndarray:
@@ -78,17 +62,17 @@ def assert_same_topology(a: MeshTopology, b: MeshTopology) -> None:
 
 
 def test_tetrahedron_outward() -> None:
-    t = mesh_topology(TETRAHEDRON_FACES, 4)
+    t = mesh_topology(TETRA_FACES, 4)
     assert (t.boundary_edges, t.nonmanifold_edges, t.components) == (0, 0, 1)
     assert t.watertight and t.winding_consistent and t.orientable
     assert t.face_component.tolist() == [0, 0, 0, 0]
     assert t.boundary_edge_list.shape == t.nonmanifold_edge_list.shape == (0, 2)
-    assert signed_volume(TETRAHEDRON, TETRAHEDRON_FACES) == pytest.approx(1 / 6, rel=1e-15)
-    r = orient(TETRAHEDRON, TETRAHEDRON_FACES)
+    assert signed_volume(TETRA_VERTICES, TETRA_FACES) == pytest.approx(1 / 6, rel=1e-15)
+    r = orient(TETRA_VERTICES, TETRA_FACES)
     assert isinstance(r, Orientation)
     assert r.orientation == "outward"
     assert not r.flipped.any()
-    assert np.array_equal(r.faces, TETRAHEDRON_FACES)
+    assert np.array_equal(r.faces, TETRA_FACES)
     assert r.volume == pytest.approx(1 / 6, rel=1e-15)
     (component,) = r.components
     assert component == ComponentOrientation(
@@ -106,23 +90,23 @@ def test_tetrahedron_outward() -> None:
 
 
 def test_tetrahedron_inward() -> None:
-    inward = TETRAHEDRON_FACES[:, ::-1]
-    assert signed_volume(TETRAHEDRON, inward) == pytest.approx(-1 / 6, rel=1e-15)
+    inward = TETRA_FACES[:, ::-1]
+    assert signed_volume(TETRA_VERTICES, inward) == pytest.approx(-1 / 6, rel=1e-15)
     t = mesh_topology(inward, 4)
     assert t.watertight and t.winding_consistent
-    r = orient(TETRAHEDRON, inward)
+    r = orient(TETRA_VERTICES, inward)
     assert r.orientation == "inward"
     assert r.flipped.all()
     assert np.array_equal(r.faces, inward[:, [0, 2, 1]])
     assert r.volume == pytest.approx(-1 / 6, rel=1e-15)  # of the input
     assert r.components[0].volume == pytest.approx(1 / 6, rel=1e-15)  # after orienting
     assert r.components[0].flipped == 4
-    assert signed_volume(TETRAHEDRON, r.faces) == pytest.approx(1 / 6, rel=1e-15)
+    assert signed_volume(TETRA_VERTICES, r.faces) == pytest.approx(1 / 6, rel=1e-15)
 
 
 def test_the_hand_built_cube_is_outward() -> None:
-    assert signed_volume(CUBE, CUBE_FACES) == pytest.approx(1.0, rel=1e-15)
-    r = orient(CUBE, CUBE_FACES)
+    assert signed_volume(CUBE_VERTICES, CUBE_FACES) == pytest.approx(1.0, rel=1e-15)
+    r = orient(CUBE_VERTICES, CUBE_FACES)
     assert r.orientation == "outward" and not r.flipped.any()
     assert r.topology.watertight and r.topology.winding_consistent
 
@@ -131,7 +115,7 @@ def test_cube_with_one_flipped_face() -> None:
     faces = reversed_rows(CUBE_FACES, [7])
     t = mesh_topology(faces, 8)
     assert t.watertight and not t.winding_consistent and t.orientable
-    r = orient(CUBE, faces)
+    r = orient(CUBE_VERTICES, faces)
     assert r.orientation == "mixed"
     assert np.flatnonzero(r.flipped).tolist() == [7]
     assert np.array_equal(r.faces, CUBE_FACES)
@@ -150,19 +134,19 @@ def test_open_box_is_decided_by_the_heuristic() -> None:
     rim = {tuple(edge) for edge in t.boundary_edge_list.tolist()}
     assert rim == {(5, 4), (7, 5), (6, 7), (4, 6)}
     for faces, verdict, flips in ((box, "outward", 0), (box[:, ::-1], "inward", 10)):
-        r = orient(CUBE, faces)
+        r = orient(CUBE_VERTICES, faces)
         assert r.orientation == verdict
         assert r.flipped.sum() == flips
         assert r.volume is None
         (component,) = r.components
         assert (component.closed, component.method, component.volume) == (False, "heuristic", None)
         assert np.array_equal(np.sort(r.faces, axis=1), np.sort(box, axis=1))
-        assert orient(CUBE, r.faces).orientation == "outward"
+        assert orient(CUBE_VERTICES, r.faces).orientation == "outward"
 
 
 def test_two_components() -> None:
-    vertices = np.concatenate([TETRAHEDRON, CUBE + 5])
-    faces = np.concatenate([CUBE_FACES + 4, TETRAHEDRON_FACES[:, ::-1]])
+    vertices = np.concatenate([TETRA_VERTICES, CUBE_VERTICES + 5])
+    faces = np.concatenate([CUBE_FACES + 4, TETRA_FACES[:, ::-1]])
     t = mesh_topology(faces, len(vertices))
     assert t.components == 2 and t.watertight and t.winding_consistent
     assert t.face_component.tolist() == [0] * 12 + [1] * 4  # numbered by first face
@@ -190,19 +174,19 @@ def test_moebius_strip_is_reported_not_flipped() -> None:
 
 
 def test_faces_with_a_repeated_index_are_left_out() -> None:
-    faces = np.concatenate([[[0, 0, 1]], TETRAHEDRON_FACES, [[2, 3, 3], [1, 2, 1]]])
+    faces = np.concatenate([[[0, 0, 1]], TETRA_FACES, [[2, 3, 3], [1, 2, 1]]])
     t = mesh_topology(faces, 4)
     assert (t.boundary_edges, t.nonmanifold_edges, t.components) == (0, 0, 1)
     assert t.watertight and t.winding_consistent
     assert t.face_component.tolist() == [-1, 0, 0, 0, 0, -1, -1]
-    r = orient(TETRAHEDRON, faces[:, ::-1])
+    r = orient(TETRA_VERTICES, faces[:, ::-1])
     assert r.flipped.tolist() == [False, True, True, True, True, False, False]
     assert np.array_equal(r.faces[[0, 5, 6]], faces[[0, 5, 6], ::-1])
     assert r.orientation == "inward"
     assert r.volume == pytest.approx(-1 / 6, rel=1e-15)
     all_repeated = mesh_topology([[0, 0, 1], [2, 2, 2]], 3)
     assert (all_repeated.components, all_repeated.watertight) == (0, False)
-    assert orient(TETRAHEDRON, [[0, 0, 1]]).orientation == "undetermined"
+    assert orient(TETRA_VERTICES, [[0, 0, 1]]).orientation == "undetermined"
 
 
 def test_collinear_faces_with_distinct_indices_count() -> None:
@@ -215,8 +199,8 @@ def test_collinear_faces_with_distinct_indices_count() -> None:
 
 
 def test_nonmanifold_fin() -> None:
-    vertices = np.concatenate([TETRAHEDRON, [[0.5, -1.0, -1.0]]])
-    faces = np.concatenate([TETRAHEDRON_FACES, [[0, 1, 4]]])  # a fin on edge 0-1
+    vertices = np.concatenate([TETRA_VERTICES, [[0.5, -1.0, -1.0]]])
+    faces = np.concatenate([TETRA_FACES, [[0, 1, 4]]])  # a fin on edge 0-1
     t = mesh_topology(faces, 5)
     assert (t.boundary_edges, t.nonmanifold_edges, t.components) == (2, 1, 1)
     assert t.nonmanifold_edge_list.tolist() == [[0, 1]]
@@ -226,13 +210,13 @@ def test_nonmanifold_fin() -> None:
     assert r.orientation == "outward" and not r.flipped.any()
     (component,) = r.components
     assert (component.closed, component.method, component.volume) == (False, "heuristic", None)
-    inward = orient(vertices, np.concatenate([TETRAHEDRON_FACES[:, ::-1], [[0, 1, 4]]]))
+    inward = orient(vertices, np.concatenate([TETRA_FACES[:, ::-1], [[0, 1, 4]]]))
     assert inward.orientation == "inward"
     assert inward.flipped.tolist() == [True] * 4 + [False]
 
 
 def test_two_cubes_sharing_an_edge_are_oriented_each_on_its_own() -> None:
-    vertices = np.concatenate([CUBE, CUBE + np.array([1, 1, 0])])
+    vertices = np.concatenate([CUBE_VERTICES, CUBE_VERTICES + np.array([1, 1, 0])])
     faces = np.concatenate([CUBE_FACES, CUBE_FACES + 8])
     # Weld the second cube's edge (0, 0)-(0, 0, 1) onto the first cube's (1, 1)-(1, 1, 1).
     faces[faces == 8], faces[faces == 12] = 3, 7
@@ -249,7 +233,7 @@ def test_two_cubes_sharing_an_edge_are_oriented_each_on_its_own() -> None:
 def test_a_duplicate_face_pair() -> None:
     t = mesh_topology([[0, 1, 2], [0, 1, 2]], 3)
     assert t.watertight and not t.winding_consistent
-    r = orient(TETRAHEDRON, [[0, 1, 2], [0, 1, 2]])
+    r = orient(TETRA_VERTICES, [[0, 1, 2], [0, 1, 2]])
     # Back to back they enclose nothing: consistent, but neither way is out.
     assert r.flipped.tolist() == [False, True]
     assert r.orientation == "mixed"
@@ -278,23 +262,23 @@ def test_empty_and_isolated() -> None:
     r = orient(np.empty((0, 3)), np.empty((0, 3), dtype=int))
     assert r.orientation == "undetermined" and r.volume is None
     assert r.faces.shape == (0, 3) and len(r.components) == 0
-    assert signed_volume(TETRAHEDRON, []) == 0.0
+    assert signed_volume(TETRA_VERTICES, []) == 0.0
     # An isolated vertex is in no component.
-    vertices = np.concatenate([TETRAHEDRON, [[9.0, 9, 9]]])
-    assert mesh_topology(TETRAHEDRON_FACES, 5).components == 1
-    assert orient(vertices, TETRAHEDRON_FACES).volume == pytest.approx(1 / 6, rel=1e-15)
+    vertices = np.concatenate([TETRA_VERTICES, [[9.0, 9, 9]]])
+    assert mesh_topology(TETRA_FACES, 5).components == 1
+    assert orient(vertices, TETRA_FACES).volume == pytest.approx(1 / 6, rel=1e-15)
 
 
 def test_bad_input_is_refused() -> None:
     with pytest.raises(ValueError, match="refers to vertex 4"):
         mesh_topology([[0, 1, 4]], 4)
     with pytest.raises(ValueError, match="shape"):
-        orient(TETRAHEDRON, [[0, 1]])
+        orient(TETRA_VERTICES, [[0, 1]])
 
 
 def test_component_table_is_a_sequence() -> None:
-    vertices = np.concatenate([TETRAHEDRON, CUBE + 5])
-    r = orient(vertices, np.concatenate([CUBE_FACES + 4, TETRAHEDRON_FACES]))
+    vertices = np.concatenate([TETRA_VERTICES, CUBE_VERTICES + 5])
+    r = orient(vertices, np.concatenate([CUBE_FACES + 4, TETRA_FACES]))
     table = r.components
     assert isinstance(table, ComponentTable) and len(table) == 2
     assert table[-1].index == 1 and table[-1].faces == 4
@@ -308,11 +292,11 @@ def test_component_table_is_a_sequence() -> None:
 
 def test_signed_volume_is_accurate_far_from_the_origin() -> None:
     # det(A, B, C) about the origin would cancel terms of 2**60; about the centroid it does not.
-    far = CUBE * 2.0**-10 + 2.0**30  # exact
+    far = CUBE_VERTICES * 2.0**-10 + 2.0**30  # exact
     assert signed_volume(far, CUBE_FACES) == pytest.approx(2.0**-30, rel=1e-14)
     naive = np.linalg.det(far[CUBE_FACES]).sum() / 6
     assert abs(naive - 2.0**-30) > 0.1 * 2.0**-30  # what the shift avoids
-    huge = CUBE * 1e200
+    huge = CUBE_VERTICES * 1e200
     assert signed_volume(huge, CUBE_FACES) == math.inf
     assert orient(huge, CUBE_FACES[:, ::-1]).orientation == "inward"
 

@@ -15,7 +15,7 @@ import mesh_normal as mn
 from mesh_normal.analysis import MeshAnalysis, analyse, build_report, mesh_report
 from mesh_normal.files import SUFFIXES, read_mesh, write_mesh
 from mesh_normal.report import Bounds, FileInfo, MeshFormat, MeshReport
-from tests.app.mesh.test_api import CUBE, CUBE_ONE_FLIPPED, OPEN_BOX, TETRA
+from tests.meshes import CUBE_OBJ, CUBE_ONE_FLIPPED_OBJ, HUGE_TETRA_OBJ, OPEN_BOX_OBJ, TETRA_OBJ
 
 #: The report's keys, in the order the JSON has always had them.
 KEYS = [
@@ -44,7 +44,6 @@ KEYS = [
 ]
 
 #: A tetrahedron with coordinates near 1e200: its area (1e400) and volume overflow.
-HUGE = "v 0 0 0\nv 1e200 0 0\nv 0 1e200 0\nv 0 0 1e200\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
 
 
 def report_of(text: str, name: str = "mesh.obj") -> MeshReport:
@@ -62,8 +61,10 @@ def strict_json(text: str | bytes) -> Any:
 
 
 def test_cube_with_one_flipped_face() -> None:
-    report = report_of(CUBE_ONE_FLIPPED, "flipped.obj")
-    assert report.file == FileInfo(name="flipped.obj", format="obj", bytes=len(CUBE_ONE_FLIPPED))
+    report = report_of(CUBE_ONE_FLIPPED_OBJ, "flipped.obj")
+    assert report.file == FileInfo(
+        name="flipped.obj", format="obj", bytes=len(CUBE_ONE_FLIPPED_OBJ)
+    )
     assert (report.vertices, report.faces, report.source_faces) == (8, 12, 12)
     assert report.area == 6.0
     assert report.winding_consistent is False and report.watertight is True
@@ -80,7 +81,7 @@ def test_cube_with_one_flipped_face() -> None:
 
 
 def test_clean_cube() -> None:
-    report = report_of(CUBE)
+    report = report_of(CUBE_OBJ)
     assert report.orientation == "outward"
     assert report.volume == pytest.approx(1.0, rel=1e-15)
     assert report.fix.faces_flipped == 0 and report.fix.flipped_face_indices == []
@@ -88,14 +89,14 @@ def test_clean_cube() -> None:
 
 
 def test_open_box_is_a_warning() -> None:
-    report = report_of(OPEN_BOX)
+    report = report_of(OPEN_BOX_OBJ)
     assert (report.watertight, report.boundary_edges, report.volume) == (False, 4, None)
     assert [(p.code, p.severity) for p in report.problems] == [("open", "warning")]
     assert report.fix.components[0].method == "heuristic"
 
 
 def test_the_json_keys_keep_their_names_and_order() -> None:
-    report = report_of(CUBE_ONE_FLIPPED)
+    report = report_of(CUBE_ONE_FLIPPED_OBJ)
     data = strict_json(report.model_dump_json())
     assert list(data) == KEYS
     assert list(data["file"]) == ["name", "format", "bytes"]
@@ -118,7 +119,7 @@ def test_the_json_keys_keep_their_names_and_order() -> None:
 
 
 def test_file_normals_of_an_stl() -> None:
-    mesh = read_mesh(TETRA.encode(), "t.obj")
+    mesh = read_mesh(TETRA_OBJ.encode(), "t.obj")
     data = write_mesh(mesh.vertices, mesh.faces, "stl")
     stored = build_report(analyse(read_mesh(data, "t.stl"), "t.stl", len(data))).file_normals
     assert stored is not None
@@ -141,7 +142,7 @@ def test_file_normals_of_an_stl() -> None:
 
 
 def test_an_overflowing_area_is_null_never_nan() -> None:
-    report = report_of(HUGE)
+    report = report_of(HUGE_TETRA_OBJ)
     assert report.area is None and report.volume is None
     assert "overflow" in [p.code for p in report.problems]
     data = strict_json(report.model_dump_json())
@@ -151,7 +152,7 @@ def test_an_overflowing_area_is_null_never_nan() -> None:
 
 @pytest.mark.parametrize("value", [math.inf, -math.inf, math.nan])
 def test_a_measure_that_is_not_finite_becomes_none(value: float) -> None:
-    report = report_of(CUBE).model_copy(update={"area": value})  # model_copy skips validation
+    report = report_of(CUBE_OBJ).model_copy(update={"area": value})  # model_copy skips validation
     assert report.area is not None and not math.isfinite(report.area)
     assert strict_json(report.model_dump_json())["area"] is None  # the models write null
     rebuilt = MeshReport.model_validate({**report.model_dump(), "area": value})
@@ -165,7 +166,7 @@ def test_bounds_refuse_coordinates_that_are_not_finite() -> None:
 
 
 def test_the_models_check_what_they_hold() -> None:
-    fields = report_of(CUBE).model_dump()
+    fields = report_of(CUBE_OBJ).model_dump()
     for update in ({"orientation": "sideways"}, {"vertices": -1}, {"surplus": 1}):
         with pytest.raises(ValidationError):
             MeshReport.model_validate({**fields, **update})
@@ -174,7 +175,7 @@ def test_the_models_check_what_they_hold() -> None:
 
 
 def test_the_report_is_frozen() -> None:
-    report = report_of(CUBE)
+    report = report_of(CUBE_OBJ)
     with pytest.raises(ValidationError, match="frozen"):
         report.area = 1.0  # type: ignore[misc]
 
@@ -209,31 +210,33 @@ def test_every_field_has_a_description() -> None:
 
 def test_mn_analyse_is_the_report_from_a_path(tmp_path: Path) -> None:
     path = tmp_path / "flipped.obj"
-    path.write_text(CUBE_ONE_FLIPPED)
+    path.write_text(CUBE_ONE_FLIPPED_OBJ)
     report = mn.analyse(path)
     assert isinstance(report, MeshReport)
-    assert report == report_of(CUBE_ONE_FLIPPED, "flipped.obj")
+    assert report == report_of(CUBE_ONE_FLIPPED_OBJ, "flipped.obj")
     assert mn.analyse(str(path)) == report
     assert mn.analyse(path, filename="other.obj").file.name == "other.obj"
 
 
 def test_mn_analyse_takes_bytes_a_file_object_or_a_loaded_mesh(tmp_path: Path) -> None:
-    data = CUBE.encode()
-    assert mn.analyse(data, "cube.obj") == report_of(CUBE, "cube.obj")
-    assert mn.analyse(io.BytesIO(data), "cube.obj") == report_of(CUBE, "cube.obj")
+    data = CUBE_OBJ.encode()
+    assert mn.analyse(data, "cube.obj") == report_of(CUBE_OBJ, "cube.obj")
+    assert mn.analyse(io.BytesIO(data), "cube.obj") == report_of(CUBE_OBJ, "cube.obj")
     path = tmp_path / "cube.obj"
     path.write_bytes(data)
     with path.open("rb") as stream:
         assert mn.analyse(stream).file.name == "cube.obj"
     from_mesh = mn.analyse(read_mesh(data, "cube.obj"))
     assert from_mesh.file == FileInfo(name=None, format="obj", bytes=0)
-    assert from_mesh.model_dump(exclude={"file"}) == report_of(CUBE).model_dump(exclude={"file"})
+    assert from_mesh.model_dump(exclude={"file"}) == report_of(CUBE_OBJ).model_dump(
+        exclude={"file"}
+    )
 
 
 def test_mn_analyse_is_mesh_report_and_the_arrays_stay_available() -> None:
     assert mn.analyse is mesh_report
     assert mn.MeshReport is MeshReport and mn.MeshAnalysis is MeshAnalysis
-    analysis = analyse(read_mesh(CUBE.encode(), "cube.obj"))
+    analysis = analyse(read_mesh(CUBE_OBJ.encode(), "cube.obj"))
     assert analysis.faces.normals.shape == (12, 3)
 
 
@@ -242,6 +245,6 @@ def test_an_unreadable_source_raises_the_file_error(tmp_path: Path) -> None:
         mn.analyse(b"not a mesh at all", "broken.obj")
     with pytest.raises(FileNotFoundError):
         mn.analyse(tmp_path / "missing.obj")
-    (tmp_path / "cube.obj").write_text(CUBE)
+    (tmp_path / "cube.obj").write_text(CUBE_OBJ)
     with (tmp_path / "cube.obj").open() as text, pytest.raises(TypeError, match="binary mode"):
         mn.analyse(text)  # type: ignore[arg-type]

@@ -11,14 +11,8 @@ import trimesh
 from mesh_normal.corners import corner_normals
 from mesh_normal.faces import face_normals
 from mesh_normal.vertices import WEIGHTINGS, vertex_normals
-from tests.mesh_normal._meshes import (
-    SAMPLES,
-    TETRAHEDRON,
-    TETRAHEDRON_FACES,
-    load,
-    octahedron,
-    unit,
-)
+from tests.mesh_normal._normals import unit
+from tests.meshes import SAMPLES, TETRA_FACES, TETRA_VERTICES, load, octahedron
 
 
 def test_tetrahedron_vertex_normals_by_hand() -> None:
@@ -40,7 +34,7 @@ def test_tetrahedron_vertex_normals_by_hand() -> None:
         ],
     }
     for weighting, (first, second) in expected.items():
-        r = vertex_normals(TETRAHEDRON, TETRAHEDRON_FACES, weighting)
+        r = vertex_normals(TETRA_VERTICES, TETRA_FACES, weighting)
         assert np.allclose(r.normals[:2], [first, second], atol=1e-15, rtol=0), weighting
         assert not r.missing.any()
 
@@ -90,7 +84,7 @@ def test_angle_and_max_weighting_ignore_how_the_cube_is_triangulated() -> None:
 
 
 def test_a_sheet_folded_flat_onto_itself_has_no_vertex_normals() -> None:
-    vertices = TETRAHEDRON[:3]
+    vertices = TETRA_VERTICES[:3]
     faces = np.array([[0, 1, 2], [0, 2, 1]])
     for weighting in WEIGHTINGS:
         r = vertex_normals(vertices, faces, weighting)

@@ -7,46 +7,30 @@ import json
 import math
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
+from typing import Any, get_args
 
 import numpy as np
 import pytest
 from fastapi.testclient import TestClient
 
 from app.main import create_app
+from app.mesh.api import FixFormat
+from app.mesh.page import FIX_FORMATS
 from mesh_normal import face_normals, vertex_normals
-from mesh_normal.files import read_mesh
+from mesh_normal.files import FORMATS, WRITABLE, read_mesh
 from tests.conftest import assert_error
+from tests.meshes import (
+    CUBE_OBJ,
+    CUBE_OBJ_FACES,
+    CUBE_OBJ_POINTS,
+    CUBE_ONE_FLIPPED_OBJ,
+    HUGE_TETRA_OBJ,
+    OPEN_BOX_OBJ,
+    TETRA_OBJ,
+    TETRA_OBJ_POINTS,
+    obj_text,
+)
 from tests.paths import DATA
-
-TETRA_POINTS = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
-#: The unit corner tetrahedron, wound outward.
-TETRA = TETRA_POINTS + "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
-CUBE_POINTS = "".join(f"v {x} {y} {z}\n" for x in (0, 1) for y in (0, 1) for z in (0, 1))
-#: A unit cube, 12 triangles wound outward (vertex i has coordinates from the bits of i).
-CUBE_FACES = [
-    (0, 1, 3),
-    (0, 3, 2),
-    (4, 6, 7),
-    (4, 7, 5),
-    (0, 4, 5),
-    (0, 5, 1),
-    (2, 3, 7),
-    (2, 7, 6),
-    (0, 2, 6),
-    (0, 6, 4),
-    (1, 5, 7),
-    (1, 7, 3),
-]
-
-
-def obj(points: str, faces: list[tuple[int, ...]]) -> str:
-    return points + "".join("f " + " ".join(str(i + 1) for i in face) + "\n" for face in faces)
-
-
-CUBE = obj(CUBE_POINTS, CUBE_FACES)
-CUBE_ONE_FLIPPED = obj(CUBE_POINTS, [CUBE_FACES[0][::-1], *CUBE_FACES[1:]])
-OPEN_BOX = obj(CUBE_POINTS, [face for face in CUBE_FACES if face not in ((1, 5, 7), (1, 7, 3))])
 
 
 def upload(client: TestClient, path: str, text: str | bytes, name: str = "mesh.obj", **params: str):  # type: ignore[no-untyped-def]
@@ -55,10 +39,10 @@ def upload(client: TestClient, path: str, text: str | bytes, name: str = "mesh.o
 
 
 def test_cube_is_clean(client: TestClient) -> None:
-    response = upload(client, "/api/mesh", CUBE, "cube.obj")
+    response = upload(client, "/api/mesh", CUBE_OBJ, "cube.obj")
     assert response.status_code == 200, response.text
     report = response.json()
-    assert report["file"] == {"name": "cube.obj", "format": "obj", "bytes": len(CUBE)}
+    assert report["file"] == {"name": "cube.obj", "format": "obj", "bytes": len(CUBE_OBJ)}
     assert (report["vertices"], report["faces"], report["source_faces"]) == (8, 12, 12)
     assert report["area"] == 6.0
     assert report["volume"] == pytest.approx(1.0, rel=1e-15)
@@ -76,13 +60,13 @@ def test_cube_is_clean(client: TestClient) -> None:
 
 
 def test_tetrahedron_volume_and_area(client: TestClient) -> None:
-    report = upload(client, "/api/mesh", TETRA).json()
+    report = upload(client, "/api/mesh", TETRA_OBJ).json()
     assert report["volume"] == pytest.approx(1 / 6, rel=1e-15)
     assert report["area"] == pytest.approx(1.5 + math.sqrt(3) / 2, rel=1e-15)
 
 
 def test_one_flipped_face_is_found_and_named(client: TestClient) -> None:
-    report = upload(client, "/api/mesh", CUBE_ONE_FLIPPED).json()
+    report = upload(client, "/api/mesh", CUBE_ONE_FLIPPED_OBJ).json()
     assert report["winding_consistent"] is False
     assert report["orientation"] == "mixed"
     assert report["volume"] is None
@@ -94,7 +78,7 @@ def test_one_flipped_face_is_found_and_named(client: TestClient) -> None:
 
 
 def test_inward_mesh(client: TestClient) -> None:
-    inward = obj(CUBE_POINTS, [face[::-1] for face in CUBE_FACES])
+    inward = obj_text(CUBE_OBJ_POINTS, [face[::-1] for face in CUBE_OBJ_FACES])
     report = upload(client, "/api/mesh", inward).json()
     assert report["orientation"] == "inward"
     assert report["winding_consistent"] is True
@@ -104,7 +88,7 @@ def test_inward_mesh(client: TestClient) -> None:
 
 
 def test_open_box(client: TestClient) -> None:
-    report = upload(client, "/api/mesh", OPEN_BOX).json()
+    report = upload(client, "/api/mesh", OPEN_BOX_OBJ).json()
     assert report["watertight"] is False
     assert report["boundary_edges"] == 4
     assert report["volume"] is None
@@ -113,7 +97,7 @@ def test_open_box(client: TestClient) -> None:
 
 
 def test_degenerate_faces_are_counted_in_file_order(client: TestClient) -> None:
-    text = TETRA + "f 1 1 2\nf 1 2 2\nv 2 0 0\nf 1 2 5\n"
+    text = TETRA_OBJ + "f 1 1 2\nf 1 2 2\nv 2 0 0\nf 1 2 5\n"
     report = upload(client, "/api/mesh", text).json()
     assert report["degenerate_faces"] == 3
     assert report["degenerate_face_indices"] == [4, 5, 6]
@@ -124,8 +108,10 @@ def test_degenerate_faces_are_counted_in_file_order(client: TestClient) -> None:
 
 def test_two_components_and_an_unused_vertex(client: TestClient) -> None:
     shifted = "".join(f"v {x + 5} {y} {z}\n" for x in (0, 1) for y in (0, 1) for z in (0, 1))
-    faces = CUBE_FACES + [tuple(i + 8 for i in face) for face in CUBE_FACES]
-    report = upload(client, "/api/mesh", obj(CUBE_POINTS + shifted + "v 9 9 9\n", faces)).json()
+    faces = CUBE_OBJ_FACES + [tuple(i + 8 for i in face) for face in CUBE_OBJ_FACES]
+    report = upload(
+        client, "/api/mesh", obj_text(CUBE_OBJ_POINTS + shifted + "v 9 9 9\n", faces)
+    ).json()
     assert report["components"] == 2
     assert report["unused_vertices"] == 1
     assert report["volume"] == pytest.approx(2.0)
@@ -136,7 +122,7 @@ def test_raw_body_with_a_filename(client: TestClient) -> None:
     response = client.post(
         "/api/mesh",
         params={"filename": "cube.obj"},
-        content=CUBE.encode(),
+        content=CUBE_OBJ.encode(),
         headers={"content-type": "application/octet-stream"},
     )
     assert response.status_code == 200, response.text
@@ -159,7 +145,7 @@ def test_sample_ply_matches_trimesh(client: TestClient) -> None:
 def test_stored_face_normals_are_compared(client: TestClient) -> None:
     from mesh_normal.files import write_mesh
 
-    mesh = read_mesh(CUBE.encode(), "cube.obj")
+    mesh = read_mesh(CUBE_OBJ.encode(), "cube.obj")
     stl = write_mesh(mesh.vertices, mesh.faces, "stl")
     report = upload(client, "/api/mesh", stl, "cube.stl").json()
     stored = report["file_normals"]
@@ -172,12 +158,12 @@ def test_stored_face_normals_are_compared(client: TestClient) -> None:
     ("kind", "shape"), [("face", (12, 3)), ("vertex", (8, 3)), ("corner", (12, 3, 3))]
 )
 def test_normals_as_npy(client: TestClient, kind: str, shape: tuple[int, ...]) -> None:
-    response = upload(client, "/api/mesh/normals", CUBE, "cube.obj", kind=kind, format="npy")
+    response = upload(client, "/api/mesh/normals", CUBE_OBJ, "cube.obj", kind=kind, format="npy")
     assert response.status_code == 200, response.text
     assert 'filename="cube-' + kind + '-normals.npy"' in response.headers["content-disposition"]
     array = np.load(io.BytesIO(response.content), allow_pickle=False)
     assert array.dtype == np.float64 and array.shape == shape
-    mesh = read_mesh(CUBE.encode(), "cube.obj")
+    mesh = read_mesh(CUBE_OBJ.encode(), "cube.obj")
     if kind == "face":
         np.testing.assert_array_equal(array, face_normals(mesh.vertices, mesh.faces).normals)
     if kind == "vertex":
@@ -188,16 +174,16 @@ def test_normals_as_npy(client: TestClient, kind: str, shape: tuple[int, ...]) -
 
 
 def test_normals_as_json_and_csv(client: TestClient) -> None:
-    body = upload(client, "/api/mesh/normals", TETRA, kind="vertex", weighting="area").json()
+    body = upload(client, "/api/mesh/normals", TETRA_OBJ, kind="vertex", weighting="area").json()
     assert body["kind"] == "vertex" and body["weighting"] == "area"
     assert body["shape"] == [4, 3] and body["missing"] == 0
     expected = vertex_normals(
-        read_mesh(TETRA.encode(), "t.obj").vertices,
-        read_mesh(TETRA.encode(), "t.obj").faces,
+        read_mesh(TETRA_OBJ.encode(), "t.obj").vertices,
+        read_mesh(TETRA_OBJ.encode(), "t.obj").faces,
         "area",
     ).normals
     assert body["normals"] == expected.tolist()
-    csv = upload(client, "/api/mesh/normals", TETRA, kind="face", format="csv")
+    csv = upload(client, "/api/mesh/normals", TETRA_OBJ, kind="face", format="csv")
     assert csv.headers["content-type"].startswith("text/csv")
     lines = csv.text.strip().splitlines()
     assert lines[0] == "face,nx,ny,nz" and len(lines) == 5
@@ -205,29 +191,29 @@ def test_normals_as_json_and_csv(client: TestClient) -> None:
 
 
 def test_normals_query_errors(client: TestClient) -> None:
-    assert_error(upload(client, "/api/mesh/normals", TETRA, kind="edge"), 422, "kind")
-    assert_error(upload(client, "/api/mesh/normals", TETRA, weighting="mean"), 422, "weighting")
+    assert_error(upload(client, "/api/mesh/normals", TETRA_OBJ, kind="edge"), 422, "kind")
+    assert_error(upload(client, "/api/mesh/normals", TETRA_OBJ, weighting="mean"), 422, "weighting")
     assert_error(
-        upload(client, "/api/mesh/normals", TETRA, crease_angle="200"),
+        upload(client, "/api/mesh/normals", TETRA_OBJ, crease_angle="200"),
         422,
         "crease_angle",
         "at most 180",
     )
     assert_error(
-        upload(client, "/api/mesh/normals", TETRA, crease_angle="nan"), 422, "crease_angle"
+        upload(client, "/api/mesh/normals", TETRA_OBJ, crease_angle="nan"), 422, "crease_angle"
     )
-    assert_error(upload(client, "/api/mesh/normals", TETRA, format="xml"), 422, "format")
+    assert_error(upload(client, "/api/mesh/normals", TETRA_OBJ, format="xml"), 422, "format")
 
 
 def test_fix_flips_the_one_face_and_keeps_the_vertices(client: TestClient) -> None:
-    response = upload(client, "/api/mesh/fix", CUBE_ONE_FLIPPED, "box.obj")
+    response = upload(client, "/api/mesh/fix", CUBE_ONE_FLIPPED_OBJ, "box.obj")
     assert response.status_code == 200, response.text
     assert response.headers["x-faces-flipped"] == "1"
     assert response.headers["x-component-faces-flipped"] == "0:1"
     assert response.headers["x-orientation-before"] == "mixed"
     assert 'filename="box-fixed.obj"' in response.headers["content-disposition"]
     fixed = read_mesh(response.content, "fixed.obj")
-    original = read_mesh(CUBE_ONE_FLIPPED.encode(), "box.obj")
+    original = read_mesh(CUBE_ONE_FLIPPED_OBJ.encode(), "box.obj")
     np.testing.assert_array_equal(fixed.vertices, original.vertices)
     report = upload(client, "/api/mesh", response.content, "fixed.obj").json()
     assert report["orientation"] == "outward" and report["winding_consistent"] is True
@@ -235,10 +221,32 @@ def test_fix_flips_the_one_face_and_keeps_the_vertices(client: TestClient) -> No
 
 @pytest.mark.parametrize("fmt", ["ply", "stl", "obj"])
 def test_fix_writes_each_format(client: TestClient, fmt: str) -> None:
-    response = upload(client, "/api/mesh/fix", OPEN_BOX, "box.obj", format=fmt)
+    response = upload(client, "/api/mesh/fix", OPEN_BOX_OBJ, "box.obj", format=fmt)
     assert response.status_code == 200, response.text
     again = upload(client, "/api/mesh", response.content, f"fixed.{fmt}").json()
     assert again["faces"] == 10 and again["boundary_edges"] == 4
+
+
+def test_the_fix_formats_are_the_librarys_writable_formats() -> None:
+    # FixFormat stays a Literal for FastAPI and mypy: this keeps it in step with the table.
+    assert get_args(FixFormat) == WRITABLE
+    assert FIX_FORMATS == WRITABLE
+
+
+@pytest.mark.parametrize("fmt", WRITABLE)
+def test_fix_answers_with_the_tables_media_type(client: TestClient, fmt: str) -> None:
+    response = upload(client, "/api/mesh/fix", TETRA_OBJ, format=fmt)
+    assert response.status_code == 200, response.text
+    assert response.headers["content-type"] == FORMATS[fmt].media_type
+    default = upload(client, "/api/mesh/fix", response.content, f"fixed.{fmt}")
+    assert default.headers["content-type"] == FORMATS[fmt].media_type  # the upload's format
+
+
+def test_fix_documents_the_writable_formats(client: TestClient) -> None:
+    fix = client.get("/openapi.json").json()["paths"]["/api/mesh/fix"]["post"]
+    (parameter,) = [p for p in fix["parameters"] if p["name"] == "format"]
+    assert parameter["description"].startswith("ply, stl or obj; default: ")
+    assert list(fix["responses"]["200"]["content"]) == [FORMATS[n].media_type for n in WRITABLE]
 
 
 def test_missing_and_empty_file(client: TestClient) -> None:
@@ -260,10 +268,10 @@ def test_missing_and_empty_file(client: TestClient) -> None:
     [
         ("mesh.xyz", b"1 2 3\n", 415),
         ("mesh.stl", b"\0" * 80 + (1000).to_bytes(4, "little") + b"\0" * 50, 400),
-        ("mesh.obj", TETRA_POINTS + "f 1 2 9\n", 400),
-        ("mesh.obj", TETRA_POINTS + "f 1 2 -9\n", 400),
+        ("mesh.obj", TETRA_OBJ_POINTS + "f 1 2 9\n", 400),
+        ("mesh.obj", TETRA_OBJ_POINTS + "f 1 2 -9\n", 400),
         ("mesh.obj", "v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", 400),
-        ("mesh.obj", TETRA_POINTS, 400),
+        ("mesh.obj", TETRA_OBJ_POINTS, 400),
         ("mesh.ply", b"ply\nformat ascii 1.0\nelement vertex 3\n", 400),
     ],
 )
@@ -281,10 +289,10 @@ def small_limit() -> Iterator[TestClient]:
 
 
 def test_upload_limit_declared(small_limit: TestClient) -> None:
-    big = CUBE + "# padding\n" * 400
+    big = CUBE_OBJ + "# padding\n" * 400
     body = assert_error(upload(small_limit, "/api/mesh", big), 413, None, "larger than")
     assert "1.953 KB" in body["error"]
-    assert upload(small_limit, "/api/mesh", CUBE).status_code == 200
+    assert upload(small_limit, "/api/mesh", CUBE_OBJ).status_code == 200
     assert "up to 1.953 KB" in small_limit.get("/mesh").text  # the page states the app's limit
 
 
@@ -309,15 +317,14 @@ def test_upload_limit_from_the_environment(monkeypatch: pytest.MonkeyPatch) -> N
 
 
 def test_report_is_strict_json(client: TestClient) -> None:
-    text = upload(client, "/api/mesh", CUBE_ONE_FLIPPED).text
+    text = upload(client, "/api/mesh", CUBE_ONE_FLIPPED_OBJ).text
     json.loads(text, parse_constant=lambda name: pytest.fail(f"{name} in the report"))
 
 
 def test_coordinates_near_1e200_give_a_null_area_never_nan(client: TestClient) -> None:
-    huge = "v 0 0 0\nv 1e200 0 0\nv 0 1e200 0\nv 0 0 1e200\n" + TETRA[len(TETRA_POINTS) :]
     for text in (
-        upload(client, "/api/mesh", huge).text,
-        upload(client, "/api/mesh", huge + "v 5 5 5\n").text,  # and an unused vertex
+        upload(client, "/api/mesh", HUGE_TETRA_OBJ).text,
+        upload(client, "/api/mesh", HUGE_TETRA_OBJ + "v 5 5 5\n").text,  # and an unused vertex
     ):
         report = json.loads(text, parse_constant=lambda name: pytest.fail(f"{name} in the report"))
         assert report["area"] is None and report["volume"] is None
@@ -365,7 +372,7 @@ def test_openapi_documents_every_key_of_the_report(client: TestClient) -> None:
     """A report with every optional part filled: bounds, file normals, components, problems."""
     from mesh_normal.files import write_mesh
 
-    mesh = read_mesh(CUBE_ONE_FLIPPED.encode(), "flipped.obj")
+    mesh = read_mesh(CUBE_ONE_FLIPPED_OBJ.encode(), "flipped.obj")
     stl = write_mesh(mesh.vertices, mesh.faces, "stl")
     report = upload(client, "/api/mesh", stl, "flipped.stl").json()
     assert report["bounds"] and report["file_normals"] and report["problems"]
@@ -386,7 +393,7 @@ def test_a_wrong_key_is_found_by_the_schema_check(client: TestClient) -> None:
     """The check above can fail: a renamed or missing key is reported."""
     spec = client.get("/openapi.json").json()
     schema = {"$ref": "#/components/schemas/MeshReport"}
-    report = upload(client, "/api/mesh", CUBE).json()
+    report = upload(client, "/api/mesh", CUBE_OBJ).json()
     report["fix"]["flipped"] = report["fix"].pop("faces_flipped")
     assert sorted(undocumented(spec, schema, report, "report")) == [
         "report.fix.faces_flipped: not in the report",
@@ -419,7 +426,7 @@ def test_mesh_work_runs_off_the_event_loop(monkeypatch: pytest.MonkeyPatch) -> N
         transport = httpx.ASGITransport(app=create_app())
         async with httpx.AsyncClient(transport=transport, base_url="http://test") as client:
             pending = asyncio.create_task(
-                client.post("/api/mesh", files={"file": ("cube.obj", CUBE.encode())})
+                client.post("/api/mesh", files={"file": ("cube.obj", CUBE_OBJ.encode())})
             )
             assert await asyncio.to_thread(started.wait, 10)
             quick = await client.get("/api/normal", params=EXAMPLE_QUERY)
@@ -440,9 +447,9 @@ def test_no_upload_outlives_its_request(client: TestClient) -> None:
     """A large upload is spooled to a temporary file; it is closed (and so gone) afterwards."""
     import os
 
-    big = CUBE + "# padding to pass the 1 MB spooling threshold\n" * 40_000
+    big = CUBE_OBJ + "# padding to pass the 1 MB spooling threshold\n" * 40_000
     assert len(big) > 1024 * 1024
-    upload(client, "/api/mesh", CUBE)  # warm up: whatever the first request opens for good
+    upload(client, "/api/mesh", CUBE_OBJ)  # warm up: whatever the first request opens for good
     before = set(os.listdir("/proc/self/fd"))
     for path in ("/api/mesh", "/mesh"):
         assert upload(client, path, big).status_code == 200
@@ -457,7 +464,7 @@ def test_stored_normals_that_are_not_finite_are_unusable_not_nan(client: TestCli
 
     from mesh_normal.files import write_mesh
 
-    mesh = read_mesh(TETRA.encode(), "t.obj")
+    mesh = read_mesh(TETRA_OBJ.encode(), "t.obj")
     stl = bytearray(write_mesh(mesh.vertices, mesh.faces, "stl"))
     stl[84:88] = struct.pack("<f", float("inf"))  # the first facet normal's x
     response = upload(client, "/api/mesh", bytes(stl), "t.stl")
@@ -481,7 +488,7 @@ def test_stl_cannot_hold_coordinates_beyond_float32(client: TestClient) -> None:
 
 
 def test_a_byte_order_mark_is_not_part_of_the_first_line(client: TestClient) -> None:
-    text = "\ufeffv 9 9 9\n" + TETRA_POINTS + "f -3 -2 -1\n"
+    text = "\ufeffv 9 9 9\n" + TETRA_OBJ_POINTS + "f -3 -2 -1\n"
     report = upload(client, "/api/mesh", text.encode("utf-8")).json()
     assert (report["vertices"], report["unused_vertices"]) == (5, 2)
 
@@ -506,7 +513,7 @@ def test_ascii_ply_face_indices_must_be_whole_numbers(client: TestClient) -> Non
 
 def test_other_multipart_fields_do_not_get_in_the_way(client: TestClient) -> None:
     response = client.post(
-        "/api/mesh", files=[("file", ("t.obj", TETRA.encode())), ("other", ("b.txt", b"x"))]
+        "/api/mesh", files=[("file", ("t.obj", TETRA_OBJ.encode())), ("other", ("b.txt", b"x"))]
     )
     assert response.status_code == 200 and response.json()["faces"] == 4
 
@@ -533,7 +540,7 @@ def test_a_one_sided_part_is_not_offered_a_winding_fix(client: TestClient) -> No
         a, b = 2 * i, 2 * i + 1
         c, d = (2 * i + 2, 2 * i + 3) if i < strip - 1 else (1, 0)  # the half twist
         faces += [(a, b, d), (a, d, c)]
-    report = upload(client, "/api/mesh", obj("\n".join(points) + "\n", faces)).json()
+    report = upload(client, "/api/mesh", obj_text("\n".join(points) + "\n", faces)).json()
     codes = [item["code"] for item in report["problems"]]
     assert "nonorientable" in codes and "winding" not in codes
 
@@ -549,14 +556,14 @@ def test_values_beyond_the_double_range_are_null_and_explained(
     client: TestClient, size: str, area: bool, title: str
 ) -> None:
     points = f"v 0 0 0\nv {size} 0 0\nv 0 {size} 0\nv 0 0 {size}\n"
-    report = upload(client, "/api/mesh", points + TETRA[len(TETRA_POINTS) :]).json()
+    report = upload(client, "/api/mesh", points + TETRA_OBJ[len(TETRA_OBJ_POINTS) :]).json()
     assert report["volume"] is None and (report["area"] is not None) == area
     assert report["watertight"] and report["orientation"] == "outward"
     assert [(item["code"], item["title"]) for item in report["problems"]] == [("overflow", title)]
 
 
 def test_the_page_refuses_a_large_upload_with_its_own_html(small_limit: TestClient) -> None:
-    big = CUBE + "# padding\n" * 400
+    big = CUBE_OBJ + "# padding\n" * 400
     response = upload(small_limit, "/mesh", big)
     assert response.status_code == 413
     assert response.headers["content-type"].startswith("text/html")
@@ -564,7 +571,7 @@ def test_the_page_refuses_a_large_upload_with_its_own_html(small_limit: TestClie
 
 
 def test_a_trailing_slash_gets_the_upload_limit_too(client: TestClient) -> None:
-    padded = CUBE + "# padding past the 64 KB limit of other addresses\n" * 2000
+    padded = CUBE_OBJ + "# padding past the 64 KB limit of other addresses\n" * 2000
     assert len(padded) > 64 * 1024
     response = upload(client, "/api/mesh/", padded)
     assert response.status_code == 200, response.text  # redirected to /api/mesh, not a 413
@@ -575,14 +582,14 @@ def test_stored_corner_and_vertex_normals_are_compared(client: TestClient) -> No
     from mesh_normal import face_normals
     from mesh_normal.files.ply import ply_bytes
 
-    mesh = read_mesh(CUBE.encode(), "cube.obj")
+    mesh = read_mesh(CUBE_OBJ.encode(), "cube.obj")
     flat = face_normals(mesh.vertices, mesh.faces).normals  # a cube's corners: its faces'
     vn = "".join(f"vn {x!r} {y!r} {z!r}\n" for x, y, z in flat.tolist())
     faces = "".join(
         f"f {a + 1}//{k + 1} {b + 1}//{k + 1} {c + 1}//{k + 1}\n"
         for k, (a, b, c) in enumerate(mesh.faces.tolist())
     )
-    corner = upload(client, "/api/mesh", CUBE_POINTS + vn + faces).json()["file_normals"]
+    corner = upload(client, "/api/mesh", CUBE_OBJ_POINTS + vn + faces).json()["file_normals"]
     assert corner["kind"] == "corner" and corner["compared"] == 36
     assert corner["agreeing"] == 36 and corner["opposite"] == 0
 

@@ -9,8 +9,8 @@ import json
 import pytest
 from fastapi.testclient import TestClient
 
-from tests.app.mesh.test_api import CUBE, CUBE_ONE_FLIPPED, OPEN_BOX
 from tests.conftest import Page
+from tests.meshes import CUBE_OBJ, CUBE_ONE_FLIPPED_OBJ, HUGE_TETRA_OBJ, OPEN_BOX_OBJ
 
 
 def post(
@@ -62,7 +62,7 @@ def test_form_posts_the_file_without_javascript(client: TestClient) -> None:
 
 
 def test_report_names_the_flipped_face_and_offers_the_fix(client: TestClient) -> None:
-    response, html = post(client, CUBE_ONE_FLIPPED)
+    response, html = post(client, CUBE_ONE_FLIPPED_OBJ)
     assert response.template.name == "mesh.html"  # type: ignore[attr-defined]
     report = response.context["report"]  # type: ignore[attr-defined]
     assert [p.code for p in report.problems] == ["winding"]
@@ -77,17 +77,16 @@ def test_report_names_the_flipped_face_and_offers_the_fix(client: TestClient) ->
 
 
 def test_json_twin_equals_the_api(client: TestClient) -> None:
-    api = client.post("/api/mesh", files={"file": ("cube.obj", CUBE_ONE_FLIPPED.encode())})
+    api = client.post("/api/mesh", files={"file": ("cube.obj", CUBE_ONE_FLIPPED_OBJ.encode())})
     assert api.status_code == 200
     for part in (None, "report"):
-        _, html = post(client, CUBE_ONE_FLIPPED, part=part)
+        _, html = post(client, CUBE_ONE_FLIPPED_OBJ, part=part)
         assert json_block(html, "mesh-report") == api.json()
 
 
 def test_json_twin_of_an_overflowing_mesh_is_the_api_with_nulls(client: TestClient) -> None:
-    huge = "v 0 0 0\nv 1e200 0 0\nv 0 1e200 0\nv 0 0 1e200\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
-    api = client.post("/api/mesh", files={"file": ("huge.obj", huge.encode())})
-    _, html = post(client, huge, name="huge.obj", part="report")
+    api = client.post("/api/mesh", files={"file": ("huge.obj", HUGE_TETRA_OBJ.encode())})
+    _, html = post(client, HUGE_TETRA_OBJ, name="huge.obj", part="report")
     twin = json_block(html, "mesh-report")
     assert twin == api.json()
     assert twin["area"] is None and twin["volume"] is None
@@ -95,7 +94,7 @@ def test_json_twin_of_an_overflowing_mesh_is_the_api_with_nulls(client: TestClie
 
 
 def test_fragment_is_the_report_alone(client: TestClient) -> None:
-    response, html = post(client, CUBE, part="report")
+    response, html = post(client, CUBE_OBJ, part="report")
     assert "<html" not in response.text and "<form" in response.text  # the download forms
     assert not html.find("form", id="mesh-form")
     assert "No problems found" in html.text("mesh-verdict")
@@ -105,14 +104,14 @@ def test_fragment_is_the_report_alone(client: TestClient) -> None:
 
 
 def test_open_box_shows_boundary_in_the_view(client: TestClient) -> None:
-    _, html = post(client, OPEN_BOX, part="report")
+    _, html = post(client, OPEN_BOX_OBJ, part="report")
     assert "The mesh is open" in html.text("problem-open")
     names = [trace["name"] for trace in json_block(html, "mesh-view-data")["data"]]
     assert "boundary edges" in names
 
 
 def test_curl_command_quotes_an_awkward_name(client: TestClient) -> None:
-    _, html = post(client, CUBE, name="my cube's.obj")
+    _, html = post(client, CUBE_OBJ, name="my cube's.obj")
     assert html.text("mesh-curl").startswith("curl -F 'file=@my cube'\"'\"'s.obj' ")
 
 

@@ -10,7 +10,7 @@ import pytest
 
 from mesh_normal.files import FORMATS, SUFFIXES, WRITABLE, read_mesh, write_mesh
 from mesh_normal.files.formats import suffix_format
-from tests.mesh_normal.files._meshes import TETRA_FACES, TETRA_VERTICES
+from tests.meshes import TETRA_FACES, TETRA_VERTICES
 from tests.paths import ROOT
 
 

@@ -5,7 +5,7 @@ import pytest
 import trimesh
 
 from mesh_normal.files import MeshFileError, read_mesh
-from tests.mesh_normal.files._meshes import TETRA_FACES, TETRA_VERTICES
+from tests.meshes import TETRA_FACES, TETRA_VERTICES
 from tests.paths import DATA
 
 

@@ -5,7 +5,7 @@ import pytest
 import trimesh
 
 from mesh_normal.files import SUFFIXES, LoadedMesh, MeshFileError, read_mesh, write_mesh
-from tests.mesh_normal.files._meshes import TETRA_FACES, TETRA_VERTICES, ascii_stl
+from tests.meshes import TETRA_FACES, TETRA_VERTICES, ascii_stl
 from tests.paths import DATA
 
 SAMPLES = {

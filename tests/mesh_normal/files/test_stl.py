@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from mesh_normal.files import MeshFileError, read_mesh
-from tests.mesh_normal.files._meshes import TETRA_FACES, TETRA_VERTICES, ascii_stl, binary_stl
+from tests.meshes import TETRA_FACES, TETRA_VERTICES, ascii_stl, binary_stl
 
 CORNERS = TETRA_VERTICES[TETRA_FACES]
 NORMALS = np.array([[0.0, 0, -1], [0, -1, 0], [-1, 0, 0], [1, 1, 1]])

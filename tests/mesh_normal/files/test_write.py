@@ -7,7 +7,7 @@ import pytest
 
 from mesh_normal import face_normals
 from mesh_normal.files import MeshFileError, read_mesh, write_mesh
-from tests.mesh_normal.files._meshes import TETRA_FACES, TETRA_VERTICES
+from tests.meshes import TETRA_FACES, TETRA_VERTICES
 
 RNG = np.random.default_rng(7)
 VERTICES = RNG.standard_normal((50, 3)) * 10.0 ** RNG.integers(-30, 30, (50, 1))

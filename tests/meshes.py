@@ -1,0 +1,133 @@
+"""The meshes the tests share: as arrays, as file texts and bytes, and the samples in tests/data.
+
+A mesh that one test module needs stays in that module; this is for the ones several share.
+"""
+
+from __future__ import annotations
+
+import struct
+from collections.abc import Sequence
+
+import numpy as np
+import trimesh
+
+from tests.paths import DATA
+
+# --- as arrays ------------------------------------------------------------------------------
+
+#: The unit corner tetrahedron: the origin and the three unit points.
+TETRA_VERTICES = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+#: Its four faces, wound outward: -z, -y, -x, then the slanted one.
+TETRA_FACES = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+
+#: The unit cube: corner (x, y, z) is vertex x + 2 y + 4 z.
+CUBE_VERTICES = np.array(
+    [[x, y, z] for z in (0, 1) for y in (0, 1) for x in (0, 1)], dtype=np.float64
+)
+#: Its sides (bottom, top, -y, +y, -x, +x), counter-clockwise seen from outside.
+CUBE_QUADS = [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)]
+#: Each side cut into two triangles [a, b, c], [a, c, d]: 12 faces, wound outward.
+CUBE_FACES = np.array([t for a, b, c, d in CUBE_QUADS for t in ((a, b, c), (a, c, d))])
+
+
+def octahedron() -> tuple[np.ndarray, np.ndarray]:
+    """The regular octahedron with corners at +-1 on each axis, its 8 faces wound outward."""
+    vertices = np.array(
+        [[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], dtype=np.float64
+    )
+    faces = []
+    for x in (0, 1):
+        for y in (2, 3):
+            for z in (4, 5):
+                corner = [x, y, z]
+                if np.linalg.det(vertices[corner]) < 0:  # outward: positive orientation
+                    corner = [x, z, y]
+                faces.append(corner)
+    return vertices, np.array(faces)
+
+
+# --- as OBJ texts ---------------------------------------------------------------------------
+
+
+def obj_text(points: str, faces: Sequence[Sequence[int]]) -> str:
+    """An OBJ file: the ``v`` lines in ``points``, then one ``f`` line a face (0-based rows)."""
+    return points + "".join("f " + " ".join(str(i + 1) for i in face) + "\n" for face in faces)
+
+
+#: The ``v`` lines of the tetrahedron above, written as integers.
+TETRA_OBJ_POINTS = "".join(f"v {x:g} {y:g} {z:g}\n" for x, y, z in TETRA_VERTICES.tolist())
+#: The tetrahedron above as an OBJ file, wound outward.
+TETRA_OBJ = obj_text(TETRA_OBJ_POINTS, TETRA_FACES.tolist())
+#: The tetrahedron with its corners at 1e200: finite, but its cross products overflow float64.
+HUGE_TETRA_OBJ = obj_text("v 0 0 0\nv 1e200 0 0\nv 0 1e200 0\nv 0 0 1e200\n", TETRA_FACES.tolist())
+
+#: The ``v`` lines of the unit cube as OBJ, numbered the other way round from CUBE_VERTICES:
+#: vertex 4 x + 2 y + z (the API, page, CLI and report tests were written against this file).
+CUBE_OBJ_POINTS = "".join(f"v {x} {y} {z}\n" for x in (0, 1) for y in (0, 1) for z in (0, 1))
+#: Its 12 triangles wound outward, in this numbering: sides -x, +x, -y, +y, -z, +z.
+CUBE_OBJ_FACES = [
+    (0, 1, 3),
+    (0, 3, 2),
+    (4, 6, 7),
+    (4, 7, 5),
+    (0, 4, 5),
+    (0, 5, 1),
+    (2, 3, 7),
+    (2, 7, 6),
+    (0, 2, 6),
+    (0, 6, 4),
+    (1, 5, 7),
+    (1, 7, 3),
+]
+#: The unit cube as an OBJ file: closed and wound outward.
+CUBE_OBJ = obj_text(CUBE_OBJ_POINTS, CUBE_OBJ_FACES)
+#: The cube with its first face reversed: closed, winding mixed.
+CUBE_ONE_FLIPPED_OBJ = obj_text(CUBE_OBJ_POINTS, [CUBE_OBJ_FACES[0][::-1], *CUBE_OBJ_FACES[1:]])
+#: The cube without its top (z = 1): 10 faces, one hole of 4 boundary edges.
+OPEN_BOX_OBJ = obj_text(
+    CUBE_OBJ_POINTS, [face for face in CUBE_OBJ_FACES if face not in ((1, 5, 7), (1, 7, 3))]
+)
+
+# --- as STL bytes ---------------------------------------------------------------------------
+
+
+def binary_stl(
+    corners: np.ndarray,
+    normals: np.ndarray | None = None,
+    header: bytes = b"test",
+    count: int | None = None,
+) -> bytes:
+    """A binary STL of (m, 3, 3) corners; ``count`` overrides the header's triangle count."""
+    corners = np.asarray(corners, dtype="<f4").reshape(-1, 3, 3)
+    normals = np.zeros((len(corners), 3)) if normals is None else normals
+    body = b"".join(
+        struct.pack("<12fH", *normal, *triangle.ravel(), 0)
+        for normal, triangle in zip(normals, corners, strict=True)
+    )
+    stated = len(corners) if count is None else count
+    return header.ljust(80, b" ") + struct.pack("<I", stated) + body
+
+
+def ascii_stl(corners: np.ndarray, normals: np.ndarray) -> bytes:
+    """An ASCII STL of (m, 3, 3) corners and (m, 3) stated normals, numbers as Python repr."""
+    lines = ["solid test"]
+    for normal, triangle in zip(
+        np.asarray(normals).tolist(), np.asarray(corners).tolist(), strict=True
+    ):
+        lines += [f"  facet normal {normal[0]} {normal[1]} {normal[2]}", "    outer loop"]
+        lines += [f"      vertex {x!r} {y!r} {z!r}" for x, y, z in triangle]
+        lines += ["    endloop", "  endfacet"]
+    lines.append("endsolid test")
+    return "\n".join(lines).encode()
+
+
+# --- the sample files in tests/data ---------------------------------------------------------
+
+#: The small sample files the differential tests compare with trimesh and libigl.
+SAMPLES = ("sphere.ply", "nut.ply", "ant.ply", "cube.obj")
+
+
+def load(name: str) -> tuple[np.ndarray, np.ndarray]:
+    """A file of tests/data as read by trimesh (unprocessed): (n, 3) float64, (m, 3) int."""
+    mesh = trimesh.load(DATA / name, process=False, force="mesh")
+    return np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces)
