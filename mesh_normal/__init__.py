@@ -14,8 +14,9 @@ Every name below is loaded on first use, so that ``import mesh_normal`` (and the
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from mesh_normal._lazy import lazy_names
 
 #: The one version: the wheel's metadata (hatch reads it here), ``mesh-normal --version``
 #: and the web app's OpenAPI document.
@@ -103,15 +104,4 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str) -> Any:
-    home = _HOMES.get(name)
-    if home is None:
-        raise AttributeError(f"module 'mesh_normal' has no attribute {name!r}")
-    module, _, attribute = home.partition(":")
-    value = getattr(importlib.import_module(f"mesh_normal.{module}"), attribute or name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return __all__
+__getattr__, __dir__ = lazy_names(__name__, _HOMES, globals())

@@ -14,8 +14,9 @@ command line's ``--help`` reads) comes without numpy.
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from mesh_normal._lazy import lazy_names
 
 if TYPE_CHECKING:
     from mesh_normal.files.errors import MeshFileError
@@ -48,14 +49,4 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str) -> Any:
-    home = _HOMES.get(name)
-    if home is None:
-        raise AttributeError(f"module 'mesh_normal.files' has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"mesh_normal.files.{home}"), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return __all__
+__getattr__, __dir__ = lazy_names(__name__, _HOMES, globals())
