@@ -86,5 +86,5 @@ def test_the_table_loads_neither_numpy_nor_a_reader() -> None:
     )
     assert (
         completed.stdout.strip()
-        == "['mesh_normal', 'mesh_normal.files', 'mesh_normal.files.formats']"
+        == "['mesh_normal', 'mesh_normal._lazy', 'mesh_normal.files', 'mesh_normal.files.formats']"
     )
