@@ -18,7 +18,6 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
-import os
 import sys
 import time
 from collections.abc import Collection, Iterator
@@ -80,13 +79,11 @@ def load(path: str, progress: Progress) -> tuple[LoadedMesh, int]:
 def write(path: str, data: bytes) -> None:
     """Write through a temporary file beside ``path`` and rename it: never a half-written
     file, and ``mesh-normal fix a.obj a.obj`` cannot lose the input."""
-    target = Path(path)
-    temporary = target.with_name(f".{target.name}.{os.getpid()}.tmp")
+    from mesh_normal.files.write import replace_file
+
     try:
-        temporary.write_bytes(data)
-        os.replace(temporary, target)
+        replace_file(path, data)
     except OSError as error:
-        temporary.unlink(missing_ok=True)
         raise Failure(f"cannot write {path}: {error.strerror or error}", EXIT_OUTPUT) from None
 
 

@@ -54,7 +54,8 @@ def write_mesh(
         or ``"obj"`` (1-based indices, exact float64 text). Without it, the suffix of
         ``path`` names the format.
     path : str or os.PathLike, optional
-        Where to write the file (replaced if it exists); the function then returns ``None``.
+        Where to write the file (replaced if it exists, through a temporary file and a rename,
+        so a failed write leaves the old file whole); the function then returns ``None``.
 
     Raises
     ------
@@ -73,15 +74,35 @@ def write_mesh(
     data = entry.write(points, triangles)
     if path is None:
         return data
-    Path(path).write_bytes(data)
+    replace_file(path, data)
     return None
+
+
+def replace_file(path: StrPath, data: bytes) -> None:
+    """Write ``data`` to ``path`` through a temporary file beside it, then rename it over
+    ``path``: a failed write (a full disk, a size limit) leaves any old file as it was and no
+    half-written one, and writing a mesh over its own input cannot lose it."""
+    target = Path(path)
+    temporary = target.with_name(f".{target.name}.{os.getpid()}.tmp")
+    try:
+        temporary.write_bytes(data)
+        os.replace(temporary, target)
+    except BaseException:
+        temporary.unlink(missing_ok=True)
+        raise
 
 
 def _writable(file_format: str | None, path: StrPath | None) -> MeshFormat:
     formats = ", ".join(WRITABLE)
+    name = Path(os.fspath(path or "")).name
+    named = suffix_format(name) if path is not None else None
+    if file_format is not None and named is not None and named != file_format:
+        raise unsupported(
+            f"The path {name!r} names {FORMATS[named].title} but the file_format is "
+            f"{file_format!r}; give one of them, or make them agree."
+        )
     if file_format is None:
-        name = Path(os.fspath(path or "")).name
-        file_format = suffix_format(name)
+        file_format = named
         if file_format is None:
             raise unsupported(
                 f"The format cannot be told from the name {name!r}; give a file_format "

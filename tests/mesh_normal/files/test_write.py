@@ -94,3 +94,28 @@ def test_a_bad_mesh_writes_no_file(tmp_path: Path) -> None:
 def test_a_missing_folder_is_python_s_os_error(tmp_path: Path) -> None:
     with pytest.raises(FileNotFoundError):
         write_mesh(TETRA_VERTICES, TETRA_FACES, path=tmp_path / "no" / "such.ply")
+
+
+def test_a_format_and_a_suffix_that_disagree_are_refused(tmp_path: Path) -> None:
+    path = tmp_path / "tetra.stl"
+    with pytest.raises(MeshFileError, match=r"'tetra\.stl' names STL but the file_format is 'ply'"):
+        write_mesh(TETRA_VERTICES, TETRA_FACES, "ply", path=path)
+    assert not path.exists()
+
+
+def test_a_failed_write_leaves_the_old_file_whole(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    path = tmp_path / "tetra.ply"
+    path.write_bytes(b"the old file")
+
+    def half_then_full_disk(self: Path, data: bytes) -> int:
+        with open(self, "wb") as file:
+            file.write(data[: len(data) // 2])
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(Path, "write_bytes", half_then_full_disk)
+    with pytest.raises(OSError, match="No space left"):
+        write_mesh(TETRA_VERTICES, TETRA_FACES, path=path)
+    assert path.read_bytes() == b"the old file"
+    assert sorted(item.name for item in tmp_path.iterdir()) == ["tetra.ply"]  # no temporary left
