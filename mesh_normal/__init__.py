@@ -23,8 +23,7 @@ from mesh_normal._lazy import lazy_names
 __version__ = "0.2.0"
 
 if TYPE_CHECKING:
-    from mesh_normal.analysis import MeshAnalysis
-    from mesh_normal.analysis import mesh_report as analyse
+    from mesh_normal.analysis import analyse
     from mesh_normal.batch import BatchNormals, triangle_normals
     from mesh_normal.checks import CheckedMesh, checked_mesh
     from mesh_normal.corners import CornerNormals, corner_normals
@@ -59,9 +58,8 @@ _HOMES = {
     "Orientation": "orientation",
     "orient": "orientation",
     "signed_volume": "orientation",
-    "MeshAnalysis": "analysis",
     "MeshReport": "report",
-    "analyse": "analysis:mesh_report",  # mn.analyse(path) is the report
+    "analyse": "analysis",  # mn.analyse(path) is the report
     "MeshTopology": "topology",
     "mesh_topology": "topology",
     "compile_kernels": "precompile",
@@ -78,7 +76,6 @@ __all__ = [
     "FaceGeometry",
     "FaceNormals",
     "LoadedMesh",
-    "MeshAnalysis",
     "MeshFileError",
     "MeshReport",
     "MeshTopology",

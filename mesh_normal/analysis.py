@@ -1,8 +1,8 @@
 """One mesh, analysed once: the arrays behind the report, and the report built from them.
 
-:func:`analyse` runs the core on a :class:`~mesh_normal.files.LoadedMesh` once and keeps the
+:func:`analyse_mesh` runs the core on a :class:`~mesh_normal.files.LoadedMesh` once and keeps the
 arrays (the page draws them); :func:`build_report` sums them up as a
-:class:`~mesh_normal.report.MeshReport`; :func:`mesh_report` does both from a file, and is the
+:class:`~mesh_normal.report.MeshReport`; :func:`analyse` does both from a file, and is the
 library's ``mn.analyse``.
 """
 
@@ -51,11 +51,11 @@ class MeshAnalysis:
     unused_vertices: int
 
 
-def analyse(mesh: LoadedMesh, name: str | None = None, size: int = 0) -> MeshAnalysis:
+def analyse_mesh(mesh: LoadedMesh, name: str | None = None, size: int = 0) -> MeshAnalysis:
     """Run every check of the core on ``mesh`` (read from a file of ``size`` bytes).
 
     Returns the arrays (face normals, topology, orientation) that :func:`build_report` sums up
-    and the page draws; for the report alone use :func:`mesh_report`.
+    and the page draws; for the report alone use :func:`analyse`.
     """
     # One pass: the reader checked the arrays, and the cross products are taken once here for
     # the face normals, the orientation's volumes and the file-normal comparison alike.
@@ -75,7 +75,7 @@ def analyse(mesh: LoadedMesh, name: str | None = None, size: int = 0) -> MeshAna
     )
 
 
-def mesh_report(source: LoadedMesh | MeshSource, filename: str | None = None) -> MeshReport:
+def analyse(source: LoadedMesh | MeshSource, filename: str | None = None) -> MeshReport:
     """The report on a mesh: ``mn.analyse(path)``.
 
     ``source`` is a mesh already read (:class:`~mesh_normal.files.LoadedMesh`), or a path, the
@@ -99,9 +99,9 @@ def mesh_report(source: LoadedMesh | MeshSource, filename: str | None = None) ->
         When a file object gives text, not bytes.
     """
     if isinstance(source, LoadedMesh):
-        return build_report(analyse(source, filename, 0))
+        return build_report(analyse_mesh(source, filename, 0))
     data, name = source_bytes(source, filename)
-    return build_report(analyse(read_mesh(data, name), name, len(data)))
+    return build_report(analyse_mesh(read_mesh(data, name), name, len(data)))
 
 
 def build_report(analysis: MeshAnalysis) -> MeshReport:

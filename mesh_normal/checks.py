@@ -20,6 +20,10 @@ from mesh_normal.types import FloatArray, IndexArray
 class CheckedMesh:
     """A mesh whose arrays passed :func:`check_mesh`, with the scaling the kernels use.
 
+    The core trusts it without checking again, and it holds the caller's arrays where they
+    already had the right type and layout (no copy): do not change them afterwards. An index
+    changed out of range after the check would be read out of bounds by the compiled kernels.
+
     Attributes
     ----------
     vertices : (n, 3) float64
@@ -55,7 +59,8 @@ def checked_mesh(vertices: ArrayLike, faces: ArrayLike) -> CheckedMesh:
     Returns
     -------
     CheckedMesh
-        The converted arrays and their scaling.
+        The converted arrays and their scaling; the input arrays themselves where they were
+        already float64 and intp in C order, so they must not change while it is in use.
     """
     points = _as_vertices(vertices)
     indices = check_faces(faces, len(points))

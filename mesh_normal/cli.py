@@ -88,11 +88,11 @@ def write(path: str, data: bytes) -> None:
 
 
 def analyze(args: argparse.Namespace, progress: Progress) -> int:
-    from mesh_normal.analysis import analyse, build_report
+    from mesh_normal.analysis import analyse_mesh, build_report
 
     mesh, size = load(args.file, progress)
     progress.step("checking faces, edges and winding")
-    report = build_report(analyse(mesh, Path(args.file).name, size))
+    report = build_report(analyse_mesh(mesh, Path(args.file).name, size))
     progress.done()
     if args.json:  # the JSON of POST /api/mesh, indented; allow_nan=False: never NaN
         print(json.dumps(report.model_dump(mode="json"), indent=2, allow_nan=False))
@@ -122,8 +122,6 @@ def summary(report: MeshReport) -> str:
 
 
 def normals(args: argparse.Namespace, progress: Progress) -> int:
-    from mesh_normal.exports import NormalsFormat, compute_normals, normals_file, normals_ply
-
     suffix = Path(args.output).suffix.lower()
     if suffix not in NORMAL_SUFFIXES:
         raise Failure(
@@ -134,6 +132,8 @@ def normals(args: argparse.Namespace, progress: Progress) -> int:
         raise Failure(
             "corner normals do not fit in a PLY file; use .npy, .csv or .json", EXIT_USAGE
         )
+    from mesh_normal.exports import NormalsFormat, compute_normals, normals_file, normals_ply
+
     mesh, _ = load(args.file, progress)
     progress.step(f"computing {args.kind} normals")
     values, missing = compute_normals(mesh, args.kind, args.weighting, args.crease_angle)
@@ -157,10 +157,6 @@ def normals(args: argparse.Namespace, progress: Progress) -> int:
 
 
 def fix(args: argparse.Namespace, progress: Progress) -> int:
-    from mesh_normal.analysis import flips_by_component
-    from mesh_normal.files import MeshFileError, write_mesh
-    from mesh_normal.orientation import orient
-
     chosen = args.format or Path(args.output).suffix.lower().lstrip(".")
     if chosen not in FIX_FORMATS:
         raise Failure(
@@ -168,6 +164,10 @@ def fix(args: argparse.Namespace, progress: Progress) -> int:
             f"suffix or --format), not {chosen or 'none'}",
             EXIT_USAGE,
         )
+    from mesh_normal.analysis import flips_by_component
+    from mesh_normal.files import MeshFileError, write_mesh
+    from mesh_normal.orientation import orient
+
     mesh, _ = load(args.input, progress)
     progress.step("making the winding consistent and outward")
     fixed = orient(mesh.checked())

@@ -89,8 +89,8 @@ def announce_compiling() -> None:
         if not _announced and not all(map(is_cached, fresh)):
             _announced = True
             print(
-                f"mesh-normal: compiling the mesh kernels once, about {COMPILE_SECONDS} s "
-                "(later runs load them from the cache)",
+                "mesh-normal: compiling the mesh kernels (each once, about "
+                f"{COMPILE_SECONDS} s for all of them; later runs load them from the cache)",
                 file=sys.stderr,
                 flush=True,
             )

@@ -17,7 +17,7 @@ from fastapi.responses import Response
 from app.mesh.uploads import UPLOAD_BODY, Upload, read_upload
 from app.web.errors import ERROR_RESPONSES, ApiError
 from app.web.jsonio import FastJSONResponse
-from mesh_normal.analysis import analyse, build_report, flips_by_component
+from mesh_normal.analysis import analyse_mesh, build_report, flips_by_component
 from mesh_normal.exports import NormalsKind, export_normals
 from mesh_normal.files import LoadedMesh, MeshFileError, read_mesh, write_mesh
 from mesh_normal.files.formats import FORMATS, WRITABLE
@@ -77,7 +77,7 @@ async def post_mesh(request: Request) -> FastJSONResponse:
 
 
 def _report(upload: Upload) -> MeshReport:
-    return build_report(analyse(load(upload), upload.filename, len(upload.data)))
+    return build_report(analyse_mesh(load(upload), upload.filename, len(upload.data)))
 
 
 @router.post(

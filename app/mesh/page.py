@@ -23,7 +23,7 @@ from app.mesh.uploads import Upload, read_upload
 from app.web.errors import ApiError
 from app.web.middleware import size_text
 from app.web.templating import templates
-from mesh_normal.analysis import analyse, build_report
+from mesh_normal.analysis import analyse_mesh, build_report
 from mesh_normal.exports import FORMATS, KINDS
 from mesh_normal.files import SUFFIXES, WRITABLE
 from mesh_normal.vertices import Weighting
@@ -50,7 +50,7 @@ def _form_context(request: Request) -> dict[str, Any]:
 
 def _report_context(upload: Upload, base_url: str) -> dict[str, Any]:
     """Analyse the upload (in a worker thread): the report, its figures and the downloads."""
-    analysis = analyse(load(upload), upload.filename, len(upload.data))
+    analysis = analyse_mesh(load(upload), upload.filename, len(upload.data))
     report = build_report(analysis)
     name = upload.filename or "mesh"
     return {

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -46,6 +46,9 @@ class LoadedMesh:
         OBJ ``f v//vn`` normals per corner of each triangle, when every corner has one.
     notes : tuple of str
         Plain sentences about what reading did (welding, triangulation, skipped elements).
+    from_reader : bool
+        True when :func:`~mesh_normal.files.read_mesh` built it: its arrays passed the checks
+        and are read-only, so :meth:`checked` need not check them again.
     """
 
     vertices: FloatArray
@@ -56,12 +59,19 @@ class LoadedMesh:
     file_vertex_normals: FloatArray | None = None
     file_corner_normals: FloatArray | None = None
     notes: tuple[str, ...] = ()
+    from_reader: bool = field(default=False, repr=False, compare=False)
 
     def checked(self) -> CheckedMesh:
-        """The mesh as the core takes it, not checked again: :func:`build` checked these arrays
-        by the rules of :func:`~mesh_normal.checks.check_mesh` (finite, indices in range)."""
-        from mesh_normal.checks import CheckedMesh, scaling  # numpy only
+        """The mesh as the core takes it (:class:`~mesh_normal.checks.CheckedMesh`).
 
+        A mesh the reader built is not checked again: :func:`build` checked its arrays by the
+        rules of :func:`~mesh_normal.checks.check_mesh` and made them read-only. One built by
+        hand is checked now, with a ``ValueError`` for the first problem.
+        """
+        from mesh_normal.checks import CheckedMesh, checked_mesh, scaling  # numpy only
+
+        if not self.from_reader:
+            return checked_mesh(self.vertices, self.faces)
         return CheckedMesh(self.vertices, self.faces, *scaling(self.vertices))
 
 
@@ -94,6 +104,8 @@ def build(
             else "The file holds no vertices and no faces."
         )
     _check_indices(triangles, len(points), face or _nth("face"))
+    for checked in (points, triangles):  # what was checked stays as it was checked
+        checked.setflags(write=False)
     return LoadedMesh(
         vertices=points,
         faces=triangles,
@@ -103,6 +115,7 @@ def build(
         file_vertex_normals=_optional(vertex_normals, (len(points), 3)),
         file_corner_normals=_optional(corner_normals, (len(triangles), 3, 3)),
         notes=tuple(notes),
+        from_reader=True,
     )
 
 

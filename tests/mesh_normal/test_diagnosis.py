@@ -7,7 +7,7 @@ from typing import Any, get_args
 import numpy as np
 import pytest
 
-from mesh_normal.analysis import analyse, build_report
+from mesh_normal.analysis import analyse_mesh, build_report
 from mesh_normal.diagnosis import CHECKS, Problem, ProblemCode, problems
 from mesh_normal.files import read_mesh
 from mesh_normal.report import FileNormals, MeshReport
@@ -16,7 +16,7 @@ from tests.meshes import CUBE_OBJ, CUBE_ONE_FLIPPED_OBJ
 
 def clean() -> MeshReport:
     data = CUBE_OBJ.encode()
-    return build_report(analyse(read_mesh(data, "cube.obj"), "cube.obj", len(data)))
+    return build_report(analyse_mesh(read_mesh(data, "cube.obj"), "cube.obj", len(data)))
 
 
 def changed(**update: Any) -> MeshReport:

@@ -383,9 +383,9 @@ def test_openapi_documents_every_key_of_the_report(client: TestClient) -> None:
     assert resolve(spec, schema)["title"] == "MeshReport"
     assert undocumented(spec, schema, report, "report") == []
     # The schema's enumerations are the values the report holds.
-    mesh_report = resolve(spec, schema)["properties"]
-    assert report["orientation"] in mesh_report["orientation"]["enum"]
-    file_info = resolve(spec, mesh_report["file"])["properties"]
+    report_schema = resolve(spec, schema)["properties"]
+    assert report["orientation"] in report_schema["orientation"]["enum"]
+    file_info = resolve(spec, report_schema["file"])["properties"]
     assert set(file_info["format"]["enum"]) == {"stl", "obj", "ply", "off", "glb", "gltf"}
 
 
@@ -413,14 +413,14 @@ def test_mesh_work_runs_off_the_event_loop(monkeypatch: pytest.MonkeyPatch) -> N
     from tests.conftest import EXAMPLE_QUERY
 
     started, release = threading.Event(), threading.Event()
-    real = api.analyse
+    real = api.analyse_mesh
 
     def slow(*args, **kwargs):  # type: ignore[no-untyped-def]
         started.set()
         release.wait(10)
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(api, "analyse", slow)
+    monkeypatch.setattr(api, "analyse_mesh", slow)
 
     async def scenario() -> None:
         transport = httpx.ASGITransport(app=create_app())

@@ -4,8 +4,9 @@ import numpy as np
 import pytest
 import trimesh
 
+import mesh_normal as mn
 from mesh_normal.files import SUFFIXES, LoadedMesh, MeshFileError, read_mesh, write_mesh
-from tests.meshes import TETRA_FACES, TETRA_VERTICES, ascii_stl
+from tests.meshes import TETRA_FACES, TETRA_OBJ, TETRA_VERTICES, ascii_stl
 from tests.paths import DATA
 
 SAMPLES = {
@@ -88,3 +89,20 @@ def test_truncated_and_garbled_files_give_a_mesh_or_a_mesh_file_error(name: str)
         garbled[rng.integers(0, len(data), 8)] = rng.integers(0, 256, 8)
         outcome(garbled.tobytes(), name)
         outcome(garbled[: len(garbled) // 2].tobytes(), None)
+
+
+def test_the_reader_s_arrays_are_read_only_and_trusted() -> None:
+    mesh = read_mesh(TETRA_OBJ.encode(), "t.obj")
+    assert mesh.from_reader
+    assert not mesh.vertices.flags.writeable and not mesh.faces.flags.writeable
+    checked = mesh.checked()
+    assert checked.vertices is mesh.vertices and checked.faces is mesh.faces  # not checked again
+
+
+def test_a_mesh_built_by_hand_is_checked_before_the_core_trusts_it() -> None:
+    faces = np.array([[0, 1, 2], [0, 1, 10**7]])
+    mesh = LoadedMesh(vertices=TETRA_VERTICES, faces=faces, format="obj", source_faces=2)
+    with pytest.raises(ValueError, match="refers to vertex 10000000"):
+        mesh.checked()
+    with pytest.raises(ValueError, match="refers to vertex 10000000"):
+        mn.analyse(mesh)
