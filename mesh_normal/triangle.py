@@ -22,7 +22,7 @@ from numbers import Real
 from mesh_normal.exact import OutOfRange, ratio_sqrt, round_scaled, sqrt_scaled, to_fixed
 from mesh_normal.tolerances import LARGEST_DOUBLE_TEXT
 
-Vector = tuple[float, float, float]
+Vector = tuple[float, float, float]  # not mesh_normal.types: this module needs no NumPy
 MaybeVector = tuple[float | None, float | None, float | None]
 IntVector = tuple[int, int, int]
 

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-IntArray = NDArray[np.intp]
+from mesh_normal.types import IndexArray
 
 OK, BOUNDARY, NONMANIFOLD, FLIPPED, DEGENERATE = range(5)
 
@@ -43,7 +43,7 @@ def edge_keys(edges: NDArray[np.integer[Any]], vertex_count: int) -> NDArray[np.
 
 
 def faces_on_edges(
-    faces: IntArray, vertex_count: int, edges: NDArray[np.integer[Any]]
+    faces: IndexArray, vertex_count: int, edges: NDArray[np.integer[Any]]
 ) -> NDArray[np.bool_]:
     """For (m, 3) faces, whether each has one of the (k, 2) ``edges`` as a side."""
     if not len(edges) or not len(faces):
@@ -54,7 +54,7 @@ def faces_on_edges(
 
 
 def face_classes(
-    faces: IntArray,
+    faces: IndexArray,
     vertex_count: int,
     degenerate: NDArray[np.bool_],
     flipped: NDArray[np.bool_],

@@ -19,8 +19,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from app.mesh.classes import CLASSES, COLORS, DEGENERATE, FLIPPED, OK, IntArray
+from app.mesh.classes import CLASSES, COLORS, DEGENERATE, FLIPPED, OK
 from app.web.plotly import DEEP_ACCENT, FONT, TRANSPARENT, Trace, cone_trace
+from mesh_normal.types import IndexArray
 
 #: Most faces the 3D view draws; a larger mesh is decimated.
 DISPLAY_FACES = 20_000
@@ -44,7 +45,7 @@ BOUNDARY_LINE = "#c99a06"
 NONMANIFOLD_LINE = "#862e9c"
 
 
-def _sample(indices: IntArray, count: int, rng: np.random.Generator) -> IntArray:
+def _sample(indices: IndexArray, count: int, rng: np.random.Generator) -> IndexArray:
     if len(indices) <= count:
         return indices
     return np.sort(rng.choice(indices, size=count, replace=False))
@@ -52,7 +53,7 @@ def _sample(indices: IntArray, count: int, rng: np.random.Generator) -> IntArray
 
 def select_faces(
     classes: NDArray[np.int8], limit: int = DISPLAY_FACES, problem_limit: int = PROBLEM_FACES
-) -> IntArray:
+) -> IndexArray:
     """The faces to draw, in file order: all when they fit, else problems first, then a sample.
 
     Deterministic: the same classes give the same selection.
@@ -134,7 +135,7 @@ def _edge_trace(
     }
 
 
-def _arrow_faces(shown: IntArray, classes: NDArray[np.int8]) -> IntArray:
+def _arrow_faces(shown: IndexArray, classes: NDArray[np.int8]) -> IndexArray:
     """Faces that get an arrow: flipped ones first (up to a third), then a sample.
 
     One in ARROW_SHARE of the drawn faces, at least 24 and at most ARROW_FACES, so that a
@@ -152,7 +153,7 @@ def _arrows(
     name: str,
     centroids: NDArray[np.float64],
     normals: NDArray[np.float64],
-    indices: IntArray,
+    indices: IndexArray,
     length: float,
     color: str,
 ) -> list[Trace]:
@@ -188,7 +189,7 @@ def _arrows(
 
 def build_view(
     vertices: NDArray[np.float64],
-    faces: IntArray,
+    faces: IndexArray,
     normals: NDArray[np.float64],
     classes: NDArray[np.int8],
     boundary_edges: NDArray[np.integer[Any]],
@@ -283,7 +284,7 @@ def build_view(
 
 def _problem_edges(
     points: NDArray[np.float64],
-    used: IntArray,
+    used: IndexArray,
     boundary_edges: NDArray[np.integer[Any]],
     nonmanifold_edges: NDArray[np.integer[Any]],
 ) -> list[Trace]:
