@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 from mesh_normal.files.errors import MeshFileError
 from mesh_normal.files.formats import MAKER
 from mesh_normal.files.loaded import LoadedMesh, build
-from mesh_normal.files.polygons import fan
+from mesh_normal.files.polygons import triangulate
 
 _IGNORED = {
     "o",
@@ -88,7 +88,7 @@ def read_obj(data: bytes) -> LoadedMesh:
     found = _scan(data.decode("latin-1"))
     vertices, counts = found.vertices, found.counts
     vertex_ids, normal_ids = _corner_indices(found)
-    positions, source, notes = fan(counts)
+    positions, source, notes = triangulate(counts, vertex_ids, vertices)
     faces = vertex_ids[positions]
     face_line = found.face_lines[source]
     corner_normals = vertex_normals = None

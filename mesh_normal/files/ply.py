@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 from mesh_normal.files.errors import MeshFileError
 from mesh_normal.files.formats import MAKER
 from mesh_normal.files.loaded import LoadedMesh, build
-from mesh_normal.files.polygons import fan
+from mesh_normal.files.polygons import triangulate
 
 _TYPES = {
     "char": "i1",
@@ -331,7 +331,7 @@ def _mesh(elements: list[_Element]) -> LoadedMesh:
         counts, flat = np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp)
     else:
         counts, flat = _polygons(face.data[key])
-    positions, source, fan_notes = fan(counts)
+    positions, source, fan_notes = triangulate(counts, flat, vertices)
     notes += fan_notes
     faces = flat[positions]
     others = [

@@ -1,50 +1,264 @@
-"""Fan triangulation of polygons given as corner counts, vectorised."""
+"""Polygons triangulated inside themselves: fans where they fit, ear clipping elsewhere.
+
+A polygon of ``k`` corners becomes ``k - 2`` consecutive triangles, in file order, wound like
+the polygon: every triangle's normal agrees with the polygon's Newell normal. The fan from the
+first corner is kept wherever none of its triangles faces against the polygon: every convex
+polygon, and any polygon star-shaped around its first corner. That test is vectorised, so
+triangles and quads cost a few array passes; only polygons whose fan folds over (concave ones
+seen from their first corner) are ear-clipped, one at a time, on the plane of their Newell
+normal with mapbox-earcut.
+"""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
+import mapbox_earcut
 import numpy as np
 from numpy.typing import NDArray
 
+#: A fan triangle faces against its polygon when its area along the polygon's normal is below
+#: ``-FAN_FOLD * size**2``: rounding on a degenerate (collinear) triangle stays far above that.
+FAN_FOLD = 1e-10
+#: A polygon is not planar when a corner lies farther from its plane than this share of its size
+#: (the diagonal of its bounding box).
+PLANAR_SHARE = 1e-3
 
-def fan(counts: NDArray[np.integer]) -> tuple[NDArray[np.intp], NDArray[np.intp], list[str]]:
-    """Triangulate polygons of ``counts[i]`` corners as fans from each one's first corner.
+Triangulated = tuple[NDArray[np.intp], NDArray[np.intp], list[str]]
+
+
+def triangulate(
+    counts: NDArray[np.integer],
+    corner_vertices: NDArray[np.integer],
+    vertices: NDArray[np.floating],
+) -> Triangulated:
+    """Triangulate polygons of ``counts[i]`` corners, each inside itself.
 
     Parameters
     ----------
     counts : (p,) int
         Corners of each polygon; their corners are consecutive in one flat array.
+    corner_vertices : (c,) int
+        The vertex of each corner in that flat array (``c = counts.sum()``).
+    vertices : (n, 3) float
+        Vertex positions. Out-of-range indices or non-finite positions leave fans (the reader's
+        checks report them).
 
     Returns
     -------
     corners : (t, 3) intp
-        Positions in the flat corner array: polygon ``[a, b, c, d]`` gives ``[a, b, c]`` and
-        ``[a, c, d]``, in polygon order. Polygons with fewer than three corners give none.
+        Positions in the flat corner array, ``k - 2`` consecutive triangles for each polygon in
+        polygon order; polygons with fewer than three corners give none.
     source : (t,) intp
         The polygon each triangle came from.
     notes : list of str
-        What was triangulated or skipped, as sentences (empty for all triangles).
+        What was triangulated, skipped or found not planar, as sentences (empty for all
+        triangles).
+    """
+    sizes = np.asarray(counts, dtype=np.intp)
+    corners, source = fan(sizes)
+    if np.all(sizes == 3):
+        return corners, source, []
+    shapes = _measure(sizes, np.asarray(corner_vertices), np.asarray(vertices, dtype=np.float64))
+    clipped, crossing = _ear_clip(corners, sizes, shapes) if shapes else (0, 0)
+    return corners, source, _notes(sizes, shapes, clipped, crossing)
+
+
+def fan(counts: NDArray[np.integer]) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """Fans from each polygon's first corner: ``[a, b, c, d]`` gives ``[a, b, c]``, ``[a, c, d]``.
+
+    Parameters
+    ----------
+    counts : (p,) int
+
+    Returns
+    -------
+    corners : (t, 3) intp
+        Positions in the flat corner array.
+    source : (t,) intp
+        The polygon each triangle came from.
     """
     counts = np.asarray(counts, dtype=np.intp)
     starts = np.cumsum(counts) - counts
     if np.all(counts == 3):
-        return starts[:, None] + np.arange(3), np.arange(len(counts)), []
+        return starts[:, None] + np.arange(3), np.arange(len(counts))
     pieces = np.maximum(counts - 2, 0)
     source = np.repeat(np.arange(len(counts)), pieces)
     first = starts[source]
     step = np.arange(len(source)) - np.repeat(np.cumsum(pieces) - pieces, pieces) + 1
-    corners = np.stack([first, first + step, first + step + 1], axis=1)
-    return corners, source, _notes(counts)
+    return np.stack([first, first + step, first + step + 1], axis=1), source
 
 
-def _notes(counts: NDArray[np.integer]) -> list[str]:
-    quads, larger = int(np.sum(counts == 4)), int(np.sum(counts > 4))
-    short = int(np.sum(counts < 3))
+@dataclass(frozen=True)
+class _Shapes:
+    """The polygons of four or more corners, measured on their own plane.
+
+    Attributes
+    ----------
+    polygons : (m,) intp
+        Which polygons (of all ``p``) these are.
+    points : (c', 3) float64
+        Their corners, each polygon's centred on its centroid (far from the origin too).
+    starts : (m,) intp
+        Where each polygon's corners start in ``points``.
+    normals : (m, 3) float64
+        Unit Newell normals (NaN where the polygon has no area).
+    folded : (m,) bool
+        The fan from the first corner has a triangle facing against the polygon.
+    deviation : (m,) float64
+        Farthest corner from the polygon's plane, as a share of its size.
+    """
+
+    polygons: NDArray[np.intp]
+    points: NDArray[np.float64]
+    starts: NDArray[np.intp]
+    normals: NDArray[np.float64]
+    folded: NDArray[np.bool_]
+    deviation: NDArray[np.float64]
+
+
+def _measure(
+    counts: NDArray[np.intp], corner_vertices: NDArray[np.integer], vertices: NDArray[np.float64]
+) -> _Shapes | None:
+    """Measure the polygons of four or more corners, or ``None`` when there are none or the
+    corner indices are not all valid."""
+    large = counts >= 4
+    if not large.any() or len(corner_vertices) != counts.sum():
+        return None
+    chosen = corner_vertices[np.repeat(large, counts)]
+    if chosen.min() < 0 or chosen.max() >= len(vertices):
+        return None
+    sizes = counts[large]
+    starts = np.cumsum(sizes) - sizes
+    owner = np.repeat(np.arange(len(sizes)), sizes)
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        points = vertices[chosen]
+        diagonal = np.maximum.reduceat(points, starts) - np.minimum.reduceat(points, starts)
+        size = np.sqrt(np.einsum("ij,ij->i", diagonal, diagonal))
+        points -= (np.add.reduceat(points, starts) / sizes[:, None])[owner]
+        following = np.arange(1, len(points) + 1)
+        following[starts + sizes - 1] = starts
+        normals = np.add.reduceat(_cross(points, points[following]), starts)
+        normals /= np.sqrt(np.einsum("ij,ij->i", normals, normals))[:, None]
+        heights = np.abs(np.einsum("ij,ij->i", points, normals[owner]))
+        deviation = np.maximum.reduceat(heights, starts) / size
+        folded = _fan_folds(points, sizes, normals, size)
+    return _Shapes(np.flatnonzero(large), points, starts, normals, folded, deviation)
+
+
+def _fan_folds(
+    points: NDArray[np.float64],
+    sizes: NDArray[np.intp],
+    normals: NDArray[np.float64],
+    size: NDArray[np.float64],
+) -> NDArray[np.bool_]:
+    """Whether each polygon's fan has a triangle facing against the polygon's normal."""
+    corners, owner = fan(sizes)
+    first = points[corners[:, 0]]
+    along = np.einsum(
+        "ij,ij->i",
+        _cross(points[corners[:, 1]] - first, points[corners[:, 2]] - first),
+        normals[owner],
+    )
+    lowest = np.minimum.reduceat(along, np.cumsum(sizes - 2) - (sizes - 2))
+    folded: NDArray[np.bool_] = lowest < -FAN_FOLD * size**2
+    return folded
+
+
+def _cross(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Row-wise cross products (faster than ``np.cross`` on long arrays)."""
+    x = a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]
+    y = a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]
+    z = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    return np.stack([x, y, z], axis=1)
+
+
+def _ear_clip(
+    corners: NDArray[np.intp], counts: NDArray[np.intp], shapes: _Shapes
+) -> tuple[int, int]:
+    """Replace, in place, the fans that fold over with ear-clipped triangles (the same ``k - 2``
+    rows); return how many were clipped and how many kept their fan because ear clipping could
+    not cover them (they cross themselves)."""
+    pieces = np.maximum(counts - 2, 0)
+    first_triangle = np.cumsum(pieces) - pieces
+    starts = np.cumsum(counts) - counts
+    clipped = crossing = 0
+    for index in np.flatnonzero(shapes.folded):
+        polygon, begin = shapes.polygons[index], shapes.starts[index]
+        local = _clip(shapes.points[begin : begin + counts[polygon]], shapes.normals[index])
+        if local is None:
+            crossing += 1
+            continue
+        row = first_triangle[polygon]
+        corners[row : row + len(local)] = starts[polygon] + local
+        clipped += 1
+    return clipped, crossing
+
+
+def _clip(points: NDArray[np.float64], normal: NDArray[np.float64]) -> NDArray[np.intp] | None:
+    """Ear-clip one polygon on its plane.
+
+    Parameters
+    ----------
+    points : (k, 3) float64
+        Its corners, centred.
+    normal : (3,) float64
+        Its unit Newell normal.
+
+    Returns
+    -------
+    (k - 2, 3) intp or None
+        Corner positions in ``points``, each triangle wound like the polygon; ``None`` when
+        ear clipping gives fewer triangles (the polygon crosses itself).
+    """
+    axis = np.zeros(3)
+    axis[np.argmin(np.abs(normal))] = 1.0
+    across = np.cross(normal, axis)
+    across /= np.linalg.norm(across)
+    plane = points @ np.stack([across, np.cross(normal, across)], axis=1)  # u x v = normal
+    ring = np.array([len(points)], dtype=np.uint32)
+    found = mapbox_earcut.triangulate_float64(np.ascontiguousarray(plane), ring)
+    local = np.asarray(found, dtype=np.intp).reshape(-1, 3)
+    if len(local) != len(points) - 2:
+        return None
+    a, b, c = plane[local[:, 0]], plane[local[:, 1]], plane[local[:, 2]]
+    backwards = (b - a)[:, 0] * (c - a)[:, 1] - (b - a)[:, 1] * (c - a)[:, 0] < 0
+    local[backwards] = local[backwards][:, [0, 2, 1]]
+    return local
+
+
+def _notes(
+    counts: NDArray[np.intp], shapes: _Shapes | None, clipped: int, crossing: int
+) -> list[str]:
+    fans = counts.copy()
+    if shapes is not None:
+        fans[shapes.polygons[shapes.folded]] = 0  # counted as clipped or crossing below
+    quads, larger = int(np.sum(fans == 4)), int(np.sum(fans > 4))
     notes = []
     if quads or larger:
         parts = [_plural(quads, "quad"), _plural(larger, "larger polygon")]
         made = " and ".join(part for part in parts if part)
         notes.append(f"Triangulated {made} as fans from each one's first corner.")
-    if short:
+    if clipped:
+        notes.append(
+            f"Triangulated {_plural(clipped, 'concave polygon')} by ear clipping on each "
+            "one's own plane (a fan from the first corner would fold over)."
+        )
+    if crossing:
+        notes.append(
+            f"{_plural(crossing, 'polygon')} cross{'es' if crossing == 1 else ''} "
+            f"{'itself' if crossing == 1 else 'themselves'}; "
+            f"{'its' if crossing == 1 else 'their'} fan from the first corner is kept."
+        )
+    if shapes is not None and (bent := shapes.deviation > PLANAR_SHARE).any():
+        largest = float(shapes.deviation[bent].max()) * 100
+        notes.append(
+            f"{_plural(int(bent.sum()), 'polygon')} "
+            f"{'is' if bent.sum() == 1 else 'are'} not planar (largest deviation "
+            f"{largest:.3g} % of {'its' if bent.sum() == 1 else 'their'} size); "
+            f"{'its' if bent.sum() == 1 else 'their'} triangles follow the file's corners."
+        )
+    if short := int(np.sum(counts < 3)):
         notes.append(f"Skipped {_plural(short, 'face')} with fewer than three corners.")
     return notes
 
