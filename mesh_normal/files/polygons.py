@@ -3,30 +3,31 @@
 A polygon of ``k`` corners becomes ``k - 2`` consecutive triangles, in file order, wound like
 the polygon: every triangle's normal agrees with the polygon's Newell normal. The fan from the
 first corner is kept wherever none of its triangles faces against the polygon: every convex
-polygon, and any polygon star-shaped around its first corner. That test is vectorised, so
-triangles and quads cost a few array passes; only polygons whose fan folds over (concave ones
-seen from their first corner) are ear-clipped, one at a time, on the plane of their Newell
-normal with mapbox-earcut.
+polygon, and any polygon star-shaped around its first corner. That test is one compiled pass
+(:mod:`mesh_normal.files.polygon_shapes`, about as long as building the fans on a million
+quads; files of triangles skip it); only polygons whose fan folds over (concave ones seen from
+their first corner) are ear-clipped, one at a time, on the plane of their Newell normal with
+mapbox-earcut. Polygons that are not planar keep the triangles the same rules give and are
+counted in a note.
 """
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import mapbox_earcut
 import numpy as np
 from numpy.typing import NDArray
 
-from mesh_normal.kernels import announce_compiling, kernel
-from mesh_normal.types import BoolArray, FloatArray, IndexArray, Vector
+from mesh_normal.types import FloatArray, IndexArray
 
-#: A fan triangle faces against its polygon when its area along the polygon's normal is below
-#: ``-FAN_FOLD * size**2``: rounding on a degenerate (collinear) triangle stays far above that.
-FAN_FOLD = 1e-10
+if TYPE_CHECKING:
+    from mesh_normal.files.polygon_shapes import Shapes
+
 #: A polygon is not planar when a corner lies farther from its plane than this share of its size
 #: (the diagonal of its bounding box).
 PLANAR_SHARE = 1e-3
+
 
 Triangulated = tuple[NDArray[np.intp], NDArray[np.intp], list[str]]
 
@@ -65,8 +66,14 @@ def triangulate(
         return corners, source, []
     indices = np.asarray(corner_vertices, dtype=np.intp)
     points = np.ascontiguousarray(vertices, dtype=np.float64).reshape(-1, 3)
-    shapes = _measure(sizes, indices, points)
-    clipped, crossing = _ear_clip(corners, sizes, indices, points, shapes) if shapes else (0, 0)
+    shapes = None
+    if np.any(sizes >= 4):
+        from mesh_normal.files.polygon_shapes import measure_polygons  # numba: polygons only
+
+        shapes = measure_polygons(sizes, indices, points)
+    clipped, crossing = (0, 0)
+    if shapes is not None:
+        clipped, crossing = _ear_clip(corners, sizes, indices, points, shapes)
     return corners, source, _notes(sizes, shapes, clipped, crossing)
 
 
@@ -95,150 +102,12 @@ def fan(counts: NDArray[np.integer]) -> tuple[NDArray[np.intp], NDArray[np.intp]
     return np.stack([first, first + step, first + step + 1], axis=1), source
 
 
-@dataclass(frozen=True)
-class _Shapes:
-    """Every polygon measured on its own plane (full length; polygons under four corners are
-    never folded and have deviation 0).
-
-    Attributes
-    ----------
-    normals : (p, 3) float64
-        Unit Newell normals (NaN where a polygon of four or more corners has no area).
-    folded : (p,) bool
-        The fan from the first corner has a triangle facing against the polygon.
-    deviation : (p,) float64
-        Farthest corner from the polygon's plane, as a share of its size (NaN without area).
-    """
-
-    normals: FloatArray
-    folded: BoolArray
-    deviation: FloatArray
-
-
-def _measure(
-    counts: IndexArray, corner_vertices: IndexArray, vertices: FloatArray
-) -> _Shapes | None:
-    """Measure the polygons, or ``None`` when a corner index is not a vertex."""
-    if len(corner_vertices) != counts.sum():
-        return None
-    starts = np.cumsum(counts) - counts
-    normals, deviation = np.empty((len(counts), 3)), np.zeros(len(counts))
-    folded = np.zeros(len(counts), dtype=bool)
-    announce_compiling()
-    if not _polygon_shapes(counts, starts, corner_vertices, vertices, normals, deviation, folded):
-        return None
-    return _Shapes(normals, folded, deviation)
-
-
-@kernel()
-def _polygon_shapes(
-    counts: IndexArray,
-    starts: IndexArray,
-    corner_vertices: IndexArray,
-    vertices: FloatArray,
-    normals: FloatArray,
-    deviation: FloatArray,
-    folded: BoolArray,
-) -> bool:
-    """Fill ``normals``, ``deviation`` and ``folded`` for polygons of four or more corners, in
-    one pass over their corners (NumPy took 20 times as long on a million quads). Corners are
-    taken relative to the polygon's centroid, so a polygon far from the origin measures as
-    one at it. Returns False, having filled nothing reliable, when a corner index is not a
-    vertex."""
-    for polygon in range(len(counts)):
-        k, start = counts[polygon], starts[polygon]
-        if k < 4:
-            continue
-        for corner in range(start, start + k):
-            if corner_vertices[corner] < 0 or corner_vertices[corner] >= len(vertices):
-                return False
-        centre, size = _centre_and_size(vertices, corner_vertices[start : start + k])
-        normal = _newell(vertices, corner_vertices[start : start + k], centre)
-        normals[polygon] = normal
-        deviation[polygon] = (
-            _farthest(vertices, corner_vertices[start : start + k], centre, normal) / size
-        )
-        folded[polygon] = _fan_folds(
-            vertices, corner_vertices[start : start + k], normal, -FAN_FOLD * size * size
-        )
-    return True
-
-
-@kernel()
-def _relative(vertices: FloatArray, vertex: int, origin: Vector) -> Vector:
-    return (
-        vertices[vertex, 0] - origin[0],
-        vertices[vertex, 1] - origin[1],
-        vertices[vertex, 2] - origin[2],
-    )
-
-
-@kernel()
-def _centre_and_size(vertices: FloatArray, ring: IndexArray) -> tuple[Vector, float]:
-    """The centroid of a polygon's corners and its bounding-box diagonal."""
-    x = y = z = 0.0
-    low_x = low_y = low_z = np.inf
-    high_x = high_y = high_z = -np.inf
-    for vertex in ring:
-        px, py, pz = vertices[vertex, 0], vertices[vertex, 1], vertices[vertex, 2]
-        x, y, z = x + px, y + py, z + pz
-        low_x, low_y, low_z = min(low_x, px), min(low_y, py), min(low_z, pz)
-        high_x, high_y, high_z = max(high_x, px), max(high_y, py), max(high_z, pz)
-    size = math.sqrt((high_x - low_x) ** 2 + (high_y - low_y) ** 2 + (high_z - low_z) ** 2)
-    return (x / len(ring), y / len(ring), z / len(ring)), size
-
-
-@kernel()
-def _newell(vertices: FloatArray, ring: IndexArray, centre: Vector) -> Vector:
-    """The unit Newell normal of a polygon, its corners taken relative to ``centre``."""
-    x = y = z = 0.0
-    k = len(ring)
-    for corner in range(k):
-        a, b = ring[corner], ring[(corner + 1) % k]
-        ax, ay, az = _relative(vertices, a, centre)
-        bx, by, bz = _relative(vertices, b, centre)
-        x, y, z = x + ay * bz - az * by, y + az * bx - ax * bz, z + ax * by - ay * bx
-    length = math.sqrt(x * x + y * y + z * z)
-    return x / length, y / length, z / length
-
-
-@kernel()
-def _farthest(vertices: FloatArray, ring: IndexArray, centre: Vector, normal: Vector) -> float:
-    """The largest distance of a corner from the plane through ``centre`` along ``normal``."""
-    farthest = 0.0
-    for vertex in ring:
-        height = 0.0
-        for i in range(3):
-            height += (vertices[vertex, i] - centre[i]) * normal[i]
-        farthest = max(farthest, abs(height))
-    return farthest
-
-
-@kernel()
-def _fan_folds(vertices: FloatArray, ring: IndexArray, normal: Vector, floor: float) -> bool:
-    """Whether a fan triangle of the polygon has its (doubled) area along ``normal`` below
-    ``floor``."""
-    first = (vertices[ring[0], 0], vertices[ring[0], 1], vertices[ring[0], 2])
-    for corner in range(1, len(ring) - 1):
-        b, c = ring[corner], ring[corner + 1]
-        bx, by, bz = _relative(vertices, b, first)
-        cx, cy, cz = _relative(vertices, c, first)
-        along = (
-            (by * cz - bz * cy) * normal[0]
-            + (bz * cx - bx * cz) * normal[1]
-            + (bx * cy - by * cx) * normal[2]
-        )
-        if along < floor:
-            return True
-    return False
-
-
 def _ear_clip(
     corners: IndexArray,
     counts: IndexArray,
     corner_vertices: IndexArray,
     vertices: FloatArray,
-    shapes: _Shapes,
+    shapes: Shapes,
 ) -> tuple[int, int]:
     """Replace, in place, the fans that fold over with ear-clipped triangles (the same ``k - 2``
     rows); return how many were clipped and how many kept their fan because ear clipping could
@@ -293,7 +162,7 @@ def _clip(points: NDArray[np.float64], normal: NDArray[np.float64]) -> NDArray[n
 
 
 def _notes(
-    counts: NDArray[np.intp], shapes: _Shapes | None, clipped: int, crossing: int
+    counts: NDArray[np.intp], shapes: Shapes | None, clipped: int, crossing: int
 ) -> list[str]:
     fans = counts.copy()
     if shapes is not None:
