@@ -143,7 +143,7 @@ def _clip(points: NDArray[np.float64], normal: NDArray[np.float64]) -> NDArray[n
     -------
     (k - 2, 3) intp or None
         Corner positions in ``points``, each triangle wound like the polygon; ``None`` when
-        ear clipping gives fewer triangles (the polygon crosses itself).
+        ear clipping cannot cover it with ``k - 2`` triangles (the polygon crosses itself).
     """
     axis = np.zeros(3)
     axis[np.argmin(np.abs(normal))] = 1.0
@@ -152,13 +152,58 @@ def _clip(points: NDArray[np.float64], normal: NDArray[np.float64]) -> NDArray[n
     plane = points @ np.stack([across, np.cross(normal, across)], axis=1)  # u x v = normal
     ring = np.array([len(points)], dtype=np.uint32)
     found = mapbox_earcut.triangulate_float64(np.ascontiguousarray(plane), ring)
-    local = np.asarray(found, dtype=np.intp).reshape(-1, 3)
-    if len(local) != len(points) - 2:
+    local = _restore_dropped(np.asarray(found, dtype=np.intp).reshape(-1, 3), len(points))
+    if local is None or len(local) != len(points) - 2:
         return None
     a, b, c = plane[local[:, 0]], plane[local[:, 1]], plane[local[:, 2]]
     backwards = (b - a)[:, 0] * (c - a)[:, 1] - (b - a)[:, 1] * (c - a)[:, 0] < 0
     local[backwards] = local[backwards][:, [0, 2, 1]]
     return local
+
+
+def _restore_dropped(local: IndexArray, k: int) -> IndexArray | None:
+    """Put back the corners ear clipping dropped (earcut drops a corner equal to the one
+    before it), splitting the triangle on the edge that skips them, so a polygon keeps its
+    ``k - 2`` triangles; ``None`` when no triangle has that edge.
+
+    Parameters
+    ----------
+    local : (t, 3) intp
+        Triangles over corners ``0 .. k - 1``.
+    """
+    used = np.zeros(k, dtype=bool)
+    used[local.ravel()] = True
+    if used.all() or not used.any():
+        return local
+    triangles = [tuple(map(int, row)) for row in local]
+    first = int(np.argmax(used))
+    ring = [(first + step) % k for step in range(1, k + 1)]  # ends at first, a used corner
+    before, skipped = first, []
+    for corner in ring:
+        if not used[corner]:
+            skipped.append(corner)
+            continue
+        if skipped:
+            split = _split(triangles, before, corner, skipped)
+            if split is None:
+                return None
+            triangles = split
+        before, skipped = corner, []
+    return np.array(triangles, dtype=np.intp)
+
+
+def _split(
+    triangles: list[tuple[int, ...]], start: int, end: int, between: list[int]
+) -> list[tuple[int, ...]] | None:
+    """Replace the triangle with edge ``start -> end`` by a fan over ``between`` from its third
+    corner."""
+    for row, (a, b, c) in enumerate(triangles):
+        for p, q, r in ((a, b, c), (b, c, a), (c, a, b)):
+            if (p, q) == (start, end):
+                chain = [start, *between, end]
+                fan_rows = [(chain[i], chain[i + 1], r) for i in range(len(chain) - 1)]
+                return triangles[:row] + fan_rows + triangles[row + 1 :]
+    return None
 
 
 def _notes(
