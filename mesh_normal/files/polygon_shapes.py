@@ -15,6 +15,9 @@ import numpy as np
 from mesh_normal.kernels import announce_compiling, kernel
 from mesh_normal.types import BoolArray, FloatArray, IndexArray, Vector
 
+#: A polygon's corners: the flat corner array, where they start, and how many.
+Ring = tuple[IndexArray, int, int]
+
 #: A fan triangle faces against its polygon when its area along the polygon's normal is below
 #: ``-FAN_FOLD * size**2``: rounding on a degenerate (collinear) triangle stays far above that.
 FAN_FOLD = 1e-10
@@ -77,15 +80,12 @@ def _polygon_shapes(
         for corner in range(start, start + k):
             if corner_vertices[corner] < 0 or corner_vertices[corner] >= len(vertices):
                 return False
-        centre, size = _centre_and_size(vertices, corner_vertices[start : start + k])
-        normal = _newell(vertices, corner_vertices[start : start + k], centre)
-        normals[polygon] = normal
-        deviation[polygon] = (
-            _farthest(vertices, corner_vertices[start : start + k], centre, normal) / size
-        )
-        folded[polygon] = _fan_folds(
-            vertices, corner_vertices[start : start + k], normal, -FAN_FOLD * size * size
-        )
+        ring = (corner_vertices, start, k)  # a tuple, not a slice: no reference counting
+        centre, size = _centre_and_size(vertices, ring)
+        normal = _newell(vertices, ring, centre)
+        normals[polygon, 0], normals[polygon, 1], normals[polygon, 2] = normal
+        deviation[polygon] = _farthest(vertices, ring, centre, normal) / size
+        folded[polygon] = _fan_folds(vertices, ring, normal, -FAN_FOLD * size * size)
     return True
 
 
@@ -99,27 +99,29 @@ def _relative(vertices: FloatArray, vertex: int, origin: Vector) -> Vector:
 
 
 @kernel()
-def _centre_and_size(vertices: FloatArray, ring: IndexArray) -> tuple[Vector, float]:
+def _centre_and_size(vertices: FloatArray, ring: Ring) -> tuple[Vector, float]:
     """The centroid of a polygon's corners and its bounding-box diagonal."""
     x = y = z = 0.0
     low_x = low_y = low_z = np.inf
     high_x = high_y = high_z = -np.inf
-    for vertex in ring:
+    corner_vertices, start, k = ring
+    for corner in range(start, start + k):
+        vertex = corner_vertices[corner]
         px, py, pz = vertices[vertex, 0], vertices[vertex, 1], vertices[vertex, 2]
         x, y, z = x + px, y + py, z + pz
         low_x, low_y, low_z = min(low_x, px), min(low_y, py), min(low_z, pz)
         high_x, high_y, high_z = max(high_x, px), max(high_y, py), max(high_z, pz)
     size = math.sqrt((high_x - low_x) ** 2 + (high_y - low_y) ** 2 + (high_z - low_z) ** 2)
-    return (x / len(ring), y / len(ring), z / len(ring)), size
+    return (x / k, y / k, z / k), size
 
 
 @kernel()
-def _newell(vertices: FloatArray, ring: IndexArray, centre: Vector) -> Vector:
+def _newell(vertices: FloatArray, ring: Ring, centre: Vector) -> Vector:
     """The unit Newell normal of a polygon, its corners taken relative to ``centre``."""
     x = y = z = 0.0
-    k = len(ring)
+    corner_vertices, start, k = ring
     for corner in range(k):
-        a, b = ring[corner], ring[(corner + 1) % k]
+        a, b = corner_vertices[start + corner], corner_vertices[start + (corner + 1) % k]
         ax, ay, az = _relative(vertices, a, centre)
         bx, by, bz = _relative(vertices, b, centre)
         x, y, z = x + ay * bz - az * by, y + az * bx - ax * bz, z + ax * by - ay * bx
@@ -128,10 +130,12 @@ def _newell(vertices: FloatArray, ring: IndexArray, centre: Vector) -> Vector:
 
 
 @kernel()
-def _farthest(vertices: FloatArray, ring: IndexArray, centre: Vector, normal: Vector) -> float:
+def _farthest(vertices: FloatArray, ring: Ring, centre: Vector, normal: Vector) -> float:
     """The largest distance of a corner from the plane through ``centre`` along ``normal``."""
     farthest = 0.0
-    for vertex in ring:
+    corner_vertices, start, k = ring
+    for corner in range(start, start + k):
+        vertex = corner_vertices[corner]
         height = 0.0
         for i in range(3):
             height += (vertices[vertex, i] - centre[i]) * normal[i]
@@ -140,12 +144,13 @@ def _farthest(vertices: FloatArray, ring: IndexArray, centre: Vector, normal: Ve
 
 
 @kernel()
-def _fan_folds(vertices: FloatArray, ring: IndexArray, normal: Vector, floor: float) -> bool:
+def _fan_folds(vertices: FloatArray, ring: Ring, normal: Vector, floor: float) -> bool:
     """Whether a fan triangle of the polygon has its (doubled) area along ``normal`` below
     ``floor``."""
-    first = (vertices[ring[0], 0], vertices[ring[0], 1], vertices[ring[0], 2])
-    for corner in range(1, len(ring) - 1):
-        b, c = ring[corner], ring[corner + 1]
+    corner_vertices, start, k = ring
+    first = _relative(vertices, corner_vertices[start], (0.0, 0.0, 0.0))
+    for corner in range(start + 1, start + k - 1):
+        b, c = corner_vertices[corner], corner_vertices[corner + 1]
         bx, by, bz = _relative(vertices, b, first)
         cx, cy, cz = _relative(vertices, c, first)
         along = (

@@ -112,6 +112,8 @@ def _ear_clip(
     """Replace, in place, the fans that fold over with ear-clipped triangles (the same ``k - 2``
     rows); return how many were clipped and how many kept their fan because ear clipping could
     not cover them (they cross themselves)."""
+    if not shapes.folded.any():
+        return 0, 0
     pieces = np.maximum(counts - 2, 0)
     first_triangle = np.cumsum(pieces) - pieces
     starts = np.cumsum(counts) - counts
