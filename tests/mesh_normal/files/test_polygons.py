@@ -247,3 +247,11 @@ def test_polygons_without_area_or_valid_corners_keep_their_fans() -> None:
 def test_non_finite_corners_are_left_to_the_readers_check() -> None:
     with pytest.raises(MeshFileError, match="nan"):
         read_mesh(b"OFF\n4 1 0\n0 0 0\n1 0 0\nnan 1 0\n0 1 0\n4 0 1 2 3\n", "nan.off")
+
+
+def test_a_polygon_that_crosses_itself_keeps_its_fan_and_says_so() -> None:
+    # The fourth corner dips below the first edge: the boundary crosses itself twice.
+    ring = placed([(0, 0), (4, 0), (4, 3), (1, -1), (0, 3)])
+    corners, _, notes = triangulate(np.array([5]), np.arange(5), ring)
+    np.testing.assert_array_equal(corners, fan(np.array([5]))[0])
+    assert notes == ["1 polygon crosses itself; its fan from the first corner is kept."]
