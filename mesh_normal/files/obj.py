@@ -210,8 +210,12 @@ def _face_corners(lines: list[str]) -> tuple[list[str], NDArray[np.intp]]:
 
 def _corner_indices(found: _Statements) -> tuple[NDArray[np.intp], NDArray[np.intp] | None]:
     """0-based vertex index of every corner, and normal index when every corner has one."""
-    fields = _fields(found.corners)
     face_of_corner = np.repeat(np.arange(len(found.counts)), found.counts)
+    try:
+        fields = _fields(found.corners)
+    except _BadCorner as bad:
+        line = int(found.face_lines[face_of_corner[bad.position]])
+        raise _BadCorner(bad.corner, bad.position, line) from None
     vertex_ids = _resolve(
         fields[0],
         face_of_corner,
@@ -247,9 +251,12 @@ def _fields(corners: list[str]) -> _Fields:
         if not slashes:
             return _ints(text.split()), None, None
         doubles = text.count("//")
-        if slashes == 2 * count and doubles == count:  # v//vn
+        if slashes == 2 * count and doubles == count:  # v//vn, or v// with the normal left out
             tokens = text.replace("//", " ").split()
-            return _ints(tokens[0::2]), None, _ints(tokens[1::2])
+            if len(tokens) == 2 * count:
+                return _ints(tokens[0::2]), None, _ints(tokens[1::2])
+            if len(tokens) == count:
+                return _ints(tokens), None, None
         if slashes in (count, 2 * count) and not doubles:  # v/vt or v/vt/vn
             width = slashes // count + 1
             tokens = text.replace("/", " ").split()
@@ -266,30 +273,35 @@ def _ints(tokens: list[str]) -> NDArray[np.int64]:
 
 
 def _mixed_fields(corners: list[str]) -> _Fields:
+    """Corner by corner: any field may be empty (``1/``, ``1//``, ``1//3``, ``1/2/``), as
+    other readers allow; a corner without a normal drops the normals of the whole file."""
     columns: list[list[int]] = [[], [], []]
     has_normal = True
-    for corner in corners:
+    for position, corner in enumerate(corners):
         parts = corner.split("/")
-        if len(parts) > 3:
-            raise _BadCorner(corner)
+        if len(parts) > 3 or not parts[0]:
+            raise _BadCorner(corner, position)
         parts += [""] * (3 - len(parts))
         has_normal = has_normal and parts[2] != ""
         for column, part in zip(columns, parts, strict=True):
             try:
                 column.append(int(part) if part else 0)
             except ValueError:
-                raise _BadCorner(corner) from None
-        if not parts[0]:
-            raise _BadCorner(corner)
+                raise _BadCorner(corner, position) from None
     arrays = [np.array(column, dtype=np.int64) for column in columns]
     return arrays[0], arrays[1], arrays[2] if has_normal else None
 
 
 class _BadCorner(MeshFileError):
-    def __init__(self, corner: str) -> None:
+    """A corner that is not ``v``, ``v/vt``, ``v//vn`` or ``v/vt/vn``; :func:`_corner_indices`
+    adds its line from ``position`` (its place among all corners)."""
+
+    def __init__(self, corner: str, position: int, line: int | None = None) -> None:
+        self.corner, self.position = corner, position
+        where = f" (line {line:,})" if line is not None else ""
         super().__init__(
             f"The face corner {corner[:40]!r} is not an index, nor index/texture, "
-            "index//normal or index/texture/normal."
+            f"index//normal or index/texture/normal{where}."
         )
 
 

@@ -147,3 +147,49 @@ def test_comments_may_follow_vertices_and_faces() -> None:
     )
     assert mesh.faces.tolist() == [[0, 1, 2], [0, 2, 1]]
     assert mesh.vertices.tolist() == [[0, 0, 0], [1, 0, 0], [0, 1, 0]]
+
+
+SQUARE_OBJ = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\nvn 0 0 -1\n"
+
+
+@pytest.mark.parametrize(
+    "faces",
+    [
+        "f 1// 2// 3//\nf 1// 3// 4//",  # empty normal fields (the NumPy broadcasting failure)
+        "f 1/ 2/ 3/\nf 1/ 3/ 4/",  # empty texture fields
+        "f 1/1/ 2/1/ 3/1/\nf 1/1/ 3/1/ 4/1/",  # a texture, an empty normal
+        "f 1// 2//1 3//\nf 1//2 3// 4//1",  # some corners with a normal, some without
+        "f 1 2/ 3//\nf 1/1/ 3/1 4",  # every form in one file
+        "f 1// 2// 3//\nf 1 3 4",  # forms differing between faces
+    ],
+)
+def test_empty_fields_read_as_other_readers_do_and_drop_partial_normals(faces: str) -> None:
+    mesh = read_mesh((SQUARE_OBJ + faces).encode(), "empty.obj")
+    np.testing.assert_array_equal(mesh.faces, [[0, 1, 2], [0, 2, 3]])
+    assert mesh.source_faces == 2
+    assert mesh.file_corner_normals is None and mesh.file_vertex_normals is None
+
+
+@pytest.mark.parametrize(
+    "faces",
+    [
+        "f 1//1 2//1 3//1\nf 1//2 3//2 4//2",
+        "f 1//1 2/1/1 3//1\nf 1/1/2 3//2 4/1/2",  # an empty texture field beside full corners
+        "f 1//-2 2//-2 3//-2\nf 1//-1 3//-1 4//-1",  # negative normal indices
+    ],
+)
+def test_empty_texture_fields_keep_the_normals(faces: str) -> None:
+    mesh = read_mesh((SQUARE_OBJ + faces).encode(), "normals.obj")
+    np.testing.assert_array_equal(mesh.faces, [[0, 1, 2], [0, 2, 3]])
+    np.testing.assert_array_equal(mesh.file_corner_normals, [[[0, 0, 1]] * 3, [[0, 0, -1]] * 3])
+
+
+@pytest.mark.parametrize("corner", ["/3", "1/2/3/4", "1/x", "1//y", "x//"])
+def test_a_broken_corner_names_its_line(corner: str) -> None:
+    text = SQUARE_OBJ + f"f 1// 2// 3//\n\nf 1// 3// {corner}"
+    with pytest.raises(MeshFileError) as error:
+        read_mesh(text.encode(), "bad.obj")
+    assert str(error.value) == (
+        f"The face corner {corner!r} is not an index, nor index/texture, "
+        "index//normal or index/texture/normal (line 10)."
+    )
