@@ -4,9 +4,15 @@ trimesh's OBJ loader, even with ``process=False``, drops vertices no face uses a
 vertices where texture coordinates differ (a seam), so its arrays no longer line up with the
 file's. Here ``v x y z [w] [r g b]`` keeps x, y, z; ``f`` takes ``v``, ``v/vt``, ``v//vn`` and
 ``v/vt/vn`` corners with 1-based or negative (relative) indices, polygons fan-triangulated;
-``vt`` is only counted; ``l`` and ``p`` are skipped with a note; ``o``, ``g``, ``s``,
-``usemtl``, ``mtllib`` and other statements are ignored; a backslash at a line's end continues
-it. Errors name the line.
+``vt`` is only counted; ``l`` and ``p`` are skipped with a note; ``s``, ``usemtl``,
+``mtllib`` and other statements are ignored; a backslash at a line's end continues it. Errors
+name the line.
+
+Groups: each face belongs to the latest ``o`` (object) and ``g`` (group) before it, named
+``"object"``, ``"group"`` or ``"object/group"`` when both are given (an ``o`` ends the group
+before it, and so does a ``g`` without a name; ``g`` with several names keeps them, ``"a b"``).
+Faces before any are in ``"default"``, as the OBJ specification names it; the same name again
+is the same group. A file without ``o`` and ``g`` has no groups.
 
 Normals: per corner when every face corner names a ``vn``; per vertex as well when each vertex
 is always given the same normal vector.
@@ -26,8 +32,6 @@ from mesh_normal.files.loaded import LoadedMesh, build
 from mesh_normal.files.polygons import fan
 
 _IGNORED = {
-    "o",
-    "g",
     "s",
     "usemtl",
     "mtllib",
@@ -48,9 +52,10 @@ _IGNORED = {
 }
 
 
-_KINDS = {"v ": 1, "vn": 2, "vt": 3, "f ": 4, "": 0}
-_KEYS = {"v": 1, "vn": 2, "vt": 3, "f": 4, "l": 5, "p": 6}
-IGNORE, VERTEX, NORMAL, TEXTURE, FACE, LINE, POINT, OTHER = range(8)
+_KINDS = {"v ": 1, "vn": 2, "vt": 3, "f ": 4, "o ": 5, "g ": 6, "": 0}
+_KEYS = {"v": 1, "vn": 2, "vt": 3, "f": 4, "o": 5, "g": 6, "l": 7, "p": 8}
+IGNORE, VERTEX, NORMAL, TEXTURE, FACE, OBJECT, GROUP, LINE, POINT, OTHER = range(10)
+_DEFAULT_GROUP = "default"
 
 
 @dataclass(frozen=True, slots=True)
@@ -69,6 +74,9 @@ class _Statements:
     face_lines : (p,) intp
     vertices_before, normals_before : (p,) intp
         How many ``v`` and ``vn`` statements come before each face (for negative indices).
+    face_labels : (p,) intp or None
+        Each face's group, an index into ``labels``; ``None`` without ``o`` and ``g``.
+    labels : list of str
     notes : list of str
     """
 
@@ -80,6 +88,8 @@ class _Statements:
     face_lines: NDArray[np.intp]
     vertices_before: NDArray[np.intp]
     normals_before: NDArray[np.intp]
+    face_labels: NDArray[np.intp] | None
+    labels: list[str]
     notes: list[str]
 
 
@@ -91,6 +101,7 @@ def read_obj(data: bytes) -> LoadedMesh:
     positions, source, notes = fan(counts)
     faces = vertex_ids[positions]
     face_line = found.face_lines[source]
+    face_groups, group_names = _triangle_groups(found, source)
     corner_normals = vertex_normals = None
     if normal_ids is not None and len(faces):
         corner_normals = found.normals[normal_ids[positions]]
@@ -102,6 +113,8 @@ def read_obj(data: bytes) -> LoadedMesh:
         source_faces=len(counts),
         corner_normals=corner_normals,
         vertex_normals=vertex_normals,
+        face_groups=face_groups,
+        group_names=group_names,
         notes=[*notes, *found.notes],
         vertex=lambda i: f"vertex {i + 1:,} (line {found.vertex_lines[i]:,})",
         face=lambda i: f"the face on line {face_line[i]:,}",
@@ -144,6 +157,9 @@ def _scan(text: str) -> _Statements:
         if kinds[row] >= LINE:
             other[key] += 1
     rows = {kind: np.flatnonzero(kinds == kind) for kind in (VERTEX, NORMAL, FACE)}
+    face_labels, labels = _face_labels(
+        lines, np.flatnonzero(np.isin(kinds, (OBJECT, GROUP))), rows[FACE]
+    )
     vertices = _numbers([lines[row] for row in rows[VERTEX]], numbers[rows[VERTEX]], "v")
     normals = _numbers([lines[row] for row in rows[NORMAL]], numbers[rows[NORMAL]], "vn")
     # A comment may follow a face's corners: "f 1 2 3 # the lid".
@@ -162,8 +178,51 @@ def _scan(text: str) -> _Statements:
         face_lines=numbers[rows[FACE]],
         vertices_before=np.searchsorted(rows[VERTEX], rows[FACE]),
         normals_before=np.searchsorted(rows[NORMAL], rows[FACE]),
+        face_labels=face_labels,
+        labels=labels,
         notes=_skipped(other),
     )
+
+
+def _face_labels(
+    lines: list[str], statements: NDArray[np.intp], faces: NDArray[np.intp]
+) -> tuple[NDArray[np.intp] | None, list[str]]:
+    """Each face's group (see the module docstring) and the group names, from the rows of the
+    ``o`` and ``g`` statements and of the faces."""
+    if not len(statements):
+        return None, []
+    labels = [_DEFAULT_GROUP]
+    index = {_DEFAULT_GROUP: 0}
+    current = np.empty(len(statements), dtype=np.intp)
+    thing = group = ""
+    for position, row in enumerate(statements.tolist()):
+        keyword, *names = lines[row].partition("#")[0].split()
+        name = " ".join(names)
+        if keyword == "o":
+            thing, group = name, ""
+        else:
+            group = name
+        label = "/".join(part for part in (thing, group) if part) or _DEFAULT_GROUP
+        current[position] = index.setdefault(label, len(labels))
+        if len(labels) < len(index):
+            labels.append(label)
+    latest = np.searchsorted(statements, faces) - 1  # the last statement before each face
+    return np.where(latest >= 0, current[np.maximum(latest, 0)], 0), labels
+
+
+def _triangle_groups(
+    found: _Statements, source: NDArray[np.intp]
+) -> tuple[NDArray[np.intp] | None, list[str] | None]:
+    """Each triangle's group, numbered by first triangle, and the names of groups with one."""
+    if found.face_labels is None:
+        return None, None
+    used, first, numbered = np.unique(
+        found.face_labels[source], return_index=True, return_inverse=True
+    )
+    order = np.argsort(first, kind="stable")  # number groups by their first triangle
+    renumber = np.empty_like(order)
+    renumber[order] = np.arange(len(order))
+    return renumber[numbered.ravel()], [found.labels[label] for label in used[order]]
 
 
 def _numbers(lines: list[str], numbers: NDArray[np.intp], key: str) -> NDArray[np.float64]:

@@ -193,3 +193,62 @@ def test_a_broken_corner_names_its_line(corner: str) -> None:
         f"The face corner {corner!r} is not an index, nor index/texture, "
         "index//normal or index/texture/normal (line 10)."
     )
+
+
+def test_objects_and_groups_are_kept_per_triangle() -> None:
+    data = obj("""
+    v 0 0 0
+    v 1 0 0
+    v 0 1 0
+    v 1 1 0
+    f 1 2 3
+    o Box
+    f 1 2 3 4
+    g side  a   # several names, spaced and commented
+    f 1 2 3
+    g
+    f 3 2 1
+    o Lid
+    f 1 2
+    f 1 2 3
+    g side a
+    f 1 3 2
+    o Box
+    g\tside a
+    f 1 2 3
+    g empty
+    o Box
+    f 2 3 4
+    """)
+    mesh = read_mesh(data, "groups.obj")
+    # The quad's two triangles share their group; the two-corner face gives no triangle.
+    assert mesh.group_names == ("default", "Box", "Box/side a", "Lid", "Lid/side a")
+    assert mesh.face_groups is not None and not mesh.face_groups.flags.writeable
+    np.testing.assert_array_equal(mesh.face_groups, [0, 1, 1, 2, 1, 3, 4, 2, 1])
+    assert len(mesh.face_groups) == len(mesh.faces)
+
+
+def test_groups_are_numbered_by_their_first_triangle_and_empty_ones_left_out() -> None:
+    data = obj("""
+    v 0 0 0
+    v 1 0 0
+    v 0 1 0
+    g unused
+    g second
+    g first
+    g second
+    f 1 2 3
+    g first
+    f 1 3 2
+    """)
+    mesh = read_mesh(data, "order.obj")
+    assert mesh.group_names == ("second", "first")
+    np.testing.assert_array_equal(mesh.face_groups, [0, 1])
+
+
+def test_a_file_without_o_or_g_has_no_groups() -> None:
+    mesh = read_mesh(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3", "plain.obj")
+    assert mesh.face_groups is None and mesh.group_names is None
+    single = read_mesh(b"o only\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 3 2", "one.obj")
+    assert single.group_names == ("only",)
+    np.testing.assert_array_equal(single.face_groups, [0, 0])
