@@ -122,7 +122,13 @@ def read_obj(data: bytes) -> LoadedMesh:
 
 
 def _logical_lines(text: str) -> tuple[list[str], NDArray[np.intp]]:
-    """The lines, with backslash continuations joined, and each one's 1-based line number."""
+    """The lines, with backslash continuations joined, and each one's 1-based line number
+    (of its first physical line).
+
+    Spaces after the backslash still continue (editors leave them and nobody sees them). A
+    comment line ending in a backslash does not: it would silently swallow the statement
+    after it, and comments end in one innocently (``# saved in C:\\models\\``).
+    """
     lines = text.splitlines()
     if "\\" not in text:
         return lines, np.arange(1, len(lines) + 1)
@@ -130,8 +136,9 @@ def _logical_lines(text: str) -> tuple[list[str], NDArray[np.intp]]:
     numbers: list[int] = []
     pending: list[str] = []
     for number, line in enumerate(lines, 1):
-        if line.endswith("\\"):
-            pending.append(line[:-1])
+        end = line.rstrip()
+        if end.endswith("\\") and (pending or not end.lstrip().startswith("#")):
+            pending.append(end[:-1])
             continue
         numbers.append(number - len(pending))
         joined.append(" ".join([*pending, line]))

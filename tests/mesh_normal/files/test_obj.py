@@ -252,3 +252,32 @@ def test_a_file_without_o_or_g_has_no_groups() -> None:
     single = read_mesh(b"o only\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 3 2", "one.obj")
     assert single.group_names == ("only",)
     np.testing.assert_array_equal(single.face_groups, [0, 0])
+
+
+def test_line_continuations_join_any_statement() -> None:
+    data = (
+        b"v 0 \\\n 0 0\r\n"  # a vertex split in two, Windows line ends around it
+        b"v 1 \\   \r\n"  # spaces after the backslash still continue it
+        b"0 0 \\\r\n"
+        b"\r\n"  # ...onto an empty line: the vertex is complete before it
+        b"v \\\n0 \\\n1 \\\n0\n"  # three continuations
+        b"f 1 \\\n2 \\\n3\n"
+        b"f 1 3 2 \\"  # the file ends inside a continued face
+    )
+    mesh = read_mesh(data, "continued.obj")
+    assert mesh.vertices.tolist() == [[0, 0, 0], [1, 0, 0], [0, 1, 0]]
+    assert mesh.faces.tolist() == [[0, 1, 2], [0, 2, 1]]
+
+
+def test_a_comment_ending_in_a_backslash_does_not_swallow_the_next_line() -> None:
+    data = b"# saved in C:\\models\\\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"
+    assert read_mesh(data, "comment.obj").vertices.tolist() == [[0, 0, 0], [1, 0, 0], [0, 1, 0]]
+
+
+def test_errors_in_continued_lines_name_their_first_line() -> None:
+    data = b"v 0 0 0\nv 1 \\\n x 0\nv 0 1 0\nf 1 2 3\n"
+    with pytest.raises(MeshFileError, match=r"^Line 2: 'x' is not a number\.$"):
+        read_mesh(data, "bad.obj")
+    data = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 \\\n 2 \\\n 3\nf 1 \\\n2 9\n"
+    with pytest.raises(MeshFileError, match=r"^Line 7: vertex index 9 is out of range"):
+        read_mesh(data, "bad.obj")
