@@ -281,3 +281,25 @@ def test_errors_in_continued_lines_name_their_first_line() -> None:
     data = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 \\\n 2 \\\n 3\nf 1 \\\n2 9\n"
     with pytest.raises(MeshFileError, match=r"^Line 7: vertex index 9 is out of range"):
         read_mesh(data, "bad.obj")
+
+
+def test_real_file_with_two_objects_keeps_them() -> None:
+    """trimesh's models/two_objects.obj: a cube (12 faces) then a tetrahedron (4)."""
+    mesh = read_mesh((DATA / "two_objects.obj").read_bytes(), "two_objects.obj")
+    assert mesh.group_names == ("cube", "tetra")
+    np.testing.assert_array_equal(mesh.face_groups, [0] * 12 + [1] * 4)
+    assert mesh.faces[12:].min() == 8  # the tetrahedron uses its own four vertices
+
+
+def test_real_blender_file_with_vertex_double_slash_normal_faces() -> None:
+    """trimesh's models/cube_compressed.obj: ``f 2//1 4//1 1//1``, one ``vn`` per side."""
+    mesh = read_mesh((DATA / "cube_compressed.obj").read_bytes(), "cube_compressed.obj")
+    assert mesh.faces.shape == (12, 3) and mesh.group_names == ("Cube",)
+    assert mesh.faces[0].tolist() == [1, 3, 0]
+    corners = mesh.vertices[mesh.faces]
+    geometric = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    stored = mesh.file_corner_normals
+    assert stored is not None and np.all(stored == stored[:, :1])  # one normal per face
+    cosines = np.einsum("ij,ij->i", geometric, stored[:, 0]) / np.linalg.norm(geometric, axis=1)
+    assert np.all(cosines > 0.999)  # each side's vn is its own outward normal
+    assert mesh.file_vertex_normals is None  # corners of a cube get three normals each
