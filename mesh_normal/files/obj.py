@@ -321,7 +321,8 @@ def _fields(corners: list[str]) -> _Fields:
             tokens = text.replace("//", " ").split()
             if len(tokens) == 2 * count:
                 return _ints(tokens[0::2]), None, _ints(tokens[1::2])
-            if len(tokens) == count:
+            # Every corner "X//" with X not empty: "//5 1//" also has one number a corner.
+            if len(tokens) == count and _every_corner_ends(text, "//", count):
                 return _ints(tokens), None, None
         if slashes in (count, 2 * count) and not doubles:  # v/vt or v/vt/vn
             width = slashes // count + 1
@@ -332,6 +333,12 @@ def _fields(corners: list[str]) -> _Fields:
     except ValueError:
         pass
     return _mixed_fields(corners)
+
+
+def _every_corner_ends(text: str, end: str, count: int) -> bool:
+    """Whether each of the ``count`` corners in ``text`` ends with ``end`` (and no slash
+    follows it: ``"1////"`` is no ``"1//"``)."""
+    return "///" not in text and text.endswith(end) and text.count(end + " ") == count - 1
 
 
 def _ints(tokens: list[str]) -> NDArray[np.int64]:

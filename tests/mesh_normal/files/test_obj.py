@@ -184,9 +184,10 @@ def test_empty_texture_fields_keep_the_normals(faces: str) -> None:
     np.testing.assert_array_equal(mesh.file_corner_normals, [[[0, 0, 1]] * 3, [[0, 0, -1]] * 3])
 
 
-@pytest.mark.parametrize("corner", ["/3", "1/2/3/4", "1/x", "1//y", "x//"])
-def test_a_broken_corner_names_its_line(corner: str) -> None:
-    text = SQUARE_OBJ + f"f 1// 2// 3//\n\nf 1// 3// {corner}"
+@pytest.mark.parametrize("corner", ["/3", "1/2/3/4", "1/x", "1//y", "x//", "//4", "//", "4////"])
+@pytest.mark.parametrize("where", ["f 1// 3// {}", "f {} 1// 3//"])
+def test_a_broken_corner_names_its_line(corner: str, where: str) -> None:
+    text = SQUARE_OBJ + f"f 1// 2// 3//\n\n{where.format(corner)}"
     with pytest.raises(MeshFileError) as error:
         read_mesh(text.encode(), "bad.obj")
     assert str(error.value) == (
