@@ -310,35 +310,48 @@ _Fields = tuple[NDArray[np.int64], NDArray[np.int64] | None, NDArray[np.int64] |
 def _fields(corners: list[str]) -> _Fields:
     """Vertex, texture and normal index of every corner as written (0 where a field is empty,
     ``None`` for the normal unless every corner has one, and for texture indices when the
-    form is uniform: they are not used)."""
+    form is uniform: they are not used).
+
+    When every corner has the same form (``v``, ``v/vt``, ``v/vt/vn``, ``v//vn`` or ``v//``),
+    all are split at once; anything else, corner by corner.
+    """
     text = " ".join(corners)
     slashes, count = text.count("/"), len(corners)
     try:
         if not slashes:
             return _ints(text.split()), None, None
-        doubles = text.count("//")
-        if slashes == 2 * count and doubles == count:  # v//vn, or v// with the normal left out
-            tokens = text.replace("//", " ").split()
-            if len(tokens) == 2 * count:
+        per_corner = slashes // count if slashes in (count, 2 * count) else 0
+        if per_corner and _same_slashes(text, per_corner, count):
+            # Now each corner is a/b (one slash) or a/b/c (two); empty fields show as fewer
+            # numbers, and "//" (an empty b) in every corner or in none settles which.
+            tokens, doubles = text.replace("/", " ").split(), text.count("//")
+            if per_corner == 1 and len(tokens) == 2 * count:  # v/vt
+                return _ints(tokens[0::2]), None, None
+            if not doubles and len(tokens) == 3 * count:  # v/vt/vn
+                return _ints(tokens[0::3]), None, _ints(tokens[2::3])
+            if doubles == count and len(tokens) == 2 * count:  # v//vn
                 return _ints(tokens[0::2]), None, _ints(tokens[1::2])
-            # Every corner "X//" with X not empty: "//5 1//" also has one number a corner.
-            if len(tokens) == count and _every_corner_ends(text, "//", count):
+            # v//: "//5 1//" has one number a corner too, so every corner must end "//".
+            if doubles == count and len(tokens) == count and _every_corner_ends(text, "//"):
                 return _ints(tokens), None, None
-        if slashes in (count, 2 * count) and not doubles:  # v/vt or v/vt/vn
-            width = slashes // count + 1
-            tokens = text.replace("/", " ").split()
-            if len(tokens) == width * count:
-                normal_ids = _ints(tokens[2::width]) if width == 3 else None
-                return _ints(tokens[0::width]), None, normal_ids
     except ValueError:
         pass
     return _mixed_fields(corners)
 
 
-def _every_corner_ends(text: str, end: str, count: int) -> bool:
-    """Whether each of the ``count`` corners in ``text`` ends with ``end`` (and no slash
-    follows it: ``"1////"`` is no ``"1//"``)."""
-    return "///" not in text and text.endswith(end) and text.count(end + " ") == count - 1
+def _same_slashes(text: str, slashes: int, count: int) -> bool:
+    """Whether each of the ``count`` space-separated corners in ``text`` has ``slashes``."""
+    separators = text.encode("latin-1").translate(None, _NOT_SEPARATORS)
+    return separators == (b"/" * slashes + b" ") * (count - 1) + b"/" * slashes
+
+
+#: Every byte but the space and the slash, for :func:`_same_slashes` to delete.
+_NOT_SEPARATORS = bytes(code for code in range(256) if code not in b" /")
+
+
+def _every_corner_ends(text: str, end: str) -> bool:
+    """Whether every space-separated corner in ``text`` ends with ``end``."""
+    return text.endswith(end) and text.count(end + " ") == text.count(" ")
 
 
 def _ints(tokens: list[str]) -> NDArray[np.int64]:

@@ -161,6 +161,9 @@ SQUARE_OBJ = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\nvn 0 0 -1\n"
         "f 1// 2//1 3//\nf 1//2 3// 4//1",  # some corners with a normal, some without
         "f 1 2/ 3//\nf 1/1/ 3/1 4",  # every form in one file
         "f 1// 2// 3//\nf 1 3 4",  # forms differing between faces
+        # One slash a corner on average, as in v/vt, but not in each: corner by corner.
+        "f 1 2/1/1 3/1\nf 1/1 3 4/1",
+        "f 1/1 2 3/1/1\nf 1 3/1/1 4/1",
     ],
 )
 def test_empty_fields_read_as_other_readers_do_and_drop_partial_normals(faces: str) -> None:
