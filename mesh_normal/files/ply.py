@@ -393,6 +393,9 @@ def _read_strips(element: _Element | None) -> _Strips | None:
     if element is None or key is None:
         return None
     counts, flat = _polygons(element.data[key])
+    item = np.dtype(element.lists[key][1])
+    if item.kind == "u":  # -1 stored unsigned is all ones (OpenGL's primitive restart index)
+        flat = np.where(flat == np.iinfo(item).max, -1, flat)
     triangles, source, dropped = strip_triangles(counts, flat)
     records = _count(len(counts), "triangle strip")
     restarts = int(np.sum(flat == -1))

@@ -115,3 +115,16 @@ def test_strip_triangles_of_nothing() -> None:
         np.zeros(2, dtype=np.intp), np.zeros(0, dtype=np.int64)
     )
     assert triangles.shape == (0, 3) and source.shape == (0,) and dropped == 0
+
+
+@pytest.mark.parametrize(("kind", "code"), [("uint", "I"), ("ushort", "H")])
+def test_an_unsigned_restart_is_all_ones(kind: str, code: str) -> None:
+    strip = [0, 1, 2, -1, 2, 3, 4]
+    data = strip_ply([strip], "binary_little_endian")
+    header, _, body = data.partition(b"end_header\n")
+    header = header.replace(b"list int int", f"list int {kind}".encode())
+    points = body[: 12 * len(ROW)]
+    stored = [index % 2 ** (8 * struct.calcsize(code)) for index in strip]
+    records = struct.pack(f"<i{len(strip)}{code}", len(strip), *stored)
+    mesh = read_mesh(header + b"end_header\n" + points + records, "unsigned.ply")
+    np.testing.assert_array_equal(mesh.faces, [[0, 1, 2], [2, 3, 4]])
