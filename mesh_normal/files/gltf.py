@@ -49,14 +49,16 @@ def _read(
     from trimesh.exchange.gltf import load_glb  # imported on first use: trimesh is slow to import
 
     check_extensions(header)
-    packed, decoded = packed_glb(header, chunk, resolve)
-    scene = load_glb(io.BytesIO(packed), merge_primitives=False, skip_materials=True)
+    packed = packed_glb(header, chunk, resolve)
+    scene = load_glb(io.BytesIO(packed.glb), merge_primitives=False, skip_materials=True)
     mesh = _flatten(scene, file_format)
     notes = []
-    if decoded:
-        notes.append(f"Decoded {decoded:,} quantized (normalized integer) glTF accessors.")
-    if "KHR_draco_mesh_compression" in (header.get("extensionsUsed") or []):
-        notes.append("Decoded Draco-compressed (KHR_draco_mesh_compression) primitives.")
+    if packed.draco:
+        notes.append(
+            f"Decoded {packed.draco:,} Draco-compressed (KHR_draco_mesh_compression) primitives."
+        )
+    if packed.quantized:
+        notes.append(f"Decoded {packed.quantized:,} quantized (normalized integer) glTF accessors.")
     return dataclasses.replace(mesh, notes=(*notes, *mesh.notes)) if notes else mesh
 
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import base64
 import binascii
+import dataclasses
 import importlib.util
 import json
 import struct
@@ -120,10 +121,17 @@ def check_extensions(header: dict[str, Any]) -> None:
         )
 
 
-def packed_glb(
-    header: dict[str, Any], glb_chunk: bytes | None, resolve: Resolver | None
-) -> tuple[bytes, int]:
-    """One GLB holding every buffer, and how many normalized accessors were decoded."""
+@dataclasses.dataclass(frozen=True, slots=True)
+class Packed:
+    """The GLB trimesh reads, and what was decoded on the way (for the notes)."""
+
+    glb: bytes
+    quantized: int  # normalized integer accessors decoded
+    draco: int  # Draco-compressed primitives decoded
+
+
+def packed_glb(header: dict[str, Any], glb_chunk: bytes | None, resolve: Resolver | None) -> Packed:
+    """One GLB holding every buffer, Draco and quantized accessors decoded."""
     blob = bytearray()
     starts = []
     for index, buffer in enumerate(header.get("buffers") or []):
@@ -138,12 +146,13 @@ def packed_glb(
         view["buffer"] = 0
         view.pop("extensions", None)  # EXT_meshopt_compression's own buffers: we read fallbacks
     header["buffers"] = [{"byteLength": len(blob)}] if blob else []
-    decoded = _decode_normalized(header, blob)
+    draco = _decode_draco(header, blob)
+    quantized = _decode_normalized(header, blob)
     for key in ("images", "textures", "samplers"):  # never read: the geometry needs none
         header.pop(key, None)
     for material in header.get("materials") or []:
         material.clear()
-    return _glb(header, bytes(blob)), decoded
+    return Packed(_glb(header, bytes(blob)), quantized, draco)
 
 
 def _buffer_bytes(
@@ -168,6 +177,79 @@ def _buffer_bytes(
             f"{where}; send a .zip holding the .gltf and its files, or a .glb."
         )
     return found[:length]
+
+
+def _decode_draco(header: dict[str, Any], blob: bytearray) -> int:
+    """Decode every Draco primitive into plain accessors appended to ``blob``.
+
+    Done here rather than by trimesh so that a Draco attribute holding quantized integers
+    (``normalized`` with an integer type, as gltf-transform writes) is decoded like any other:
+    DracoPy gives its integer values, which would be 32767 times too large as they are.
+    """
+    import DracoPy
+
+    decoded = 0
+    views, accessors = header.get("bufferViews") or [], header.get("accessors") or []
+    for mesh in header.get("meshes") or []:
+        for primitive in mesh.get("primitives") or []:
+            extension = (primitive.get("extensions") or {}).pop("KHR_draco_mesh_compression", None)
+            if extension is None:
+                continue
+            view = views[extension["bufferView"]]
+            start = view.get("byteOffset", 0)
+            try:
+                draco = DracoPy.decode(bytes(blob[start : start + view["byteLength"]]))
+            except Exception as error:  # DracoPy's own failures, worded once
+                raise MeshFileError(
+                    f"A Draco-compressed glTF primitive is broken: {error}."
+                ) from error
+            ids = extension.get("attributes") or {}
+            by_id = {attribute["unique_id"]: attribute["data"] for attribute in draco.attributes}
+            attributes = {}
+            for name in ("POSITION", "NORMAL"):
+                if name in ids and ids[name] in by_id and name in primitive.get("attributes", {}):
+                    target = accessors[primitive["attributes"][name]]
+                    values = np.asarray(by_id[ids[name]], dtype=np.float32).reshape(-1, 3)
+                    attributes[name] = _append(header, blob, values, 5126, target)
+            primitive["attributes"] = attributes
+            faces = getattr(draco, "faces", None)  # a point cloud has none
+            if faces is None:
+                primitive.pop("indices", None)
+            else:
+                indices = np.asarray(faces, dtype=np.uint32).reshape(-1)
+                primitive["indices"] = _append(header, blob, indices, 5125, None)
+            decoded += 1
+    return decoded
+
+
+def _append(
+    header: dict[str, Any],
+    blob: bytearray,
+    values: NDArray[Any],
+    component: int,
+    like: dict[str, Any] | None,
+) -> int:
+    """Append ``values`` as a new accessor (normalized as ``like`` says), giving its index."""
+    if like is not None and like.get("normalized") and like.get("componentType") in _NORMALIZED:
+        divisor = _NORMALIZED[like["componentType"]][1]
+        values = np.maximum(values / divisor, -1.0).astype(np.float32)
+    blob += b"\0" * (-len(blob) % 4)
+    views = header.setdefault("bufferViews", [])
+    views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": values.nbytes})
+    blob += np.ascontiguousarray(values).tobytes()
+    accessors = header.setdefault("accessors", [])
+    kind = "SCALAR" if values.ndim == 1 else "VEC3"
+    accessors.append(
+        {
+            "bufferView": len(views) - 1,
+            "componentType": component,
+            "count": len(values),
+            "type": kind,
+        }
+    )
+    if header.get("buffers"):
+        header["buffers"][0]["byteLength"] = len(blob)
+    return len(accessors) - 1
 
 
 def _decode_normalized(header: dict[str, Any], blob: bytearray) -> int:

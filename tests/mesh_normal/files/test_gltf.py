@@ -11,6 +11,7 @@ import trimesh
 
 from mesh_normal.files import MeshFileError, read_mesh
 from mesh_normal.files.gltf_buffers import glb_parts
+from tests.paths import DATA
 
 
 def scene() -> trimesh.Scene:
@@ -191,3 +192,13 @@ def test_gltf_alone_with_an_external_bin_says_to_send_a_zip_or_glb() -> None:
     assert error.value.status_code == 400
     assert "model.bin" in str(error.value) and "send a .zip" in str(error.value)
     assert ".glb" in str(error.value)
+
+
+def test_real_draco_holding_quantized_positions() -> None:
+    """gltf-transform's DenseSphere: int16 normalized positions inside Draco, node scale 0.93."""
+    mesh = read_mesh(DATA / "gltf" / "DenseSphere.glb")
+    assert len(mesh.faces) == 30720
+    radii = np.linalg.norm(mesh.vertices, axis=1)
+    assert radii.min() > 0.92 and radii.max() < 0.932  # not 32767 times that
+    assert trimesh.Trimesh(mesh.vertices, mesh.faces, process=False).volume > 0
+    assert "Decoded 1 Draco-compressed (KHR_draco_mesh_compression) primitives." in mesh.notes
