@@ -2,11 +2,12 @@
 and its ``.mtl``, textures), read as that mesh.
 
 The one member whose extension names a mesh format is read; a ``.gltf`` finds the files its
-URIs name among the other members, read only when asked for, so images cost nothing. Guarded
-against zip bombs: at most :data:`MAX_MEMBERS` members, a total uncompressed size of at most
-:data:`MAX_RATIO` times the archive and :data:`MAX_TOTAL` bytes (checked on the sizes the
-archive states, and again on the bytes really read), and no member named outside the archive
-(``..``, absolute paths).
+URIs name among the other members, read only when asked for, so images cost nothing.
+
+Guarded against zip bombs: at most :data:`MAX_MEMBERS` members; a total uncompressed size of
+at most :func:`unpack_limit` (:data:`MAX_RATIO` times the archive, at least :data:`MIN_LIMIT`,
+at most :data:`MAX_TOTAL`), checked on the sizes the archive states and again on the bytes
+really read; no member named outside the archive (``..``, absolute paths, drive letters).
 """
 
 from __future__ import annotations
@@ -25,7 +26,14 @@ MAX_MEMBERS = 1000
 #: Most bytes all members may hold together, uncompressed.
 MAX_TOTAL = 1 << 30
 #: Most uncompressed bytes per byte of archive (mesh files compress about 2 to 10 times).
-MAX_RATIO = 100
+MAX_RATIO = 50
+#: What any archive may unpack to, whatever its ratio: a small file compresses well.
+MIN_LIMIT = 1 << 20
+
+
+def unpack_limit(size: int) -> int:
+    """Most bytes an archive of ``size`` bytes may unpack to."""
+    return min(MAX_TOTAL, max(MIN_LIMIT, MAX_RATIO * size))
 
 
 def read_zip(data: bytes, read_file: Callable[[bytes, str], LoadedMesh]) -> LoadedMesh:
@@ -39,7 +47,7 @@ def read_zip(data: bytes, read_file: Callable[[bytes, str], LoadedMesh]) -> Load
     with archive:
         members = _checked_members(archive, len(data))
         member = _mesh_member(members)
-        budget = _Budget(min(MAX_TOTAL, MAX_RATIO * len(data)))
+        budget = _Budget(unpack_limit(len(data)))
         mesh = _read_member(archive, member, members, budget, read_file)
     note = f"Read {member.filename} from the .zip file."
     return dataclasses.replace(mesh, notes=(note, *mesh.notes))
@@ -51,10 +59,10 @@ def _checked_members(archive: zipfile.ZipFile, size: int) -> dict[str, zipfile.Z
     if len(infos) > MAX_MEMBERS:
         raise MeshFileError(f"The .zip file holds {len(infos):,} members; at most {MAX_MEMBERS:,}.")
     total = sum(info.file_size for info in infos)
-    if total > min(MAX_TOTAL, MAX_RATIO * size):
+    if total > unpack_limit(size):
         raise MeshFileError(
             f"The .zip file would unpack to {total:,} bytes, more than this reader accepts "
-            f"({MAX_RATIO} times the archive, at most {MAX_TOTAL:,} bytes)."
+            f"({unpack_limit(size):,}: {MAX_RATIO} times the archive, at most {MAX_TOTAL:,})."
         )
     members = {}
     for info in infos:

@@ -171,9 +171,9 @@ def _buffer_bytes(
             raise MeshFileError(f"glTF buffer {index} has a broken data: URI.") from error
     found = resolve(urllib.parse.unquote(uri)) if resolve is not None else None
     if found is None:
-        where = "in the .zip" if resolve is not None else "with the upload"
+        where = "is not in the .zip" if resolve is not None else "does not come with it"
         raise MeshFileError(
-            f"The glTF file refers to the separate buffer file {uri[:100]}, which is not "
+            f"The glTF file refers to the separate buffer file {uri[:100]}, which "
             f"{where}; send a .zip holding the .gltf and its files, or a .glb."
         )
     return found[:length]

@@ -137,3 +137,9 @@ def test_real_meshopt_is_a_415_naming_it() -> None:
         read_mesh(GLTF / "BoxMeshopt.glb")
     assert error.value.status_code == 415
     assert "This glTF needs EXT_meshopt_compression, which is not supported" in str(error.value)
+
+
+def test_the_unpack_limit() -> None:
+    assert archive.unpack_limit(100) == 1 << 20  # a small file may compress very well
+    assert archive.unpack_limit(1_000_000) == 50_000_000
+    assert archive.unpack_limit(1 << 30) == 1 << 30
