@@ -25,7 +25,8 @@ from app.web.middleware import size_text
 from app.web.templating import templates
 from mesh_normal.analysis import analyse_mesh, build_report
 from mesh_normal.exports import FORMATS, KINDS
-from mesh_normal.files import SUFFIXES, WRITABLE
+from mesh_normal.files import WRITABLE
+from mesh_normal.files.formats import ACCEPTED_SUFFIXES
 from mesh_normal.vertices import Weighting
 
 router = APIRouter(include_in_schema=False)
@@ -40,7 +41,7 @@ def _form_context(request: Request) -> dict[str, Any]:
     """What the upload form needs: the accepted suffixes and the app's size limit."""
     limit: int = request.app.state.upload_limit
     return {
-        "suffixes": sorted(suffix.lstrip(".") for suffix in SUFFIXES),
+        "suffixes": [suffix.lstrip(".") for suffix in ACCEPTED_SUFFIXES],
         "limit": limit,
         "limit_text": size_text(limit),
         "report": None,

@@ -15,7 +15,7 @@ from starlette.datastructures import UploadFile
 from starlette.exceptions import HTTPException
 
 from app.web.errors import ApiError
-from mesh_normal.files import SUFFIXES
+from mesh_normal.files.formats import ACCEPTED_SUFFIXES
 
 #: A tetrahedron as OBJ text: the example upload in the API documentation.
 EXAMPLE_FILE = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
@@ -32,7 +32,9 @@ UPLOAD_BODY: dict[str, Any] = {
                         "file": {
                             "type": "string",
                             "format": "binary",
-                            "description": "The mesh file: " + ", ".join(sorted(SUFFIXES)) + ".",
+                            "description": "The mesh file: "
+                            + ", ".join(ACCEPTED_SUFFIXES)
+                            + " (a .zip holds one mesh file with its .bin or .mtl).",
                             "example": EXAMPLE_FILE,
                         }
                     },

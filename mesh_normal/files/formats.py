@@ -80,6 +80,14 @@ SUFFIXES: dict[str, str] = {
     suffix: entry.name for entry in FORMATS.values() for suffix in entry.suffixes
 }
 
+#: Archives :func:`~mesh_normal.files.read_mesh` opens to read the one mesh file inside, with
+#: its neighbours (a ``.gltf`` and its ``.bin``): see :mod:`mesh_normal.files.archive`. Not
+#: formats of their own: the mesh keeps the format of the file inside.
+ARCHIVE_SUFFIXES: tuple[str, ...] = (".zip",)
+
+#: Every suffix :func:`~mesh_normal.files.read_mesh` takes, sorted: the formats' and archives'.
+ACCEPTED_SUFFIXES: tuple[str, ...] = tuple(sorted((*SUFFIXES, *ARCHIVE_SUFFIXES)))
+
 #: The formats :func:`~mesh_normal.files.write_mesh` can write, in order of preference.
 WRITABLE: tuple[str, ...] = tuple(name for name, entry in FORMATS.items() if entry.writable)
 

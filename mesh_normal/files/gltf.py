@@ -5,12 +5,16 @@ scene graph, with its node's world transform applied (a mesh used by two nodes a
 ``NORMAL`` attributes, when every primitive has them, become the vertex normals, transformed by
 the inverse transpose of the transform and normalised. A node whose transform mirrors (negative
 determinant) has its triangles' winding reversed, as the glTF specification asks, so fronts
-stay fronts. Point and line primitives are skipped with a note. A ``.gltf`` file must embed
-its buffers (``data:`` URIs): an upload comes without its neighbouring files.
+stay fronts. Point and line primitives are skipped with a note.
+
+Before trimesh reads it, :mod:`mesh_normal.files.gltf_buffers` refuses required extensions we
+cannot honour, decodes quantized accessors and gathers the buffers: a ``.gltf`` sent alone must
+embed them (``data:`` URIs); one with separate ``.bin`` files comes in a ``.zip``.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import io
 from typing import Any
 
@@ -18,30 +22,44 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mesh_normal.files.errors import MeshFileError
+from mesh_normal.files.gltf_buffers import (
+    Resolver,
+    check_extensions,
+    glb_parts,
+    gltf_header,
+    packed_glb,
+)
 from mesh_normal.files.loaded import LoadedMesh, build
 
 
 def read_glb(data: bytes) -> LoadedMesh:
     """Read binary glTF (see the module docstring)."""
+    header, chunk = glb_parts(data)
+    return _read(header, chunk, None, "glb")
+
+
+def read_gltf(data: bytes, resolve: Resolver | None = None) -> LoadedMesh:
+    """Read JSON glTF; ``resolve`` finds the files its URIs name (from a ``.zip``), if any."""
+    return _read(gltf_header(data), None, resolve, "gltf")
+
+
+def _read(
+    header: dict[str, Any], chunk: bytes | None, resolve: Resolver | None, file_format: str
+) -> LoadedMesh:
     from trimesh.exchange.gltf import load_glb  # imported on first use: trimesh is slow to import
 
-    return _flatten(load_glb(io.BytesIO(data), merge_primitives=False), "glb")
-
-
-def read_gltf(data: bytes) -> LoadedMesh:
-    """Read JSON glTF with embedded buffers (see the module docstring)."""
-    try:
-        from trimesh.exchange.gltf import load_gltf
-
-        scene = load_gltf(io.BytesIO(data), resolver=None, merge_primitives=False)
-    except (FileNotFoundError, ValueError, AttributeError, TypeError) as error:
-        if b'"uri"' in data and b"data:" not in data:
-            raise MeshFileError(
-                "The glTF file refers to separate buffer files, which an upload "
-                "does not include; export it as GLB or with embedded buffers."
-            ) from error
-        raise
-    return _flatten(scene, "gltf")
+    check_extensions(header)
+    packed = packed_glb(header, chunk, resolve)
+    scene = load_glb(io.BytesIO(packed.glb), merge_primitives=False, skip_materials=True)
+    mesh = _flatten(scene, file_format)
+    notes = []
+    if packed.draco:
+        notes.append(
+            f"Decoded {packed.draco:,} Draco-compressed (KHR_draco_mesh_compression) primitives."
+        )
+    if packed.quantized:
+        notes.append(f"Decoded {packed.quantized:,} quantized (normalized integer) glTF accessors.")
+    return dataclasses.replace(mesh, notes=(*notes, *mesh.notes)) if notes else mesh
 
 
 def _world_transforms(scene: dict[str, Any]) -> list[tuple[NDArray[np.float64], str]]:

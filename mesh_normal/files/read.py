@@ -56,6 +56,10 @@ def read_mesh(source: MeshSource, filename: str | None = None) -> LoadedMesh:
         raise MeshFileError("The file is empty (0 bytes).")
     if data.startswith(b"\xef\xbb\xbf"):  # a UTF-8 byte order mark: text formats only
         data = data[3:]
+    if is_zip(data):
+        from mesh_normal.files.archive import read_zip
+
+        return read_zip(data, read_mesh)
     named = suffix_format(filename)
     found = sniff(data) or named
     if found is None:
@@ -121,6 +125,11 @@ def sniff(data: bytes) -> str | None:
     if b"\0" not in head and _OBJ.search(head):
         return "obj"
     return None
+
+
+def is_zip(data: bytes) -> bool:
+    """Whether the bytes are a ``.zip`` archive (a local file header, or an empty archive)."""
+    return data.startswith((b"PK\x03\x04", b"PK\x05\x06"))
 
 
 def unknown_format(filename: str | None) -> MeshFileError:

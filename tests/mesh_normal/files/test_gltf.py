@@ -1,10 +1,17 @@
 from __future__ import annotations
 
+import importlib.util
+import json
+import struct
+from typing import Any
+
 import numpy as np
 import pytest
 import trimesh
 
 from mesh_normal.files import MeshFileError, read_mesh
+from mesh_normal.files.gltf_buffers import glb_parts
+from tests.paths import DATA
 
 
 def scene() -> trimesh.Scene:
@@ -55,3 +62,143 @@ def test_external_buffers_are_named() -> None:
     )
     with pytest.raises(MeshFileError):
         read_mesh(data, "x.gltf")
+
+
+def glb(header: dict[str, Any], blob: bytes) -> bytes:
+    """A GLB written by hand: the JSON chunk, then the binary chunk."""
+    text = json.dumps(header).encode()
+    text += b" " * (-len(text) % 4)
+    blob += b"\0" * (-len(blob) % 4)
+    body = struct.pack("<II", len(text), 0x4E4F534A) + text
+    body += struct.pack("<II", len(blob), 0x004E4942) + blob
+    return struct.pack("<III", 0x46546C67, 2, 12 + len(body)) + body
+
+
+TETRA = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=np.float64)
+TETRA_FACES = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]], dtype=np.uint16)
+
+
+def quantized_tetra(
+    component: int, dtype: str, scale: float, normalized: bool = True, stride: int = 0
+) -> bytes:
+    """A tetrahedron whose positions are integers ``TETRA * scale`` (KHR_mesh_quantization),
+    laid out with ``stride`` bytes a row when given, and its indices after them."""
+    item = np.dtype(dtype).itemsize
+    rows = np.zeros((4, max(stride, 3 * item)), dtype=np.uint8)
+    rows[:, : 3 * item] = (TETRA * scale).astype(dtype).view(np.uint8).reshape(4, -1)
+    positions = rows.tobytes()
+    indices = TETRA_FACES.tobytes()
+    view: dict[str, Any] = {"buffer": 0, "byteOffset": 0, "byteLength": len(positions)}
+    if stride:
+        view["byteStride"] = stride
+    header = {
+        "asset": {"version": "2.0"},
+        "extensionsUsed": ["KHR_mesh_quantization"],
+        "extensionsRequired": ["KHR_mesh_quantization"],
+        "buffers": [{"byteLength": len(positions) + len(indices)}],
+        "bufferViews": [
+            view,
+            {"buffer": 0, "byteOffset": len(positions), "byteLength": len(indices)},
+        ],
+        "accessors": [
+            {
+                "bufferView": 0,
+                "componentType": component,
+                "normalized": normalized,
+                "count": 4,
+                "type": "VEC3",
+            },
+            {"bufferView": 1, "componentType": 5123, "count": 12, "type": "SCALAR"},
+        ],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+        "nodes": [{"mesh": 0, "scale": [2.0, 2.0, 2.0]}],
+        "scenes": [{"nodes": [0]}],
+        "scene": 0,
+    }
+    return glb(header, positions + indices)
+
+
+@pytest.mark.parametrize(
+    ("component", "dtype", "scale"),
+    [(5120, "<i1", 127), (5121, "<u1", 255), (5122, "<i2", 32767), (5123, "<u2", 65535)],
+)
+def test_normalized_integer_positions_are_decoded(component: int, dtype: str, scale: int) -> None:
+    mesh = read_mesh(quantized_tetra(component, dtype, scale), "q.glb")
+    np.testing.assert_allclose(mesh.vertices, TETRA * 2, atol=1e-6)  # the node scales by 2
+    np.testing.assert_array_equal(mesh.faces, TETRA_FACES)
+    assert "Decoded 1 quantized (normalized integer) glTF accessors." in mesh.notes
+
+
+def test_normalized_int16_with_a_stride_and_the_minus_one_clamp() -> None:
+    data = quantized_tetra(5122, "<i2", -32768, stride=8)  # -32768 / 32767 clamps to -1
+    mesh = read_mesh(data, "q.glb")
+    np.testing.assert_allclose(mesh.vertices, TETRA * -2, atol=1e-6)
+
+
+def test_unnormalized_integers_are_their_values() -> None:
+    mesh = read_mesh(quantized_tetra(5122, "<i2", 100, normalized=False), "q.glb")
+    np.testing.assert_allclose(mesh.vertices, TETRA * 200)
+
+
+@pytest.mark.parametrize(
+    "extension", ["EXT_meshopt_compression", "EXT_mesh_gpu_instancing", "KHR_made_up"]
+)
+def test_required_extensions_we_cannot_honour_are_named(extension: str) -> None:
+    header = {"asset": {"version": "2.0"}, "extensionsRequired": [extension], "meshes": []}
+    with pytest.raises(MeshFileError) as error:
+        read_mesh(glb(header, b""), "x.glb")
+    assert error.value.status_code == 415
+    assert f"This glTF needs {extension}, which is not supported" in str(error.value)
+
+
+def test_extensions_that_only_change_looks_are_ignored() -> None:
+    data = bytearray(quantized_tetra(5122, "<i2", 32767))
+    header, chunk = glb_parts(bytes(data))
+    header["extensionsRequired"] += ["KHR_materials_unlit", "KHR_texture_transform"]
+    mesh = read_mesh(glb(header, chunk or b""), "x.glb")
+    assert len(mesh.faces) == 4
+
+
+def test_draco_is_decoded() -> None:
+    source = trimesh.creation.icosphere(2)
+    data = trimesh.Scene(source).export(file_type="glb", extension_draco=True)
+    header, _ = glb_parts(data)
+    assert "KHR_draco_mesh_compression" in header["extensionsRequired"]
+    mesh = read_mesh(data, "ball.glb")
+    assert len(mesh.faces) == len(source.faces)
+    areas = trimesh.Trimesh(mesh.vertices, mesh.faces, process=False).area_faces
+    assert areas.min() > 0  # never the placeholder zeros
+    np.testing.assert_allclose(np.linalg.norm(mesh.vertices, axis=1), 1, atol=1e-3)
+    assert any("Draco" in note for note in mesh.notes)
+
+
+def test_draco_without_dracopy_is_a_415_naming_it(monkeypatch: pytest.MonkeyPatch) -> None:
+    data = trimesh.Scene(trimesh.creation.box()).export(file_type="glb", extension_draco=True)
+    real = importlib.util.find_spec
+    monkeypatch.setattr(
+        importlib.util, "find_spec", lambda name, *a: None if name == "DracoPy" else real(name, *a)
+    )
+    with pytest.raises(MeshFileError) as error:
+        read_mesh(data, "box.glb")
+    assert error.value.status_code == 415 and "DracoPy" in str(error.value)
+
+
+def test_gltf_alone_with_an_external_bin_says_to_send_a_zip_or_glb() -> None:
+    data = json.dumps(
+        {"asset": {"version": "2.0"}, "buffers": [{"uri": "model.bin", "byteLength": 12}]}
+    ).encode()
+    with pytest.raises(MeshFileError) as error:
+        read_mesh(data, "x.gltf")
+    assert error.value.status_code == 400
+    assert "model.bin" in str(error.value) and "send a .zip" in str(error.value)
+    assert ".glb" in str(error.value)
+
+
+def test_real_draco_holding_quantized_positions() -> None:
+    """gltf-transform's DenseSphere: int16 normalized positions inside Draco, node scale 0.93."""
+    mesh = read_mesh(DATA / "gltf" / "DenseSphere.glb")
+    assert len(mesh.faces) == 30720
+    radii = np.linalg.norm(mesh.vertices, axis=1)
+    assert radii.min() > 0.92 and radii.max() < 0.932  # not 32767 times that
+    assert trimesh.Trimesh(mesh.vertices, mesh.faces, process=False).volume > 0
+    assert "Decoded 1 Draco-compressed (KHR_draco_mesh_compression) primitives." in mesh.notes
