@@ -8,6 +8,8 @@
 
 The best match is the candidate with which most stored normals agree (within
 ``AGREEMENT_DEGREES``); ties go to the smaller median angle, then to the earlier candidate.
+Both are taken up to the sign (see :meth:`Angles.rank`): normals stored inside out still name
+the weighting they were made with, and count as opposite.
 
 Angles are taken as ``2 atan2(|a - b|, |a + b|)`` for unit a and b (Kahan): accurate over the
 whole range, where the arccosine of a dot product rounds every angle below about 1e-8 rad to
@@ -89,16 +91,18 @@ class Angles:
         """How many angles are within ``AGREEMENT_DEGREES``."""
         return int(np.count_nonzero(self.radians <= math.radians(AGREEMENT_DEGREES)))
 
-    def median(self) -> float:
-        """The median angle in radians (infinite when none was compared, for ranking)."""
-        return float(np.median(self.radians)) if len(self.radians) else math.inf
-
     def rank(self) -> tuple[int, float]:
-        """Smaller is better: most agreeing, then the smallest median."""
-        return -self.agreeing(), self.median()
+        """Smaller is better: most agreeing, then the smallest median, by the angle between
+        the lines (the smaller of the angle and 180 degrees minus it), so that normals stored
+        inside out still find the weighting they were made with."""
+        lines = np.minimum(self.radians, math.pi - self.radians)
+        agreeing = int(np.count_nonzero(lines <= math.radians(AGREEMENT_DEGREES)))
+        return -agreeing, float(np.median(lines)) if len(lines) else math.inf
 
     def exact(self) -> bool:
-        """Every compared angle is below ``EXACT_DEGREES`` (and at least one was compared)."""
+        """Every compared angle is below ``EXACT_DEGREES`` (and at least one was compared).
+
+        Only normals that agree stop the search early; inside-out ones try every candidate."""
         return bool(len(self.radians)) and float(self.radians.max()) < math.radians(EXACT_DEGREES)
 
 
