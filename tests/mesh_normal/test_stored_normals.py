@@ -327,3 +327,22 @@ def test_median_is_at_most_the_maximum(seed: int, noise: float, flips: float, ki
         assert found.agreeing + found.opposite <= found.compared
     else:
         assert found.median_angle_degrees is None and found.max_angle_degrees is None
+
+
+@pytest.mark.parametrize(("kind", "weighting"), [("vertex", "max"), ("corner", "uniform")])
+def test_the_advice_recomputes_the_normals_the_file_holds(kind: str, weighting: Weighting) -> None:
+    """Inside-out normals: the snippet makes the file's kind and weighting, the right way out."""
+    vertices, faces = prism()
+    if kind == "vertex":
+        made = vertex_normals(vertices, faces, weighting).normals
+        data = obj_vertex_normals(vertices, faces, -made)
+    else:
+        made = corner_normals(vertices, faces, crease_angle=60, weighting=weighting).normals
+        data = obj_corner_normals(vertices, faces, -made)
+    report = report_of(data, "p.obj")
+    assert report.file_normals is not None and report.file_normals.kind == kind
+    [problem] = [item for item in report.problems if item.code == "file_normals"]
+    assert problem.python is not None and f'weighting="{weighting}"' in problem.python
+    scope: dict[str, Any] = {"vertices": vertices, "faces": faces}
+    exec(problem.python, scope)
+    np.testing.assert_allclose(scope["normals"], made, atol=1e-12)
