@@ -358,3 +358,20 @@ def test_a_meshlab_obj_whose_vn_follow_v_agrees() -> None:
     assert (stored.kind, stored.weighting, stored.stored) == ("vertex", "angle", 502)
     assert stored.agreeing == stored.compared == 502 and stored.opposite == 0
     assert stored.max_angle_degrees is not None and stored.max_angle_degrees < 0.05
+
+
+def test_zero_vertex_normals_are_unusable_and_the_json_has_no_nan() -> None:
+    vertices, faces = blob()
+    normals = vertex_normals(vertices, faces, "angle").normals
+    normals[:10] = 0.0
+    report = report_of(ply_text(vertices, faces, normals), "blob.ply")
+    stored = report.file_normals
+    assert stored is not None and stored.unusable == 10
+    assert stored.compared == stored.agreeing == len(vertices) - 10
+    data = strict(report)["file_normals"]
+    assert data["weighting"] == "angle" and data["crease_angle_degrees"] is None
+    everything = report_of(ply_text(vertices, faces, 0 * normals), "blob.ply")
+    none = everything.file_normals
+    assert none is not None and (none.compared, none.unusable) == (0, len(vertices))
+    assert none.median_angle_degrees is None and none.max_angle_degrees is None
+    assert strict(everything)["file_normals"]["median_angle_degrees"] is None
