@@ -77,14 +77,12 @@ class Angles:
     Attributes
     ----------
     candidate : Candidate
-    compared : (k,) bool
-        The stored normal is usable and the candidate has one.
     radians : (c,) float64
-        The angle at each compared row, in order.
+        The angle at each compared row (the stored normal is usable and the candidate has
+        one), in order.
     """
 
     candidate: Candidate
-    compared: BoolArray
     radians: FloatArray
 
     def agreeing(self) -> int:
@@ -94,7 +92,8 @@ class Angles:
     def rank(self) -> tuple[int, float]:
         """Smaller is better: most agreeing, then the smallest median, by the angle between
         the lines (the smaller of the angle and 180 degrees minus it), so that normals stored
-        inside out still find the weighting they were made with."""
+        inside out still find the weighting they were made with.
+        """
         lines = np.minimum(self.radians, math.pi - self.radians)
         agreeing = int(np.count_nonzero(lines <= math.radians(AGREEMENT_DEGREES)))
         return -agreeing, float(np.median(lines)) if len(lines) else math.inf
@@ -102,7 +101,8 @@ class Angles:
     def exact(self) -> bool:
         """Every compared angle is below ``EXACT_DEGREES`` (and at least one was compared).
 
-        Only normals that agree stop the search early; inside-out ones try every candidate."""
+        Only normals that agree stop the search early; inside-out ones try every candidate.
+        """
         return bool(len(self.radians)) and float(self.radians.max()) < math.radians(EXACT_DEGREES)
 
 
@@ -150,7 +150,7 @@ def angles_between(unit: FloatArray, usable: BoolArray, candidate: Candidate) ->
         np.sqrt(np.einsum("ij,ij->i", difference, difference)),
         np.sqrt(np.einsum("ij,ij->i", total, total)),
     )
-    return Angles(candidate, compared, radians)
+    return Angles(candidate, radians)
 
 
 def best_match(
@@ -158,10 +158,12 @@ def best_match(
 ) -> Angles | None:
     """The candidate that matches best (see the module's rule), computing no more than needed."""
     best: Angles | None = None
+    best_rank = (1, math.inf)  # worse than any candidate's
     for candidate in candidates:
         angles = angles_between(unit, usable, candidate)
-        if best is None or angles.rank() < best.rank():
-            best = angles
+        rank = angles.rank()
+        if best is None or rank < best_rank:
+            best, best_rank = angles, rank
         if best.exact():
             break
     return best
