@@ -6,6 +6,7 @@ import numpy as np
 
 from mesh_normal.corners import corner_normals
 from mesh_normal.faces import face_geometry, face_normals
+from mesh_normal.files.polygons import triangulate
 from mesh_normal.orientation import orient
 from mesh_normal.vertices import vertex_normals
 
@@ -20,3 +21,6 @@ def compile_kernels() -> None:
     vertex_normals(geometry)  # one kernel for every weighting
     corner_normals(geometry, crease_angle=30.0)
     orient(geometry)
+    triangulate(
+        np.array([4]), np.arange(4), np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]])
+    )

@@ -29,12 +29,13 @@ class LoadedMesh:
     vertices : (n, 3) float64
         In file order; for STL, the welded corners in order of first appearance.
     faces : (m, 3) intp
-        Triangles in file order; a polygon becomes ``k - 2`` consecutive fan triangles.
+        Triangles in file order; a polygon becomes ``k - 2`` consecutive fan triangles, and
+        PLY triangle strips follow the faces as their triangles.
     format : str
         ``"stl"``, ``"obj"``, ``"ply"``, ``"off"``, ``"glb"`` or ``"gltf"``.
     source_faces : int
         Faces as written in the file, before triangulation (and before skipping any with fewer
-        than three corners).
+        than three corners); a PLY triangle strip record counts as one.
     file_face_normals : (m, 3) float64 or None
         Normals the file stores per face (STL facet normals, PLY face ``nx ny nz``), repeated
         for each triangle of a polygon; as stored, not normalised. ``None`` when the file has
@@ -44,6 +45,12 @@ class LoadedMesh:
         ``NORMAL`` (transformed with its node, normalised).
     file_corner_normals : (m, 3, 3) float64 or None
         OBJ ``f v//vn`` normals per corner of each triangle, when every corner has one.
+    face_groups : (m,) intp or None
+        The group of each triangle, an index into ``group_names``; ``None`` when the file has
+        no groups (only OBJ ``o`` and ``g`` make them).
+    group_names : tuple of str or None
+        Names of the groups, in order of their first triangle (each named group has one);
+        ``None`` exactly when ``face_groups`` is.
     notes : tuple of str
         Plain sentences about what reading did (welding, triangulation, skipped elements).
     from_reader : bool
@@ -58,6 +65,8 @@ class LoadedMesh:
     file_face_normals: FloatArray | None = None
     file_vertex_normals: FloatArray | None = None
     file_corner_normals: FloatArray | None = None
+    face_groups: IndexArray | None = None
+    group_names: tuple[str, ...] | None = None
     notes: tuple[str, ...] = ()
     from_reader: bool = field(default=False, repr=False, compare=False)
 
@@ -84,6 +93,8 @@ def build(
     face_normals: NDArray[np.floating] | None = None,
     vertex_normals: NDArray[np.floating] | None = None,
     corner_normals: NDArray[np.floating] | None = None,
+    face_groups: NDArray[np.integer] | None = None,
+    group_names: Sequence[str] | None = None,
     notes: Sequence[str] = (),
     vertex: Describe | None = None,
     face: Describe | None = None,
@@ -114,6 +125,8 @@ def build(
         file_face_normals=_optional(face_normals, (len(triangles), 3)),
         file_vertex_normals=_optional(vertex_normals, (len(points), 3)),
         file_corner_normals=_optional(corner_normals, (len(triangles), 3, 3)),
+        face_groups=_groups(face_groups, group_names, len(triangles)),
+        group_names=None if group_names is None else tuple(group_names),
         notes=tuple(notes),
         from_reader=True,
     )
@@ -168,4 +181,19 @@ def _optional(array: NDArray[np.floating] | None, shape: tuple[int, ...]) -> Flo
     result = np.ascontiguousarray(array, dtype=np.float64)
     if result.shape != shape:  # a reader's bug, not the file's: fail loudly in tests
         raise AssertionError(f"file normals of shape {result.shape}, expected {shape}")
+    return result
+
+
+def _groups(
+    groups: NDArray[np.integer] | None, names: Sequence[str] | None, count: int
+) -> IndexArray | None:
+    """The group index of every triangle, read-only; a reader's mistake fails loudly."""
+    if groups is None or names is None:
+        if groups is not None or names is not None:
+            raise AssertionError("face_groups and group_names come together")
+        return None
+    result = np.ascontiguousarray(groups, dtype=np.intp)
+    if result.shape != (count,) or (count and not 0 <= result.min() <= result.max() < len(names)):
+        raise AssertionError(f"face groups of shape {result.shape} for {len(names)} names")
+    result.setflags(write=False)
     return result

@@ -4,9 +4,15 @@ trimesh's OBJ loader, even with ``process=False``, drops vertices no face uses a
 vertices where texture coordinates differ (a seam), so its arrays no longer line up with the
 file's. Here ``v x y z [w] [r g b]`` keeps x, y, z; ``f`` takes ``v``, ``v/vt``, ``v//vn`` and
 ``v/vt/vn`` corners with 1-based or negative (relative) indices, polygons fan-triangulated;
-``vt`` is only counted; ``l`` and ``p`` are skipped with a note; ``o``, ``g``, ``s``,
-``usemtl``, ``mtllib`` and other statements are ignored; a backslash at a line's end continues
-it. Errors name the line.
+``vt`` is only counted; ``l`` and ``p`` are skipped with a note; ``s``, ``usemtl``,
+``mtllib`` and other statements are ignored; a backslash at a line's end continues it. Errors
+name the line.
+
+Groups: each face belongs to the latest ``o`` (object) and ``g`` (group) before it, named
+``"object"``, ``"group"`` or ``"object/group"`` when both are given (an ``o`` ends the group
+before it, and so does a ``g`` without a name; ``g`` with several names keeps them, ``"a b"``).
+Faces before any are in ``"default"``, as the OBJ specification names it; the same name again
+is the same group. A file without ``o`` and ``g`` has no groups.
 
 Normals: per corner when every face corner names a ``vn``; per vertex as well when each vertex
 is always given the same normal vector.
@@ -23,11 +29,9 @@ from numpy.typing import NDArray
 from mesh_normal.files.errors import MeshFileError
 from mesh_normal.files.formats import MAKER
 from mesh_normal.files.loaded import LoadedMesh, build
-from mesh_normal.files.polygons import fan
+from mesh_normal.files.polygons import triangulate
 
 _IGNORED = {
-    "o",
-    "g",
     "s",
     "usemtl",
     "mtllib",
@@ -48,9 +52,10 @@ _IGNORED = {
 }
 
 
-_KINDS = {"v ": 1, "vn": 2, "vt": 3, "f ": 4, "": 0}
-_KEYS = {"v": 1, "vn": 2, "vt": 3, "f": 4, "l": 5, "p": 6}
-IGNORE, VERTEX, NORMAL, TEXTURE, FACE, LINE, POINT, OTHER = range(8)
+_KINDS = {"v ": 1, "vn": 2, "vt": 3, "f ": 4, "o ": 5, "g ": 6, "": 0}
+_KEYS = {"v": 1, "vn": 2, "vt": 3, "f": 4, "o": 5, "g": 6, "l": 7, "p": 8}
+IGNORE, VERTEX, NORMAL, TEXTURE, FACE, OBJECT, GROUP, LINE, POINT, OTHER = range(10)
+_DEFAULT_GROUP = "default"
 
 
 @dataclass(frozen=True, slots=True)
@@ -69,6 +74,9 @@ class _Statements:
     face_lines : (p,) intp
     vertices_before, normals_before : (p,) intp
         How many ``v`` and ``vn`` statements come before each face (for negative indices).
+    face_labels : (p,) intp or None
+        Each face's group, an index into ``labels``; ``None`` without ``o`` and ``g``.
+    labels : list of str
     notes : list of str
     """
 
@@ -80,6 +88,8 @@ class _Statements:
     face_lines: NDArray[np.intp]
     vertices_before: NDArray[np.intp]
     normals_before: NDArray[np.intp]
+    face_labels: NDArray[np.intp] | None
+    labels: list[str]
     notes: list[str]
 
 
@@ -88,9 +98,10 @@ def read_obj(data: bytes) -> LoadedMesh:
     found = _scan(data.decode("latin-1"))
     vertices, counts = found.vertices, found.counts
     vertex_ids, normal_ids = _corner_indices(found)
-    positions, source, notes = fan(counts)
+    positions, source, notes = triangulate(counts, vertex_ids, vertices)
     faces = vertex_ids[positions]
     face_line = found.face_lines[source]
+    face_groups, group_names = _triangle_groups(found, source)
     corner_normals = vertex_normals = None
     if normal_ids is not None and len(faces):
         corner_normals = found.normals[normal_ids[positions]]
@@ -102,6 +113,8 @@ def read_obj(data: bytes) -> LoadedMesh:
         source_faces=len(counts),
         corner_normals=corner_normals,
         vertex_normals=vertex_normals,
+        face_groups=face_groups,
+        group_names=group_names,
         notes=[*notes, *found.notes],
         vertex=lambda i: f"vertex {i + 1:,} (line {found.vertex_lines[i]:,})",
         face=lambda i: f"the face on line {face_line[i]:,}",
@@ -109,7 +122,13 @@ def read_obj(data: bytes) -> LoadedMesh:
 
 
 def _logical_lines(text: str) -> tuple[list[str], NDArray[np.intp]]:
-    """The lines, with backslash continuations joined, and each one's 1-based line number."""
+    """The lines, with backslash continuations joined, and each one's 1-based line number
+    (of its first physical line).
+
+    Spaces after the backslash still continue (editors leave them and nobody sees them). A
+    comment line ending in a backslash does not: it would silently swallow the statement
+    after it, and comments end in one innocently (``# saved in C:\\models\\``).
+    """
     lines = text.splitlines()
     if "\\" not in text:
         return lines, np.arange(1, len(lines) + 1)
@@ -117,8 +136,9 @@ def _logical_lines(text: str) -> tuple[list[str], NDArray[np.intp]]:
     numbers: list[int] = []
     pending: list[str] = []
     for number, line in enumerate(lines, 1):
-        if line.endswith("\\"):
-            pending.append(line[:-1])
+        end = line.rstrip()
+        if end.endswith("\\") and (pending or not end.lstrip().startswith("#")):
+            pending.append(end[:-1])
             continue
         numbers.append(number - len(pending))
         joined.append(" ".join([*pending, line]))
@@ -144,6 +164,9 @@ def _scan(text: str) -> _Statements:
         if kinds[row] >= LINE:
             other[key] += 1
     rows = {kind: np.flatnonzero(kinds == kind) for kind in (VERTEX, NORMAL, FACE)}
+    face_labels, labels = _face_labels(
+        lines, np.flatnonzero(np.isin(kinds, (OBJECT, GROUP))), rows[FACE]
+    )
     vertices = _numbers([lines[row] for row in rows[VERTEX]], numbers[rows[VERTEX]], "v")
     normals = _numbers([lines[row] for row in rows[NORMAL]], numbers[rows[NORMAL]], "vn")
     # A comment may follow a face's corners: "f 1 2 3 # the lid".
@@ -162,8 +185,51 @@ def _scan(text: str) -> _Statements:
         face_lines=numbers[rows[FACE]],
         vertices_before=np.searchsorted(rows[VERTEX], rows[FACE]),
         normals_before=np.searchsorted(rows[NORMAL], rows[FACE]),
+        face_labels=face_labels,
+        labels=labels,
         notes=_skipped(other),
     )
+
+
+def _face_labels(
+    lines: list[str], statements: NDArray[np.intp], faces: NDArray[np.intp]
+) -> tuple[NDArray[np.intp] | None, list[str]]:
+    """Each face's group (see the module docstring) and the group names, from the rows of the
+    ``o`` and ``g`` statements and of the faces."""
+    if not len(statements):
+        return None, []
+    labels = [_DEFAULT_GROUP]
+    index = {_DEFAULT_GROUP: 0}
+    current = np.empty(len(statements), dtype=np.intp)
+    thing = group = ""
+    for position, row in enumerate(statements.tolist()):
+        keyword, *names = lines[row].partition("#")[0].split()
+        name = " ".join(names)
+        if keyword == "o":
+            thing, group = name, ""
+        else:
+            group = name
+        label = "/".join(part for part in (thing, group) if part) or _DEFAULT_GROUP
+        current[position] = index.setdefault(label, len(labels))
+        if len(labels) < len(index):
+            labels.append(label)
+    latest = np.searchsorted(statements, faces) - 1  # the last statement before each face
+    return np.where(latest >= 0, current[np.maximum(latest, 0)], 0), labels
+
+
+def _triangle_groups(
+    found: _Statements, source: NDArray[np.intp]
+) -> tuple[NDArray[np.intp] | None, list[str] | None]:
+    """Each triangle's group, numbered by first triangle, and the names of groups with one."""
+    if found.face_labels is None:
+        return None, None
+    used, first, numbered = np.unique(
+        found.face_labels[source], return_index=True, return_inverse=True
+    )
+    order = np.argsort(first, kind="stable")  # number groups by their first triangle
+    renumber = np.empty_like(order)
+    renumber[order] = np.arange(len(order))
+    return renumber[numbered.ravel()], [found.labels[label] for label in used[order]]
 
 
 def _numbers(lines: list[str], numbers: NDArray[np.intp], key: str) -> NDArray[np.float64]:
@@ -210,8 +276,12 @@ def _face_corners(lines: list[str]) -> tuple[list[str], NDArray[np.intp]]:
 
 def _corner_indices(found: _Statements) -> tuple[NDArray[np.intp], NDArray[np.intp] | None]:
     """0-based vertex index of every corner, and normal index when every corner has one."""
-    fields = _fields(found.corners)
     face_of_corner = np.repeat(np.arange(len(found.counts)), found.counts)
+    try:
+        fields = _fields(found.corners)
+    except _BadCorner as bad:
+        line = int(found.face_lines[face_of_corner[bad.position]])
+        raise _BadCorner(bad.corner, bad.position, line) from None
     vertex_ids = _resolve(
         fields[0],
         face_of_corner,
@@ -240,25 +310,48 @@ _Fields = tuple[NDArray[np.int64], NDArray[np.int64] | None, NDArray[np.int64] |
 def _fields(corners: list[str]) -> _Fields:
     """Vertex, texture and normal index of every corner as written (0 where a field is empty,
     ``None`` for the normal unless every corner has one, and for texture indices when the
-    form is uniform: they are not used)."""
+    form is uniform: they are not used).
+
+    When every corner has the same form (``v``, ``v/vt``, ``v/vt/vn``, ``v//vn`` or ``v//``),
+    all are split at once; anything else, corner by corner.
+    """
     text = " ".join(corners)
     slashes, count = text.count("/"), len(corners)
     try:
         if not slashes:
             return _ints(text.split()), None, None
-        doubles = text.count("//")
-        if slashes == 2 * count and doubles == count:  # v//vn
-            tokens = text.replace("//", " ").split()
-            return _ints(tokens[0::2]), None, _ints(tokens[1::2])
-        if slashes in (count, 2 * count) and not doubles:  # v/vt or v/vt/vn
-            width = slashes // count + 1
-            tokens = text.replace("/", " ").split()
-            if len(tokens) == width * count:
-                normal_ids = _ints(tokens[2::width]) if width == 3 else None
-                return _ints(tokens[0::width]), None, normal_ids
+        per_corner = slashes // count if slashes in (count, 2 * count) else 0
+        if per_corner and _same_slashes(text, per_corner, count):
+            # Now each corner is a/b (one slash) or a/b/c (two); empty fields show as fewer
+            # numbers, and "//" (an empty b) in every corner or in none settles which.
+            tokens, doubles = text.replace("/", " ").split(), text.count("//")
+            if per_corner == 1 and len(tokens) == 2 * count:  # v/vt
+                return _ints(tokens[0::2]), None, None
+            if not doubles and len(tokens) == 3 * count:  # v/vt/vn
+                return _ints(tokens[0::3]), None, _ints(tokens[2::3])
+            if doubles == count and len(tokens) == 2 * count:  # v//vn
+                return _ints(tokens[0::2]), None, _ints(tokens[1::2])
+            # v//: "//5 1//" has one number a corner too, so every corner must end "//".
+            if doubles == count and len(tokens) == count and _every_corner_ends(text, "//"):
+                return _ints(tokens), None, None
     except ValueError:
         pass
     return _mixed_fields(corners)
+
+
+def _same_slashes(text: str, slashes: int, count: int) -> bool:
+    """Whether each of the ``count`` space-separated corners in ``text`` has ``slashes``."""
+    separators = text.encode("latin-1").translate(None, _NOT_SEPARATORS)
+    return separators == (b"/" * slashes + b" ") * (count - 1) + b"/" * slashes
+
+
+#: Every byte but the space and the slash, for :func:`_same_slashes` to delete.
+_NOT_SEPARATORS = bytes(code for code in range(256) if code not in b" /")
+
+
+def _every_corner_ends(text: str, end: str) -> bool:
+    """Whether every space-separated corner in ``text`` ends with ``end``."""
+    return text.endswith(end) and text.count(end + " ") == text.count(" ")
 
 
 def _ints(tokens: list[str]) -> NDArray[np.int64]:
@@ -266,30 +359,35 @@ def _ints(tokens: list[str]) -> NDArray[np.int64]:
 
 
 def _mixed_fields(corners: list[str]) -> _Fields:
+    """Corner by corner: any field may be empty (``1/``, ``1//``, ``1//3``, ``1/2/``), as
+    other readers allow; a corner without a normal drops the normals of the whole file."""
     columns: list[list[int]] = [[], [], []]
     has_normal = True
-    for corner in corners:
+    for position, corner in enumerate(corners):
         parts = corner.split("/")
-        if len(parts) > 3:
-            raise _BadCorner(corner)
+        if len(parts) > 3 or not parts[0]:
+            raise _BadCorner(corner, position)
         parts += [""] * (3 - len(parts))
         has_normal = has_normal and parts[2] != ""
         for column, part in zip(columns, parts, strict=True):
             try:
                 column.append(int(part) if part else 0)
             except ValueError:
-                raise _BadCorner(corner) from None
-        if not parts[0]:
-            raise _BadCorner(corner)
+                raise _BadCorner(corner, position) from None
     arrays = [np.array(column, dtype=np.int64) for column in columns]
     return arrays[0], arrays[1], arrays[2] if has_normal else None
 
 
 class _BadCorner(MeshFileError):
-    def __init__(self, corner: str) -> None:
+    """A corner that is not ``v``, ``v/vt``, ``v//vn`` or ``v/vt/vn``; :func:`_corner_indices`
+    adds its line from ``position`` (its place among all corners)."""
+
+    def __init__(self, corner: str, position: int, line: int | None = None) -> None:
+        self.corner, self.position = corner, position
+        where = f" (line {line:,})" if line is not None else ""
         super().__init__(
             f"The face corner {corner[:40]!r} is not an index, nor index/texture, "
-            "index//normal or index/texture/normal."
+            f"index//normal or index/texture/normal{where}."
         )
 
 

@@ -15,7 +15,7 @@ from numpy.typing import NDArray
 
 from mesh_normal.files.errors import MeshFileError, unsupported
 from mesh_normal.files.loaded import LoadedMesh, build
-from mesh_normal.files.polygons import fan
+from mesh_normal.files.polygons import triangulate
 
 _KEYWORD = re.compile(r"(ST)?(C)?(N)?(4)?(n)?OFF")
 
@@ -61,7 +61,7 @@ def read_off(data: bytes) -> LoadedMesh:
     width = 6 if match.group(3) else 3
     table = _table(vertex_rows, width)
     polygon_counts, flat = _faces(face_rows)
-    positions, source, notes = fan(polygon_counts)
+    positions, source, notes = triangulate(polygon_counts, flat, table[:, :3])
     lines = np.array([number for number, _ in face_rows], dtype=np.intp)
     return build(
         "off",

@@ -4,8 +4,12 @@ trimesh's ``load_ply`` keeps vertex order, but it triangulates polygons grouped 
 triangles first, then quads, ...), not in file order, and drops face normals. Here every
 element is read as the header declares it (fixed-size elements with one ``np.frombuffer``,
 lists of one size too; mixed sizes record by record), vertices keep their order, faces are
-fan-triangulated in file order, and ``nx ny nz`` on vertices or faces are kept. Elements other
-than ``vertex`` and ``face`` are read past and named in a note.
+fan-triangulated in file order, and ``nx ny nz`` on vertices or faces are kept. Triangle
+strips (``element tristrips`` with a ``vertex_indices`` list, -1 restarting a strip, as classic
+scanned models and trimesh2 write them) follow the faces as triangles with the OpenGL winding
+(:func:`strip_triangles`); each record counts once in ``source_faces``, as a polygon does, and
+a note says how many triangles the strips gave. Other elements are read past and named in a
+note.
 
 Written as binary little-endian PLY with float64 coordinates (:func:`write_ply`), and with
 vertex or face normals beside them (:func:`ply_bytes`).
@@ -22,7 +26,7 @@ from numpy.typing import NDArray
 from mesh_normal.files.errors import MeshFileError
 from mesh_normal.files.formats import MAKER
 from mesh_normal.files.loaded import LoadedMesh, build
-from mesh_normal.files.polygons import fan
+from mesh_normal.files.polygons import triangulate
 
 _TYPES = {
     "char": "i1",
@@ -319,38 +323,138 @@ def _mesh(elements: list[_Element]) -> LoadedMesh:
     vertices = np.stack([np.asarray(vertex.data[axis], dtype=np.float64) for axis in "xyz"], axis=1)
     notes = []
     face = named.get("face")
-    key = next(
-        (
-            name
-            for name in ("vertex_indices", "vertex_index")
-            if face is not None and name in face.lists
-        ),
-        None,
-    )
+    key = _indices_key(face)
     if face is None or key is None:
         counts, flat = np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp)
     else:
         counts, flat = _polygons(face.data[key])
-    positions, source, fan_notes = fan(counts)
+    positions, source, fan_notes = triangulate(counts, flat, vertices)
     notes += fan_notes
     faces = flat[positions]
+    strips = _read_strips(named.get("tristrips"))
+    if strips is not None:
+        notes.append(strips.note)
+    read = ("vertex", "face") if strips is None else ("vertex", "face", "tristrips")
     others = [
-        f"{element.name} ({element.count:,})"
-        for element in elements
-        if element.name not in ("vertex", "face")
+        f"{element.name} ({element.count:,})" for element in elements if element.name not in read
     ]
     if others:
         notes.append(f"Ignored elements this reader does not use: {', '.join(others)}.")
+    face_normals = _face_normals(face, source)
+    if strips is not None and len(strips.triangles):
+        faces = np.concatenate([faces, strips.triangles])
+        face_normals = None  # strips carry none: normals for only some triangles say nothing
+    from_polygons = len(source)
     return build(
         "ply",
         vertices,
         faces,
-        source_faces=len(counts),
+        source_faces=len(counts) + (0 if strips is None else strips.count),
         vertex_normals=_normals(vertex),
-        face_normals=_face_normals(face, source),
+        face_normals=face_normals,
         notes=notes,
-        face=lambda i: f"face {source[i]:,} (counting from 0)",
+        face=lambda i: (
+            f"face {source[i]:,} (counting from 0)"
+            if i < from_polygons or strips is None
+            else f"triangle strip {strips.source[i - from_polygons]:,} (counting from 0)"
+        ),
     )
+
+
+def _indices_key(element: _Element | None) -> str | None:
+    """The list property naming an element's corners, if it has one."""
+    names = ("vertex_indices", "vertex_index")
+    return next((name for name in names if element is not None and name in element.lists), None)
+
+
+@dataclass(frozen=True, slots=True)
+class _Strips:
+    """Triangles of a ``tristrips`` element.
+
+    Attributes
+    ----------
+    triangles : (t, 3) int64
+    source : (t,) intp
+        The strip (record of the element) each triangle came from.
+    count : int
+        Strips as the file writes them (records; a record may hold several strips split by -1).
+    note : str
+    """
+
+    triangles: NDArray[np.int64]
+    source: NDArray[np.intp]
+    count: int
+    note: str
+
+
+def _read_strips(element: _Element | None) -> _Strips | None:
+    """The triangles of the ``tristrips`` element, or ``None`` when there is none."""
+    key = _indices_key(element)
+    if element is None or key is None:
+        return None
+    counts, flat = _polygons(element.data[key])
+    item = np.dtype(element.lists[key][1])
+    if item.kind == "u":  # -1 stored unsigned is all ones (OpenGL's primitive restart index)
+        flat = np.where(flat == np.iinfo(item).max, -1, flat)
+    triangles, source, dropped = strip_triangles(counts, flat)
+    records = _count(len(counts), "triangle strip")
+    restarts = int(np.sum(flat == -1))
+    split = f" (with {_count(restarts, 'restart')})" if restarts else ""
+    made = f"Read {records}{split} as {_count(len(triangles), 'triangle')}"
+    if dropped:
+        made += f", dropping {_count(dropped, 'degenerate triangle')} that repeat a corner"
+    return _Strips(triangles, source, len(counts), made + ".")
+
+
+def _count(count: int, noun: str) -> str:
+    return f"{count:,} {noun}" + ("" if count == 1 else "s")
+
+
+def strip_triangles(
+    counts: NDArray[np.intp], flat: NDArray[np.int64]
+) -> tuple[NDArray[np.int64], NDArray[np.intp], int]:
+    """Triangles of triangle strips, in strip order, with the OpenGL and glTF winding.
+
+    Triangle ``i`` of a strip ``v`` is ``(v[i], v[i+1], v[i+2])`` for even ``i`` and
+    ``(v[i+1], v[i], v[i+2])`` for odd ``i``; an index of -1 ends a strip and starts the next
+    (counting ``i`` from 0 again). Triangles that repeat an index are dropped: strips use them
+    to join or turn, and they have no area by construction.
+
+    Parameters
+    ----------
+    counts : (p,) intp
+        Indices in each strip record.
+    flat : (s,) int64
+        The records' indices, one after another.
+
+    Returns
+    -------
+    triangles : (t, 3) int64
+    source : (t,) intp
+        The record each triangle came from.
+    dropped : int
+        Triangles dropped for repeating an index.
+    """
+    ends = np.cumsum(counts)
+    # A -1 after every record: records end their strips just as a -1 inside one does.
+    indices = np.insert(flat, ends, -1)
+    record = np.repeat(np.arange(len(counts)), counts + 1)
+    breaks = np.flatnonzero(indices == -1)
+    first = np.arange(max(len(indices) - 2, 0))
+    corners = np.stack([indices[first], indices[first + 1], indices[first + 2]], axis=1)
+    whole = np.all(corners != -1, axis=1)
+    # Place of each triangle in its strip: its first corner's distance from the last restart.
+    last_break = np.searchsorted(breaks, first, side="right") - 1
+    place = first - np.where(last_break >= 0, breaks[np.maximum(last_break, 0)], -1) - 1
+    odd = place % 2 == 1
+    corners[odd, :2] = corners[odd, 1::-1]
+    degenerate = (
+        (corners[:, 0] == corners[:, 1])
+        | (corners[:, 1] == corners[:, 2])
+        | (corners[:, 0] == corners[:, 2])
+    )
+    keep = whole & ~degenerate
+    return corners[keep], record[first[keep]], int(np.sum(whole & degenerate))
 
 
 def _polygons(column: object) -> tuple[NDArray[np.intp], NDArray[np.int64]]:
