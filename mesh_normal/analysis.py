@@ -8,22 +8,17 @@ library's ``mn.analyse``.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
-from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
 
-from mesh_normal.corners import corner_normals
 from mesh_normal.diagnosis import problems
 from mesh_normal.faces import FaceGeometry, FaceNormals, face_geometry, face_normals
 from mesh_normal.files import LoadedMesh, read_mesh
 from mesh_normal.files.read import MeshSource, source_bytes
 from mesh_normal.orientation import Orientation, orient
 from mesh_normal.report import (
-    AGREEMENT_DEGREES,
-    COMPARISON_CREASE,
     INDEX_LIST_LIMIT,
     Bounds,
     ComponentFix,
@@ -31,10 +26,9 @@ from mesh_normal.report import (
     FileNormals,
     Fix,
     MeshReport,
-    StoredKind,
 )
+from mesh_normal.stored_normals import stored_normal_agreement
 from mesh_normal.topology import MeshTopology
-from mesh_normal.vertices import vertex_normals
 
 
 @dataclass(frozen=True, slots=True)
@@ -174,85 +168,9 @@ def _fix(orientation: Orientation) -> Fix:
     )
 
 
-def _stored_normals(
-    analysis: MeshAnalysis,
-) -> tuple[StoredKind, str, NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]] | None:
-    """The file's normals beside ours: kind, our kind in words, theirs, ours, ours missing."""
-    mesh = analysis.mesh
-    if mesh.file_face_normals is not None:
-        faces = analysis.faces
-        return "face", "our face normals", mesh.file_face_normals, faces.normals, faces.degenerate
-    if mesh.file_corner_normals is not None:
-        corners = corner_normals(
-            analysis.geometry, crease_angle=COMPARISON_CREASE, weighting="angle"
-        )
-        return (
-            "corner",
-            f"our corner normals (crease angle {COMPARISON_CREASE:g}°)",
-            mesh.file_corner_normals.reshape(-1, 3),
-            corners.normals.reshape(-1, 3),
-            corners.missing.ravel(),
-        )
-    if mesh.file_vertex_normals is not None:
-        smooth = vertex_normals(analysis.geometry, weighting="angle")
-        return (
-            "vertex",
-            "our angle-weighted vertex normals",
-            mesh.file_vertex_normals,
-            smooth.normals,
-            smooth.missing,
-        )
-    return None
-
-
 def file_normal_agreement(analysis: MeshAnalysis) -> FileNormals | None:
-    """How well the normals stored in the file agree with ours, or ``None`` without any."""
-    stored = _stored_normals(analysis)
-    if stored is None:
-        return None
-    kind, reference, theirs, ours, missing = stored
-    # A stored normal is usable when it is finite and not zero. Each is first divided by its
-    # largest |component| (so its length can neither overflow nor underflow); ours are unit
-    # vectors, so the cosine is a dot product over that length. Only the cosines are formed
-    # (one pass); the angles of the median and the worst row come from atan2.
-    with np.errstate(invalid="ignore", divide="ignore"):
-        magnitude = np.abs(theirs)  # the max of three columns: axis=1 reductions are slow
-        largest = np.maximum(np.maximum(magnitude[:, 0], magnitude[:, 1]), magnitude[:, 2])
-        usable = np.isfinite(largest) & (largest > 0)
-        theirs = theirs / np.where(usable, largest, 1.0)[:, None]
-        lengths = np.sqrt(np.einsum("ij,ij->i", theirs, theirs))
-        both = usable & ~missing
-        rows = np.flatnonzero(both)
-        cosines = (np.einsum("ij,ij->i", theirs, ours) / lengths)[rows]  # no row copies
-    agree = math.cos(math.radians(AGREEMENT_DEGREES))
-    return FileNormals(
-        kind=kind,
-        compared_with=reference,
-        stored=len(theirs),
-        compared=int(np.count_nonzero(both)),
-        unusable=int(np.count_nonzero(~usable)),
-        agreeing=int(np.count_nonzero(cosines >= agree)),
-        opposite=int(np.count_nonzero(cosines < 0)),
-        agreement_degrees=AGREEMENT_DEGREES,
-        median_angle_degrees=_angle(theirs, ours, rows, cosines, "median"),
-        max_angle_degrees=_angle(theirs, ours, rows, cosines, "max"),
-    )
+    """How well the normals stored in the file agree with ours, or ``None`` without any.
 
-
-def _angle(
-    theirs: NDArray[np.float64],
-    ours: NDArray[np.float64],
-    rows: NDArray[np.intp],
-    cosines: NDArray[np.float64],
-    which: Literal["median", "max"],
-) -> float | None:
-    """The median or largest angle in degrees, taken accurately (atan2) at that one row."""
-    if not len(cosines):
-        return None
-    if which == "max":
-        row = int(rows[np.argmin(cosines)])
-    else:
-        middle = len(cosines) // 2
-        row = int(rows[np.argpartition(cosines, middle)[middle]])
-    a, b = theirs[row], ours[row]
-    return math.degrees(math.atan2(float(np.linalg.norm(np.cross(a, b))), float(a @ b)))
+    Like with like: see :mod:`mesh_normal.stored_normals`.
+    """
+    return stored_normal_agreement(analysis.mesh, analysis.geometry, analysis.faces)

@@ -8,7 +8,7 @@ are wrong as the file stands), ``"warning"`` (some results are missing or need c
 
 from __future__ import annotations
 
-from mesh_normal.report import MeshReport, Problem, ProblemCode, Severity
+from mesh_normal.report import FileNormals, MeshReport, Problem, ProblemCode, Severity
 
 
 def _count(number: int, one: str, many: str | None = None) -> str:
@@ -147,6 +147,8 @@ def _nonorientable(report: MeshReport) -> Problem | None:
 
 
 def _file_normals(report: MeshReport) -> Problem | None:
+    # Only normals turned around are a problem: ones within 90 degrees that miss the agreement
+    # angle are another exporter's rounding or weighting, and the page counts them.
     stored = report.file_normals
     if not stored or not stored.compared or not stored.opposite:
         return None
@@ -159,9 +161,19 @@ def _file_normals(report: MeshReport) -> Problem | None:
         "the file's normals and its winding disagree, which renderers show as dark or "
         "inside-out faces.",
         "Recompute the normals from the (fixed) winding and export them again.",
-        "import mesh_normal as mn\n\n"
-        'normals = mn.vertex_normals(vertices, faces, weighting="angle").normals',
+        "import mesh_normal as mn\n\n" + _recompute(stored),
     )
+
+
+def _recompute(stored: FileNormals) -> str:
+    """The call that makes normals of the kind (and the weighting) the file's matched best."""
+    weighting = f'weighting="{stored.weighting or "angle"}"'
+    if stored.kind == "face":
+        return "normals = mn.face_normals(vertices, faces).normals"
+    if stored.kind == "corner":
+        crease = f"crease_angle={stored.crease_angle_degrees or 30:g}"
+        return f"normals = mn.corner_normals(vertices, faces, {crease}, {weighting}).normals"
+    return f"normals = mn.vertex_normals(vertices, faces, {weighting}).normals"
 
 
 def _unused(report: MeshReport) -> Problem | None:

@@ -19,12 +19,14 @@ import numpy as np
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
 
 from mesh_normal.orientation import Method, Verdict
+from mesh_normal.vertices import Weighting
 
 #: How many face indices (or components) a list in the report holds at most; counts are full.
 INDEX_LIST_LIMIT = 100
 #: File normals within this angle of ours count as agreeing.
 AGREEMENT_DEGREES = 1.0
-#: The crease angle of the corner normals we compare an OBJ's per-corner normals with.
+#: The first crease angle of the corner normals we compare an OBJ's per-corner normals with
+#: (others are tried too: see :mod:`mesh_normal.stored_normals`).
 COMPARISON_CREASE = 30.0
 
 MeshFormat = Literal["stl", "obj", "ply", "off", "glb", "gltf"]
@@ -135,7 +137,17 @@ class FileNormals(_Model):
     """How the normals stored in the file agree with the ones computed from the winding."""
 
     kind: StoredKind = Field(description="Which normals the file stores: face, corner or vertex.")
-    compared_with: str = Field(description="Which of our normals they are compared with.")
+    compared_with: str = Field(
+        description="Which of our normals they are compared with: the best match of those tried."
+    )
+    weighting: Weighting | None = Field(
+        description="The weighting of our vertex or corner normals that matched best "
+        "(angle, area, uniform or max); null for face normals.",
+    )
+    crease_angle_degrees: Finite | None = Field(
+        description="The crease angle of our corner normals that matched best; null unless "
+        "the file stores corner normals.",
+    )
     stored: int = Field(ge=0, description="How many normals the file stores.")
     compared: int = Field(
         ge=0, description="How many were compared: usable in the file and defined by us."

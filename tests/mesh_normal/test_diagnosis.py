@@ -76,6 +76,8 @@ def test_file_normals_that_point_the_other_way() -> None:
     stored = FileNormals(
         kind="vertex",
         compared_with="our angle-weighted vertex normals",
+        weighting="angle",
+        crease_angle_degrees=None,
         stored=8,
         compared=8,
         unusable=0,
@@ -101,6 +103,8 @@ def every_problem() -> list[Problem]:
     stored = {
         "kind": "face",
         "compared_with": "our face normals",
+        "weighting": None,
+        "crease_angle_degrees": None,
         "stored": 12,
         "compared": 12,
         "unusable": 0,

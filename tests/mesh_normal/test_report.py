@@ -127,6 +127,8 @@ def test_file_normals_of_an_stl() -> None:
     assert data_keys == [
         "kind",
         "compared_with",
+        "weighting",
+        "crease_angle_degrees",
         "stored",
         "compared",
         "unusable",
@@ -138,6 +140,7 @@ def test_file_normals_of_an_stl() -> None:
     ]
     assert (stored.kind, stored.stored, stored.compared, stored.agreeing) == ("face", 4, 4, 4)
     assert stored.opposite == 0 and stored.unusable == 0
+    assert stored.weighting is None and stored.crease_angle_degrees is None
     assert stored.max_angle_degrees is not None and stored.max_angle_degrees < 1e-4
 
 
