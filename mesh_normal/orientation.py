@@ -34,7 +34,14 @@ is, however it is turned and scaled):
   plus the float error of computing V. A single triangle, whose V about its own centroid is
   zero in exact arithmetic, is always below it, wherever it is.
 
-A patch that fails either test is *undetermined*: :func:`orient` does not turn it over, only
+Shells inside shells. A closed patch that lies inside another closed patch (its bounding box
+within the other's and sample vertices at a generalized winding number of magnitude above
+one half about it) may be a cavity, wound inward on purpose, or a part inside a housing,
+wound outward: its sign is no evidence either way, so it is undetermined. Shells that cross
+(an eye sunk half into a head) are decided each by its own volume. So :func:`orient` flips
+nothing on a closed mesh whose shells all have positive volume or are nested.
+
+A patch that fails any of these tests is *undetermined*: :func:`orient` does not turn it over, only
 makes it consistent, keeping the winding of the majority of its faces (of its lowest-numbered
 face on a tie). A non-orientable patch is left as it is.
 
@@ -98,7 +105,8 @@ class ComponentOrientation:
     method : {"volume", "heuristic", "none"}
         How its outside was chosen: by the sign of its volume (closed and orientable), by the
         cone heuristic (open; at least one patch decided), or not at all (non-orientable,
-        flat, or a closed surface enclosing no volume).
+        flat, a closed surface enclosing no volume, a shell inside another one, or a
+        volume whose sign could be rounding noise).
     flipped : int
         How many of its faces :func:`orient` reversed.
     volume : float or None
@@ -296,6 +304,9 @@ def orient(
     orientable = found.orientable
     closed = found.closed[found.patch_component]
     decided = orientable & _evident(volume, closed, cone, per_patch, len(indices))
+    # A shell inside another may be a cavity (wound inward on purpose) or a part inside a
+    # housing (outward): its volume's sign is no evidence, so it is left as it is.
+    decided &= ~_nested(geometry, found, decided & closed)
     # Turn the consistent patch over when it points in, or when most of its faces are against
     # its first face (flat patches).
     turn = np.where(decided, volume < 0, 2 * against > size)
@@ -467,6 +478,110 @@ def _cone_kernel(
         bc = math.sqrt((vx - ux) ** 2 + (vy - uy) ** 2 + (vz - uz) ** 2)
         bounds[face] = normal * to_a
         sensitivity[face] = 4 * normal + to_a * bc + to_b * ac + to_c * ab
+
+
+# --- shells inside shells ----------------------------------------------------------------------
+
+#: How many points of a closed shell are tested for lying inside another (spread over its faces).
+_NEST_SAMPLES = 8
+#: Beyond this many closed shells their bounding boxes are not compared (k**2 pairs).
+_NEST_SHELLS = 4096
+#: At most this many (sample, face) visits go into winding numbers.
+_NEST_WORK = 2 * 10**8
+
+
+def _nested(geometry: FaceGeometry, found: Structure, candidates: BoolArray) -> BoolArray:
+    """(patches,) bool: which of the ``candidates`` (closed patches) lie inside another one.
+
+    A shell K is inside another J when K's bounding box lies within J's and each of up to
+    ``_NEST_SAMPLES`` vertices of K, spread over its faces, has a generalized winding number
+    about J (J's winding made consistent) of magnitude above one half: 1 inside a closed
+    surface, 0 outside, whichever way it is wound. Shells that cross (an eye sunk half into a
+    head) have sample points outside and are not nested. Past ``_NEST_SHELLS`` shells, or
+    once the winding numbers would take more than ``_NEST_WORK`` face visits, the shells not
+    yet cleared count as nested: undecided, never flipped.
+    """
+    nested = np.zeros(found.patches, dtype=bool)
+    shells = np.flatnonzero(candidates)
+    if len(shells) < 2:
+        return nested
+    if len(shells) > _NEST_SHELLS:
+        nested[shells] = True
+        return nested
+    mesh = geometry.mesh
+    faces = mesh.faces
+    group = found.group
+    member = np.flatnonzero(np.r_[candidates, False][group])
+    order = member[np.argsort(group[member], kind="stable")]
+    starts = np.searchsorted(group[order], shells)
+    ends = np.searchsorted(group[order], shells, side="right")
+    corners = mesh.points[faces[order]] * mesh.factor  # (k, 3, 3)
+    low = np.minimum.reduceat(corners.min(axis=1), starts)
+    high = np.maximum.reduceat(corners.max(axis=1), starts)
+    # inside[k, j]: shell k's box lies within shell j's.
+    inside = np.logical_and(
+        np.all(low[:, None] >= low[None], axis=2), np.all(high[:, None] <= high[None], axis=2)
+    )
+    inside[np.arange(len(shells)), np.arange(len(shells))] = False
+    oriented = faces[order].copy()
+    turned = found.parity[order].astype(bool)
+    oriented[turned, 1:] = oriented[turned, :0:-1]
+    work = 0
+    announce_compiling()
+    for k, j in zip(*np.nonzero(inside), strict=True):
+        if nested[shells[k]]:
+            continue
+        picks = np.linspace(starts[k], ends[k] - 1, min(_NEST_SAMPLES, ends[k] - starts[k]))
+        samples = corners[picks.astype(np.intp), 0]
+        work += len(samples) * (ends[j] - starts[j])
+        if work > _NEST_WORK:
+            nested[shells[k]] = True
+            continue
+        winding = np.empty(len(samples))
+        _winding_numbers(mesh.points, mesh.factor, oriented[starts[j] : ends[j]], samples, winding)
+        if (np.abs(winding) > 0.5).all():
+            nested[shells[k]] = True
+    return nested
+
+
+@kernel()
+def _winding_numbers(
+    points: FloatArray,
+    factor: float,
+    faces: IndexArray,
+    samples: FloatArray,
+    winding: FloatArray,
+) -> None:
+    """The generalized winding number of ``faces`` at each sample (Van Oosterom and
+    Strackee's solid angle of each triangle, summed, over 4 pi)."""
+    for s in range(len(samples)):
+        px, py, pz = samples[s, 0], samples[s, 1], samples[s, 2]
+        total = 0.0
+        for f in range(len(faces)):
+            a, b, c = faces[f, 0], faces[f, 1], faces[f, 2]
+            ax, ay, az = (
+                points[a, 0] * factor - px,
+                points[a, 1] * factor - py,
+                points[a, 2] * factor - pz,
+            )
+            bx, by, bz = (
+                points[b, 0] * factor - px,
+                points[b, 1] * factor - py,
+                points[b, 2] * factor - pz,
+            )
+            cx, cy, cz = (
+                points[c, 0] * factor - px,
+                points[c, 1] * factor - py,
+                points[c, 2] * factor - pz,
+            )
+            la = math.sqrt(ax * ax + ay * ay + az * az)
+            lb = math.sqrt(bx * bx + by * by + bz * bz)
+            lc = math.sqrt(cx * cx + cy * cy + cz * cz)
+            det = ax * (by * cz - bz * cy) - ay * (bx * cz - bz * cx) + az * (bx * cy - by * cx)
+            dot = la * lb * lc + (ax * bx + ay * by + az * bz) * lc
+            dot += (ax * cx + ay * cy + az * cz) * lb + (bx * cx + by * cy + bz * cz) * la
+            total += 2.0 * math.atan2(det, dot)
+        winding[s] = total / (4.0 * math.pi)
 
 
 def _unscaled(value: float, scale: int) -> float:

@@ -248,3 +248,14 @@ HARD_CASES = {
     "far triangle": far_triangle,
     "scan fragments": scan_fragments,
 }
+
+
+def hollow_ball() -> tuple[np.ndarray, np.ndarray]:
+    """A ball with a spherical cavity: the outer shell wound outward, the inner one inward
+    (its faces point into the cavity, away from the material), each with its own vertices."""
+    outer = icosphere(3)
+    inner_vertices, inner_faces = icosphere(2, 0.5)
+    return combined(outer, (inner_vertices + np.array([0.1, 0.0, 0.05]), inner_faces[:, [0, 2, 1]]))
+
+
+HARD_CASES["hollow ball"] = hollow_ball

@@ -239,3 +239,32 @@ def test_a_face_with_two_corners_at_one_point_has_no_edges() -> None:
     t = mesh_topology(checked_mesh(vertices, [[0, 1, 2], [0, 1, 3]]))
     assert t.face_component.tolist() == [0, -1]
     assert t.boundary_edges == 3
+
+
+def test_a_shell_inside_another_is_left_as_it_is() -> None:
+    # A cavity is wound inward on purpose, a part in a housing outward: neither is flipped.
+    vertices, faces = HARD_CASES["hollow ball"]()
+    r = orient(vertices, faces)
+    assert r.orientation == "outward" and not r.flipped.any()
+    assert [c.method for c in r.components] == ["volume", "none"]
+    assert r.volume is not None and r.volume > 0
+    inner = mesh_topology(checked_mesh(vertices, faces)).face_component == 1
+    part = faces.copy()
+    part[inner] = faces[inner][:, [0, 2, 1]]
+    assert not orient(vertices, part).flipped.any()
+    # The outer shell is still decided by its volume.
+    assert np.array_equal(orient(vertices, faces[:, [0, 2, 1]]).flipped, ~inner)
+
+
+def test_nested_shells_past_the_limits_are_left_alone(monkeypatch: pytest.MonkeyPatch) -> None:
+    from mesh_normal import orientation
+
+    vertices, faces = HARD_CASES["head with eyes"]()
+    labels = mesh_topology(checked_mesh(vertices, faces)).face_component
+    eye = labels == 2
+    faces[eye] = faces[eye][:, [0, 2, 1]]
+    assert np.array_equal(orient(vertices, faces).flipped, eye)
+    monkeypatch.setattr(orientation, "_NEST_WORK", 10)
+    assert not orient(vertices, faces).flipped.any()  # not cleared: left as it is
+    monkeypatch.setattr(orientation, "_NEST_SHELLS", 1)
+    assert not orient(vertices, faces).flipped.any()
