@@ -99,7 +99,7 @@ class Structure:
     """What mesh_topology and orient need: the topology and the patches with their parities."""
 
     topology: MeshTopology
-    group: IndexArray  # (m,) patch of each face; faces with a repeated index get ``patches``
+    group: IndexArray  # (m,) patch of each face; faces with a repeated point get ``patches``
     patches: int
     parity: IndexArray  # (m,) 1 where a face must flip to agree with its patch's first face
     orientable: BoolArray  # (patches,)
@@ -439,19 +439,27 @@ def _identical(rows: FloatArray) -> IndexArray | None:
     ordered = np.sort(key)
     if not (ordered[1:] == ordered[:-1]).any():
         return None
-    order = np.argsort(key, kind="stable")
-    same_key = key[order[1:]] == key[order[:-1]]
-    same_row = same_key & (rows[order[1:]] == rows[order[:-1]]).all(axis=1)
+    order = np.argsort(key)
+    same_key = ordered[1:] == ordered[:-1]
+    same_row = same_key & _same_as_previous(bits[order])
     if (same_key != same_row).any():  # a hash collision: sort the rows themselves
         order = np.lexsort((rows[:, 2], rows[:, 1], rows[:, 0]))
-        same_row = (rows[order[1:]] == rows[order[:-1]]).all(axis=1)
+        same_row = _same_as_previous(bits[order])
     if not same_row.any():
         return None
-    # Both sorts are stable, so each run of equal rows starts with its smallest vertex.
-    starts = np.r_[True, ~same_row]
+    # Each run of equal rows is represented by its smallest vertex.
+    starts = np.flatnonzero(np.r_[True, ~same_row])
     point = np.empty(len(rows), dtype=np.intp)
-    point[order] = order[starts][np.cumsum(starts) - 1]
+    point[order] = np.repeat(np.minimum.reduceat(order, starts), np.diff(np.r_[starts, len(order)]))
     return point
+
+
+def _same_as_previous(bits: np.ndarray) -> BoolArray:
+    """(k - 1,) bool: whether each row of (k, 3) uint64 bits equals the one before it."""
+    same: BoolArray = bits[1:, 0] == bits[:-1, 0]
+    same &= bits[1:, 1] == bits[:-1, 1]
+    same &= bits[1:, 2] == bits[:-1, 2]
+    return same
 
 
 def _welded(vertices: FloatArray, weld: float, point: IndexArray | None) -> IndexArray:
