@@ -14,6 +14,12 @@ from mesh_normal.vertices import vertex_normals
 def compile_kernels() -> None:
     """Compile every mesh kernel now (into numba's cache), e.g. while building an image."""
 
+    # Two tetrahedra, one inside the other: the winding-number kernel for nested shells.
+    tetrahedron = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
+    sides = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    orient(
+        np.concatenate([tetrahedron, 0.1 + 0.2 * tetrahedron]), np.concatenate([sides, sides + 4])
+    )
     vertices = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
     faces = np.array([[0, 1, 2]])
     geometry = face_geometry(vertices, faces)

@@ -5,9 +5,20 @@ edge is an unordered pair of vertices, *used* by every face that has it as a hal
 corner is one vertex of one face, numbered ``3 * face + k`` for ``faces[face, k]``, so corner
 ids follow ``faces.ravel()`` (see :func:`vertex_corners`).
 
-- A face with a repeated index (``[4, 4, 7]``) has no edges here: it is left out of every
-  count and of all adjacency, belongs to no component (label -1) and is never flipped.
-  A face with three distinct indices counts, even if its points are collinear or coincide.
+By position. Files often give each piece of an object its own vertices (a cube whose six
+sides are separate patches, a head with separate eyes). Given a mesh (a
+:class:`~mesh_normal.checks.CheckedMesh` or its geometry), the topology therefore looks at
+*points*: vertices with identical coordinates (exact equality, -0.0 equal to 0.0) are one
+point, represented by the first of them (:func:`same_points`), and "vertex" below means
+point. An optional weld tolerance, a fraction of the bounding-box diagonal, also joins
+vertices that miss each other by rounding; it is off by default. Every output still names
+the file's vertices (a point by its first vertex) and keeps the faces in their order; given
+raw faces without coordinates, :func:`mesh_topology` can only go by index.
+
+- A face with a repeated vertex (``[4, 4, 7]``, or two corners at one point) has no edges
+  here: it is left out of every count and of all adjacency, belongs to no component
+  (label -1) and is never flipped. A face with three distinct points counts, even if they
+  are collinear.
 - A *boundary* edge is used by exactly one face, a *non-manifold* edge by three or more.
   A mesh is *watertight* when it has at least one face and neither kind of edge.
 - A *component* is a set of faces connected through shared edges, non-manifold ones too.
@@ -27,6 +38,7 @@ compression, the smaller root wins) labels the patches in nearly O(m) work.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -35,7 +47,7 @@ from numpy.typing import ArrayLike
 from mesh_normal.checks import CheckedMesh, check_faces
 from mesh_normal.faces import FaceGeometry
 from mesh_normal.kernels import announce_compiling, kernel
-from mesh_normal.types import BoolArray, IndexArray
+from mesh_normal.types import BoolArray, FloatArray, IndexArray
 
 #: Sort keys (edge * 3m + half-edge, vertex * 3m + corner) must stay below this to fit int64
 #: with room to spare.
@@ -87,7 +99,7 @@ class Structure:
     """What mesh_topology and orient need: the topology and the patches with their parities."""
 
     topology: MeshTopology
-    group: IndexArray  # (m,) patch of each face; faces with a repeated index get ``patches``
+    group: IndexArray  # (m,) patch of each face; faces with a repeated point get ``patches``
     patches: int
     parity: IndexArray  # (m,) 1 where a face must flip to agree with its patch's first face
     orientable: BoolArray  # (patches,)
@@ -96,7 +108,10 @@ class Structure:
 
 
 def mesh_topology(
-    faces: ArrayLike | CheckedMesh | FaceGeometry, vertex_count: int | None = None
+    faces: ArrayLike | CheckedMesh | FaceGeometry,
+    vertex_count: int | None = None,
+    *,
+    weld: float | None = None,
 ) -> MeshTopology:
     """Count the boundary and non-manifold edges and the components; judge the winding.
 
@@ -104,9 +119,13 @@ def mesh_topology(
     ----------
     faces : (m, 3) int, CheckedMesh or FaceGeometry
         Indices into ``vertex_count`` vertices, or an already checked mesh or its geometry
-        (then no ``vertex_count``).
+        (then no ``vertex_count``). A mesh is judged by position (vertices with identical
+        coordinates are one point); raw faces, having no coordinates, by index.
     vertex_count : int
         n, the number of vertices.
+    weld : float, optional
+        With a mesh: also join vertices closer than this fraction of the bounding-box
+        diagonal (see :func:`same_points`). Off by default.
 
     Returns
     -------
@@ -124,10 +143,18 @@ def mesh_topology(
     if isinstance(faces, CheckedMesh):
         if vertex_count is not None:
             raise TypeError("a checked mesh holds its vertex count: pass it alone.")
-        return structure(faces.faces, len(faces.vertices)).topology
+        return structure(by_position(faces, weld), len(faces.vertices)).topology
     if vertex_count is None:
         raise TypeError("vertex_count is required with raw faces.")
+    if weld is not None:
+        raise TypeError("welding needs the coordinates: pass a checked mesh.")
     return structure(check_faces(faces, vertex_count), vertex_count).topology
+
+
+def by_position(mesh: CheckedMesh, weld: float | None = None) -> IndexArray:
+    """(m, 3) intp: the faces with each vertex replaced by the first at its position."""
+    point = same_points(mesh.vertices, weld)
+    return mesh.faces if point is None else point[mesh.faces]
 
 
 # --- edges, patches and components -----------------------------------------------------------
@@ -369,3 +396,94 @@ def vertex_corners(
     starts = np.zeros(vertex_count + 1, dtype=np.intp)
     np.cumsum(np.bincount(vertex, minlength=vertex_count), out=starts[1:])
     return VertexCorners(order, starts)
+
+
+# --- the same point: vertices with identical coordinates ----------------------------------------
+
+
+def same_points(vertices: FloatArray, weld: float | None = None) -> IndexArray | None:
+    """Map each vertex to the first vertex at the same position; None when all differ.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64
+        Finite coordinates.
+    weld : float, optional
+        Also join vertices closer than ``weld`` times the diagonal of the bounding box in
+        every coordinate (see :func:`_welded`); off (exact equality only) by default.
+
+    Returns
+    -------
+    (n,) intp or None
+        ``point[v]`` is the smallest vertex at ``v``'s position (joined transitively when
+        welding); None stands for the identity, the common case, found with one sort.
+    """
+    if weld is not None and not (math.isfinite(weld) and weld >= 0):
+        raise ValueError(f"The weld tolerance must be a finite number >= 0, not {weld!r}.")
+    point = _identical(vertices)
+    if not weld or len(vertices) < 2:
+        return point
+    return _welded(vertices, weld, point)
+
+
+def _identical(rows: FloatArray) -> IndexArray | None:
+    """The first row equal to each row (-0.0 equals 0.0), or None when all rows differ."""
+    if len(rows) < 2:
+        return None
+    rows = rows + 0.0  # -0.0 becomes 0.0, so that equal numbers have equal bits
+    bits = rows.view(np.uint64)
+    # A hash of the bits: sorting one uint64 key is a fraction of the cost of a row lexsort.
+    key = bits[:, 0] * np.uint64(0x9E3779B97F4A7C15)
+    key ^= bits[:, 1] * np.uint64(0xC2B2AE3D27D4EB4F)
+    key ^= bits[:, 2] * np.uint64(0x165667B19E3779F9)
+    ordered = np.sort(key)
+    if not (ordered[1:] == ordered[:-1]).any():
+        return None
+    order = np.argsort(key)
+    same_key = ordered[1:] == ordered[:-1]
+    same_row = same_key & _same_as_previous(bits[order])
+    if (same_key != same_row).any():  # a hash collision: sort the rows themselves
+        order = np.lexsort((rows[:, 2], rows[:, 1], rows[:, 0]))
+        same_row = _same_as_previous(bits[order])
+    if not same_row.any():
+        return None
+    # Each run of equal rows is represented by its smallest vertex.
+    starts = np.flatnonzero(np.r_[True, ~same_row])
+    point = np.empty(len(rows), dtype=np.intp)
+    point[order] = np.repeat(np.minimum.reduceat(order, starts), np.diff(np.r_[starts, len(order)]))
+    return point
+
+
+def _same_as_previous(bits: np.ndarray) -> BoolArray:
+    """(k - 1,) bool: whether each row of (k, 3) uint64 bits equals the one before it."""
+    same: BoolArray = bits[1:, 0] == bits[:-1, 0]
+    same &= bits[1:, 1] == bits[:-1, 1]
+    same &= bits[1:, 2] == bits[:-1, 2]
+    return same
+
+
+def _welded(vertices: FloatArray, weld: float, point: IndexArray | None) -> IndexArray:
+    """Join vertices that share a cell of side ``s = weld * diagonal`` in one of 8 grids.
+
+    The grids are offset by 0 or s / 2 along each axis: two vertices closer than s / 2 in
+    every coordinate share a cell in at least one of them (along each axis at most one of
+    the two sets of cell walls, s / 2 apart, passes between them), and vertices that share a
+    cell are closer than s in every coordinate. Joins are transitive (a chain of close
+    vertices becomes one point), as in every welding tool.
+    """
+    low, high = vertices.min(axis=0), vertices.max(axis=0)
+    side = weld * float(np.linalg.norm(high - low))
+    count = len(vertices)
+    identity = np.arange(count)
+    one, two = [identity], [identity if point is None else point]
+    if side > 0:
+        relative = (vertices - low) / side
+        for offset in np.ndindex(2, 2, 2):
+            cells = np.floor(relative + 0.5 * np.array(offset, dtype=np.float64))
+            same = _identical(cells)
+            if same is not None:
+                one.append(identity)
+                two.append(same)
+    first, second = np.concatenate(one), np.concatenate(two)
+    root, _ = _connected(count, first, second, np.zeros(len(first), dtype=np.intp))
+    return root

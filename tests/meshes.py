@@ -131,3 +131,131 @@ def load(name: str) -> tuple[np.ndarray, np.ndarray]:
     """A file of tests/data as read by trimesh (unprocessed): (n, 3) float64, (m, 3) int."""
     mesh = trimesh.load(DATA / name, process=False, force="mesh")
     return np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces)
+
+
+# --- generated hard cases for orientation: separate pieces, far away, open ---------------------
+
+
+def random_rotation(seed: int) -> np.ndarray:
+    """A (3, 3) rotation drawn from ``seed``."""
+    q, r = np.linalg.qr(np.random.default_rng(seed).normal(size=(3, 3)))
+    q = q * np.sign(np.diag(r))
+    return q if np.linalg.det(q) > 0 else -q
+
+
+def separate_sides_cube(
+    divisions: int = 3, wobble: bool = False, seed: int = 0
+) -> tuple[np.ndarray, np.ndarray]:
+    """The unit cube, rotated, its six sides separate patches with their own float32 vertices.
+
+    Each side is a grid of ``divisions`` squares a side, wound outward. Shared corners have
+    identical coordinates (the same float32 numbers), unless ``wobble``: then every vertex of
+    every side moves by one float32 step along each axis at random, so the sides wobble and
+    miss each other by a step, as sides transformed one by one do.
+    """
+    rng = np.random.default_rng(seed)
+    rotation = random_rotation(seed)
+    steps = np.linspace(0.0, 1.0, divisions + 1)
+    vertices, faces = [], []
+    for axis in range(3):
+        for high in (0.0, 1.0):
+            s, t = np.meshgrid(steps, steps, indexing="ij")
+            side = np.zeros((divisions + 1, divisions + 1, 3))
+            u, v = (axis + 1) % 3, (axis + 2) % 3
+            side[..., axis], side[..., u], side[..., v] = high, s, t
+            points = (side.reshape(-1, 3) - 0.5) @ rotation.T
+            points = points.astype(np.float32)
+            if wobble:
+                toward = np.where(rng.random(points.shape) < 0.5, -np.inf, np.inf)
+                points = np.nextafter(points, toward.astype(np.float32))
+            base = sum(len(p) for p in vertices)
+            k = divisions + 1
+            grid = []
+            for i in range(divisions):
+                for j in range(divisions):
+                    a, b, c, d = i * k + j, (i + 1) * k + j, (i + 1) * k + j + 1, i * k + j + 1
+                    grid += [(a, b, c), (a, c, d)]
+            quads = np.array(grid) + base
+            # (u, v, axis) is right-handed, so a, b, c winds towards +axis: out on the high side.
+            faces.append(quads if high else quads[:, [0, 2, 1]])
+            vertices.append(points.astype(np.float64))
+    return np.concatenate(vertices), np.concatenate(faces)
+
+
+def icosphere(subdivisions: int = 2, radius: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """trimesh's icosphere, wound outward."""
+    mesh = trimesh.creation.icosphere(subdivisions=subdivisions, radius=radius)
+    return np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces)
+
+
+def combined(*pieces: tuple[np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """Several meshes as one, each keeping its own vertices."""
+    vertices, faces, base = [], [], 0
+    for points, triangles in pieces:
+        vertices.append(points)
+        faces.append(np.asarray(triangles) + base)
+        base += len(points)
+    return np.concatenate(vertices), np.concatenate(faces)
+
+
+def head_with_eyes() -> tuple[np.ndarray, np.ndarray]:
+    """A closed head (an icosphere) and two separate closed eyes sunk half into it."""
+    head = icosphere(3)
+    eyes = [icosphere(2, 0.2) for _ in range(2)]
+    left = (eyes[0][0] + [0.6, 0.3, 0.75], eyes[0][1])
+    right = (eyes[1][0] + [-0.6, 0.3, 0.75], eyes[1][1])
+    return combined(head, left, right)
+
+
+def open_hemisphere() -> tuple[np.ndarray, np.ndarray]:
+    """The upper half of an icosphere: open, wound outward (convex side out)."""
+    vertices, faces = icosphere(3)
+    keep = vertices[faces].mean(axis=1)[:, 2] > 0
+    return vertices, faces[keep]
+
+
+def far_triangle(offset: float = 1e4) -> tuple[np.ndarray, np.ndarray]:
+    """One small triangle near (offset, offset, offset)."""
+    corners = np.array([[0.0, 0.0, 0.0], [0.3, 0.1, 0.0], [0.1, 0.2, 0.05]])
+    return corners + offset, np.array([[0, 1, 2]])
+
+
+def scan_fragments(seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """Open patches of a noisy sphere seen from six directions, each with its own vertices.
+
+    Like range scans not yet merged: each faces its scanner (outward), and they neither
+    share vertices nor close up.
+    """
+    rng = np.random.default_rng(seed)
+    vertices, faces = icosphere(4)
+    vertices = vertices * (1 + 0.003 * rng.standard_normal(len(vertices)))[:, None]
+    centres = vertices[faces].mean(axis=1)
+    centres /= np.linalg.norm(centres, axis=1)[:, None]
+    pieces = []
+    for direction in np.eye(3).tolist() + (-np.eye(3)).tolist():
+        keep = faces[centres @ np.array(direction) > np.cos(np.radians(35))]
+        used, inverse = np.unique(keep, return_inverse=True)
+        pieces.append((vertices[used], inverse.reshape(-1, 3)))
+    return combined(*pieces)
+
+
+#: The generated hard cases: name -> (vertices, faces), every one wound outward.
+HARD_CASES = {
+    "separate sides cube": separate_sides_cube,
+    "wobbling sides cube": lambda: separate_sides_cube(wobble=True),
+    "head with eyes": head_with_eyes,
+    "open hemisphere": open_hemisphere,
+    "far triangle": far_triangle,
+    "scan fragments": scan_fragments,
+}
+
+
+def hollow_ball() -> tuple[np.ndarray, np.ndarray]:
+    """A ball with a spherical cavity: the outer shell wound outward, the inner one inward
+    (its faces point into the cavity, away from the material), each with its own vertices."""
+    outer = icosphere(3)
+    inner_vertices, inner_faces = icosphere(2, 0.5)
+    return combined(outer, (inner_vertices + np.array([0.1, 0.0, 0.05]), inner_faces[:, [0, 2, 1]]))
+
+
+HARD_CASES["hollow ball"] = hollow_ball
