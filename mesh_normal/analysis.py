@@ -8,7 +8,9 @@ library's ``mn.analyse``.
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
@@ -94,6 +96,10 @@ def analyse(source: LoadedMesh | MeshSource, filename: str | None = None) -> Mes
     """
     if isinstance(source, LoadedMesh):
         return build_report(analyse_mesh(source, filename, 0))
+    if isinstance(source, str | os.PathLike):  # read as a path: a .gltf finds its .bin beside it
+        path = Path(source)
+        named = filename or path.name
+        return build_report(analyse_mesh(read_mesh(path, named), named, path.stat().st_size))
     data, name = source_bytes(source, filename)
     return build_report(analyse_mesh(read_mesh(data, name), name, len(data)))
 

@@ -6,8 +6,10 @@ import dataclasses
 import io
 import os
 import re
+from collections.abc import Callable
 from pathlib import Path
 from typing import Protocol
+from urllib.parse import unquote
 
 from mesh_normal.files.errors import MeshFileError, unsupported
 from mesh_normal.files.formats import FORMATS, SUFFIXES, suffix_format
@@ -65,7 +67,12 @@ def read_mesh(source: MeshSource, filename: str | None = None) -> LoadedMesh:
     if found is None:
         raise unknown_format(filename)
     try:
-        mesh = FORMATS[found].read(data)
+        if found == "gltf" and isinstance(source, str | os.PathLike):
+            from mesh_normal.files.gltf import read_gltf
+
+            mesh = read_gltf(data, _beside(Path(source)))
+        else:
+            mesh = FORMATS[found].read(data)
     except MeshFileError:
         raise
     except Exception as error:  # a library's own exception: never a 500
@@ -78,6 +85,18 @@ def read_mesh(source: MeshSource, filename: str | None = None) -> LoadedMesh:
         note = f"The file is named as {named_as} but holds {holds}; it was read as {holds}."
         mesh = dataclasses.replace(mesh, notes=(note, *mesh.notes))
     return mesh
+
+
+def _beside(path: Path) -> Callable[[str], bytes | None]:
+    """Find the files a glTF's relative URIs name in the folder of the glTF read from ``path``."""
+
+    def resolve(uri: str) -> bytes | None:
+        if ":" in uri.split("/", 1)[0]:  # a scheme (http:, file:) or a drive: nothing to fetch
+            return None
+        beside = path.parent / unquote(uri)
+        return beside.read_bytes() if beside.is_file() else None
+
+    return resolve
 
 
 def source_bytes(source: MeshSource, filename: str | None) -> tuple[bytes, str | None]:

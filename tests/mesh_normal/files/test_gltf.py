@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 import trimesh
 
+import mesh_normal as mn
 from mesh_normal.files import MeshFileError, read_mesh
 from mesh_normal.files.gltf_buffers import glb_parts
 from tests.paths import DATA
@@ -202,3 +203,17 @@ def test_real_draco_holding_quantized_positions() -> None:
     assert radii.min() > 0.92 and radii.max() < 0.932  # not 32767 times that
     assert trimesh.Trimesh(mesh.vertices, mesh.faces, process=False).volume > 0
     assert "Decoded 1 Draco-compressed (KHR_draco_mesh_compression) primitives." in mesh.notes
+
+
+def test_a_gltf_read_from_a_path_finds_its_buffer_beside_it() -> None:
+    mesh = read_mesh(DATA / "gltf" / "Box.gltf")
+    assert mesh.faces.shape == (12, 3)
+    report = mn.analyse(DATA / "gltf" / "BoxDraco.gltf")
+    assert (report.faces, report.watertight, report.orientation) == (12, True, "outward")
+    assert report.file.bytes == (DATA / "gltf" / "BoxDraco.gltf").stat().st_size
+
+
+def test_a_gltf_sent_as_bytes_still_asks_for_its_buffer() -> None:
+    data = (DATA / "gltf" / "Box.gltf").read_bytes()
+    with pytest.raises(MeshFileError, match=r"separate buffer file Box0\.bin"):
+        read_mesh(data, "Box.gltf")
