@@ -27,7 +27,7 @@ AGREEMENT_DEGREES = 1.0
 #: The crease angle of the corner normals we compare an OBJ's per-corner normals with.
 COMPARISON_CREASE = 30.0
 
-MeshFormat = Literal["stl", "obj", "ply", "off", "glb", "gltf"]
+MeshFormat = Literal["stl", "obj", "ply", "off", "glb", "gltf", "3mf"]
 StoredKind = Literal["face", "corner", "vertex"]
 
 
