@@ -26,7 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mesh_normal.files.archive import _Budget, _checked_members, unpack_limit
-from mesh_normal.files.errors import MeshFileError
+from mesh_normal.files.errors import MeshFileError, unsupported
 from mesh_normal.files.loaded import LoadedMesh, build
 
 #: Where a 3MF package keeps its model unless ``_rels/.rels`` says otherwise.
@@ -138,6 +138,15 @@ def _parse(xml: bytes) -> ET.Element:
 def _object(obj: ET.Element, number: int) -> _Object:
     mesh = obj.find("{*}mesh")
     if mesh is None:
+        if any(
+            key.endswith("}path")
+            for component in obj.iterfind("{*}components/{*}component")
+            for key in component.attrib
+        ):
+            raise unsupported(
+                "The 3MF file's components refer to other model parts (the production "
+                "extension), which are not supported."
+            )
         components = tuple(
             (component.get("objectid", ""), _transform(component))
             for component in obj.iterfind("{*}components/{*}component")

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from fastapi.testclient import TestClient
 
-from mesh_normal.files import MeshFileError, read_mesh
+from mesh_normal.files import MeshFileError, archive, read_mesh
 from mesh_normal.files.formats import ACCEPTED_SUFFIXES, FORMATS
 from mesh_normal.files.read import sniff
 from tests.conftest import assert_error
@@ -211,3 +211,21 @@ def test_upload_a_3mf(client: TestClient) -> None:
 def test_upload_a_broken_3mf(client: TestClient) -> None:
     response = client.post("/api/mesh", files={"file": ("bad.3mf", package(None))})
     assert_error(response, 400, "file", "3MF", "no model part")
+
+
+def test_components_in_other_model_parts_are_a_415() -> None:
+    resources = (
+        '<object id="1" xmlns:p="http://schemas.microsoft.com/3dmanufacturing/production/2015/06">'
+        '<components><component objectid="1" p:path="/3D/part.model"/></components></object>'
+    )
+    with pytest.raises(MeshFileError, match="production extension") as error:
+        read_mesh(package(model(resources, '<item objectid="1"/>')))
+    assert error.value.status_code == 415
+
+
+def test_the_zip_bomb_guards_of_archives_hold(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(archive, "MIN_LIMIT", 1000)
+    resources = mesh_object(1, TETRA_VERTICES * 2000, TETRA_TRIANGLES)  # compresses well
+    data = package(model(resources, '<item objectid="1"/>'))
+    with pytest.raises(MeshFileError, match="would unpack to"):
+        read_mesh(data, "bomb.3mf")
