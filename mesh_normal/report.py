@@ -29,7 +29,7 @@ AGREEMENT_DEGREES = 1.0
 #: (others are tried too: see :mod:`mesh_normal.stored_normals`).
 COMPARISON_CREASE = 30.0
 
-MeshFormat = Literal["stl", "obj", "ply", "off", "glb", "gltf"]
+MeshFormat = Literal["stl", "obj", "ply", "off", "glb", "gltf", "3mf"]
 StoredKind = Literal["face", "corner", "vertex"]
 
 

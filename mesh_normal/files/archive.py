@@ -87,7 +87,7 @@ def _mesh_member(members: dict[str, zipfile.ZipInfo]) -> zipfile.ZipInfo:
     ]
     if not found:
         raise MeshFileError(
-            "The .zip file holds no mesh file (.gltf, .glb, .obj, .ply, .stl or .off)."
+            "The .zip file holds no mesh file (.gltf, .glb, .obj, .ply, .stl, .off or .3mf)."
         )
     if len(found) > 1:
         names = ", ".join(info.filename for info in found[:5])

@@ -72,6 +72,7 @@ FORMATS: dict[str, MeshFormat] = {
         MeshFormat("off", "OFF", (".off",), "application/octet-stream", "off"),
         MeshFormat("glb", "GLB", (".glb",), "model/gltf-binary", "gltf"),
         MeshFormat("gltf", "glTF", (".gltf",), "model/gltf+json", "gltf"),
+        MeshFormat("3mf", "3MF", (".3mf",), "model/3mf", "threemf"),
     )
 }
 

@@ -58,11 +58,11 @@ def read_mesh(source: MeshSource, filename: str | None = None) -> LoadedMesh:
         raise MeshFileError("The file is empty (0 bytes).")
     if data.startswith(b"\xef\xbb\xbf"):  # a UTF-8 byte order mark: text formats only
         data = data[3:]
-    if is_zip(data):
+    named = suffix_format(filename)
+    if is_zip(data) and (sniff(data) or named) != "3mf":  # a 3MF file is a zip package itself
         from mesh_normal.files.archive import read_zip
 
         return read_zip(data, read_mesh)
-    named = suffix_format(filename)
     found = sniff(data) or named
     if found is None:
         raise unknown_format(filename)
@@ -131,6 +131,10 @@ _TEXT_MODE = "read_mesh needs a file opened in binary mode: open(path, 'rb'), no
 def sniff(data: bytes) -> str | None:
     """The format the bytes themselves show, or ``None`` (OBJ only when it is plain)."""
     head = data[:4096]
+    if is_zip(data):
+        from mesh_normal.files.threemf import is_3mf
+
+        return "3mf" if is_3mf(data) else None
     if head.startswith(b"glTF"):
         return "glb"
     if re.match(rb"ply\r?\n", head):

@@ -386,7 +386,7 @@ def test_openapi_documents_every_key_of_the_report(client: TestClient) -> None:
     report_schema = resolve(spec, schema)["properties"]
     assert report["orientation"] in report_schema["orientation"]["enum"]
     file_info = resolve(spec, report_schema["file"])["properties"]
-    assert set(file_info["format"]["enum"]) == {"stl", "obj", "ply", "off", "glb", "gltf"}
+    assert set(file_info["format"]["enum"]) == {"stl", "obj", "ply", "off", "glb", "gltf", "3mf"}
 
 
 def test_a_wrong_key_is_found_by_the_schema_check(client: TestClient) -> None:

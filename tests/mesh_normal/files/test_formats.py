@@ -15,7 +15,7 @@ from tests.paths import ROOT
 
 
 def test_the_table() -> None:
-    assert list(FORMATS) == ["ply", "stl", "obj", "off", "glb", "gltf"]
+    assert list(FORMATS) == ["ply", "stl", "obj", "off", "glb", "gltf", "3mf"]
     assert [entry.title for entry in FORMATS.values()] == [
         "PLY",
         "STL",
@@ -23,11 +23,13 @@ def test_the_table() -> None:
         "OFF",
         "GLB",
         "glTF",
+        "3MF",
     ]
     assert WRITABLE == ("ply", "stl", "obj")
     assert FORMATS["stl"].media_type == "model/stl"
     assert FORMATS["obj"].media_type == "model/obj"
     assert FORMATS["glb"].media_type == "model/gltf-binary"
+    assert FORMATS["3mf"].media_type == "model/3mf"
 
 
 @pytest.mark.parametrize("name", sorted(FORMATS))

@@ -31,6 +31,7 @@ def test_suffixes() -> None:
         ".off": "off",
         ".glb": "glb",
         ".gltf": "gltf",
+        ".3mf": "3mf",
     }
 
 

@@ -1,0 +1,231 @@
+"""3MF packages built here: objects, build transforms, components, and broken packages."""
+
+from __future__ import annotations
+
+import io
+import zipfile
+
+import numpy as np
+import pytest
+from fastapi.testclient import TestClient
+
+from mesh_normal.files import MeshFileError, archive, read_mesh
+from mesh_normal.files.formats import ACCEPTED_SUFFIXES, FORMATS
+from mesh_normal.files.read import sniff
+from tests.conftest import assert_error
+
+TETRA_VERTICES = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)]
+#: Counter-clockwise seen from outside, as 3MF asks.
+TETRA_TRIANGLES = [(0, 2, 1), (0, 1, 3), (0, 3, 2), (1, 2, 3)]
+TYPES = (
+    '<?xml version="1.0" encoding="UTF-8"?>\n'
+    '<Types xmlns="http://schemas.openxmlformats.org/package/2006/content-types">'
+    '<Default Extension="rels" ContentType="application/vnd.openxmlformats-package'
+    '.relationships+xml"/><Default Extension="model" '
+    'ContentType="application/vnd.ms-package.3dmanufacturing-3dmodel+xml"/></Types>'
+)
+RELS = (
+    '<?xml version="1.0" encoding="UTF-8"?>\n'
+    '<Relationships xmlns="http://schemas.openxmlformats.org/package/2006/relationships">'
+    '<Relationship Target="/3D/{part}" Id="rel0" '
+    'Type="http://schemas.microsoft.com/3dmanufacturing/2013/01/3dmodel"/></Relationships>'
+)
+#: Row vectors times this: (x, y, z) -> (-y, x, z), a quarter turn about z.
+TURN = "0 1 0 -1 0 0 0 0 1 0 0 0"
+
+
+def mesh_object(
+    number: int, vertices: list[tuple[float, ...]], triangles: list[tuple[int, ...]]
+) -> str:
+    points = "".join(f'<vertex x="{x}" y="{y}" z="{z}"/>' for x, y, z in vertices)
+    faces = "".join(f'<triangle v1="{a}" v2="{b}" v3="{c}"/>' for a, b, c in triangles)
+    return (
+        f'<object id="{number}" type="model"><mesh><vertices>{points}</vertices>'
+        f"<triangles>{faces}</triangles></mesh></object>"
+    )
+
+
+def model(resources: str, build: str) -> str:
+    return (
+        '<?xml version="1.0" encoding="UTF-8"?>\n<model unit="millimeter" xml:lang="en-US" '
+        'xmlns="http://schemas.microsoft.com/3dmanufacturing/core/2015/02">'
+        f"<resources>{resources}</resources><build>{build}</build></model>"
+    )
+
+
+def package(model_xml: str | None, part: str = "3dmodel.model", rels: bool = True) -> bytes:
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w", zipfile.ZIP_DEFLATED) as archive:
+        archive.writestr("[Content_Types].xml", TYPES)
+        if rels:
+            archive.writestr("_rels/.rels", RELS.format(part=part))
+        if model_xml is not None:
+            archive.writestr(f"3D/{part}", model_xml)
+    return buffer.getvalue()
+
+
+def tetrahedron() -> bytes:
+    return package(model(mesh_object(1, TETRA_VERTICES, TETRA_TRIANGLES), '<item objectid="1"/>'))
+
+
+def test_the_format_table_has_3mf() -> None:
+    entry = FORMATS["3mf"]
+    assert (entry.suffixes, entry.media_type, entry.writable) == ((".3mf",), "model/3mf", False)
+    assert ".3mf" in ACCEPTED_SUFFIXES
+
+
+def test_a_tetrahedron() -> None:
+    data = tetrahedron()
+    assert sniff(data) == "3mf"
+    mesh = read_mesh(data)  # no name: told from the bytes, not a generic .zip
+    assert mesh.format == "3mf" and mesh.source_faces == 4 and mesh.notes == ()
+    np.testing.assert_array_equal(mesh.vertices, TETRA_VERTICES)
+    np.testing.assert_array_equal(mesh.faces, TETRA_TRIANGLES)
+
+
+def test_two_objects_with_build_transforms_keep_file_order() -> None:
+    second = [(0, 0, 0), (2, 0, 0), (0, 2, 0)]
+    resources = mesh_object(1, TETRA_VERTICES, TETRA_TRIANGLES) + mesh_object(
+        7, second, [(0, 1, 2)]
+    )
+    build = (
+        '<item objectid="1" transform="1 0 0 0 1 0 0 0 1 10 0 0"/>'
+        f'<item objectid="7" transform="{TURN}"/>'
+    )
+    mesh = read_mesh(package(model(resources, build)), "two.3mf")
+    assert (len(mesh.vertices), len(mesh.faces)) == (7, 5)
+    np.testing.assert_array_equal(mesh.vertices[:4], np.add(TETRA_VERTICES, (10, 0, 0)))
+    np.testing.assert_allclose(mesh.vertices[4:], [(0, 0, 0), (0, 2, 0), (-2, 0, 0)])
+    np.testing.assert_array_equal(mesh.faces, [*TETRA_TRIANGLES, (4, 5, 6)])
+    assert mesh.notes == ("Joined 2 3MF meshes from 2 build items, with their transforms applied.",)
+
+
+def test_components_compose_with_the_item_transform() -> None:
+    resources = mesh_object(1, TETRA_VERTICES, TETRA_TRIANGLES) + (
+        '<object id="2" type="model"><components>'
+        '<component objectid="1" transform="1 0 0 0 1 0 0 0 1 1 0 0"/>'
+        '<component objectid="1"/></components></object>'
+    )
+    mesh = read_mesh(package(model(resources, f'<item objectid="2" transform="{TURN}"/>')))
+    assert len(mesh.vertices) == 8 and len(mesh.faces) == 8
+    # translated first (the component), then turned (the item): (0, 0, 0) -> (1, 0, 0) -> (0, 1, 0)
+    np.testing.assert_allclose(mesh.vertices[0], (0, 1, 0), atol=1e-12)
+    np.testing.assert_allclose(mesh.vertices[4:], [(0, 0, 0), (0, 1, 0), (-1, 0, 0), (0, 0, 1)])
+
+
+def test_a_mirroring_transform_reverses_the_winding() -> None:
+    resources = mesh_object(1, TETRA_VERTICES, TETRA_TRIANGLES)
+    item = '<item objectid="1" transform="-1 0 0 0 1 0 0 0 1 0 0 0"/>'
+    mesh = read_mesh(package(model(resources, item)))
+    np.testing.assert_array_equal(mesh.faces, np.array(TETRA_TRIANGLES)[:, ::-1])
+    np.testing.assert_array_equal(mesh.vertices[1], (-1, 0, 0))
+    assert "Reversed the winding of 1 mirrored" in mesh.notes[0]
+
+
+def test_the_model_part_the_relationships_name() -> None:
+    resources = mesh_object(1, TETRA_VERTICES, TETRA_TRIANGLES)
+    data = package(model(resources, '<item objectid="1"/>'), part="other.model")
+    assert sniff(data) == "3mf"  # by its content types, not by the usual part name
+    assert len(read_mesh(data).faces) == 4
+
+
+def test_a_3mf_inside_a_zip() -> None:
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w") as archive:
+        archive.writestr("parts/tetra.3mf", tetrahedron())
+    mesh = read_mesh(buffer.getvalue(), "parts.zip")
+    assert mesh.format == "3mf" and mesh.notes == ("Read parts/tetra.3mf from the .zip file.",)
+
+
+@pytest.mark.parametrize(
+    ("data", "words"),
+    [
+        (package(None), "has no model part (3D/3dmodel.model)"),
+        (package("<model><resources>", rels=False), "XML is broken"),
+        (
+            package(model(mesh_object(1, TETRA_VERTICES, [(0, 1, 4)]), '<item objectid="1"/>')),
+            "Triangle 0 (counting from 0) of object 1 refers to vertex 4, but the object has 4",
+        ),
+        (
+            package(model(mesh_object(1, TETRA_VERTICES, TETRA_TRIANGLES), '<item objectid="9"/>')),
+            "refers to object '9', which it lacks",
+        ),
+        (package(model(mesh_object(1, TETRA_VERTICES, TETRA_TRIANGLES), "")), "names no objects"),
+        (
+            package(
+                model(
+                    '<object id="1"><components><component objectid="1"/></components></object>',
+                    '<item objectid="1"/>',
+                )
+            ),
+            "nests components deeper",
+        ),
+        (
+            package(
+                model(
+                    mesh_object(1, TETRA_VERTICES, TETRA_TRIANGLES),
+                    '<item objectid="1" transform="1 0 0"/>',
+                )
+            ),
+            "transform that is not 12 numbers",
+        ),
+        (
+            package(
+                model(
+                    '<object id="1"><mesh><vertices><vertex x="1" y="a" z="0"/>'
+                    "</vertices></mesh></object>",
+                    '<item objectid="1"/>',
+                )
+            ),
+            "vertex 0 (counting from 0) of object 1 has a missing or non-numeric x/y/z",
+        ),
+        (
+            package('<!DOCTYPE m [<!ENTITY a "aaaa">]><model>&a;</model>'),
+            "declares a DTD",
+        ),
+    ],
+)
+def test_broken_packages_are_one_sentence(data: bytes, words: str) -> None:
+    with pytest.raises(MeshFileError) as error:
+        read_mesh(data, "broken.3mf")
+    assert error.value.status_code == 400 and words in str(error.value)
+    assert str(error.value).endswith(".") and str(error.value).count(". ") == 0
+
+
+def test_a_zip_named_3mf_without_a_model_is_not_read_as_a_zip() -> None:
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w") as archive:
+        archive.writestr("readme.txt", "hi")
+    with pytest.raises(MeshFileError, match="no model part"):
+        read_mesh(buffer.getvalue(), "empty.3mf")
+
+
+def test_upload_a_3mf(client: TestClient) -> None:
+    response = client.post("/api/mesh", files={"file": ("tetra.3mf", tetrahedron())})
+    assert response.status_code == 200, response.text
+    report = response.json()
+    assert report["file"]["format"] == "3mf" and report["faces"] == 4
+    assert report["orientation"] == "outward"
+
+
+def test_upload_a_broken_3mf(client: TestClient) -> None:
+    response = client.post("/api/mesh", files={"file": ("bad.3mf", package(None))})
+    assert_error(response, 400, "file", "3MF", "no model part")
+
+
+def test_components_in_other_model_parts_are_a_415() -> None:
+    resources = (
+        '<object id="1" xmlns:p="http://schemas.microsoft.com/3dmanufacturing/production/2015/06">'
+        '<components><component objectid="1" p:path="/3D/part.model"/></components></object>'
+    )
+    with pytest.raises(MeshFileError, match="production extension") as error:
+        read_mesh(package(model(resources, '<item objectid="1"/>')))
+    assert error.value.status_code == 415
+
+
+def test_the_zip_bomb_guards_of_archives_hold(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(archive, "MIN_LIMIT", 1000)
+    resources = mesh_object(1, TETRA_VERTICES * 2000, TETRA_TRIANGLES)  # compresses well
+    data = package(model(resources, '<item objectid="1"/>'))
+    with pytest.raises(MeshFileError, match="would unpack to"):
+        read_mesh(data, "bomb.3mf")
