@@ -12,11 +12,12 @@ really read; no member named outside the archive (``..``, absolute paths, drive 
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import io
 import posixpath
 import zipfile
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 
 from mesh_normal.files.errors import MeshFileError
 from mesh_normal.files.loaded import LoadedMesh
@@ -40,20 +41,28 @@ def read_zip(data: bytes, read_file: Callable[[bytes, str], LoadedMesh]) -> Load
     """Read the one mesh file in a ``.zip`` (see the module docstring); ``read_file(data,
     name)`` reads a member other than a ``.gltf`` (it is ``read_mesh``, passed in because
     ``read_mesh`` calls this)."""
-    try:
-        archive = zipfile.ZipFile(io.BytesIO(data))
-    except zipfile.BadZipFile as error:
-        raise MeshFileError(f"The .zip file could not be opened: {error}.") from error
-    with archive:
-        members = _checked_members(archive, len(data))
+    with opened_zip(data, "The .zip file could not be opened") as (archive, members, budget):
         member = _mesh_member(members)
-        budget = _Budget(unpack_limit(len(data)))
         mesh = _read_member(archive, member, members, budget, read_file)
     note = f"Read {member.filename} from the .zip file."
     return dataclasses.replace(mesh, notes=(note, *mesh.notes))
 
 
-def _checked_members(archive: zipfile.ZipFile, size: int) -> dict[str, zipfile.ZipInfo]:
+@contextlib.contextmanager
+def opened_zip(
+    data: bytes, cannot_open: str
+) -> Iterator[tuple[zipfile.ZipFile, dict[str, zipfile.ZipInfo], Budget]]:
+    """The archive in ``data``, its members once they pass the guards, and the budget of bytes
+    it may unpack to; ``cannot_open`` starts the sentence for bytes that are no zip."""
+    try:
+        archive = zipfile.ZipFile(io.BytesIO(data))
+    except zipfile.BadZipFile as error:
+        raise MeshFileError(f"{cannot_open}: {error}.") from error
+    with archive:
+        yield archive, checked_members(archive, len(data)), Budget(unpack_limit(len(data)))
+
+
+def checked_members(archive: zipfile.ZipFile, size: int) -> dict[str, zipfile.ZipInfo]:
     """The archive's files by normalised name, once its names and sizes pass the guards."""
     infos = archive.infolist()
     if len(infos) > MAX_MEMBERS:
@@ -98,7 +107,7 @@ def _mesh_member(members: dict[str, zipfile.ZipInfo]) -> zipfile.ZipInfo:
 
 
 @dataclasses.dataclass(slots=True)
-class _Budget:
+class Budget:
     """Bytes left to unpack; the archive's stated sizes may lie, so what is read counts."""
 
     left: int
@@ -116,7 +125,7 @@ def _read_member(
     archive: zipfile.ZipFile,
     member: zipfile.ZipInfo,
     members: dict[str, zipfile.ZipInfo],
-    budget: _Budget,
+    budget: Budget,
     read_file: Callable[[bytes, str], LoadedMesh],
 ) -> LoadedMesh:
     from mesh_normal.files.formats import suffix_format

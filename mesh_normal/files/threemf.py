@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from mesh_normal.files.archive import _Budget, _checked_members, unpack_limit
+from mesh_normal.files.archive import Budget, opened_zip
 from mesh_normal.files.errors import MeshFileError, unsupported
 from mesh_normal.files.loaded import LoadedMesh, build
 
@@ -94,13 +94,11 @@ def read_3mf(data: bytes) -> LoadedMesh:
 
 
 def _model_bytes(data: bytes) -> bytes:
-    try:
-        archive = zipfile.ZipFile(io.BytesIO(data))
-    except zipfile.BadZipFile as error:
-        raise MeshFileError(f"The 3MF file could not be opened as a zip: {error}.") from error
-    with archive:
-        members = _checked_members(archive, len(data))
-        budget = _Budget(unpack_limit(len(data)))
+    with opened_zip(data, "The 3MF file could not be opened as a zip") as (
+        archive,
+        members,
+        budget,
+    ):
         by_lower = {name.lower(): info for name, info in members.items()}  # OPC: no case
         part = _model_part_name(archive, by_lower, budget)
         info = by_lower.get(part.lower())
@@ -110,7 +108,7 @@ def _model_bytes(data: bytes) -> bytes:
 
 
 def _model_part_name(
-    archive: zipfile.ZipFile, members: dict[str, zipfile.ZipInfo], budget: _Budget
+    archive: zipfile.ZipFile, members: dict[str, zipfile.ZipInfo], budget: Budget
 ) -> str:
     """The model part ``_rels/.rels`` names, else the usual ``3D/3dmodel.model``."""
     rels = members.get("_rels/.rels")

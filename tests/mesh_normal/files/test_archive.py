@@ -94,7 +94,7 @@ def test_too_many_members(monkeypatch: pytest.MonkeyPatch) -> None:
 def test_members_larger_than_they_state_are_cut_off() -> None:
     data = zipped({"a.obj": b"0123456789"})
     with zipfile.ZipFile(io.BytesIO(data)) as file:
-        budget = archive._Budget(5)
+        budget = archive.Budget(5)
         with pytest.raises(MeshFileError, match="more than its members state"):
             budget.read(file, file.infolist()[0])
 
