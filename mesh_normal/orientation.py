@@ -484,8 +484,14 @@ def _cone_kernel(
 
 #: How many points of a closed shell are tested for lying inside another (spread over its faces).
 _NEST_SAMPLES = 8
-#: Beyond this many closed shells their bounding boxes are not compared (k**2 pairs).
+#: Beyond this many closed shells not every pair of boxes is compared (k**2 pairs): a shell whose
+#: box lies inside the box of one of the ``_NEST_LARGEST`` largest shells counts as nested, and
+#: the others are decided by their own volume.
 _NEST_SHELLS = 4096
+_NEST_LARGEST = 64
+#: Beyond this many pairs of boxes one inside the other, no winding number is taken: a shell
+#: whose box lies inside another's counts as nested (undecided) on that alone.
+_NEST_PAIRS = 4096
 #: At most this many (sample, face) visits go into winding numbers.
 _NEST_WORK = 2 * 10**8
 
@@ -497,16 +503,16 @@ def _nested(geometry: FaceGeometry, found: Structure, candidates: BoolArray) -> 
     ``_NEST_SAMPLES`` vertices of K, spread over its faces, has a generalized winding number
     about J (J's winding made consistent) of magnitude above one half: 1 inside a closed
     surface, 0 outside, whichever way it is wound. Shells that cross (an eye sunk half into a
-    head) have sample points outside and are not nested. Past ``_NEST_SHELLS`` shells, or
-    once the winding numbers would take more than ``_NEST_WORK`` face visits, the shells not
-    yet cleared count as nested: undecided, never flipped.
+    head) have sample points outside and are not nested. Past ``_NEST_SHELLS`` shells only
+    the boxes of the largest ones are compared, and a shell inside one of them counts as nested;
+    past
+    ``_NEST_PAIRS`` pairs of boxes one inside the other, or once the winding numbers would take
+    more than ``_NEST_WORK`` face visits, a shell whose box lies inside another's and that is not
+    yet cleared counts as nested: undecided, never flipped.
     """
     nested = np.zeros(found.patches, dtype=bool)
     shells = np.flatnonzero(candidates)
     if len(shells) < 2:
-        return nested
-    if len(shells) > _NEST_SHELLS:
-        nested[shells] = True
         return nested
     mesh = geometry.mesh
     faces = mesh.faces
@@ -518,11 +524,17 @@ def _nested(geometry: FaceGeometry, found: Structure, candidates: BoolArray) -> 
     corners = mesh.points[faces[order]] * mesh.factor  # (k, 3, 3)
     low = np.minimum.reduceat(corners.min(axis=1), starts)
     high = np.maximum.reduceat(corners.max(axis=1), starts)
+    if len(shells) > _NEST_SHELLS:
+        nested[shells] = _inside_largest(low, high)
+        return nested
     # inside[k, j]: shell k's box lies within shell j's.
     inside = np.logical_and(
         np.all(low[:, None] >= low[None], axis=2), np.all(high[:, None] <= high[None], axis=2)
     )
     inside[np.arange(len(shells)), np.arange(len(shells))] = False
+    if np.count_nonzero(inside) > _NEST_PAIRS:  # too many to test: the boxes alone decide
+        nested[shells] = inside.any(axis=1)
+        return nested
     oriented = faces[order].copy()
     turned = found.parity[order].astype(bool)
     oriented[turned, 1:] = oriented[turned, :0:-1]
@@ -542,6 +554,18 @@ def _nested(geometry: FaceGeometry, found: Structure, candidates: BoolArray) -> 
         if (np.abs(winding) > 0.5).all():
             nested[shells[k]] = True
     return nested
+
+
+def _inside_largest(low: FloatArray, high: FloatArray) -> BoolArray:
+    """(k,) bool: which boxes lie inside the box of one of the largest other boxes."""
+    largest = np.argsort(-np.prod(high - low, axis=1), kind="stable")[:_NEST_LARGEST]
+    inside = np.logical_and(
+        np.all(low[:, None] >= low[largest][None], axis=2),
+        np.all(high[:, None] <= high[largest][None], axis=2),
+    )
+    inside[largest, np.arange(len(largest))] = False  # a box lies inside itself
+    found: BoolArray = inside.any(axis=1)
+    return found
 
 
 @kernel()

@@ -268,3 +268,29 @@ def test_nested_shells_past_the_limits_are_left_alone(monkeypatch: pytest.Monkey
     assert not orient(vertices, faces).flipped.any()  # not cleared: left as it is
     monkeypatch.setattr(orientation, "_NEST_SHELLS", 1)
     assert not orient(vertices, faces).flipped.any()
+
+
+def test_many_separate_inward_shells_are_still_fixed_past_the_pair_limits() -> None:
+    # 5,000 tetrahedra wound inward, side by side: more shells than _NEST_SHELLS, and no box
+    # lies inside another's, so each is decided by its own volume and turned outward.
+    tetra = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.0]])
+    inward = np.array([[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]])
+    count = 5000
+    offsets = np.stack(
+        [np.arange(count) % 100 * 3, np.arange(count) // 100 * 3, 0 * np.arange(count)], 1
+    )
+    vertices = (tetra[None] + offsets[:, None]).reshape(-1, 3)
+    faces = (inward[None] + 4 * np.arange(count)[:, None, None]).reshape(-1, 3)
+    fixed = orient(vertices, faces)
+    assert fixed.flipped.all() and fixed.orientation == "inward"
+
+
+def test_crossing_shells_in_one_box_are_left_alone_quickly() -> None:
+    # 1,000 tetrahedra jittered around one place: a million box pairs, far past _NEST_PAIRS, so
+    # the boxes alone decide (every one lies inside another's: undecided, nothing flipped).
+    tetra = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.0]])
+    outward = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    jitter = np.random.default_rng(0).normal(size=(1000, 1, 3)) * 0.01
+    vertices = (tetra[None] + jitter).reshape(-1, 3)
+    faces = (outward[None] + 4 * np.arange(1000)[:, None, None]).reshape(-1, 3)
+    assert not orient(vertices, faces).flipped.any()
