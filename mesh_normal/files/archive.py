@@ -16,7 +16,9 @@ import contextlib
 import dataclasses
 import io
 import posixpath
+import struct
 import zipfile
+import zlib
 from collections.abc import Callable, Iterator
 
 from mesh_normal.files.errors import MeshFileError
@@ -28,6 +30,18 @@ MAX_MEMBERS = 1000
 MAX_TOTAL = 1 << 30
 #: Most uncompressed bytes per byte of archive (mesh files compress about 2 to 10 times).
 MAX_RATIO = 50
+#: What the standard library raises for a damaged archive or member (bad CRC, a broken deflate
+#: stream, data cut short), an encrypted one, or a version or method it does not have.
+UNPACK_ERRORS = (
+    zipfile.BadZipFile,
+    zlib.error,
+    EOFError,
+    RuntimeError,
+    NotImplementedError,
+    ValueError,  # "negative seek value" for offsets that lie; names that are not UTF-8
+    struct.error,
+)
+
 #: What any archive may unpack to, whatever its ratio: a small file compresses well.
 MIN_LIMIT = 1 << 20
 
@@ -56,7 +70,7 @@ def opened_zip(
     it may unpack to; ``cannot_open`` starts the sentence for bytes that are no zip."""
     try:
         archive = zipfile.ZipFile(io.BytesIO(data))
-    except zipfile.BadZipFile as error:
+    except UNPACK_ERRORS as error:
         raise MeshFileError(f"{cannot_open}: {error}.") from error
     with archive:
         yield archive, checked_members(archive, len(data)), Budget(unpack_limit(len(data)))
@@ -113,8 +127,14 @@ class Budget:
     left: int
 
     def read(self, archive: zipfile.ZipFile, info: zipfile.ZipInfo) -> bytes:
-        with archive.open(info) as file:
-            data = file.read(self.left + 1)
+        try:
+            with archive.open(info) as file:
+                data = file.read(self.left + 1)
+        except UNPACK_ERRORS as error:
+            reason = str(error).strip().rstrip(".") or type(error).__name__
+            raise MeshFileError(
+                f"The member {info.filename} of the archive could not be unpacked: {reason}."
+            ) from error
         if len(data) > self.left:
             raise MeshFileError("The .zip file unpacks to more than its members state.")
         self.left -= len(data)
@@ -130,8 +150,15 @@ def _read_member(
 ) -> LoadedMesh:
     from mesh_normal.files.formats import suffix_format
     from mesh_normal.files.gltf import read_gltf
+    from mesh_normal.files.read import is_zip
+    from mesh_normal.files.threemf import is_3mf
 
     data = budget.read(archive, member)
+    if is_zip(data) and not is_3mf(data):  # one level only: nesting would escape the budget
+        raise MeshFileError(
+            f"The member {member.filename} of the .zip file is itself a .zip; send the mesh "
+            "file's own archive."
+        )
     if suffix_format(member.filename) != "gltf" or data.startswith(b"glTF"):
         return read_file(data, posixpath.basename(member.filename))
     folder = posixpath.dirname(posixpath.normpath(member.filename.replace("\\", "/")))

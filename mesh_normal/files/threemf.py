@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from mesh_normal.files.archive import Budget, opened_zip
+from mesh_normal.files.archive import UNPACK_ERRORS, Budget, opened_zip
 from mesh_normal.files.errors import MeshFileError, unsupported
 from mesh_normal.files.loaded import LoadedMesh, build
 
@@ -56,7 +56,7 @@ def is_3mf(data: bytes) -> bool:
                 return False
             with archive.open(types) as file:  # bounded: a content-types part is tiny
                 return MODEL_TYPE.encode() in file.read(1 << 16)
-    except (zipfile.BadZipFile, OSError, RuntimeError, NotImplementedError):
+    except (*UNPACK_ERRORS, OSError):  # a damaged zip (names that are not UTF-8 too) is no 3MF
         return False
 
 

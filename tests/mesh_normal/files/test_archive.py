@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import contextlib
 import io
 import json
+import random
 import zipfile
 
 import numpy as np
@@ -143,3 +145,36 @@ def test_the_unpack_limit() -> None:
     assert archive.unpack_limit(100) == 1 << 20  # a small file may compress very well
     assert archive.unpack_limit(1_000_000) == 50_000_000
     assert archive.unpack_limit(1 << 30) == 1 << 30
+
+
+def _zip_of(name: str, data: bytes, method: int = zipfile.ZIP_DEFLATED) -> bytes:
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w", method) as archive:
+        archive.writestr(name, data)
+    return buffer.getvalue()
+
+
+def test_a_damaged_member_is_a_400_naming_it() -> None:
+    damaged = bytearray(_zip_of("cube.obj", CUBE_OBJ.encode()))
+    damaged[40] ^= 0xFF  # inside the deflate stream
+    with pytest.raises(MeshFileError, match=r"The member cube\.obj of the archive could not be"):
+        read_mesh(bytes(damaged), "cube.zip")
+
+
+def test_mutated_archives_never_raise_anything_but_the_file_error() -> None:
+    good = _zip_of("cube.obj", CUBE_OBJ.encode())
+    rng = random.Random(1)
+    for _ in range(500):
+        mutated = bytearray(good)
+        for _ in range(rng.randint(1, 4)):
+            mutated[rng.randrange(len(mutated))] = rng.randrange(256)
+        with contextlib.suppress(MeshFileError):
+            read_mesh(bytes(mutated), "cube.zip")
+
+
+def test_a_zip_inside_a_zip_is_refused_at_any_depth() -> None:
+    archive = _zip_of("cube.obj", CUBE_OBJ.encode())
+    for _ in range(400):  # each level would get a budget of its own
+        archive = _zip_of("m.obj", archive, zipfile.ZIP_STORED)
+    with pytest.raises(MeshFileError, match=r"m\.obj of the \.zip file is itself a \.zip"):
+        read_mesh(archive, "deep.zip")
