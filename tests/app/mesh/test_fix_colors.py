@@ -8,6 +8,7 @@ from fastapi.testclient import TestClient
 
 from mesh_normal.files import read_mesh, write_mesh
 from tests.meshes import TETRA_FACES, TETRA_OBJ, TETRA_VERTICES
+from tests.paths import DATA
 
 UCHAR = np.array([[255, 0, 3], [4, 5, 6], [7, 128, 9], [0, 254, 1]], dtype=np.uint8)
 FLOAT = np.array(
@@ -71,3 +72,15 @@ def test_no_colours_no_header(client: TestClient, fmt: str) -> None:
 def test_the_fix_documents_x_dropped(client: TestClient) -> None:
     route = client.get("/openapi.json").json()["paths"]["/api/mesh/fix"]["post"]
     assert "X-Dropped" in route["responses"]["200"]["description"]
+
+
+def test_a_meshlab_files_colours_survive_the_fix(client: TestClient) -> None:
+    data = (DATA / "colors_meshlab.ply").read_bytes()
+    original = read_mesh(data, "colors_meshlab.ply")
+    assert original.vertex_colors is not None
+    fixed = read_mesh(fix(client, data, "colors_meshlab.ply", "ply").content, "fixed.ply")
+    assert fixed.vertex_colors is not None
+    assert fixed.vertex_colors.tobytes() == original.vertex_colors.tobytes()
+    np.testing.assert_array_equal(fixed.vertices, original.vertices)
+    dropped = fix(client, data, "colors_meshlab.ply", "stl").headers["x-dropped"]
+    assert dropped == "vertex colours (STL holds none)"

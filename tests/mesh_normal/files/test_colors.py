@@ -4,11 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import trimesh
 
 from mesh_normal.files import read_mesh, write_mesh
 from mesh_normal.files.loaded import build
 from mesh_normal.files.write import unkept
 from tests.meshes import TETRA_FACES, TETRA_VERTICES
+from tests.paths import DATA
 
 UCHAR = np.array([[255, 0, 3], [4, 5, 6], [7, 128, 9], [0, 254, 1]], dtype=np.uint8)
 FLOAT_RGBA = np.array(
@@ -139,3 +141,28 @@ def test_build_keeps_the_colour_type_and_checks_the_shape() -> None:
     with pytest.raises(AssertionError):
         build("ply", TETRA_VERTICES, TETRA_FACES, source_faces=4, vertex_colors=UCHAR[:2])
     assert build("ply", TETRA_VERTICES, TETRA_FACES, source_faces=4).vertex_colors is None
+
+
+def test_meshlab_ply_colours_match_trimesh() -> None:
+    mesh = read_mesh((DATA / "colors_meshlab.ply").read_bytes(), "colors_meshlab.ply")
+    theirs = trimesh.load(DATA / "colors_meshlab.ply", process=False).visual.vertex_colors
+    assert mesh.vertex_colors is not None and mesh.vertex_colors.shape == (845, 4)
+    np.testing.assert_array_equal(mesh.vertex_colors, theirs)
+
+
+def test_blender_ply_colours_after_texture_coordinates() -> None:
+    mesh = read_mesh((DATA / "colors_blender.ply").read_bytes(), "colors_blender.ply")
+    assert mesh.vertex_colors is not None and mesh.vertex_colors.dtype == np.uint8
+    expected = [[255, 0, 0], [0, 255, 0], [0, 0, 255], [255, 255, 255]]  # the file's text
+    assert mesh.vertex_colors.tolist() == expected
+
+
+@pytest.mark.parametrize("name", ["colors_meshlab.ply", "colors_blender.ply"])
+def test_real_ply_colours_round_trip(name: str) -> None:
+    mesh = read_mesh((DATA / name).read_bytes(), name)
+    assert mesh.vertex_colors is not None
+    again = read_mesh(
+        write_mesh(mesh.vertices, mesh.faces, "ply", vertex_colors=mesh.vertex_colors), name
+    )
+    assert again.vertex_colors is not None
+    assert again.vertex_colors.tobytes() == mesh.vertex_colors.tobytes()
