@@ -166,6 +166,7 @@ def fix(args: argparse.Namespace, progress: Progress) -> int:
         )
     from mesh_normal.analysis import flips_by_component
     from mesh_normal.files import MeshFileError, write_mesh
+    from mesh_normal.files.write import unkept
     from mesh_normal.orientation import orient
 
     mesh, _ = load(args.input, progress)
@@ -173,11 +174,14 @@ def fix(args: argparse.Namespace, progress: Progress) -> int:
     fixed = orient(mesh.checked())
     progress.step(f"writing {args.output}")
     try:
-        data = write_mesh(mesh.vertices, fixed.faces, chosen)
+        data = write_mesh(mesh.vertices, fixed.faces, chosen, vertex_colors=mesh.vertex_colors)
     except MeshFileError as error:
         raise Failure(f"cannot write {args.output}: {error}", EXIT_OUTPUT) from None
     write(args.output, data)
     progress.done()
+    dropped = unkept(chosen, mesh.vertex_colors)
+    if dropped:  # do no harm: never leave data out without saying so
+        print(f"mesh-normal: {args.output} leaves out {'; '.join(dropped)}", file=sys.stderr)
     flipped = int(fixed.flipped.sum())
     parts = flips_by_component(fixed) or "none"
     print(

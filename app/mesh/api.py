@@ -21,6 +21,7 @@ from mesh_normal.analysis import analyse_mesh, build_report, flips_by_component
 from mesh_normal.exports import NormalsKind, export_normals
 from mesh_normal.files import LoadedMesh, MeshFileError, read_mesh, write_mesh
 from mesh_normal.files.formats import FORMATS, WRITABLE
+from mesh_normal.files.write import unkept
 from mesh_normal.orientation import orient
 from mesh_normal.report import MeshReport
 from mesh_normal.vertices import Weighting
@@ -128,7 +129,10 @@ async def post_mesh_normals(
             "description": "The mesh with consistent, outward winding; vertices untouched. "
             "X-Faces-Flipped (a count), X-Component-Faces-Flipped (component:faces "
             "for the first 100 components changed) and X-Orientation-Before say "
-            "what changed.",
+            "what changed. Vertex colours are kept where the format holds them (PLY in "
+            "their own type, OBJ as v x y z r g b); X-Dropped, present only when "
+            "something was left out, names what the chosen format could not hold, e.g. "
+            '"vertex colours (STL holds none)" (several joined by "; ").',
             "content": {FORMATS[name].media_type: {} for name in WRITABLE},
         }
     },
@@ -157,8 +161,12 @@ async def post_mesh_fix(
             "x-component-faces-flipped": flips_by_component(fixed),
             "x-orientation-before": fixed.orientation,
         }
+        dropped = unkept(chosen, mesh.vertex_colors)
+        if dropped:  # do no harm: never leave data out without saying so
+            headers["x-dropped"] = "; ".join(dropped)
         try:
-            return write_mesh(mesh.vertices, fixed.faces, chosen), chosen, headers
+            data = write_mesh(mesh.vertices, fixed.faces, chosen, vertex_colors=mesh.vertex_colors)
+            return data, chosen, headers
         except MeshFileError as error:  # e.g. coordinates beyond what STL's floats hold
             raise ApiError(error.status_code, str(error), "format") from None
 

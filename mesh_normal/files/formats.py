@@ -21,8 +21,9 @@ if TYPE_CHECKING:
     from mesh_normal.files.loaded import LoadedMesh
 
     Reader = Callable[[bytes], LoadedMesh]
-    #: ``(points, triangles) -> bytes``, both already checked by ``check_mesh``.
-    Writer = Callable[[NDArray[np.float64], NDArray[np.intp]], bytes]
+    #: ``(points, triangles[, vertex_colors]) -> bytes``, the first two already checked by
+    #: ``check_mesh``; only formats that hold colours take the third.
+    Writer = Callable[..., bytes]
 
 #: What the writers put in the comment of a file's header.
 MAKER = "Mesh Normal Calculator"
@@ -49,12 +50,21 @@ class MeshFormat:
         reader = cast("Reader", self._function("read"))
         return reader(data)
 
-    def write(self, points: NDArray[np.float64], triangles: NDArray[np.intp]) -> bytes:
-        """The bytes of the file; ``points`` and ``triangles`` must be checked already."""
+    def write(
+        self,
+        points: NDArray[np.float64],
+        triangles: NDArray[np.intp],
+        vertex_colors: NDArray[np.generic] | None = None,
+    ) -> bytes:
+        """The bytes of the file; ``points`` and ``triangles`` must be checked already.
+        ``vertex_colors`` are written where the format holds them (:data:`HOLDS_COLORS`) and
+        left out elsewhere."""
         if not self.writable:
             raise ValueError(f"{self.title} files cannot be written.")
         writer = cast("Writer", self._function("write"))
-        return writer(points, triangles)
+        if vertex_colors is None or self.name not in HOLDS_COLORS:
+            return writer(points, triangles)
+        return writer(points, triangles, vertex_colors)
 
     def _function(self, verb: str) -> object:
         module = importlib.import_module(f"mesh_normal.files.{self.module}")
@@ -75,6 +85,9 @@ FORMATS: dict[str, MeshFormat] = {
         MeshFormat("3mf", "3MF", (".3mf",), "model/3mf", "threemf"),
     )
 }
+
+#: Writable formats whose writer takes vertex colours, and what of them each keeps.
+HOLDS_COLORS: dict[str, str] = {"ply": "rgba", "obj": "rgb"}
 
 #: File extension (lower case, with the dot) to format name.
 SUFFIXES: dict[str, str] = {

@@ -51,6 +51,10 @@ class LoadedMesh:
     group_names : tuple of str or None
         Names of the groups, in order of their first triangle (each named group has one);
         ``None`` exactly when ``face_groups`` is.
+    vertex_colors : (n, 3) or (n, 4) array or None
+        Vertex ``red green blue [alpha]`` as the file stores them, with their type: PLY
+        ``uchar`` (0-255) or ``float`` (0-1) properties, OBJ ``v x y z r g b`` (float64, 0-1);
+        read-only. ``None`` when the file has none.
     notes : tuple of str
         Plain sentences about what reading did (welding, triangulation, skipped elements).
     from_reader : bool
@@ -67,6 +71,7 @@ class LoadedMesh:
     file_corner_normals: FloatArray | None = None
     face_groups: IndexArray | None = None
     group_names: tuple[str, ...] | None = None
+    vertex_colors: NDArray[np.generic] | None = None
     notes: tuple[str, ...] = ()
     from_reader: bool = field(default=False, repr=False, compare=False)
 
@@ -95,6 +100,7 @@ def build(
     corner_normals: NDArray[np.floating] | None = None,
     face_groups: NDArray[np.integer] | None = None,
     group_names: Sequence[str] | None = None,
+    vertex_colors: NDArray[np.generic] | None = None,
     notes: Sequence[str] = (),
     vertex: Describe | None = None,
     face: Describe | None = None,
@@ -127,6 +133,7 @@ def build(
         file_corner_normals=_optional(corner_normals, (len(triangles), 3, 3)),
         face_groups=_groups(face_groups, group_names, len(triangles)),
         group_names=None if group_names is None else tuple(group_names),
+        vertex_colors=_colors(vertex_colors, len(points)),
         notes=tuple(notes),
         from_reader=True,
     )
@@ -195,5 +202,19 @@ def _groups(
     result = np.ascontiguousarray(groups, dtype=np.intp)
     if result.shape != (count,) or (count and not 0 <= result.min() <= result.max() < len(names)):
         raise AssertionError(f"face groups of shape {result.shape} for {len(names)} names")
+    result.setflags(write=False)
+    return result
+
+
+def _colors(colors: NDArray[np.generic] | None, count: int) -> NDArray[np.generic] | None:
+    """Vertex colours read-only, in the type the file stores them; a reader's mistake fails
+    loudly."""
+    if colors is None:
+        return None
+    result = np.array(colors, order="C")  # a copy: freezing it leaves the caller's alone
+    if result.ndim != 2 or result.shape[0] != count or result.shape[1] not in (3, 4):
+        raise AssertionError(f"vertex colours of shape {result.shape} for {count} vertices")
+    if result.dtype.kind not in "uif":
+        raise AssertionError(f"vertex colours of type {result.dtype}")
     result.setflags(write=False)
     return result

@@ -2,7 +2,8 @@
 
 trimesh's OBJ loader, even with ``process=False``, drops vertices no face uses and splits
 vertices where texture coordinates differ (a seam), so its arrays no longer line up with the
-file's. Here ``v x y z [w] [r g b]`` keeps x, y, z; ``f`` takes ``v``, ``v/vt``, ``v//vn`` and
+file's. Here ``v x y z [w]`` keeps x, y, z, and ``v x y z r g b`` (MeshLab, ZBrush) the
+colours too when every ``v`` line has them; ``f`` takes ``v``, ``v/vt``, ``v//vn`` and
 ``v/vt/vn`` corners with 1-based or negative (relative) indices, polygons fan-triangulated;
 ``vt`` is only counted; ``l`` and ``p`` are skipped with a note; ``s``, ``usemtl``,
 ``mtllib`` and other statements are ignored; a backslash at a line's end continues it. Errors
@@ -66,6 +67,8 @@ class _Statements:
     ----------
     vertices : (n, 3) float64
     vertex_lines : (n,) intp
+    colors : (n, 3) float64 or None
+        ``r g b`` after the coordinates, when every ``v`` line has exactly six numbers.
     normals : (k, 3) float64
     corners : list of str
         Every face corner as written (``"3"``, ``"3/1"``, ``"3//2"``, ``"3/1/2"``).
@@ -82,6 +85,7 @@ class _Statements:
 
     vertices: NDArray[np.float64]
     vertex_lines: NDArray[np.intp]
+    colors: NDArray[np.float64] | None
     normals: NDArray[np.float64]
     corners: list[str]
     counts: NDArray[np.intp]
@@ -115,6 +119,7 @@ def read_obj(data: bytes) -> LoadedMesh:
         vertex_normals=vertex_normals,
         face_groups=face_groups,
         group_names=group_names,
+        vertex_colors=found.colors,
         notes=[*notes, *found.notes],
         vertex=lambda i: f"vertex {i + 1:,} (line {found.vertex_lines[i]:,})",
         face=lambda i: f"the face on line {face_line[i]:,}",
@@ -167,7 +172,8 @@ def _scan(text: str) -> _Statements:
     face_labels, labels = _face_labels(
         lines, np.flatnonzero(np.isin(kinds, (OBJECT, GROUP))), rows[FACE]
     )
-    vertices = _numbers([lines[row] for row in rows[VERTEX]], numbers[rows[VERTEX]], "v")
+    vertex_text = [lines[row] for row in rows[VERTEX]]
+    vertices = _numbers(vertex_text, numbers[rows[VERTEX]], "v")
     normals = _numbers([lines[row] for row in rows[NORMAL]], numbers[rows[NORMAL]], "vn")
     # A comment may follow a face's corners: "f 1 2 3 # the lid".
     corners, counts = _face_corners(
@@ -179,6 +185,7 @@ def _scan(text: str) -> _Statements:
     return _Statements(
         vertices=vertices,
         vertex_lines=numbers[rows[VERTEX]],
+        colors=_vertex_colors(vertex_text),
         normals=normals,
         corners=corners,
         counts=counts,
@@ -260,6 +267,20 @@ def _numbers(lines: list[str], numbers: NDArray[np.intp], key: str) -> NDArray[n
             except ValueError:
                 raise MeshFileError(f"Line {number:,}: {value[:40]!r} is not a number.") from None
     raise AssertionError("unreachable: a line failed to convert")
+
+
+def _vertex_colors(lines: list[str]) -> NDArray[np.float64] | None:
+    """``r g b`` of ``v x y z r g b`` lines (MeshLab, ZBrush), when every ``v`` line has
+    exactly six numbers; a file mixing widths, or ``v x y z w``, has no colours."""
+    if not lines:
+        return None
+    rows = [line.partition("#")[0].split()[4:] for line in lines]
+    if any(len(row) != 3 for row in rows):
+        return None
+    try:
+        return np.array(rows, dtype=np.float64)
+    except ValueError:
+        return None
 
 
 def _face_corners(lines: list[str]) -> tuple[list[str], NDArray[np.intp]]:
@@ -449,17 +470,44 @@ def _skipped(other: Counter[str]) -> list[str]:
     return notes
 
 
-def write_obj(points: NDArray[np.float64], triangles: NDArray[np.intp]) -> bytes:
+def write_obj(
+    points: NDArray[np.float64],
+    triangles: NDArray[np.intp],
+    vertex_colors: NDArray[np.generic] | None = None,
+) -> bytes:
     """OBJ text: ``v`` lines in the shortest text that reads back as the same float64
-    (Python's ``repr``), then 1-based ``f`` lines.
+    (Python's ``repr``), then 1-based ``f`` lines. Vertex colours follow the coordinates as
+    ``v x y z r g b`` (floats 0-1, as MeshLab writes them); integer colours are scaled from
+    their type's range, and alpha is not written (OBJ holds none: see
+    :func:`~mesh_normal.files.write.unkept`).
 
     Parameters
     ----------
     points : (n, 3) float64
     triangles : (m, 3) intp
+    vertex_colors : (n, 3) or (n, 4), optional
     """
     lines = [f"# written by {MAKER}"]
-    lines += [f"v {x!r} {y!r} {z!r}" for x, y, z in points.tolist()]
+    if vertex_colors is None:
+        lines += [f"v {x!r} {y!r} {z!r}" for x, y, z in points.tolist()]
+    else:
+        rows = np.concatenate([points, unit_colors(vertex_colors)[:, :3]], axis=1)
+        lines += [f"v {x!r} {y!r} {z!r} {r!r} {g!r} {b!r}" for x, y, z, r, g, b in rows.tolist()]
     lines += [f"f {a} {b} {c}" for a, b, c in (triangles + 1).tolist()]
     lines.append("")
     return "\n".join(lines).encode()
+
+
+def unit_colors(colors: NDArray[np.generic]) -> NDArray[np.float64]:
+    """Colours as float64 in 0-1: integers divided by their type's maximum (255 for uchar),
+    floats as they are.
+
+    Parameters
+    ----------
+    colors : (n, k) integer or float
+    """
+    values = colors.astype(np.float64)
+    if colors.dtype.kind in "ui":
+        top = np.iinfo(colors.dtype.str).max
+        return values / float(top)
+    return values

@@ -11,8 +11,11 @@ scanned models and trimesh2 write them) follow the faces as triangles with the O
 a note says how many triangles the strips gave. Other elements are read past and named in a
 note.
 
+Vertex ``red green blue [alpha]`` are kept in the type the header declares (``uchar`` 0-255 or
+``float`` 0-1, say) and written back in it.
+
 Written as binary little-endian PLY with float64 coordinates (:func:`write_ply`), and with
-vertex or face normals beside them (:func:`ply_bytes`).
+vertex or face normals or vertex colours beside them (:func:`ply_bytes`).
 """
 
 from __future__ import annotations
@@ -48,6 +51,9 @@ _TYPES = {
 }
 _ENDIAN = {"binary_little_endian": "<", "binary_big_endian": ">", "ascii": "="}
 _NORMAL = ("nx", "ny", "nz")
+_COLOR = ("red", "green", "blue", "alpha")
+#: The PLY name of each type a colour is written in (others are written as float64).
+_TYPE_NAMES = {"u1": "uchar", "u2": "ushort", "f4": "float", "f8": "double"}
 
 
 @dataclass(slots=True)
@@ -352,6 +358,7 @@ def _mesh(elements: list[_Element]) -> LoadedMesh:
         source_faces=len(counts) + (0 if strips is None else strips.count),
         vertex_normals=_normals(vertex),
         face_normals=face_normals,
+        vertex_colors=_colors(vertex),
         notes=notes,
         face=lambda i: (
             f"face {source[i]:,} (counting from 0)"
@@ -482,20 +489,39 @@ def _normals(element: _Element | None) -> NDArray[np.float64] | None:
     return np.stack([np.asarray(element.data[axis], dtype=np.float64) for axis in _NORMAL], axis=1)
 
 
+def _colors(element: _Element) -> NDArray[np.generic] | None:
+    """Vertex ``red green blue [alpha]`` in the type the header declares them (one type for
+    all, NumPy's common type where the file mixes them)."""
+    if not set(_COLOR[:3]) <= element.data.keys():
+        return None
+    names = _COLOR if "alpha" in element.data else _COLOR[:3]
+    declared = dict(element.scalars)
+    if not all(name in declared for name in names):  # a list named "red": not a colour
+        return None
+    kind = np.result_type(*(np.dtype(declared[name]) for name in names))
+    return np.stack([np.asarray(element.data[name]).astype(kind) for name in names], axis=1)
+
+
 def _face_normals(face: _Element | None, source: NDArray[np.intp]) -> NDArray[np.float64] | None:
     normals = _normals(face)
     return None if normals is None else normals[source]
 
 
-def write_ply(points: NDArray[np.float64], triangles: NDArray[np.intp]) -> bytes:
-    """Binary little-endian PLY with float64 coordinates: it reads back bit for bit.
+def write_ply(
+    points: NDArray[np.float64],
+    triangles: NDArray[np.intp],
+    vertex_colors: NDArray[np.generic] | None = None,
+) -> bytes:
+    """Binary little-endian PLY with float64 coordinates: it reads back bit for bit, and so do
+    vertex colours (written in their own type, see :func:`ply_bytes`).
 
     Parameters
     ----------
     points : (n, 3) float64
     triangles : (m, 3) intp
+    vertex_colors : (n, 3) or (n, 4), optional
     """
-    return ply_bytes(points, triangles)
+    return ply_bytes(points, triangles, vertex_colors=vertex_colors)
 
 
 def ply_bytes(
@@ -503,9 +529,11 @@ def ply_bytes(
     triangles: NDArray[np.intp],
     vertex_normals: NDArray[np.float64] | None = None,
     face_normals: NDArray[np.float64] | None = None,
+    vertex_colors: NDArray[np.generic] | None = None,
 ) -> bytes:
-    """Binary little-endian PLY: float64 ``x y z`` and int32 triangles, and ``nx ny nz``
-    (float64) of the vertices or of the faces where those normals are given.
+    """Binary little-endian PLY: float64 ``x y z`` and int32 triangles, ``nx ny nz``
+    (float64) of the vertices or of the faces where those normals are given, and vertex
+    ``red green blue [alpha]`` where colours are given.
 
     Parameters
     ----------
@@ -513,12 +541,18 @@ def ply_bytes(
     triangles : (m, 3) intp
     vertex_normals : (n, 3) float64, optional
     face_normals : (m, 3) float64, optional
+    vertex_colors : (n, 3) or (n, 4) uint8, uint16, float32 or float64, optional
+        Written in their own type (``uchar``, ``ushort``, ``float``, ``double``), so colours
+        read from a PLY file go back as they were; other types as ``double``.
     """
     normal_fields = [("nx", "<f8"), ("ny", "<f8"), ("nz", "<f8")]
     normal_lines = "".join(f"property double {name}\n" for name, _ in normal_fields)
+    color_fields, color_lines = _color_fields(vertex_colors)
     vertices = np.empty(
         len(points),
-        dtype=[("xyz", "<f8", (3,))] + (normal_fields if vertex_normals is not None else []),
+        dtype=[("xyz", "<f8", (3,))]
+        + (normal_fields if vertex_normals is not None else [])
+        + color_fields,
     )
     faces = np.empty(
         len(triangles),
@@ -532,11 +566,23 @@ def ply_bytes(
         if normals is not None:
             for axis, (name, _) in enumerate(normal_fields):
                 records[name] = normals[:, axis]
+    for axis, (name, _) in enumerate(color_fields):
+        vertices[name] = vertex_colors[:, axis]  # type: ignore[index]
     header = (
         f"ply\nformat binary_little_endian 1.0\ncomment written by {MAKER}\n"
         f"element vertex {len(points)}\nproperty double x\nproperty double y\n"
-        f"property double z\n{normal_lines if vertex_normals is not None else ''}"
+        f"property double z\n{normal_lines if vertex_normals is not None else ''}{color_lines}"
         f"element face {len(triangles)}\nproperty list uchar int vertex_indices\n"
         f"{normal_lines if face_normals is not None else ''}end_header\n"
     )
     return header.encode() + vertices.tobytes() + faces.tobytes()
+
+
+def _color_fields(colors: NDArray[np.generic] | None) -> tuple[list[tuple[str, str]], str]:
+    """The record fields and header lines of vertex colours (none without colours)."""
+    if colors is None:
+        return [], ""
+    kind = colors.dtype.str[1:] if colors.dtype.str[1:] in _TYPE_NAMES else "f8"
+    names = _COLOR[: colors.shape[1]]
+    lines = "".join(f"property {_TYPE_NAMES[kind]} {name}\n" for name in names)
+    return [(name, "<" + kind) for name in names], lines

@@ -4,6 +4,10 @@ writer from :data:`~mesh_normal.files.formats.FORMATS` (the writers live beside 
 PLY stores float64 coordinates and OBJ the shortest text that reads back as the same float64
 (Python's ``repr``), so both round-trip bit for bit. STL can only hold float32 corners; its
 facet normals are our face normals (:func:`mesh_normal.face_normals`), zero for degenerate faces.
+
+Vertex colours go where the format holds them: PLY in their own type (``uchar``, ``float``),
+OBJ as ``v x y z r g b`` (floats 0-1, without alpha); STL holds none. :func:`unkept` names
+what a format leaves out, for callers that must say so.
 """
 
 from __future__ import annotations
@@ -12,22 +16,34 @@ import os
 from pathlib import Path
 from typing import overload
 
-from numpy.typing import ArrayLike
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from mesh_normal.checks import check_mesh
 from mesh_normal.files.errors import unsupported
-from mesh_normal.files.formats import FORMATS, WRITABLE, MeshFormat, suffix_format
+from mesh_normal.files.formats import FORMATS, HOLDS_COLORS, WRITABLE, MeshFormat, suffix_format
 
 StrPath = str | os.PathLike[str]
 
 
 @overload
-def write_mesh(vertices: ArrayLike, faces: ArrayLike, file_format: str) -> bytes: ...
+def write_mesh(
+    vertices: ArrayLike,
+    faces: ArrayLike,
+    file_format: str,
+    *,
+    vertex_colors: ArrayLike | None = None,
+) -> bytes: ...
 
 
 @overload
 def write_mesh(
-    vertices: ArrayLike, faces: ArrayLike, file_format: str | None = None, *, path: StrPath
+    vertices: ArrayLike,
+    faces: ArrayLike,
+    file_format: str | None = None,
+    *,
+    path: StrPath,
+    vertex_colors: ArrayLike | None = None,
 ) -> None: ...
 
 
@@ -37,6 +53,7 @@ def write_mesh(
     file_format: str | None = None,
     *,
     path: StrPath | None = None,
+    vertex_colors: ArrayLike | None = None,
 ) -> bytes | None:
     """The bytes of a mesh file, or, given ``path``, that file written.
 
@@ -56,6 +73,11 @@ def write_mesh(
     path : str or os.PathLike, optional
         Where to write the file (replaced if it exists, through a temporary file and a rename,
         so a failed write leaves the old file whole); the function then returns ``None``.
+    vertex_colors : (n, 3) or (n, 4), optional
+        Vertex ``red green blue [alpha]`` (as :attr:`LoadedMesh.vertex_colors
+        <mesh_normal.files.LoadedMesh.vertex_colors>` holds them). PLY writes them in their
+        own type (``uchar`` 0-255, ``float`` 0-1, ...), OBJ as ``v x y z r g b`` floats 0-1
+        (no alpha); STL holds none and writes none. :func:`unkept` names what is left out.
 
     Raises
     ------
@@ -71,11 +93,47 @@ def write_mesh(
         raise TypeError("write_mesh needs a file_format or a path to take the format from.")
     entry = _writable(file_format, path)
     points, triangles = check_mesh(vertices, faces)
-    data = entry.write(points, triangles)
+    data = entry.write(points, triangles, _checked_colors(vertex_colors, len(points)))
     if path is None:
         return data
     replace_file(path, data)
     return None
+
+
+def unkept(file_format: str, vertex_colors: ArrayLike | None) -> list[str]:
+    """What of the given vertex colours a format cannot hold, in words; empty when it holds
+    all of them (or there are none).
+
+    >>> unkept("stl", colors)
+    ['vertex colours (STL holds none)']
+    """
+    if vertex_colors is None:
+        return []
+    title = FORMATS[file_format].title if file_format in FORMATS else file_format
+    held = HOLDS_COLORS.get(file_format, "")
+    if not held:
+        return [f"vertex colours ({title} holds none)"]
+    if np.shape(vertex_colors)[-1] > len(held):
+        return [f"vertex colour alpha ({title} holds red, green and blue only)"]
+    return []
+
+
+def _checked_colors(colors: ArrayLike | None, count: int) -> NDArray[np.generic] | None:
+    """Colours as an ``(n, 3)`` or ``(n, 4)`` array of numbers; ``ValueError`` otherwise."""
+    if colors is None:
+        return None
+    result = np.asarray(colors)
+    if (
+        result.ndim != 2
+        or result.shape != (count, result.shape[1])
+        or result.shape[1] not in (3, 4)
+    ):
+        raise ValueError(
+            f"vertex_colors must have shape ({count}, 3) or ({count}, 4), not {result.shape}."
+        )
+    if result.dtype.kind not in "uif":
+        raise ValueError(f"vertex_colors must be numbers, not {result.dtype}.")
+    return result
 
 
 def replace_file(path: StrPath, data: bytes) -> None:
