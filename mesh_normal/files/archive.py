@@ -46,6 +46,11 @@ UNPACK_ERRORS = (
 MIN_LIMIT = 1 << 20
 
 
+def is_zip(data: bytes) -> bool:
+    """Whether the bytes are a ``.zip`` archive (a local file header, or an empty archive)."""
+    return data.startswith((b"PK\x03\x04", b"PK\x05\x06"))
+
+
 def unpack_limit(size: int) -> int:
     """Most bytes an archive of ``size`` bytes may unpack to."""
     return min(MAX_TOTAL, max(MIN_LIMIT, MAX_RATIO * size))
@@ -150,11 +155,9 @@ def _read_member(
 ) -> LoadedMesh:
     from mesh_normal.files.formats import suffix_format
     from mesh_normal.files.gltf import read_gltf
-    from mesh_normal.files.read import is_zip
-    from mesh_normal.files.threemf import is_3mf
 
     data = budget.read(archive, member)
-    if is_zip(data) and not is_3mf(data):  # one level only: nesting would escape the budget
+    if is_zip(data) and suffix_format(member.filename) != "3mf":  # one level: no fresh budget
         raise MeshFileError(
             f"The member {member.filename} of the .zip file is itself a .zip; send the mesh "
             "file's own archive."

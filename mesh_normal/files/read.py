@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Protocol
 from urllib.parse import unquote
 
+from mesh_normal.files.archive import is_zip
 from mesh_normal.files.errors import MeshFileError, unsupported
 from mesh_normal.files.formats import FORMATS, SUFFIXES, suffix_format
 from mesh_normal.files.loaded import LoadedMesh
@@ -148,11 +149,6 @@ def sniff(data: bytes) -> str | None:
     if b"\0" not in head and _OBJ.search(head):
         return "obj"
     return None
-
-
-def is_zip(data: bytes) -> bool:
-    """Whether the bytes are a ``.zip`` archive (a local file header, or an empty archive)."""
-    return data.startswith((b"PK\x03\x04", b"PK\x05\x06"))
 
 
 def unknown_format(filename: str | None) -> MeshFileError:
