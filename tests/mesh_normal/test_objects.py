@@ -134,13 +134,17 @@ def test_a_file_without_groups_has_no_objects() -> None:
     assert report.objects == [] and report.object_count == 0
 
 
-def test_objects_are_capped_and_counted() -> None:
-    count = INDEX_LIST_LIMIT + 5
-    text = "".join(
+def many_triangles(count: int) -> str:
+    """``count`` objects of one triangle each, ``part0`` on."""
+    return "".join(
         f"o part{i}\nv {3 * i} 0 0\nv {3 * i + 1} 0 0\nv {3 * i} 1 0\nf -3 -2 -1\n"
         for i in range(count)
     )
-    report = report_of(text)
+
+
+def test_objects_are_capped_and_counted() -> None:
+    count = INDEX_LIST_LIMIT + 5
+    report = report_of(many_triangles(count))
     assert report.object_count == count
     assert len(report.objects) == INDEX_LIST_LIMIT
     assert [item.name for item in report.objects[:2]] == ["part0", "part1"]
