@@ -1,4 +1,5 @@
-"""The report's objects: the file's groups (OBJ ``o`` and ``g``), each with its counts and verdicts.
+"""The report's objects: the file's groups (OBJ ``o`` and ``g``, glTF nodes, 3MF build items),
+each with its counts and verdicts.
 
 :func:`object_reports` sums the per-face arrays of the analysis up by group; the mesh totals of
 the report are not changed by it. Topology and orientation are those of the whole mesh: an
@@ -78,8 +79,9 @@ def object_reports(
 
 def _parts(groups: IndexArray, components: IndexArray, count: int) -> IndexArray:
     """How many distinct components the faces of each group belong to."""
-    pairs = np.unique(np.stack([groups, components], axis=1), axis=0).reshape(-1, 2)
-    return np.bincount(pairs[:, 0], minlength=count).astype(np.intp)
+    width = np.int64(components.max() + 1) if len(components) else np.int64(1)
+    pairs = np.unique(groups.astype(np.int64) * width + components)  # below count * m
+    return np.bincount(pairs // width, minlength=count).astype(np.intp)
 
 
 def _closed(groups: IndexArray, points: IndexArray, count: int) -> BoolArray:
@@ -88,17 +90,18 @@ def _closed(groups: IndexArray, points: IndexArray, count: int) -> BoolArray:
     Judged on the group alone, by position like the mesh's topology: two closed objects that
     touch (a tetrahedron on a cube's corner) are each closed though the mesh is not.
     """
-    low = np.minimum(points, np.roll(points, -1, axis=1)).ravel()
-    high = np.maximum(points, np.roll(points, -1, axis=1)).ravel()
-    group = np.repeat(groups, 3)
-    order = np.lexsort((high, low, group))
-    key = np.stack([group[order], low[order], high[order]], axis=1)
-    starts = np.r_[True, np.any(key[1:] != key[:-1], axis=1)]
-    uses = np.diff(np.r_[np.flatnonzero(starts), len(key)])
-    owner = key[starts, 0]
-    edges = np.bincount(owner, minlength=count)
-    bad = np.bincount(owner, uses != 2, count)
-    closed: BoolArray = (edges > 0) & (bad == 0)
+    after = np.roll(points, -1, axis=1)
+    low, high = np.minimum(points, after).ravel(), np.maximum(points, after).ravel()
+    # Edges numbered 0 .. e - 1 (e <= 3m) first, so that (group, edge) fits one int64 key.
+    _, edge = np.unique(low.astype(np.int64) * (high.max() + 1) + high, return_inverse=True)
+    width = np.int64(edge.max() + 1) if len(edge) else np.int64(1)
+    used, uses = np.unique(
+        np.repeat(groups, 3).astype(np.int64) * width + edge.ravel(), return_counts=True
+    )
+    owner = used // width
+    closed: BoolArray = (np.bincount(owner, minlength=count) > 0) & (
+        np.bincount(owner, uses != 2, count) == 0
+    )
     return closed
 
 
