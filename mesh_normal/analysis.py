@@ -19,6 +19,7 @@ from mesh_normal.diagnosis import problems
 from mesh_normal.faces import FaceGeometry, FaceNormals, face_geometry, face_normals
 from mesh_normal.files import LoadedMesh, read_mesh
 from mesh_normal.files.read import MeshSource, source_bytes
+from mesh_normal.objects import object_reports
 from mesh_normal.orientation import Orientation, orient
 from mesh_normal.report import (
     INDEX_LIST_LIMIT,
@@ -28,9 +29,10 @@ from mesh_normal.report import (
     FileNormals,
     Fix,
     MeshReport,
+    ObjectReport,
 )
 from mesh_normal.stored_normals import stored_normal_agreement
-from mesh_normal.topology import MeshTopology
+from mesh_normal.topology import MeshTopology, by_position
 
 
 @dataclass(frozen=True, slots=True)
@@ -130,10 +132,21 @@ def build_report(analysis: MeshAnalysis) -> MeshReport:
         bounds=_bounds(mesh.vertices),
         fix=_fix(orientation),
         file_normals=file_normal_agreement(analysis),
+        object_count=0 if mesh.group_names is None else len(mesh.group_names),
+        objects=_objects(analysis),
         notes=list(mesh.notes),
         problems=[],  # the diagnosis reads the rest of the report
     )
     return report.model_copy(update={"problems": problems(report)})
+
+
+def _objects(analysis: MeshAnalysis) -> list[ObjectReport]:
+    groups, names = analysis.mesh.face_groups, analysis.mesh.group_names
+    if groups is None or names is None:
+        return []
+    # The faces by position again (one hash sort): the topology keeps only its sums.
+    points = by_position(analysis.geometry.mesh)
+    return object_reports(groups, names, analysis.faces, analysis.orientation, points)
 
 
 def first_indices(mask: NDArray[np.bool_]) -> list[int]:

@@ -113,6 +113,15 @@ def summary(report: MeshReport) -> str:
         f"{'watertight' if report.watertight else 'open'}, "
         f"winding {'consistent' if report.winding_consistent else 'inconsistent'}",
     ]
+    if report.object_count > 1:  # one object is the mesh itself: the lines above say it all
+        lines.append(f"{report.object_count:,} objects:")
+        lines.extend(
+            f"  {item.name}: {item.faces:,} faces, {item.orientation}, "
+            f"{'closed' if item.closed else 'open'}, {item.faces_flipped:,} flipped by the fix"
+            for item in report.objects
+        )
+        if report.object_count > len(report.objects):
+            lines.append(f"  and {report.object_count - len(report.objects):,} more")
     if not report.problems:
         lines.append("No problems found.")
     lines.extend(f"{item.severity}: {item.title}. {item.action}" for item in report.problems)

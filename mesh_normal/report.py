@@ -164,6 +164,29 @@ class FileNormals(_Model):
     )
 
 
+class ObjectReport(_Model):
+    """One object of the file and what the fix does to it: an OBJ ``o`` or ``g`` group, a
+    glTF primitive as a node places it, or a 3MF build item."""
+
+    name: str = Field(description="The object's name as the file gives it.")
+    faces: int = Field(ge=0, description="How many triangles it has.")
+    area: Measure = Field(description="Its surface area; null beyond the double range.")
+    degenerate_faces: int = Field(ge=0, description="Its faces without area.")
+    components: int = Field(
+        ge=0, description="How many connected parts its faces belong to (shared parts count)."
+    )
+    closed: bool = Field(
+        description="Whether it is closed on its own: every edge of its faces (by position) "
+        "joins exactly two of its faces."
+    )
+    orientation: Verdict = Field(
+        description="Its winding as the file has it: outward (the fix flips none of its "
+        "faces), inward (it flips all its faces whose part has a decidable outside), mixed "
+        "(some) or undetermined (none of its parts has a verdict)."
+    )
+    faces_flipped: int = Field(ge=0, description="How many of its faces the fix reverses.")
+
+
 class MeshReport(_Model):
     """The report on one mesh file: counts, checks, the fix and the diagnosis in plain words."""
 
@@ -205,6 +228,15 @@ class MeshReport(_Model):
     fix: Fix = Field(description="What the fixed mesh changes.")
     file_normals: FileNormals | None = Field(
         description="How the normals stored in the file agree with ours; null without any."
+    )
+    object_count: int = Field(
+        ge=0,
+        description="How many objects the file has (OBJ o and g groups, glTF primitives "
+        "placed by nodes, 3MF build items); 0 for formats without them.",
+    )
+    objects: list[ObjectReport] = Field(
+        description=f"The first {INDEX_LIST_LIMIT} objects, in the order of their first face; "
+        "empty when the file has none."
     )
     notes: list[str] = Field(description="What the reader noticed about the file, in words.")
     problems: list[Problem] = Field(description="Each problem found, the most serious first.")

@@ -62,11 +62,12 @@ def _read(
     return dataclasses.replace(mesh, notes=(*notes, *mesh.notes)) if notes else mesh
 
 
-def _world_transforms(scene: dict[str, Any]) -> list[tuple[NDArray[np.float64], str]]:
-    """(world transform, geometry name) for every node that holds a geometry, in graph order."""
+def _world_transforms(scene: dict[str, Any]) -> list[tuple[NDArray[np.float64], str, str]]:
+    """(world transform, geometry name, node name) for every node that holds a geometry, in
+    graph order."""
     edges = scene.get("graph") or []
     world = {scene.get("base_frame", "world"): np.eye(4)}
-    placed: list[tuple[NDArray[np.float64], str]] = []
+    placed: list[tuple[NDArray[np.float64], str, str]] = []
     pending = list(edges)
     for _ in range(len(edges) + 1):  # parents normally come first; a few passes otherwise
         waiting = []
@@ -78,7 +79,7 @@ def _world_transforms(scene: dict[str, Any]) -> list[tuple[NDArray[np.float64], 
             matrix = np.asarray(edge.get("matrix", np.eye(4)), dtype=np.float64)
             world[edge["frame_to"]] = world[parent] @ matrix
             if edge.get("geometry") is not None:
-                placed.append((world[edge["frame_to"]], edge["geometry"]))
+                placed.append((world[edge["frame_to"]], edge["geometry"], str(edge["frame_to"])))
         if not waiting or len(waiting) == len(pending):
             break
         pending = waiting
@@ -88,8 +89,9 @@ def _world_transforms(scene: dict[str, Any]) -> list[tuple[NDArray[np.float64], 
 def _flatten(scene: dict[str, Any], file_format: str) -> LoadedMesh:
     geometry = scene.get("geometry") or {}
     parts: list[tuple[NDArray[np.float64], NDArray[np.intp], NDArray[np.float64] | None]] = []
+    names: list[str] = []  # one group per primitive placed, named by its node: the objects
     skipped = mirrored = 0
-    for transform, name in _world_transforms(scene):
+    for transform, name, node in _world_transforms(scene):
         kwargs = geometry.get(name) or {}
         if "faces" not in kwargs or "vertices" not in kwargs:
             skipped += 1
@@ -105,6 +107,7 @@ def _flatten(scene: dict[str, Any], file_format: str) -> LoadedMesh:
                 np.asarray(normals, dtype=np.float64).reshape(-1, 3) @ np.linalg.inv(linear)
             )  # row vectors: n @ inv(A) is inv(A).T @ n
         parts.append((vertices @ linear.T + transform[:3, 3], faces, normals))
+        names.append(node)
     notes = []
     if skipped:
         notes.append(f"Skipped {skipped:,} point or line primitives: only triangles are read.")
@@ -120,8 +123,16 @@ def _flatten(scene: dict[str, Any], file_format: str) -> LoadedMesh:
     normals = None
     if all(part[2] is not None and len(part[2]) == len(part[0]) for part in parts):
         normals = np.concatenate([part[2] for part in parts])
+    groups = np.repeat(np.arange(len(parts)), [len(part[1]) for part in parts])
     return build(
-        file_format, vertices, faces, source_faces=len(faces), vertex_normals=normals, notes=notes
+        file_format,
+        vertices,
+        faces,
+        source_faces=len(faces),
+        vertex_normals=normals,
+        face_groups=groups,
+        group_names=names,
+        notes=notes,
     )
 
 

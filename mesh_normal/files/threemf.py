@@ -81,16 +81,21 @@ def read_3mf(data: bytes) -> LoadedMesh:
     if not items:
         raise MeshFileError("The 3MF file's build names no objects to make.")
     placed: list[tuple[_Object, NDArray[np.float64]]] = []
+    owner: list[int] = []  # the build item of each placed mesh: one object of the report each
     triangles = 0
-    for item in items:
+    for index, item in enumerate(items):
         for obj, transform in _placements(objects, item.get("objectid", ""), _transform(item), 0):
             placed.append((obj, transform))
+            owner.append(index)
             triangles += len(obj.triangles) if obj.triangles is not None else 0
             if triangles > MAX_TRIANGLES:
                 raise MeshFileError(
                     f"The 3MF file's build makes more than {MAX_TRIANGLES:,} triangles."
                 )
-    return _join(placed, len(items))
+    names = [
+        f"build item {i + 1} (object {item.get('objectid', '')})" for i, item in enumerate(items)
+    ]
+    return _join(placed, len(items), owner, names)
 
 
 def _model_bytes(data: bytes) -> bytes:
@@ -226,7 +231,12 @@ def _placements(
         yield from _placements(objects, child, transform @ matrix, depth + 1)
 
 
-def _join(placed: list[tuple[_Object, NDArray[np.float64]]], items: int) -> LoadedMesh:
+def _join(
+    placed: list[tuple[_Object, NDArray[np.float64]]],
+    items: int,
+    owner: list[int],
+    names: list[str],
+) -> LoadedMesh:
     parts: list[tuple[NDArray[np.float64], NDArray[np.intp]]] = []
     mirrored = 0
     for obj, transform in placed:
@@ -251,4 +261,15 @@ def _join(placed: list[tuple[_Object, NDArray[np.float64]]], items: int) -> Load
         notes.append(
             f"Reversed the winding of {mirrored:,} mirrored 3MF meshes, so fronts stay fronts."
         )
-    return build("3mf", vertices, faces, source_faces=len(faces), notes=notes)
+    # Build items numbered by their first triangle; items that make no triangle get no group.
+    item_of_face = np.repeat(owner, [len(part[1]) for part in parts])
+    used, groups = np.unique(item_of_face, return_inverse=True)
+    return build(
+        "3mf",
+        vertices,
+        faces,
+        source_faces=len(faces),
+        face_groups=groups.ravel(),
+        group_names=[names[i] for i in used.tolist()],
+        notes=notes,
+    )

@@ -39,6 +39,8 @@ KEYS = [
     "bounds",
     "fix",
     "file_normals",
+    "object_count",
+    "objects",
     "notes",
     "problems",
 ]

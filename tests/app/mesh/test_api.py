@@ -389,6 +389,22 @@ def test_openapi_documents_every_key_of_the_report(client: TestClient) -> None:
     assert set(file_info["format"]["enum"]) == {"stl", "obj", "ply", "off", "glb", "gltf", "3mf"}
 
 
+def test_openapi_documents_every_key_of_the_objects(client: TestClient) -> None:
+    """The objects of a file with OBJ groups are documented and required key by key."""
+    report = upload(client, "/api/mesh", (DATA / "two_objects.obj").read_bytes()).json()
+    assert report["object_count"] == 2 and len(report["objects"]) == 2
+    spec = client.get("/openapi.json").json()
+    schema = {"$ref": "#/components/schemas/MeshReport"}
+    assert undocumented(spec, schema, report, "report") == []
+    item = resolve(spec, resolve(spec, schema)["properties"]["objects"]["items"])
+    assert set(item["properties"]["orientation"]["enum"]) == {
+        "outward",
+        "inward",
+        "mixed",
+        "undetermined",
+    }
+
+
 def test_a_wrong_key_is_found_by_the_schema_check(client: TestClient) -> None:
     """The check above can fail: a renamed or missing key is reported."""
     spec = client.get("/openapi.json").json()

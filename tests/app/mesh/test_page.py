@@ -10,7 +10,13 @@ import pytest
 from fastapi.testclient import TestClient
 
 from tests.conftest import Page
-from tests.meshes import CUBE_OBJ, CUBE_ONE_FLIPPED_OBJ, HUGE_TETRA_OBJ, OPEN_BOX_OBJ
+from tests.meshes import (
+    CUBE_OBJ,
+    CUBE_OBJ_FACES,
+    CUBE_ONE_FLIPPED_OBJ,
+    HUGE_TETRA_OBJ,
+    OPEN_BOX_OBJ,
+)
 
 
 def post(
@@ -143,3 +149,33 @@ def test_a_post_without_a_file_is_a_422_page(client: TestClient) -> None:
     response = client.post("/mesh", data={"other": "x"})
     assert response.status_code == 422
     assert "file is missing" in Page(response.text).text("mesh-error")
+
+
+# --- the objects of a file with groups ---------------------------------------------------------
+
+
+def test_objects_table_names_the_inward_object(client: TestClient) -> None:
+    from tests.mesh_normal.test_objects import two_cubes
+
+    inward = [face[::-1] for face in CUBE_OBJ_FACES]
+    _, html = post(client, two_cubes(inward, "turned"), part="report")
+    assert html.one("table", class_="mesh-object-table")
+    assert "2 objects in the file" in html.text("mesh-objects")
+    assert html.text("mesh-object-0") == "left 12 6 yes outward 0"
+    assert html.text("mesh-object-1") == "turned 12 6 yes inward 12"
+    assert len(html.find("tr", id="mesh-object-2")) == 0
+
+
+def test_objects_table_is_hidden_for_one_object_or_none(client: TestClient) -> None:
+    for text in (CUBE_OBJ, "o only\n" + CUBE_OBJ):
+        response, html = post(client, text, part="report")
+        assert "mesh-objects" not in response.text
+        assert not html.find("table")
+
+
+def test_objects_table_says_when_it_lists_only_the_first(client: TestClient) -> None:
+    from tests.mesh_normal.test_objects import many_triangles
+
+    _, html = post(client, many_triangles(105), part="report")
+    assert "105 objects in the file; the first 100 are listed" in html.text("mesh-objects")
+    assert html.find("tr", id="mesh-object-99") and not html.find("tr", id="mesh-object-100")

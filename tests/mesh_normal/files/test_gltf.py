@@ -48,6 +48,19 @@ def test_primitives_joined_with_transforms(file_format: str) -> None:
     assert "Joined 2 primitives with their node transforms applied." in mesh.notes
 
 
+def test_each_placed_primitive_is_a_group_named_by_its_node() -> None:
+    mesh = read_mesh(scene().export(file_type="glb"), "scene.glb")
+    assert mesh.group_names is not None and mesh.face_groups is not None
+    assert sorted(mesh.group_names) == ["ball", "box"]
+    counts = dict(zip(mesh.group_names, np.bincount(mesh.face_groups).tolist(), strict=True))
+    assert counts == {"box": 12, "ball": 80}
+    report = mn.analyse(mesh)
+    assert {item.name: item.orientation for item in report.objects} == {
+        "box": "outward",
+        "ball": "outward",
+    }
+
+
 def test_mirroring_node_reverses_winding() -> None:
     source = trimesh.Scene()
     source.add_geometry(trimesh.creation.box(), node_name="box", transform=np.diag([-1.0, 1, 1, 1]))

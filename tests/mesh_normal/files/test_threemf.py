@@ -100,6 +100,21 @@ def test_two_objects_with_build_transforms_keep_file_order() -> None:
     assert mesh.notes == ("Joined 2 3MF meshes from 2 build items, with their transforms applied.",)
 
 
+def test_each_build_item_is_a_group() -> None:
+    resources = mesh_object(1, TETRA_VERTICES, TETRA_TRIANGLES) + (
+        '<object id="2" type="model"><components>'
+        '<component objectid="1" transform="1 0 0 0 1 0 0 0 1 5 0 0"/>'
+        '<component objectid="1" transform="1 0 0 0 1 0 0 0 1 9 0 0"/></components></object>'
+        '<object id="3" type="model"><components></components></object>'
+    )
+    build = '<item objectid="3"/><item objectid="2"/><item objectid="1"/>'
+    mesh = read_mesh(package(model(resources, build)), "items.3mf")
+    # The empty item makes no triangle and no group; the item of two components is one.
+    assert mesh.group_names == ("build item 2 (object 2)", "build item 3 (object 1)")
+    assert mesh.face_groups is not None
+    np.testing.assert_array_equal(mesh.face_groups, [0] * 8 + [1] * 4)
+
+
 def test_components_compose_with_the_item_transform() -> None:
     resources = mesh_object(1, TETRA_VERTICES, TETRA_TRIANGLES) + (
         '<object id="2" type="model"><components>'

@@ -1,0 +1,118 @@
+"""The report's objects: the file's groups (OBJ ``o`` and ``g``, glTF nodes, 3MF build items),
+each with its counts and verdicts.
+
+:func:`object_reports` sums the per-face arrays of the analysis up by group; the mesh totals of
+the report are not changed by it. Topology and orientation are those of the whole mesh: an
+object's faces keep the components (and so the fix) they have in it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mesh_normal.faces import FaceNormals
+from mesh_normal.orientation import METHODS, VERDICTS, Orientation, Verdict
+from mesh_normal.report import INDEX_LIST_LIMIT, ObjectReport
+from mesh_normal.types import BoolArray, IndexArray
+
+_NONE = METHODS.index("none")
+_UNDETERMINED = VERDICTS.index("undetermined")
+
+
+def object_reports(
+    groups: IndexArray,
+    names: tuple[str, ...],
+    faces: FaceNormals,
+    orientation: Orientation,
+    points: IndexArray,
+) -> list[ObjectReport]:
+    """One :class:`ObjectReport` for each of the first INDEX_LIST_LIMIT groups.
+
+    Parameters
+    ----------
+    groups : (m,) intp
+        The group of each face, an index into ``names``.
+    names : tuple of str
+        The groups' names.
+    faces : FaceNormals
+        The areas and degenerate mask of the ``m`` faces.
+    orientation : Orientation
+        What :func:`~mesh_normal.orientation.orient` found and did, per face and component.
+    points : (m, 3) intp
+        The faces by position, as the topology saw them
+        (:func:`~mesh_normal.topology.by_position`).
+    """
+    count = len(names)
+    table = orientation.components
+    component = orientation.topology.face_component
+    flipped = orientation.flipped
+
+    def per_object(weights: BoolArray | None = None) -> IndexArray:
+        return np.bincount(groups, weights, count).astype(np.intp)
+
+    # Faces with a repeated point are in no component (-1): they have no edges, no verdict.
+    in_part = component >= 0
+    part = np.where(in_part, component, 0)
+    decidable = in_part & (table.method[part] != _NONE)
+    with_verdict = in_part & (table.orientation[part] != _UNDETERMINED)
+    total, flips = per_object(), per_object(flipped)
+    decided, decided_flips = per_object(decidable), per_object(decidable & flipped)
+    areas = np.bincount(groups, faces.areas, count)
+    degenerate = per_object(faces.degenerate)
+    parts = _parts(groups[in_part], component[in_part], count)
+    closed = _closed(groups[in_part], points[in_part], count)
+    verdicts = _verdicts(per_object(with_verdict) > 0, flips, decided, decided_flips)
+    return [
+        ObjectReport(
+            name=names[index],
+            faces=int(total[index]),
+            area=float(areas[index]),
+            degenerate_faces=int(degenerate[index]),
+            components=int(parts[index]),
+            closed=bool(closed[index]),
+            orientation=verdicts[index],
+            faces_flipped=int(flips[index]),
+        )
+        for index in range(min(count, INDEX_LIST_LIMIT))
+    ]
+
+
+def _parts(groups: IndexArray, components: IndexArray, count: int) -> IndexArray:
+    """How many distinct components the faces of each group belong to."""
+    width = np.int64(components.max() + 1) if len(components) else np.int64(1)
+    pairs = np.unique(groups.astype(np.int64) * width + components)  # below count * m
+    return np.bincount(pairs // width, minlength=count).astype(np.intp)
+
+
+def _closed(groups: IndexArray, points: IndexArray, count: int) -> BoolArray:
+    """Whether every edge of a group's faces is used by exactly two of its own faces.
+
+    Judged on the group alone, by position like the mesh's topology: two closed objects that
+    touch (a tetrahedron on a cube's corner) are each closed though the mesh is not.
+    """
+    after = np.roll(points, -1, axis=1)
+    low, high = np.minimum(points, after).ravel(), np.maximum(points, after).ravel()
+    # Edges numbered 0 .. e - 1 (e <= 3m) first, so that (group, edge) fits one int64 key.
+    _, edge = np.unique(low.astype(np.int64) * (high.max() + 1) + high, return_inverse=True)
+    width = np.int64(edge.max() + 1) if len(edge) else np.int64(1)
+    used, uses = np.unique(
+        np.repeat(groups, 3).astype(np.int64) * width + edge.ravel(), return_counts=True
+    )
+    owner = used // width
+    closed: BoolArray = (np.bincount(owner, minlength=count) > 0) & (
+        np.bincount(owner, uses != 2, count) == 0
+    )
+    return closed
+
+
+def _verdicts(
+    any_verdict: BoolArray, flips: IndexArray, decided: IndexArray, decided_flips: IndexArray
+) -> list[Verdict]:
+    """outward: nothing flipped; inward: every decidable face and only those; else mixed."""
+    inward = (decided > 0) & (decided_flips == decided) & (flips == decided_flips)
+    return [
+        "undetermined" if not seen else "outward" if not flip else "inward" if turned else "mixed"
+        for seen, flip, turned in zip(
+            any_verdict.tolist(), flips.tolist(), inward.tolist(), strict=True
+        )
+    ]
