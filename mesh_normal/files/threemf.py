@@ -80,6 +80,11 @@ def read_3mf(data: bytes) -> LoadedMesh:
     items = list(root.iterfind("{*}build/{*}item"))
     if not items:
         raise MeshFileError("The 3MF file's build names no objects to make.")
+    # Counted before anything is placed: components that place components can multiply a few
+    # kilobytes into billions of placements.
+    memo: dict[str, int] = {}
+    if sum(_cost(objects, item.get("objectid", ""), memo, 0) for item in items) > MAX_TRIANGLES:
+        raise MeshFileError(f"The 3MF file's build makes more than {MAX_TRIANGLES:,} triangles.")
     placed: list[tuple[_Object, NDArray[np.float64]]] = []
     owner: list[int] = []  # the build item of each placed mesh: one object of the report each
     triangles = 0
@@ -213,6 +218,23 @@ def _transform(element: ET.Element) -> NDArray[np.float64]:
     matrix[:3, :3] = values[:9].reshape(3, 3).T
     matrix[:3, 3] = values[9:]
     return matrix
+
+
+def _cost(objects: dict[str, _Object], object_id: str, memo: dict[str, int], depth: int) -> int:
+    """The triangles ``object_id`` places (each placement at least one), counted once per object."""
+    if object_id in memo:
+        return memo[object_id]
+    obj = objects.get(object_id)
+    if obj is None:
+        raise MeshFileError(f"The 3MF file refers to object {object_id[:40]!r}, which it lacks.")
+    if depth > MAX_DEPTH:
+        raise MeshFileError(f"The 3MF file nests components deeper than {MAX_DEPTH} (a cycle?).")
+    if obj.triangles is not None:
+        cost = max(len(obj.triangles), 1)
+    else:
+        cost = sum(_cost(objects, child, memo, depth + 1) for child, _ in obj.components)
+    memo[object_id] = min(cost, MAX_TRIANGLES + 1)  # bounded: the sums stay small integers
+    return memo[object_id]
 
 
 def _placements(

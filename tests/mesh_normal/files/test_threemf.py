@@ -244,3 +244,21 @@ def test_the_zip_bomb_guards_of_archives_hold(monkeypatch: pytest.MonkeyPatch) -
     data = package(model(resources, '<item objectid="1"/>'))
     with pytest.raises(MeshFileError, match="would unpack to"):
         read_mesh(data, "bomb.3mf")
+
+
+@pytest.mark.parametrize("leaf", [TETRA_TRIANGLES[:1], []])
+def test_components_that_double_at_every_level_are_refused_before_placing(
+    leaf: list[tuple[int, ...]],
+) -> None:
+    # Each object places the one below it twice: 2**32 placements from a few kilobytes. The
+    # count comes first (per object, once), so this is refused at once, empty leaves included.
+    levels = [mesh_object(0, TETRA_VERTICES, leaf)]
+    levels += [
+        f'<object id="{i}" type="model"><components>'
+        + f'<component objectid="{i - 1}"/>' * 2
+        + "</components></object>"
+        for i in range(1, 33)
+    ]
+    data = package(model("".join(levels), '<item objectid="32"/>'))
+    with pytest.raises(MeshFileError, match="makes more than 50,000,000 triangles"):
+        read_mesh(data, "bomb.3mf")
