@@ -29,7 +29,7 @@ from mesh_normal.files.gltf_buffers import (
     gltf_header,
     packed_glb,
 )
-from mesh_normal.files.loaded import LoadedMesh, build
+from mesh_normal.files.loaded import MAX_TRIANGLES, LoadedMesh, build
 
 
 def read_glb(data: bytes) -> LoadedMesh:
@@ -90,14 +90,19 @@ def _flatten(scene: dict[str, Any], file_format: str) -> LoadedMesh:
     geometry = scene.get("geometry") or {}
     parts: list[tuple[NDArray[np.float64], NDArray[np.intp], NDArray[np.float64] | None]] = []
     names: list[str] = []  # one group per primitive placed, named by its node: the objects
-    skipped = mirrored = 0
+    skipped = mirrored = placed = 0
     for transform, name, node in _world_transforms(scene):
         kwargs = geometry.get(name) or {}
         if "faces" not in kwargs or "vertices" not in kwargs:
             skipped += 1
             continue
-        vertices = np.asarray(kwargs["vertices"], dtype=np.float64).reshape(-1, 3)
         faces = np.asarray(kwargs["faces"], dtype=np.intp).reshape(-1, 3)
+        placed += len(faces)
+        if placed > MAX_TRIANGLES:  # before the copy: nodes may place one mesh many times
+            raise MeshFileError(
+                f"The glTF file's nodes place more than {MAX_TRIANGLES:,} triangles."
+            )
+        vertices = np.asarray(kwargs["vertices"], dtype=np.float64).reshape(-1, 3)
         linear = transform[:3, :3]
         if np.linalg.det(linear) < 0:
             faces, mirrored = faces[:, ::-1], mirrored + 1

@@ -15,6 +15,10 @@ from mesh_normal.types import FloatArray, IndexArray
 if TYPE_CHECKING:
     from mesh_normal.checks import CheckedMesh
 
+#: Most triangles a file may place once its instances (glTF nodes, 3MF components) are
+#: expanded: a few kilobytes of placements must not become gigabytes of triangles.
+MAX_TRIANGLES = 50_000_000
+
 #: Describes item ``i`` (0-based) of the built arrays for an error sentence, e.g. "the face on
 #: line 12". The default names the 0-based index.
 Describe = Callable[[int], str]

@@ -27,15 +27,13 @@ from numpy.typing import NDArray
 
 from mesh_normal.files.archive import UNPACK_ERRORS, Budget, opened_zip
 from mesh_normal.files.errors import MeshFileError, unsupported
-from mesh_normal.files.loaded import LoadedMesh, build
+from mesh_normal.files.loaded import MAX_TRIANGLES, LoadedMesh, build
 
 #: Where a 3MF package keeps its model unless ``_rels/.rels`` says otherwise.
 MODEL_PART = "3D/3dmodel.model"
 #: The content type ``[Content_Types].xml`` gives the model part.
 MODEL_TYPE = "application/vnd.ms-package.3dmanufacturing-3dmodel+xml"
 _MODEL_RELATION = "http://schemas.microsoft.com/3dmanufacturing/2013/01/3dmodel"
-#: Most triangles all placements together may make: components can multiply a small file.
-MAX_TRIANGLES = 50_000_000
 #: Deepest nesting of components (a cycle would be infinite).
 MAX_DEPTH = 32
 

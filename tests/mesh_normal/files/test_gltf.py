@@ -230,3 +230,11 @@ def test_a_gltf_sent_as_bytes_still_asks_for_its_buffer() -> None:
     data = (DATA / "gltf" / "Box.gltf").read_bytes()
     with pytest.raises(MeshFileError, match=r"separate buffer file Box0\.bin"):
         read_mesh(data, "Box.gltf")
+
+
+def test_nodes_that_place_too_many_triangles_are_refused(monkeypatch: pytest.MonkeyPatch) -> None:
+    from mesh_normal.files import gltf
+
+    monkeypatch.setattr(gltf, "MAX_TRIANGLES", 1000)  # DenseSphere places 30,720
+    with pytest.raises(MeshFileError, match="nodes place more than 1,000 triangles"):
+        read_mesh(DATA / "gltf" / "DenseSphere.glb")
