@@ -476,8 +476,10 @@ def _welded(vertices: FloatArray, weld: float, point: IndexArray | None) -> Inde
     count = len(vertices)
     identity = np.arange(count)
     one, two = [identity], [identity if point is None else point]
-    if side > 0:
-        relative = (vertices - low) / side
+    with np.errstate(over="ignore"):
+        relative = (vertices - low) / side if side > 0 else np.empty((0, 3))
+    # A side so small that the cells overflow (a subnormal weld) joins nothing beyond equality.
+    if side > 0 and np.isfinite(relative).all():
         for offset in np.ndindex(2, 2, 2):
             cells = np.floor(relative + 0.5 * np.array(offset, dtype=np.float64))
             same = _identical(cells)

@@ -6,6 +6,7 @@ how large it is. Checked on every real mesh in tests/data and on generated hard 
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -294,3 +295,15 @@ def test_crossing_shells_in_one_box_are_left_alone_quickly() -> None:
     vertices = (tetra[None] + jitter).reshape(-1, 3)
     faces = (outward[None] + 4 * np.arange(1000)[:, None, None]).reshape(-1, 3)
     assert not orient(vertices, faces).flipped.any()
+
+
+@pytest.mark.parametrize("weld", [1e-310, 5e-324])
+def test_a_subnormal_weld_joins_nothing_beyond_equality(weld: float) -> None:
+    # The grid's cells would overflow to infinity and every vertex would share one cell.
+    tetra = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.0]])
+    faces = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    vertices = np.concatenate([tetra, tetra + 5])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        found = orient(vertices, np.concatenate([faces, faces + 4]), weld=weld)
+    assert found.topology.components == 2
