@@ -218,15 +218,21 @@ def _transform(element: ET.Element) -> NDArray[np.float64]:
     return matrix
 
 
-def _cost(objects: dict[str, _Object], object_id: str, memo: dict[str, int], depth: int) -> int:
-    """The triangles ``object_id`` places (each placement at least one), counted once per object."""
-    if object_id in memo:
-        return memo[object_id]
+def _object_at(objects: dict[str, _Object], object_id: str, depth: int) -> _Object:
+    """The object ``object_id`` names at nesting ``depth``, or the sentence why there is none."""
     obj = objects.get(object_id)
     if obj is None:
         raise MeshFileError(f"The 3MF file refers to object {object_id[:40]!r}, which it lacks.")
     if depth > MAX_DEPTH:
         raise MeshFileError(f"The 3MF file nests components deeper than {MAX_DEPTH} (a cycle?).")
+    return obj
+
+
+def _cost(objects: dict[str, _Object], object_id: str, memo: dict[str, int], depth: int) -> int:
+    """The triangles ``object_id`` places (each placement at least one), counted once per object."""
+    if object_id in memo:
+        return memo[object_id]
+    obj = _object_at(objects, object_id, depth)
     if obj.triangles is not None:
         cost = max(len(obj.triangles), 1)
     else:
@@ -239,11 +245,7 @@ def _placements(
     objects: dict[str, _Object], object_id: str, transform: NDArray[np.float64], depth: int
 ) -> Iterator[tuple[_Object, NDArray[np.float64]]]:
     """Every mesh object ``object_id`` places, with its world transform, depth first."""
-    obj = objects.get(object_id)
-    if obj is None:
-        raise MeshFileError(f"The 3MF file refers to object {object_id[:40]!r}, which it lacks.")
-    if depth > MAX_DEPTH:
-        raise MeshFileError(f"The 3MF file nests components deeper than {MAX_DEPTH} (a cycle?).")
+    obj = _object_at(objects, object_id, depth)
     if obj.triangles is not None:
         yield obj, transform
         return
