@@ -122,7 +122,14 @@ def _segments(starts: NDArray[np.float64], ends: NDArray[np.float64]) -> tuple[l
 def _edge_trace(
     name: str, points: NDArray[np.float64], edges: NDArray[np.integer[Any]], color: str, width: int
 ) -> Trace:
-    x, y, z = _segments(points[edges[:, 0]], points[edges[:, 1]])
+    return _line_trace(name, points[edges[:, 0]], points[edges[:, 1]], color, width)
+
+
+def _line_trace(
+    name: str, starts: NDArray[np.float64], ends: NDArray[np.float64], color: str, width: int
+) -> Trace:
+    """Segments from each start to its end as one line trace (gaps between them)."""
+    x, y, z = _segments(starts, ends)
     return {
         "type": "scatter3d",
         "mode": "lines",
@@ -162,23 +169,13 @@ def _arrows(
         return []
     head = 0.3 * length
     tips = _rounded(centroids + normals * length)
-    x, y, z = _segments(centroids, _rounded(tips - normals * head))
     hover = [
         f"face {i}: normal ({n[0]:.4g}, {n[1]:.4g}, {n[2]:.4g})"
         for i, n in zip(indices.tolist(), normals.tolist(), strict=True)
     ]
     heads = _rounded(normals * head)
     return [
-        {
-            "type": "scatter3d",
-            "mode": "lines",
-            "name": name,
-            "x": x,
-            "y": y,
-            "z": z,
-            "line": {"color": color, "width": 3},
-            "hoverinfo": "skip",
-        },
+        _line_trace(name, centroids, _rounded(tips - normals * head), color, 3),
         {
             **cone_trace(name, tips, heads, color),
             "hovertext": hover,
