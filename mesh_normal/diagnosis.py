@@ -109,8 +109,9 @@ def _open(report: MeshReport) -> Problem | None:
         "warning",
         f"The mesh is open: {_count(edges, 'boundary edge')}",
         "Some edges belong to one face only, so the surface has holes or borders. A volume "
-        "is not defined, and which side is outside is decided by a heuristic (as in "
-        "Blender's Recalculate Outside), not by the volume.",
+        "is not defined, so which side is outside is decided by visibility: the side from "
+        "which rays escape past the rest of the mesh (as libigl's reorient_facets_raycast "
+        "does). Where both sides see alike, nothing is turned.",
         "If the mesh should be closed, fill the holes in your modeller (Blender: select "
         "the border, then Fill). Open sheets such as terrain are fine as they are.",
     )

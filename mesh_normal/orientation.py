@@ -8,31 +8,38 @@ together. A patch consistently wound with its neighbours by position is one patc
 and is never flipped against them, so the fix never turns a mesh that is consistently wound
 by position into one that is not.
 
-Which way is out. :func:`orient` first makes each orientable patch consistent, then takes the
-sign of V = sum of det(A - c, B - c, C - c) / 6 over its faces, where c is the patch's
-area-weighted centroid. For a closed patch V is the enclosed volume whatever c is, positive
-when the faces point outward (method ``"volume"``). For an open patch it is the heuristic
-(method ``"heuristic"``): the signed volume of the cone from the centroid over the faces,
-positive when the faces, weighted by area and distance, face away from the centroid. For a
-bowl, an open box, a hemisphere or a scan patch that is the convex, outer side: the side
-Blender's "Recalculate Outside" picks. Blender looks only at the face farthest from the
-centre; this sum does not hinge on one face, and it is the volume itself when the patch
-happens to be closed.
+Which way is out. :func:`orient` first makes each orientable patch consistent, then decides
+which side is out:
 
-On evidence only. The sign of V decides only when V is clearly more than noise, by two tests
-relative to the patch's own size and position (so the verdict is the same wherever the mesh
-is, however it is turned and scaled):
+- *A closed patch* by the sign of its volume V = sum of det(A - c, B - c, C - c) / 6 over its
+  faces (c its area-weighted centroid; for a closed surface V does not depend on c), positive
+  when the faces point outward (method ``"volume"``).
+- *An open patch* by visibility from outside (method ``"visibility"``, see
+  :mod:`mesh_normal.visibility`): rays leave sample faces on both sides, and the side from
+  which more of them escape past every face of the whole mesh is out. So separate pieces are
+  judged together: the inside of a bowl sees the bowl, the inner sides of a box whose sides
+  are separate patches see each other, the inner side of a car's panel sees the other
+  panels, and range scans that faced their scanner see it. This replaced a cone-volume
+  heuristic per patch (the convex side out, as Blender's "Recalculate Outside" picks), which
+  judged each piece alone and turned correctly wound separate pieces over (issue 9).
 
-- *Flatness*: |V| must exceed k times sum |n| |A - c| / 6 (what V would be if every face
-  faced straight away from c), with k = ``MESH_FLAT_SINE`` (2**-37) for a closed patch and
-  ``ORIENT_OPEN_SINE`` (2**-20) for an open one: a plane sheet, a closed surface enclosing
-  nothing (two faces back to back), or a side that should be plane and only wobbles by a
-  float32 step is flat.
+On evidence only. A closed patch's volume decides only when it is clearly more than noise, by
+two tests relative to the patch's own size and position (so the verdict is the same wherever
+the mesh is, however it is turned and scaled):
+
+- *Flatness*: |V| must exceed ``MESH_FLAT_SINE`` (2**-37) times sum |n| |A - c| / 6 (what V
+  would be if every face faced straight away from c): a closed surface enclosing nothing (two
+  faces back to back) is flat.
 - *Rounding*: |V| must exceed ``ORIENT_EVIDENCE`` times the most that V could move if every
   coordinate moved by its rounding (the float32 or float64 unit, whichever the coordinates
   are, times the patch's largest |coordinate|: a patch far from the origin is rounded more),
-  plus the float error of computing V. A single triangle, whose V about its own centroid is
-  zero in exact arithmetic, is always below it, wherever it is.
+  plus the float error of computing V.
+
+An open patch is decided only when the escaping shares of its two sides differ by at least
+:data:`mesh_normal.visibility.MARGIN`: a plane sheet, a gently curved scan or a single
+triangle sees the world alike from both sides, a plate shut inside a box from neither, and
+they are undetermined. A patch made only of faces that lie back to back with another face
+(a double-sided surface) is not scored at all: turning it would only make two faces one.
 
 Shells inside shells. A closed patch that lies inside another closed patch (its bounding box
 within the other's and sample vertices at a generalized winding number of magnitude above
@@ -72,20 +79,21 @@ from mesh_normal.tolerances import (
     FLOAT32_UNIT,
     MESH_FLAT_SINE,
     ORIENT_EVIDENCE,
-    ORIENT_OPEN_SINE,
 )
 from mesh_normal.topology import MeshTopology as MeshTopology  # re-exported: Orientation has one
 from mesh_normal.topology import Structure, by_position, structure
 from mesh_normal.types import BoolArray, FloatArray, IndexArray
+from mesh_normal.visibility import MARGIN as VISIBILITY_MARGIN
+from mesh_normal.visibility import visible_sides
 
 Verdict = Literal["outward", "inward", "mixed", "undetermined"]
-Method = Literal["volume", "heuristic", "none"]
+Method = Literal["volume", "visibility", "none"]
 
 VERDICTS: tuple[Verdict, ...] = ("outward", "inward", "mixed", "undetermined")
-METHODS: tuple[Method, ...] = ("volume", "heuristic", "none")
+METHODS: tuple[Method, ...] = ("volume", "visibility", "none")
 
 _OUTWARD, _INWARD, _MIXED, _UNDETERMINED = range(4)
-_VOLUME, _HEURISTIC, _NONE = range(3)
+_VOLUME, _VISIBILITY, _NONE = range(3)
 
 
 @dataclass(frozen=True, slots=True)
@@ -102,11 +110,12 @@ class ComponentOrientation:
         It has no boundary or non-manifold edge.
     orientable : bool
         Every patch of it is orientable.
-    method : {"volume", "heuristic", "none"}
-        How its outside was chosen: by the sign of its volume (closed and orientable), by the
-        cone heuristic (open; at least one patch decided), or not at all (non-orientable,
-        flat, a closed surface enclosing no volume, a shell inside another one, or a
-        volume whose sign could be rounding noise).
+    method : {"volume", "visibility", "none"}
+        How its outside was chosen: by the sign of its volume (closed and orientable), by
+        visibility from outside (open; at least one patch decided), or not at all
+        (non-orientable, a closed surface enclosing no volume, a shell inside another one, a
+        volume whose sign could be rounding noise, or an open part that sees alike from both
+        sides).
     flipped : int
         How many of its faces :func:`orient` reversed.
     volume : float or None
@@ -289,7 +298,8 @@ def orient(
     """
     geometry = face_geometry(vertices, faces)
     indices = geometry.mesh.faces
-    found = structure(by_position(geometry.mesh, weld), len(geometry.mesh.vertices))
+    points = by_position(geometry.mesh, weld)
+    found = structure(points, len(geometry.mesh.vertices))
     topology, group, parity = found.topology, found.group, found.parity
     bins = found.patches + 1  # the last for faces with a repeated point
 
@@ -303,13 +313,25 @@ def orient(
     size, against = per_patch(), per_patch(parity)
     orientable = found.orientable
     closed = found.closed[found.patch_component]
-    decided = orientable & _evident(volume, closed, cone, per_patch, len(indices))
+    shells = orientable & closed & _evident(volume, cone, per_patch, len(indices))
     # A shell inside another may be a cavity (wound inward on purpose) or a part inside a
     # housing (outward): its volume's sign is no evidence, so it is left as it is.
-    decided &= ~_nested(geometry, found, decided & closed)
+    shells &= ~_nested(geometry, found, shells)
+    # Open patches: the side from which the rest of the mesh and the world beyond are seen.
+    area = per_patch(geometry.lengths)
+    # A patch made only of faces back to back with another face (a double-sided surface, on
+    # purpose or not) is left as it is: turning it would only make two faces one.
+    single = per_patch((~_twinned(points)).astype(np.intp)) > 0
+    score = visible_sides(
+        geometry.mesh.vertices, indices, group, parity, orientable & ~closed & single & (area > 0),
+        area,
+    )  # fmt: skip
+    seen = np.abs(np.nan_to_num(score)) >= VISIBILITY_MARGIN
+    inward = score < 0
+    decided = shells | seen
     # Turn the consistent patch over when it points in, or when most of its faces are against
-    # its first face (flat patches).
-    turn = np.where(decided, volume < 0, 2 * against > size)
+    # its first face (undecided patches).
+    turn = np.where(shells, volume < 0, np.where(seen, inward, 2 * against > size))
     flips = np.where(orientable, np.where(turn, size - against, against), 0).astype(np.intp)
     flipped = (parity ^ np.r_[turn, False][group]).astype(bool)
     flipped &= np.r_[orientable, False][group]
@@ -383,15 +405,14 @@ def _cone_terms(geometry: FaceGeometry, group: IndexArray, groups: int) -> _Cone
 
 def _evident(
     volume: FloatArray,
-    closed: BoolArray,
     cone: _Cone,
     per_patch: Callable[[FloatArray], FloatArray],
     count: int,
 ) -> BoolArray:
     """Which patches' volume V has a sign that does not hinge on rounding (see the docstring).
 
-    Two tests, both relative to the patch itself. Flatness: |V| > k sum |n||A-c| / 6, with
-    k = MESH_FLAT_SINE for a closed patch and ORIENT_OPEN_SINE for an open one. Evidence:
+    Two tests, both relative to the patch itself. Flatness: |V| > MESH_FLAT_SINE
+    sum |n||A-c| / 6. Evidence:
     |V| exceeds ORIENT_EVIDENCE times the most that V could move if every coordinate of the
     patch moved by its rounding, u |x| (u the unit of the coordinates' precision, float32 or
     float64; |x| the patch's largest coordinate, so the bound grows with the distance from
@@ -402,7 +423,7 @@ def _evident(
     move = (cone.data_unit + 4 * EPSILON) * cone.largest[: len(volume)]
     error = move * per_patch(cone.sensitivity) + (8 + math.log2(count + 1)) * EPSILON * bounds
     magnitude = 6 * np.abs(volume)
-    flat = np.where(closed, MESH_FLAT_SINE, ORIENT_OPEN_SINE) * bounds
+    flat = MESH_FLAT_SINE * bounds
     return (magnitude > flat) & (magnitude > ORIENT_EVIDENCE * error)
 
 
@@ -608,6 +629,22 @@ def _winding_numbers(
         winding[s] = total / (4.0 * math.pi)
 
 
+def _twinned(faces: IndexArray) -> BoolArray:
+    """(m,) bool: which faces have the same three points as another face wound the other way."""
+    if len(faces) == 0:
+        return np.zeros(0, dtype=bool)
+    ordered = np.sort(faces, axis=1)
+    rotations = [faces, np.roll(faces, 1, axis=1), np.roll(faces, 2, axis=1)]
+    even = np.logical_or.reduce([np.all(r == ordered, axis=1) for r in rotations])
+    order = np.lexsort((even, ordered[:, 2], ordered[:, 1], ordered[:, 0]))
+    key = ordered[order]
+    run = np.cumsum(np.r_[True, np.any(key[1:] != key[:-1], axis=1)]) - 1
+    both = (np.bincount(run, even[order]) > 0) & (np.bincount(run, ~even[order]) > 0)
+    twinned = np.empty(len(faces), dtype=bool)
+    twinned[order] = both[run]
+    return twinned
+
+
 def _unscaled(value: float, scale: int) -> float:
     with np.errstate(over="ignore"):
         return float(np.ldexp(value, 3 * scale)) + 0.0
@@ -649,7 +686,7 @@ def _component_table(
     component_volume = np.zeros(count)
     closed_patch = has_volume[of_patch]
     component_volume[of_patch[closed_patch]] = volume[closed_patch]
-    method = np.where(any_patch(decided), np.where(closed, _VOLUME, _HEURISTIC), _NONE)
+    method = np.where(any_patch(decided), np.where(closed, _VOLUME, _VISIBILITY), _NONE)
     votes = np.stack([any_patch(vote == v) for v in range(_UNDETERMINED)])
     kinds = votes.sum(axis=0)
     orientation = np.where(

@@ -110,8 +110,9 @@ class ComponentFix(_Model):
     orientable: bool = Field(description="Whether the part can be wound consistently at all.")
     method: Method = Field(
         description="How its outside was chosen: by the sign of its volume (closed parts), by "
-        "a heuristic (open parts), or not at all (one-sided or flat parts, closed parts that "
-        "enclose no volume)."
+        "visibility, the side from which rays escape the whole mesh (open parts), or not at "
+        "all (one-sided parts, closed parts that enclose no volume or lie inside another, open "
+        "parts that see the world alike from both sides)."
     )
     faces_flipped: int = Field(ge=0, description="How many of its faces orient() reverses.")
     volume: Measure = Field(

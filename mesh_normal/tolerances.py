@@ -74,10 +74,3 @@ FLOAT32_UNIT = 2.0**-24
 #: rounding the patch's coordinates (and computing the volume) could move it; see
 #: :mod:`mesh_normal.orientation`. Below that its sign may be noise, and nothing is flipped.
 ORIENT_EVIDENCE = 4.0
-
-#: An open patch is flat unless its cone volume exceeds this times sum |n||A-c| / 6: on
-#: average its faces must tilt towards or away from its centroid by an angle whose sine is
-#: above 2**-20 (about 1e-6). The float32 step of a side that should be plane (6e-8 of its
-#: size) stays below it in any position, so such a side is never decided by its wobble; a
-#: curved piece (a hemisphere, a scan patch, an open box) is far above it.
-ORIENT_OPEN_SINE = 2.0**-20

@@ -239,8 +239,15 @@ def scan_fragments(seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     return combined(*pieces)
 
 
+def open_box_of_sides() -> tuple[np.ndarray, np.ndarray]:
+    """The separate-sides cube without its last side: five open, flat patches, wound outward."""
+    vertices, faces = separate_sides_cube()
+    return vertices, faces[: len(faces) * 5 // 6]
+
+
 #: The generated hard cases: name -> (vertices, faces), every one wound outward.
 HARD_CASES = {
+    "open box of sides": open_box_of_sides,
     "separate sides cube": separate_sides_cube,
     "wobbling sides cube": lambda: separate_sides_cube(wobble=True),
     "head with eyes": head_with_eyes,

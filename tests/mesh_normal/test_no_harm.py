@@ -24,7 +24,16 @@ from tests.meshes import (
     separate_sides_cube,
 )
 
-REAL = ("cow.obj", "airplane.ply", "ant.ply", "nut.ply", "sphere.ply", "cube.obj")
+REAL = (
+    "cow.obj",
+    "airplane.ply",
+    "ant.ply",
+    "nut.ply",
+    "sphere.ply",
+    "cube.obj",
+    "teapot.stl",
+    "soup.stl",
+)
 
 
 def mesh_of(name: str) -> tuple[np.ndarray, np.ndarray]:

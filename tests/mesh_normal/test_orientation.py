@@ -125,7 +125,7 @@ def test_cube_with_one_flipped_face() -> None:
     assert component.volume == pytest.approx(1.0, rel=1e-15)
 
 
-def test_open_box_is_decided_by_the_heuristic() -> None:
+def test_open_box_is_decided_by_visibility() -> None:
     box = CUBE_FACES[np.r_[0:2, 4:12]]  # no top (quad 1: faces 2 and 3)
     t = mesh_topology(box, 8)
     assert (t.boundary_edges, t.nonmanifold_edges, t.components) == (4, 0, 1)
@@ -139,7 +139,7 @@ def test_open_box_is_decided_by_the_heuristic() -> None:
         assert r.flipped.sum() == flips
         assert r.volume is None
         (component,) = r.components
-        assert (component.closed, component.method, component.volume) == (False, "heuristic", None)
+        assert (component.closed, component.method, component.volume) == (False, "visibility", None)
         assert np.array_equal(np.sort(r.faces, axis=1), np.sort(box, axis=1))
         assert orient(CUBE_VERTICES, r.faces).orientation == "outward"
 
@@ -206,10 +206,10 @@ def test_nonmanifold_fin() -> None:
     assert t.nonmanifold_edge_list.tolist() == [[0, 1]]
     assert not t.watertight and t.winding_consistent and t.orientable
     r = orient(vertices, faces)
-    # The tetrahedron is a patch of its own, decided by the heuristic; the flat fin has no say.
+    # The tetrahedron is a patch of its own, decided by visibility; the flat fin has no say.
     assert r.orientation == "outward" and not r.flipped.any()
     (component,) = r.components
-    assert (component.closed, component.method, component.volume) == (False, "heuristic", None)
+    assert (component.closed, component.method, component.volume) == (False, "visibility", None)
     inward = orient(vertices, np.concatenate([TETRA_FACES[:, ::-1], [[0, 1, 4]]]))
     assert inward.orientation == "inward"
     assert inward.flipped.tolist() == [True] * 4 + [False]
@@ -227,7 +227,7 @@ def test_two_cubes_sharing_an_edge_are_oriented_each_on_its_own() -> None:
     r = orient(vertices, faces)
     assert np.flatnonzero(r.flipped).tolist() == list(range(12, 24))
     assert r.orientation == "mixed"
-    assert r.components[0].method == "heuristic"
+    assert r.components[0].method == "visibility"
 
 
 def test_a_duplicate_face_pair() -> None:

@@ -94,7 +94,7 @@ def test_open_box_is_a_warning() -> None:
     report = report_of(OPEN_BOX_OBJ)
     assert (report.watertight, report.boundary_edges, report.volume) == (False, 4, None)
     assert [(p.code, p.severity) for p in report.problems] == [("open", "warning")]
-    assert report.fix.components[0].method == "heuristic"
+    assert report.fix.components[0].method == "visibility"
 
 
 def test_the_json_keys_keep_their_names_and_order() -> None:

@@ -1,0 +1,145 @@
+"""Tests for mesh_normal.visibility: open patches decided by the rays that escape on each side."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mesh_normal import visibility
+from mesh_normal.checks import checked_mesh
+from mesh_normal.faces import face_geometry
+from mesh_normal.orientation import orient
+from mesh_normal.topology import by_position, structure
+from tests.meshes import (
+    CUBE_FACES,
+    CUBE_VERTICES,
+    HARD_CASES,
+    combined,
+    icosphere,
+    load,
+    scan_fragments,
+)
+
+
+def scores(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """visible_sides over every orientable open patch, as orient() asks for them."""
+    geometry = face_geometry(vertices, faces)
+    found = structure(by_position(geometry.mesh), len(vertices))
+    area = np.bincount(found.group, geometry.lengths, found.patches + 1)[:-1]
+    candidates = found.orientable & ~found.closed[found.patch_component] & (area > 0)
+    return visibility.visible_sides(
+        geometry.mesh.vertices, geometry.mesh.faces, found.group, found.parity, candidates, area
+    )
+
+
+def square(corner: list[float], side: float, up: bool) -> tuple[np.ndarray, np.ndarray]:
+    """A square in a plane z = const, two triangles wound towards +z if ``up``."""
+    x, y, z = corner
+    points = np.array([[x, y, z], [x + side, y, z], [x + side, y + side, z], [x, y + side, z]])
+    faces = np.array([[0, 1, 2], [0, 2, 3]])
+    return points, faces if up else faces[:, ::-1]
+
+
+def test_a_plate_facing_a_large_floor_sees_nothing_on_that_side() -> None:
+    # Every ray leaves at least asin(0.1) above the plate's plane, so from a height of 1 it
+    # meets the floor within 10 of the plate: all rays towards the floor are blocked, and
+    # all rays away from it escape. The score is -1 exactly; the plate is turned over.
+    floor = square([-100.0, -100.0, 0.0], 200.0, up=True)
+    plate = square([0.0, 0.0, 1.0], 0.5, up=False)
+    vertices, faces = combined(floor, plate)
+    score = scores(vertices, faces)
+    assert score.tolist()[1] == -1.0
+    assert abs(score[0]) < visibility.MARGIN  # the floor sees the sky and the void below
+    r = orient(vertices, faces)
+    assert r.flipped.tolist() == [False, False, True, True]
+    assert [c.method for c in r.components] == ["none", "visibility"]
+    assert r.orientation == "inward"
+
+
+def test_flipping_a_patch_negates_its_score_exactly() -> None:
+    vertices, faces = scan_fragments()
+    before = scores(vertices, faces)
+    assert (before > visibility.MARGIN).all()
+    patch_of = structure(by_position(checked_mesh(vertices, faces)), len(vertices)).group
+    turned = faces.copy()
+    rows = patch_of == 2
+    turned[rows] = faces[rows][:, ::-1]
+    after = scores(vertices, turned)
+    expected = before.copy()
+    expected[2] = -before[2]
+    assert after.tolist() == expected.tolist()
+
+
+def test_a_plate_shut_inside_a_box_is_left_as_it_is() -> None:
+    box = (CUBE_VERTICES * 4.0 - 2.0, CUBE_FACES)
+    for up in (True, False):
+        vertices, faces = combined(box, square([-0.5, -0.5, 0.0], 1.0, up=up))
+        assert scores(vertices, faces)[-1] == 0.0  # no ray escapes on either side
+        r = orient(vertices, faces)
+        assert not r.flipped.any()
+        assert [c.method for c in r.components] == ["volume", "none"]
+        assert r.orientation == "outward"
+
+
+def test_back_to_back_faces_are_left_as_they_are() -> None:
+    # A closed sphere with one face doubled back to back (as in the Stanford bunny of trimesh's
+    # test models): the doubled face's three edges become non-manifold and it is a patch of
+    # its own whose front sees only the inside. Turning it would only make two faces one.
+    vertices, faces = icosphere(2)
+    doubled = np.concatenate([faces, faces[:1, ::-1]])
+    r = orient(vertices, doubled)
+    assert not r.flipped.any()
+    # The same face doubled the same way is no twin: both copies face out and stay.
+    assert not orient(vertices, np.concatenate([faces, faces[:1]])).flipped.any()
+
+
+def test_past_the_budget_only_the_largest_patches_are_decided(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    vertices, faces = scan_fragments()
+    patch_of = structure(by_position(checked_mesh(vertices, faces)), len(vertices)).group
+    # Make the fragment of face 0 larger than the others: it alone fits in a budget of one.
+    grown = vertices.copy()
+    piece = np.unique(faces[patch_of == patch_of[0]])
+    grown[piece] *= 1.01
+    monkeypatch.setattr(visibility, "RAYS", 2 * visibility.DIRECTIONS * visibility.FEWEST)
+    score = scores(grown, faces)
+    assert np.flatnonzero(~np.isnan(score)).tolist() == [patch_of[0]]
+    r = orient(grown, faces[:, ::-1])
+    assert np.array_equal(r.flipped, patch_of == patch_of[0])
+
+
+@pytest.mark.parametrize(
+    "name", ["teapot.stl", "soup.stl", *[n for n in HARD_CASES if n != "far triangle"]]
+)
+def test_reversing_every_face_turns_exactly_the_decided_patches_the_other_way(name: str) -> None:
+    vertices, faces = HARD_CASES[name]() if name in HARD_CASES else load(name)
+    here, there = orient(vertices, faces), orient(vertices, faces[:, ::-1])
+    patch_of = structure(by_position(checked_mesh(vertices, faces)), len(vertices)).group
+    labels = here.topology.face_component
+    for component in here.components:
+        rows = labels == component.index
+        if component.method == "none":
+            assert np.array_equal(there.flipped[rows], here.flipped[rows]), name
+        elif len(np.unique(patch_of[rows])) == 1:  # one patch: decided as a whole
+            assert np.array_equal(there.flipped[rows], ~here.flipped[rows]), name
+
+
+def test_the_teapot_of_separate_open_pieces_is_outward() -> None:
+    # trimesh's teapot.stl: body, lid, spout and handle, each open, none closing another.
+    vertices, faces = load("teapot.stl")
+    r = orient(vertices, faces)
+    assert r.orientation == "outward" and not r.flipped.any()
+    assert [c.method for c in r.components] == ["visibility"] * 4
+    assert orient(vertices, faces[:, ::-1]).flipped.all()
+
+
+def test_a_random_triangle_soup_is_mostly_left_alone() -> None:
+    # trimesh's soup.stl: 100 random triangles; none encloses anything. Only triangles whose
+    # one side is clearly shut in by the others are decided.
+    vertices, faces = load("soup.stl")
+    score = scores(vertices, faces)
+    decided = np.abs(score) >= visibility.MARGIN
+    r = orient(vertices, faces)
+    assert np.array_equal(r.flipped, decided & (score < 0))
+    assert decided.sum() <= 10
