@@ -36,8 +36,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba import prange
 
-from mesh_normal.kernels import announce_compiling, kernel
+from mesh_normal.kernels import PARALLEL_KERNELS, announce_compiling, kernel
 from mesh_normal.types import BoolArray, FloatArray, IndexArray
 
 #: Rays per side of each sample.
@@ -46,7 +47,7 @@ DIRECTIONS = 16
 #: graze the neighbours of a face on a gently curved patch.
 ELEVATION_SINE = 0.1
 #: Most and fewest sample faces per patch, and the most rays in all.
-SAMPLES = 64
+SAMPLES = 32
 FEWEST = 4
 RAYS = 2**19
 #: A patch is decided when the escaping shares of its two sides differ by at least this.
@@ -118,10 +119,11 @@ def visible_sides(
     against = np.zeros(len(samples), dtype=np.bool_)
     corners = _corners(unit, faces, order)
     announce_compiling()
-    _cast(
-        unit, faces, corners, order, boxes, children, spans, samples, _directions(), T_MIN,
-        escaped, weights, against,
-    )  # fmt: skip
+    with PARALLEL_KERNELS:
+        _cast(
+            unit, faces, corners, order, boxes, children, spans, samples, _directions(), T_MIN,
+            escaped, weights, against,
+        )  # fmt: skip
     # The side the patch faces when wound like its first face: + if the sample face is wound
     # like the increasing order of its vertex numbers (against is false), turned by its parity.
     facing = against ^ parity[samples].astype(bool)
@@ -157,20 +159,30 @@ def _hierarchy(
 ) -> tuple[IndexArray, FloatArray, IndexArray, IndexArray]:
     """A bounding-volume hierarchy over the faces: their order along a Morton curve of their
     centroids, and per node its box, children (-1 for a leaf) and span of that order."""
-    centroids = unit[faces].mean(axis=1)
-    cells = np.clip(((centroids + 1.0) * 512.0).astype(np.int64), 0, 1023).astype(np.uint64)
-    code = np.zeros(len(faces), dtype=np.uint64)
-    for bit in range(10):
-        for axis in range(3):
-            code |= ((cells[:, axis] >> np.uint64(bit)) & np.uint64(1)) << np.uint64(3 * bit + axis)
+    code = np.empty(len(faces), dtype=np.int64)
+    announce_compiling()
+    _morton(unit, faces, code)
     order = np.argsort(code, kind="stable").astype(np.intp)
-    nodes = max(1, 2 * len(faces))  # halving spans of 5 leaves 2 and 3: up to n / 2 leaves
+    nodes = max(1, 2 * len(faces))  # at least one face per leaf: fewer than 2 m nodes
     boxes = np.empty((nodes, 6))
     children = np.full((nodes, 2), -1, dtype=np.intp)
     spans = np.zeros((nodes, 2), dtype=np.intp)
-    announce_compiling()
-    used = _build(unit, faces, order, boxes, children, spans)
+    used = _build(unit, faces, order, code[order], boxes, children, spans)
     return order, boxes[:used], children[:used], spans[:used]
+
+
+@kernel()
+def _morton(unit: FloatArray, faces: IndexArray, code: IndexArray) -> None:
+    """The Morton code of each face's centroid on a 1024**3 grid over [-1, 1]**3."""
+    for face in range(len(faces)):
+        value = 0
+        for axis in range(3):
+            total = unit[faces[face, 0], axis] + unit[faces[face, 1], axis]
+            total += unit[faces[face, 2], axis]
+            cell = min(max(int((total / 3 + 1.0) * 512.0), 0), 1023)
+            for bit in range(10):
+                value |= ((cell >> bit) & 1) << (3 * bit + axis)
+        code[face] = value
 
 
 def _corners(unit: FloatArray, faces: IndexArray, order: IndexArray) -> FloatArray:
@@ -185,18 +197,29 @@ def _build(
     unit: FloatArray,
     faces: IndexArray,
     order: IndexArray,
+    codes: IndexArray,
     boxes: FloatArray,
     children: IndexArray,
     spans: IndexArray,
 ) -> int:
-    """Split the span of the order in halves down to leaves; boxes from the leaves up."""
+    """Split each span where the highest bit that differs in its Morton codes turns (the
+    halves of an octree cell; in the middle where the codes are all equal) down to leaves;
+    boxes from the leaves up."""
     spans[0, 0], spans[0, 1] = 0, len(order)
     used = 1
     node = 0
     while node < used:  # nodes are made in breadth order: children after their parent
         lo, hi = spans[node, 0], spans[node, 1]
         if hi - lo > _LEAF:
-            mid = (lo + hi) // 2
+            differ = codes[lo] ^ codes[hi - 1]
+            if differ == 0:
+                mid = (lo + hi) // 2
+            else:
+                bit = 0
+                while differ >> (bit + 1):
+                    bit += 1
+                # The codes of the span share every bit above ``bit``: the first with it set.
+                mid = lo + np.searchsorted(codes[lo:hi], (codes[hi - 1] >> bit) << bit)
             children[node, 0], children[node, 1] = used, used + 1
             spans[used, 0], spans[used, 1] = lo, mid
             spans[used + 1, 0], spans[used + 1, 1] = mid, hi
@@ -311,7 +334,7 @@ def _blocked(
     return False
 
 
-@kernel()
+@kernel(parallel=True)
 def _cast(
     unit: FloatArray,
     faces: IndexArray,
@@ -330,9 +353,9 @@ def _cast(
     """For each sample face: the share of its rays that escape on each side of its plane
     (+ and - of the normal of its vertices in increasing order), its area, and whether it is
     wound against that order."""
-    stack = np.empty(2 * 64 + 2, dtype=np.intp)
-    origin, direction = np.empty(3), np.empty(3)
-    for s in range(len(samples)):
+    for s in prange(len(samples)):  # each sample writes its own rows: the same bits on any cores
+        stack = np.empty(2 * 64 + 2, dtype=np.intp)
+        origin, direction = np.empty(3), np.empty(3)
         face = samples[s]
         i, j, k = faces[face, 0], faces[face, 1], faces[face, 2]
         # Sort the vertex numbers; each swap reverses the winding.
