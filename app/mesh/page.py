@@ -1,9 +1,9 @@
 """The mesh page: upload a file, read its diagnosis, see it in 3D, download normals and a fix.
 
-``GET /mesh`` shows the form; ``POST /mesh`` (multipart field ``file``) answers with the whole
-page and its report, so it works without JavaScript. ``POST /mesh?part=report`` answers with
-the report alone, which the page's script swaps in. The server keeps nothing: the page's
-downloads send the file again to the JSON API.
+``GET /mesh`` shows the form; ``POST /mesh`` (multipart field ``file``, once or once per file
+of one mesh) answers with the whole page and its report, so it works without JavaScript.
+``POST /mesh?part=report`` answers with the report alone, which the page's script swaps in.
+The server keeps nothing: the page's downloads send the files again to the JSON API.
 """
 
 from __future__ import annotations

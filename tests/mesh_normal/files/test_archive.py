@@ -124,7 +124,9 @@ def test_real_gltf_alone_names_its_bin() -> None:
     with pytest.raises(MeshFileError) as error:
         read_mesh((GLTF / "Box.gltf").read_bytes(), "Box.gltf")
     assert error.value.status_code == 400
-    assert "Box0.bin" in str(error.value) and "send a .zip" in str(error.value)
+    assert "Box0.bin" in str(error.value) and "together in one request, or in a .zip" in str(
+        error.value
+    )
 
 
 @pytest.mark.parametrize(("gltf", "faces"), [("BoxDraco.gltf", 12), ("DracoSparseMesh.gltf", 102)])
