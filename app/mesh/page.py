@@ -27,7 +27,7 @@ from app.web.templating import templates
 from mesh_normal.analysis import analyse_mesh, build_report
 from mesh_normal.exports import FORMATS, KINDS
 from mesh_normal.files import WRITABLE, LoadedMesh
-from mesh_normal.files.formats import ACCEPTED_SUFFIXES
+from mesh_normal.files.formats import ACCEPTED_SUFFIXES, COMPANION_SUFFIXES
 from mesh_normal.files.formats import FORMATS as MESH_FORMATS
 from mesh_normal.files.write import unkept
 from mesh_normal.vertices import Weighting
@@ -45,6 +45,8 @@ def _form_context(request: Request) -> dict[str, Any]:
     limit: int = request.app.state.upload_limit
     return {
         "suffixes": [suffix.lstrip(".") for suffix in ACCEPTED_SUFFIXES],
+        # The file chooser offers the files that come with a mesh file too (a .gltf's .bin).
+        "accept": ",".join((*ACCEPTED_SUFFIXES, *COMPANION_SUFFIXES)),
         "limit": limit,
         "limit_text": size_text(limit),
         "report": None,

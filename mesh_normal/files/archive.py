@@ -139,7 +139,10 @@ def _zip_among_files(name: str) -> MeshFileError:
 
 def member_name(name: str, outside: str) -> str:
     """A member's name, normalised (``\\`` to ``/``, ``a/./b`` to ``a/b``); ``outside`` starts
-    the sentence for a name that reaches outside its folder (``..``, absolute, a drive)."""
+    the sentence for a name that reaches outside its folder (``..``, absolute, a drive). Names
+    with control characters (a line break, say) are refused: sentences quote names."""
+    if any(ord(character) < 32 or ord(character) == 127 for character in name):
+        raise MeshFileError(f"A file name holds control characters: {name[:100]!a}.")
     name = name.replace("\\", "/")
     parts = name.split("/")
     if name.startswith("/") or ".." in parts or (parts and ":" in parts[0]):

@@ -161,6 +161,8 @@ def test_the_page_takes_several_files_and_names_them(client: TestClient) -> None
     form = Page(client.get("/mesh").text)
     field = form.one("input", id="mesh-file")
     assert "multiple" in field
+    accepted = (field["accept"] or "").split(",")
+    assert {".gltf", ".zip", ".bin", ".mtl"} <= set(accepted)  # the chooser offers the .bin too
     assert "a .gltf with its .bin, or an .obj with its .mtl, or a .zip" in form.text(
         "mesh-file-help"
     )
@@ -170,3 +172,17 @@ def test_the_page_takes_several_files_and_names_them(client: TestClient) -> None
     assert page.text("mesh-files") == "Files: Box.gltf (read) · Box0.bin (read)"
     assert "Read Box.gltf with Box0.bin from the 2 files sent." in response.text
     assert page.text("mesh-curl").startswith("curl -F file=@Box.gltf -F file=@Box0.bin http")
+
+
+def test_the_page_lists_the_members_read_from_a_zip(client: TestClient) -> None:
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w") as archive:
+        for _, (name, data) in BOX:
+            archive.writestr(f"box/{name}", data)
+        archive.writestr("box/box.png", b"\x89PNG")
+    response = client.post("/mesh", files={"file": ("box.zip", buffer.getvalue())})
+    page = Page(response.text)
+    assert page.text("mesh-files") == "Files: box/Box.gltf (read) · box/Box0.bin (read)"
+    assert "not needed for the geometry: box/box.png." in response.text
+    one = Page(client.post("/mesh", files={"file": ("c.obj", CUBE_OBJ.encode())}).text)
+    assert not one.find("p", id="mesh-files")  # one file read alone: nothing to list

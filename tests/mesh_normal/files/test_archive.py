@@ -253,6 +253,7 @@ def test_files_in_a_folder_find_each_other_as_in_a_zip() -> None:
         ([("/etc/Box.gltf", b""), ("x.bin", b"")], "named outside its folder: /etc/Box.gltf"),
         ([("C:\\x\\a.obj", b""), ("x.bin", b"")], "named outside its folder: C:/x/a.obj"),
         ([("a.obj", b""), ("", b"x")], "File 2 of the 2 sent has no name"),
+        ([("a.obj", b""), ("b\n.bin", b"")], "A file name holds control characters: 'b\\n.bin'"),
         ([("a.obj", b""), ("b.zip", b"PK\x05\x06")], "b.zip is a .zip among several files"),
         ([("a.obj", _zip_of("c.obj", b"")), ("x.mtl", b"")], "a.obj is a .zip among several"),
         ([("readme.txt", b"hi"), ("x.bin", b"")], "The 2 files sent hold no mesh file"),
@@ -283,3 +284,28 @@ def test_a_zip_naming_a_member_twice_is_refused() -> None:
             file.writestr("a.obj", "v 0 0 0\n")
     with pytest.raises(MeshFileError, match=r"holds two members named a\.obj"):
         read_mesh(buffer.getvalue(), "twice.zip")
+
+
+NAMES = st.sampled_from(
+    ["Box.gltf", "Box0.bin", "a.obj", "a.mtl", "x.zip", "../b.bin", "/c.stl", "d\\e.ply", ""]
+) | st.text(max_size=12)
+CONTENTS = st.sampled_from(
+    [(GLTF / "Box.gltf").read_bytes(), (GLTF / "Box0.bin").read_bytes(), CUBE_OBJ.encode(), b""]
+) | st.binary(max_size=64)
+
+
+@given(st.lists(st.tuples(NAMES, CONTENTS), max_size=5))
+@settings(max_examples=300, deadline=None)
+def test_any_files_give_a_mesh_or_one_file_error(files: list[tuple[str, bytes]]) -> None:
+    try:
+        mesh = read_mesh_files(files)
+    except MeshFileError as error:
+        refused = error
+    else:
+        refused = None
+        assert len(mesh.faces) > 0
+        if len(files) > 1:
+            assert mesh.files and mesh.notes[0].startswith(f"Read {mesh.files[0]}")
+    if refused is not None:
+        assert 400 <= refused.status_code < 500
+        assert str(refused).endswith(".") and "\n" not in str(refused)
