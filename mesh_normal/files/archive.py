@@ -10,7 +10,8 @@ Guarded against zip bombs: at most :data:`MAX_MEMBERS` members; a total uncompre
 at most :func:`unpack_limit` (:data:`MAX_RATIO` times the archive, at least :data:`MIN_LIMIT`,
 at most :data:`MAX_TOTAL`), checked on the sizes the archive states and again on the bytes
 really read; no member named outside the archive (``..``, absolute paths, drive letters), no
-name twice, no ``.zip`` inside (one level only, so one budget)."""
+name twice, no ``.zip`` inside (one level only, so one budget).
+"""
 
 from __future__ import annotations
 
