@@ -62,3 +62,28 @@ def test_the_page_says_what_the_fixed_mesh_leaves_out(page: Page, tmp_path: Path
     page.locator("#mesh-downloads").screenshot(path=tmp_path / "dropped.png", animations="disabled")
     page.select_option("#fix-format", "obj")
     expect(dropped).to_be_hidden()
+
+
+DROP_FILES = """(files) => {
+    const data = new DataTransfer();
+    for (const [name, bytes] of files) data.items.add(new File([new Uint8Array(bytes)], name));
+    const zone = document.getElementById('mesh-dropzone');
+    for (const type of ['dragenter', 'dragover', 'drop']) {
+        zone.dispatchEvent(new DragEvent(type, {dataTransfer: data, bubbles: true,
+                                                cancelable: true}));
+    }
+}"""
+
+
+def test_dropping_an_obj_with_its_mtl(page: Page) -> None:
+    response = page.goto("/mesh")
+    assert response is not None and response.status == 200
+    page.wait_for_load_state("load")
+    obj = b"mtllib model.mtl\n" + (DATA / "cube.obj").read_bytes()
+    page.evaluate(DROP_FILES, [["model.obj", list(obj)], ["model.mtl", list(b"newmtl a\n")]])
+    page.locator("#mesh-report-title").wait_for()
+    expect(page.locator(".mesh-filename")).to_have_text("model.obj")
+    expect(page.locator("#mesh-files")).to_have_text(
+        "Files: model.obj (read) · model.mtl (not needed)"
+    )
+    assert page.evaluate("() => document.getElementById('mesh-file').files.length") == 2
