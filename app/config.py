@@ -21,6 +21,11 @@ DEFAULT_BODY_LIMIT = 64 * 1024
 #: middleware) and counted against the upload limit as they arrive.
 MESH_PATHS = frozenset({"/api/mesh", "/api/mesh/normals", "/api/mesh/fix", "/mesh"})
 
+#: Most files one mesh request may carry as repeated multipart fields ``file`` (a .gltf, its
+#: buffers and textures); each is spooled on its own, so the count is kept small: more go in
+#: a .zip, which holds up to mesh_normal.files.archive.MAX_MEMBERS.
+UPLOAD_FILES = 100
+
 #: Environment variable that sets the upload limit, in megabytes (default 200).
 UPLOAD_LIMIT_VARIABLE = "MESH_UPLOAD_LIMIT_MB"
 DEFAULT_UPLOAD_LIMIT_MB = 200

@@ -19,7 +19,7 @@ from app.web.errors import ERROR_RESPONSES, ApiError
 from app.web.jsonio import FastJSONResponse
 from mesh_normal.analysis import analyse_mesh, build_report, flips_by_component
 from mesh_normal.exports import NormalsKind, export_normals
-from mesh_normal.files import LoadedMesh, MeshFileError, read_mesh, write_mesh
+from mesh_normal.files import LoadedMesh, MeshFileError, read_mesh, read_mesh_files, write_mesh
 from mesh_normal.files.formats import FORMATS, WRITABLE
 from mesh_normal.files.write import unkept
 from mesh_normal.orientation import orient
@@ -51,8 +51,11 @@ MEDIA_TYPES = {
 
 
 def load(upload: Upload) -> LoadedMesh:
-    """Read the uploaded file; a broken or unknown file becomes a 4xx naming the problem."""
+    """Read the uploaded file (or files); a broken or unknown file becomes a 4xx naming the
+    problem."""
     try:
+        if upload.parts:
+            return read_mesh_files(upload.parts)
         return read_mesh(upload.data, upload.filename)
     except MeshFileError as error:
         raise ApiError(error.status_code, str(error), "file") from None
@@ -78,7 +81,7 @@ async def post_mesh(request: Request) -> FastJSONResponse:
 
 
 def _report(upload: Upload) -> MeshReport:
-    return build_report(analyse_mesh(load(upload), upload.filename, len(upload.data)))
+    return build_report(analyse_mesh(load(upload), upload.filename, upload.size))
 
 
 @router.post(

@@ -1,14 +1,15 @@
 """The mesh page: upload a file, read its diagnosis, see it in 3D, download normals and a fix.
 
-``GET /mesh`` shows the form; ``POST /mesh`` (multipart field ``file``) answers with the whole
-page and its report, so it works without JavaScript. ``POST /mesh?part=report`` answers with
-the report alone, which the page's script swaps in. The server keeps nothing: the page's
-downloads send the file again to the JSON API.
+``GET /mesh`` shows the form; ``POST /mesh`` (multipart field ``file``, once or once per file
+of one mesh) answers with the whole page and its report, so it works without JavaScript.
+``POST /mesh?part=report`` answers with the report alone, which the page's script swaps in.
+The server keeps nothing: the page's downloads send the files again to the JSON API.
 """
 
 from __future__ import annotations
 
 import json
+import posixpath
 import shlex
 from typing import Any, get_args
 
@@ -25,8 +26,10 @@ from app.web.middleware import size_text
 from app.web.templating import templates
 from mesh_normal.analysis import analyse_mesh, build_report
 from mesh_normal.exports import FORMATS, KINDS
-from mesh_normal.files import WRITABLE
-from mesh_normal.files.formats import ACCEPTED_SUFFIXES
+from mesh_normal.files import WRITABLE, LoadedMesh
+from mesh_normal.files.formats import ACCEPTED_SUFFIXES, COMPANION_SUFFIXES
+from mesh_normal.files.formats import FORMATS as MESH_FORMATS
+from mesh_normal.files.write import unkept
 from mesh_normal.vertices import Weighting
 
 router = APIRouter(include_in_schema=False)
@@ -42,6 +45,8 @@ def _form_context(request: Request) -> dict[str, Any]:
     limit: int = request.app.state.upload_limit
     return {
         "suffixes": [suffix.lstrip(".") for suffix in ACCEPTED_SUFFIXES],
+        # The file chooser offers the files that come with a mesh file too (a .gltf's .bin).
+        "accept": ",".join((*ACCEPTED_SUFFIXES, *COMPANION_SUFFIXES)),
         "limit": limit,
         "limit_text": size_text(limit),
         "report": None,
@@ -51,10 +56,12 @@ def _form_context(request: Request) -> dict[str, Any]:
 
 def _report_context(upload: Upload, base_url: str) -> dict[str, Any]:
     """Analyse the upload (in a worker thread): the report, its figures and the downloads."""
-    analysis = analyse_mesh(load(upload), upload.filename, len(upload.data))
+    mesh = load(upload)
+    analysis = analyse_mesh(mesh, upload.filename, upload.size)
     report = build_report(analysis)
-    name = upload.filename or "mesh"
     return {
+        "files": files_read(upload, mesh.files),
+        "fix_dropped": fix_dropped(mesh),
         "report": report,
         # The JSON twin is the API's own JSON (non-finite floats already null), parsed back
         # so that the template's json_script escapes it for a <script> block.
@@ -62,13 +69,39 @@ def _report_context(upload: Upload, base_url: str) -> dict[str, Any]:
         "figures": mesh_figures(analysis),
         "classes": CLASSES,
         "stem": stem(upload.filename),
-        "curl": f"curl -F {shlex.quote('file=@' + name)} {base_url}api/mesh",
+        "curl": "curl "
+        + "".join(f"-F {shlex.quote('file=@' + sent)} " for sent in upload.names)
+        + f"{base_url}api/mesh",
+        "sent": upload.names,
         "kinds": KINDS,
         "weightings": get_args(Weighting),
         "formats": FORMATS,
         "fix_formats": FIX_FORMATS,
         "fixed_by_orient": FIXED_BY_ORIENT,
     }
+
+
+def fix_dropped(mesh: LoadedMesh) -> dict[str, str]:
+    """For each format of the fixed mesh, the sentence saying what of this mesh it leaves out,
+    in the words of the fix's ``X-Dropped`` header; empty when it keeps everything."""
+    dropped = {name: unkept(name, mesh.vertex_colors) for name in FIX_FORMATS}
+    keeping = [MESH_FORMATS[name].title for name, left_out in dropped.items() if not left_out]
+    keeps = " and ".join(keeping) + (" keeps" if len(keeping) == 1 else " keep")
+    return {
+        name: f"{MESH_FORMATS[name].title} leaves out {'; '.join(left_out)}"
+        + (f"; {keeps} everything." if keeping else ".")
+        if left_out
+        else ""
+        for name, left_out in dropped.items()
+    }
+
+
+def files_read(upload: Upload, read: tuple[str, ...]) -> list[tuple[str, bool]]:
+    """Each file sent with whether it was read; for a .zip, the members read. Empty for one
+    file read alone."""
+    if not upload.parts:
+        return [(name, True) for name in read]
+    return [(name, posixpath.normpath(name.replace("\\", "/")) in read) for name in upload.names]
 
 
 @router.get("/mesh", response_class=HTMLResponse)

@@ -1,4 +1,8 @@
-"""Reading an uploaded mesh file from a request: a multipart field ``file`` or a raw body.
+"""Reading an uploaded mesh from a request: a multipart field ``file`` or a raw body.
+
+The field ``file`` may come several times (a ``.gltf`` and its ``.bin``, an OBJ and its
+``.mtl``): the files are then read as the members of one ``.zip`` would be
+(:func:`mesh_normal.files.read_mesh_files`), up to :data:`app.config.UPLOAD_FILES` of them.
 
 The middleware counts the bytes as they arrive (see :class:`app.web.middleware.BodyLimit`);
 Starlette spools a large multipart file to an anonymous temporary file, which is gone when
@@ -14,7 +18,10 @@ from fastapi import Request
 from starlette.datastructures import UploadFile
 from starlette.exceptions import HTTPException
 
+from app.config import UPLOAD_FILES
 from app.web.errors import ApiError
+from mesh_normal.files.archive import mesh_name
+from mesh_normal.files.errors import MeshFileError
 from mesh_normal.files.formats import ACCEPTED_SUFFIXES
 
 #: A tetrahedron as OBJ text: the example upload in the API documentation.
@@ -30,12 +37,18 @@ UPLOAD_BODY: dict[str, Any] = {
                     "type": "object",
                     "properties": {
                         "file": {
-                            "type": "string",
-                            "format": "binary",
+                            "type": "array",
+                            "minItems": 1,
+                            "maxItems": UPLOAD_FILES,
+                            "items": {"type": "string", "format": "binary"},
                             "description": "The mesh file: "
                             + ", ".join(ACCEPTED_SUFFIXES)
-                            + " (a .zip holds one mesh file with its .bin or .mtl).",
-                            "example": EXAMPLE_FILE,
+                            + " (a .zip holds one mesh file with its .bin or .mtl). Or the "
+                            "field repeated, up to "
+                            f"{UPLOAD_FILES} times: the mesh file with the files it names "
+                            "(Box.gltf with Box0.bin, model.obj with model.mtl), read as "
+                            "the members of one .zip.",
+                            "example": [EXAMPLE_FILE],
                         }
                     },
                     "required": ["file"],
@@ -56,8 +69,32 @@ UPLOAD_BODY: dict[str, Any] = {
 
 @dataclass(frozen=True, slots=True)
 class Upload:
+    """One mesh file, or several files read as one mesh (``parts``, by name; ``data`` is then
+    empty and ``filename`` the name of the mesh file among them, if one is)."""
+
     data: bytes
     filename: str | None
+    parts: tuple[tuple[str | None, bytes], ...] = ()
+
+    @classmethod
+    def several(cls, parts: tuple[tuple[str | None, bytes], ...]) -> Upload:
+        try:
+            filename: str | None = mesh_name((name or "" for name, _ in parts), "")
+        except MeshFileError:  # reading the files says what is wrong, in its own sentence
+            filename = None
+        return cls(b"", filename, parts)
+
+    @property
+    def size(self) -> int:
+        """Bytes sent: the file's, or all the files' together."""
+        return sum(len(data) for _, data in self.parts) if self.parts else len(self.data)
+
+    @property
+    def names(self) -> list[str]:
+        """The names of the files sent, in their order (``mesh`` for one without a name)."""
+        if not self.parts:
+            return [self.filename or "mesh"]
+        return [name or "mesh" for name, _ in self.parts]
 
 
 async def read_upload(request: Request) -> Upload:
@@ -80,19 +117,28 @@ async def read_upload(request: Request) -> Upload:
 
 async def _multipart(request: Request) -> Upload:
     try:
-        form = await request.form(max_files=8, max_fields=16)
+        form = await request.form(max_files=UPLOAD_FILES, max_fields=16)
     except HTTPException as error:  # Starlette's words for a malformed multipart body
+        if str(error.detail).startswith("Too many files"):
+            raise ApiError(
+                400,
+                f"At most {UPLOAD_FILES} files may be sent at once; send more as a .zip.",
+                "file",
+            ) from None
         detail = str(error.detail).strip().rstrip(".").replace(". ", "; ")
         raise ApiError(400, f"The multipart body cannot be read: {detail}.", "file") from None
     try:
-        item = form.get("file")
-        if not isinstance(item, UploadFile):
-            given = "is missing" if item is None else "must be a file, not a text field"
+        items = form.getlist("file")
+        if not items or not all(isinstance(item, UploadFile) for item in items):
+            given = "is missing" if not items else "must be a file, not a text field"
             raise ApiError(422, f"file {given}: send the mesh as the multipart field file.", "file")
-        data = await item.read()
-        filename = item.filename
+        files = [item for item in items if isinstance(item, UploadFile)]
+        parts = tuple([(item.filename, await item.read()) for item in files])
     finally:
         await form.close()  # the spooled temporary files go now, not at garbage collection
+    if len(parts) > 1:
+        return Upload.several(parts)
+    filename, data = parts[0]
     if not data:
         raise ApiError(
             422, f"The uploaded file {filename or ''} is empty.".replace("  ", " "), "file"

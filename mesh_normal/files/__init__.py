@@ -22,7 +22,7 @@ if TYPE_CHECKING:
     from mesh_normal.files.errors import MeshFileError
     from mesh_normal.files.formats import FORMATS, SUFFIXES, WRITABLE, MeshFormat
     from mesh_normal.files.loaded import LoadedMesh
-    from mesh_normal.files.read import read_mesh
+    from mesh_normal.files.read import read_mesh, read_mesh_files
     from mesh_normal.files.write import write_mesh
 
 #: Public name to the module under ``mesh_normal.files`` that defines it.
@@ -34,6 +34,7 @@ _HOMES = {
     "LoadedMesh": "loaded",
     "MeshFileError": "errors",
     "read_mesh": "read",
+    "read_mesh_files": "read",
     "write_mesh": "write",
 }
 
@@ -45,6 +46,7 @@ __all__ = [
     "MeshFileError",
     "MeshFormat",
     "read_mesh",
+    "read_mesh_files",
     "write_mesh",
 ]
 

@@ -99,6 +99,10 @@ SUFFIXES: dict[str, str] = {
 #: formats of their own: the mesh keeps the format of the file inside.
 ARCHIVE_SUFFIXES: tuple[str, ...] = (".zip",)
 
+#: Files that come with a mesh file and may be sent with it (see
+#: :func:`~mesh_normal.files.read_mesh_files`): a ``.gltf``'s buffers, an OBJ's materials.
+COMPANION_SUFFIXES: tuple[str, ...] = (".bin", ".mtl")
+
 #: Every suffix :func:`~mesh_normal.files.read_mesh` takes, sorted: the formats' and archives'.
 ACCEPTED_SUFFIXES: tuple[str, ...] = tuple(sorted((*SUFFIXES, *ARCHIVE_SUFFIXES)))
 

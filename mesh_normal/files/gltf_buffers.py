@@ -174,7 +174,8 @@ def _buffer_bytes(
         where = "is not in the .zip" if resolve is not None else "does not come with it"
         raise MeshFileError(
             f"The glTF file refers to the separate buffer file {uri[:100]}, which "
-            f"{where}; send a .zip holding the .gltf and its files, or a .glb."
+            f"{where}; send the .gltf with its files (together in one request, or in a .zip), "
+            "or a .glb."
         )
     return found[:length]
 

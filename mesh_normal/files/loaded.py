@@ -61,6 +61,9 @@ class LoadedMesh:
         read-only. ``None`` when the file has none.
     notes : tuple of str
         Plain sentences about what reading did (welding, triangulation, skipped elements).
+    files : tuple of str
+        For a ``.zip`` or several files: the names of those read, the mesh file first, then
+        the files it named (a ``.gltf``'s buffers). Empty for one file read alone.
     from_reader : bool
         True when :func:`~mesh_normal.files.read_mesh` built it: its arrays passed the checks
         and are read-only, so :meth:`checked` need not check them again.
@@ -77,6 +80,7 @@ class LoadedMesh:
     group_names: tuple[str, ...] | None = None
     vertex_colors: NDArray[np.generic] | None = None
     notes: tuple[str, ...] = ()
+    files: tuple[str, ...] = ()
     from_reader: bool = field(default=False, repr=False, compare=False)
 
     def checked(self) -> CheckedMesh:

@@ -6,7 +6,7 @@ import dataclasses
 import io
 import os
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Protocol
 from urllib.parse import unquote
@@ -86,6 +86,24 @@ def read_mesh(source: MeshSource, filename: str | None = None) -> LoadedMesh:
         note = f"The file is named as {named_as} but holds {holds}; it was read as {holds}."
         mesh = dataclasses.replace(mesh, notes=(note, *mesh.notes))
     return mesh
+
+
+def read_mesh_files(files: Iterable[tuple[str | None, bytes]]) -> LoadedMesh:
+    """Read one mesh sent as several files, as ``(name, bytes)`` pairs, exactly as if they
+    were the members of one ``.zip`` (see :mod:`mesh_normal.files.archive`).
+
+    >>> read_mesh_files([("Box.gltf", gltf), ("Box0.bin", buffer)])  # a .gltf and its .bin
+    >>> read_mesh_files([("model.obj", obj), ("model.mtl", mtl)])   # the .mtl is not needed
+
+    The one file whose extension names a mesh format is read; a ``.gltf`` finds the files its
+    relative URIs name among the others. Names must not reach outside their folder (``..``,
+    absolute paths) nor come twice, and a ``.zip`` is sent alone; each problem is a
+    :class:`MeshFileError` with one sentence. One pair alone is read as :func:`read_mesh`
+    reads it.
+    """
+    from mesh_normal.files.archive import read_files
+
+    return read_files(list(files), read_mesh)
 
 
 def _beside(path: Path) -> Callable[[str], bytes | None]:

@@ -1,8 +1,9 @@
 // The mesh page. Without JavaScript the form posts the file and the server answers with the
-// whole page. With it, choosing or dropping a file uploads it at once with a progress bar
-// (POST /mesh?part=report answers with the report alone), the figures are drawn from the
-// report's JSON blocks, and the downloads send the file the page still holds to the JSON
-// API again: the server keeps nothing between requests.
+// whole page. With it, choosing or dropping a file (or several: a .gltf with its .bin, an
+// .obj with its .mtl) uploads it at once with a progress bar (POST /mesh?part=report answers
+// with the report alone), the figures are drawn from the report's JSON blocks, and the
+// downloads send the files the page still holds to the JSON API again: the server keeps
+// nothing between requests. The fixed mesh's download says what its format leaves out.
 "use strict";
 
 (function () {
@@ -22,7 +23,7 @@
     toImageButtonOptions: { format: "png", filename: "mesh-face-areas", scale: 2 },
   };
   form.classList.add("mesh-form-js");  // choosing or dropping a file starts at once
-  let file = null;      // the file the page holds, sent again by every download
+  let files = [];      // the files the page holds, sent again by every download
   let request = null;   // the upload in flight, if any
 
   function size(bytes) {
@@ -61,17 +62,33 @@
     return "The server could not read the file (status " + xhr.status + ").";
   }
 
+  // "a.obj", "a.obj and a.mtl", "a.gltf, a.bin and b.bin"
+  function listed(names) {
+    if (names.length < 2) return names.join("");
+    return names.slice(0, -1).join(", ") + " and " + names[names.length - 1];
+  }
+
+  function formData(chosen) {
+    const body = new FormData();
+    chosen.forEach(function (item) { body.append("file", item, item.name); });
+    return body;
+  }
+
+  // `chosen`: one File, or a FileList or array of them (one mesh sent as several files).
   function upload(chosen) {
-    if (!chosen) { say("Choose a mesh file first.", "error"); input.focus(); return; }
-    if (chosen.size > limit) {
-      say(chosen.name + " is " + size(chosen.size) + ", larger than the limit of " +
+    const list = chosen instanceof File ? [chosen] : Array.prototype.slice.call(chosen || []);
+    if (!list.length) { say("Choose a mesh file first.", "error"); input.focus(); return; }
+    const names = listed(list.map(function (item) { return item.name; }));
+    const total = list.reduce(function (sum, item) { return sum + item.size; }, 0);
+    if (total > limit) {
+      say(names + (list.length > 1 ? " are " : " is ") + size(total) +
+          (list.length > 1 ? " together" : "") + ", larger than the limit of " +
           form.dataset.limitText + ".", "error");
       return;
     }
     if (request) request.abort();
-    file = chosen;
-    const body = new FormData();
-    body.append("file", chosen, chosen.name);
+    files = list;
+    const body = formData(list);
     const xhr = new XMLHttpRequest();
     request = xhr;
     xhr.open("POST", "/mesh?part=report");
@@ -80,7 +97,7 @@
     };
     xhr.upload.onload = function () {
       showProgress("Analysing", null);
-      say("Analysing " + chosen.name + "…");
+      say("Analysing " + names + "…");
     };
     xhr.onload = function () {
       if (request !== xhr) return;
@@ -95,17 +112,17 @@
           xhr.responseText.indexOf("<html") === -1;
         if (fragment) output.innerHTML = xhr.responseText;
         say(sentence, "error");
-        file = null;
+        files = [];
       }
     };
     xhr.onerror = function () {
       if (request !== xhr) return;
       request = null;
       progressRow.classList.add("hidden");
-      say("The upload of " + chosen.name + " failed; check the connection and try again.", "error");
+      say("The upload of " + names + " failed; check the connection and try again.", "error");
     };
     showProgress("Uploading", 0);
-    say("Uploading " + chosen.name + " (" + size(chosen.size) + ")…");
+    say("Uploading " + names + " (" + size(total) + ")…");
     xhr.send(body);
   }
 
@@ -191,13 +208,12 @@
   }
 
   function fetchDownload(path, params, fallback, button) {
-    if (!file && input.files.length) file = input.files[0];
-    if (!file) {
+    if (!files.length && input.files.length) files = Array.prototype.slice.call(input.files);
+    if (!files.length) {
       downloadStatus("Choose the file again: the page no longer holds it.", "error");
       return Promise.resolve();
     }
-    const body = new FormData();
-    body.append("file", file, file.name);
+    const body = formData(files);
     if (button) button.disabled = true;
     downloadStatus("Preparing " + fallback + "…", "");
     return fetch(path + "?" + new URLSearchParams(params).toString(), { method: "POST", body: body })
@@ -211,9 +227,12 @@
           });
         }
         const name = filename(response, fallback);
+        // The fix names what the chosen format could not hold; never leave that unsaid.
+        const dropped = response.headers.get("x-dropped");
         return response.blob().then(function (blob) {
           save(blob, name);
-          downloadStatus("Saved " + name + ".", "ok");
+          if (dropped) downloadStatus("Saved " + name + ", which leaves out " + dropped + ".", "warn");
+          else downloadStatus("Saved " + name + ".", "ok");
         });
       })
       .catch(function () { downloadStatus("The download failed; check the connection.", "error"); })
@@ -252,8 +271,19 @@
     save(new Blob([element.textContent], { type: "application/json" }), stem + "-report.json");
   }
 
+  // Before the fixed mesh is downloaded: what its chosen format leaves out of this mesh.
+  function syncDropped() {
+    const select = document.getElementById("fix-format");
+    const slot = document.getElementById("fix-dropped");
+    const sentences = data("mesh-fix-dropped");
+    if (!select || !slot || !sentences) return;
+    slot.textContent = sentences[select.value] || "";
+    slot.classList.toggle("hidden", !slot.textContent);
+  }
+
   // Weighting means nothing for face normals, the crease angle only for corner normals.
   function syncFields() {
+    syncDropped();
     const kind = document.getElementById("normals-kind");
     if (!kind) return;
     document.getElementById("normals-weighting").disabled = kind.value === "face";
@@ -272,10 +302,10 @@
 
   // --- Wiring -------------------------------------------------------------------------------
 
-  input.addEventListener("change", function () { upload(input.files[0]); });
+  input.addEventListener("change", function () { upload(input.files); });
   form.addEventListener("submit", function (event) {
     event.preventDefault();
-    upload(input.files[0]);
+    upload(input.files);
   });
 
   function hasFiles(event) {
@@ -293,10 +323,10 @@
   dropzone.addEventListener("drop", function (event) {
     event.preventDefault();
     dropzone.classList.remove("dragging");
-    const files = event.dataTransfer && event.dataTransfer.files;
-    if (!files || !files.length) return;
-    try { input.files = files; } catch (error) { /* older browsers: the page still holds it */ }
-    upload(files[0]);
+    const dropped = event.dataTransfer && event.dataTransfer.files;
+    if (!dropped || !dropped.length) return;
+    try { input.files = dropped; } catch (error) { /* older browsers: the page still holds them */ }
+    upload(dropped);
   });
   // A file dropped beside the zone must not replace the page with the file itself.
   ["dragover", "drop"].forEach(function (type) {
@@ -322,9 +352,10 @@
   });
   document.addEventListener("change", function (event) {
     if (event.target.id === "normals-kind") syncFields();
+    if (event.target.id === "fix-format") syncDropped();
   });
 
   // A report the server rendered (the form posted without this script) is drawn too.
   if (document.getElementById("mesh-report")) { syncFields(); drawFigures(); }
-  window.meshUpload = upload;  // lets browser tests hand the page a file directly
+  window.meshUpload = upload;  // lets browser tests hand the page files directly
 })();

@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 from fastapi.testclient import TestClient
 
 from mesh_normal.files import read_mesh, write_mesh
+from tests.conftest import Page
 from tests.meshes import TETRA_FACES, TETRA_OBJ, TETRA_VERTICES
 from tests.paths import DATA
 
@@ -84,3 +87,42 @@ def test_a_meshlab_files_colours_survive_the_fix(client: TestClient) -> None:
     np.testing.assert_array_equal(fixed.vertices, original.vertices)
     dropped = fix(client, data, "colors_meshlab.ply", "stl").headers["x-dropped"]
     assert dropped == "vertex colours (STL holds none)"
+
+
+@pytest.mark.parametrize(
+    ("colors", "expected"),
+    [
+        (None, {"ply": "", "stl": "", "obj": ""}),
+        (
+            UCHAR,
+            {
+                "ply": "",
+                "stl": "STL leaves out vertex colours (STL holds none); PLY and OBJ keep "
+                "everything.",
+                "obj": "",
+            },
+        ),
+        (
+            FLOAT,
+            {
+                "ply": "",
+                "stl": "STL leaves out vertex colours (STL holds none); PLY keeps everything.",
+                "obj": "OBJ leaves out vertex colour alpha (OBJ holds red, green and blue only); "
+                "PLY keeps everything.",
+            },
+        ),
+    ],
+    ids=["none", "rgb", "rgba"],
+)
+def test_the_page_says_before_the_download_what_each_format_leaves_out(
+    client: TestClient, colors: np.ndarray | None, expected: dict[str, str]
+) -> None:
+    data = write_mesh(TETRA_VERTICES, FLIPPED, "ply", vertex_colors=colors)
+    response = client.post("/mesh", files={"file": ("c.ply", data)})
+    assert response.context["fix_dropped"] == expected  # type: ignore[attr-defined]
+    page = Page(response.text)
+    assert json.loads(page.text("mesh-fix-dropped")) == expected
+    assert "hidden" in (page.one("p", id="fix-dropped")["class"] or "")  # PLY is chosen
+    for fmt, sentence in expected.items():  # in the words of the header of that download
+        header = fix(client, data, "c.ply", fmt).headers.get("x-dropped", "")
+        assert (header in sentence) if header else not sentence

@@ -11,8 +11,10 @@ import zipfile
 import numpy as np
 import pytest
 import trimesh
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
-from mesh_normal.files import MeshFileError, archive, read_mesh
+from mesh_normal.files import MeshFileError, archive, read_mesh, read_mesh_files
 from tests.meshes import CUBE_OBJ
 from tests.paths import DATA
 
@@ -38,7 +40,10 @@ def test_gltf_with_its_bin_in_a_folder() -> None:
     mesh = read_mesh(zipped(members), "model.zip")
     assert mesh.format == "gltf" and len(mesh.faces) == 12
     np.testing.assert_allclose(np.abs(mesh.vertices), 0.5)
-    assert mesh.notes[0] == "Read model/model.gltf from the .zip file."
+    assert mesh.notes[0] == (
+        "Read model/model.gltf with model/gltf_buffer_0.bin and model/gltf_buffer_1.bin from "
+        "the .zip file; not needed for the geometry: model/texture.png."
+    )
 
 
 def test_gltf_without_its_bin_says_so() -> None:
@@ -119,7 +124,9 @@ def test_real_gltf_alone_names_its_bin() -> None:
     with pytest.raises(MeshFileError) as error:
         read_mesh((GLTF / "Box.gltf").read_bytes(), "Box.gltf")
     assert error.value.status_code == 400
-    assert "Box0.bin" in str(error.value) and "send a .zip" in str(error.value)
+    assert "Box0.bin" in str(error.value) and "together in one request, or in a .zip" in str(
+        error.value
+    )
 
 
 @pytest.mark.parametrize(("gltf", "faces"), [("BoxDraco.gltf", 12), ("DracoSparseMesh.gltf", 102)])
@@ -178,3 +185,127 @@ def test_a_zip_inside_a_zip_is_refused_at_any_depth() -> None:
         archive = _zip_of("m.obj", archive, zipfile.ZIP_STORED)
     with pytest.raises(MeshFileError, match=r"m\.obj of the \.zip file is itself a \.zip"):
         read_mesh(archive, "deep.zip")
+
+
+# --- Several files sent one by one: read as the members of one .zip ---------------------------
+
+
+def box_files() -> list[tuple[str | None, bytes]]:
+    return [(name, (GLTF / name).read_bytes()) for name in ("Box.gltf", "Box0.bin")]
+
+
+MTL = b"newmtl red\nKd 1 0 0\n"
+
+
+def test_several_files_are_read_as_the_zip_of_them() -> None:
+    files = box_files()
+    mesh = read_mesh_files(files)
+    zipped_mesh = read_mesh(zip_of("Box.gltf", "Box0.bin"), "box.zip")
+    assert (mesh.format, len(mesh.faces)) == ("gltf", 12)
+    np.testing.assert_array_equal(mesh.vertices, zipped_mesh.vertices)
+    np.testing.assert_array_equal(mesh.faces, zipped_mesh.faces)
+    assert mesh.notes[0] == "Read Box.gltf with Box0.bin from the 2 files sent."
+    assert mesh.files == zipped_mesh.files == ("Box.gltf", "Box0.bin")
+    assert zipped_mesh.notes[0] == "Read Box.gltf with Box0.bin from the .zip file."
+    assert mesh.notes[1:] == zipped_mesh.notes[1:]
+
+
+@given(st.permutations(range(4)))
+@settings(max_examples=24, deadline=None)
+def test_the_order_of_the_files_does_not_matter(order: list[int]) -> None:
+    files = [*box_files(), ("notes.txt", b"hi"), ("Box.png", b"\x89PNG")]
+    mesh = read_mesh_files([files[index] for index in order])
+    assert len(mesh.faces) == 12
+    assert mesh.notes[0].startswith("Read Box.gltf with Box0.bin from the 4 files sent; ")
+    assert "not needed for the geometry: " in mesh.notes[0]
+
+
+def test_obj_with_its_mtl_sent_as_two_files() -> None:
+    obj = ("mtllib model.mtl\nusemtl red\n" + CUBE_OBJ).encode()
+    mesh = read_mesh_files([("model.mtl", MTL), ("model.obj", obj)])
+    assert (mesh.format, len(mesh.faces), mesh.files) == ("obj", 12, ("model.obj",))
+    assert mesh.notes[0] == (
+        "Read model.obj from the 2 files sent; not needed for the geometry: model.mtl."
+    )
+
+
+def test_one_file_alone_is_read_as_read_mesh_reads_it() -> None:
+    data = zip_of("Box.gltf", "Box0.bin")
+    alone = read_mesh_files([("box.zip", data)])
+    assert alone.notes == read_mesh(data, "box.zip").notes
+    assert read_mesh_files([(None, CUBE_OBJ.encode())]).notes == read_mesh(CUBE_OBJ.encode()).notes
+
+
+def test_files_in_a_folder_find_each_other_as_in_a_zip() -> None:
+    files = [(f"model/{name}", data) for name, data in box_files()]
+    assert len(read_mesh_files(files).faces) == 12
+    misplaced = [files[0], ("other/Box0.bin", files[1][1])]
+    with pytest.raises(MeshFileError, match=r"refers to the separate file model/Box0\.bin"):
+        read_mesh_files(misplaced)
+
+
+@pytest.mark.parametrize(
+    ("files", "message"),
+    [
+        ([("Box.gltf", b"{}"), ("Box.gltf", b"{}")], "Two of the files sent are named Box.gltf"),
+        ([("a/b.bin", b""), ("a//./b.bin", b"")], "Two of the files sent are named a/b.bin"),
+        ([("Box.gltf", b""), ("../Box0.bin", b"")], "named outside its folder: ../Box0.bin"),
+        ([("/etc/Box.gltf", b""), ("x.bin", b"")], "named outside its folder: /etc/Box.gltf"),
+        ([("C:\\x\\a.obj", b""), ("x.bin", b"")], "named outside its folder: C:/x/a.obj"),
+        ([("a.obj", b""), ("", b"x")], "File 2 of the 2 sent has no name"),
+        ([("a.obj", b""), ("b\n.bin", b"")], "A file name holds control characters: 'b\\n.bin'"),
+        ([("a.obj", b""), ("b.zip", b"PK\x05\x06")], "b.zip is a .zip among several files"),
+        ([("a.obj", _zip_of("c.obj", b"")), ("x.mtl", b"")], "a.obj is a .zip among several"),
+        ([("readme.txt", b"hi"), ("x.bin", b"")], "The 2 files sent hold no mesh file"),
+        ([("a.obj", b""), ("b.stl", b"")], "The 2 files sent hold 2 mesh files (a.obj, b.stl)"),
+        ([("Box.gltf", (GLTF / "Box.gltf").read_bytes()), ("notes.txt", b"")], "Box0.bin, which"),
+        ([], "No file was sent"),
+    ],
+)
+def test_refused_files(files: list[tuple[str | None, bytes]], message: str) -> None:
+    with pytest.raises(MeshFileError) as error:
+        read_mesh_files(files)
+    assert error.value.status_code == 400 and message in str(error.value)
+    sentence = str(error.value)
+    assert sentence.endswith(".") and ". " not in sentence[:-1]
+
+
+def test_too_many_files(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(archive, "MAX_MEMBERS", 3)
+    with pytest.raises(MeshFileError, match="4 files were sent; at most 3 at once"):
+        read_mesh_files([(f"{index}.txt", b"") for index in range(4)])
+
+
+def test_a_zip_naming_a_member_twice_is_refused() -> None:
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w") as file:
+        file.writestr("a.obj", CUBE_OBJ)
+        with pytest.warns(UserWarning, match="Duplicate"):
+            file.writestr("a.obj", "v 0 0 0\n")
+    with pytest.raises(MeshFileError, match=r"holds two members named a\.obj"):
+        read_mesh(buffer.getvalue(), "twice.zip")
+
+
+NAMES = st.sampled_from(
+    ["Box.gltf", "Box0.bin", "a.obj", "a.mtl", "x.zip", "../b.bin", "/c.stl", "d\\e.ply", ""]
+) | st.text(max_size=12)
+CONTENTS = st.sampled_from(
+    [(GLTF / "Box.gltf").read_bytes(), (GLTF / "Box0.bin").read_bytes(), CUBE_OBJ.encode(), b""]
+) | st.binary(max_size=64)
+
+
+@given(st.lists(st.tuples(NAMES, CONTENTS), max_size=5))
+@settings(max_examples=300, deadline=None)
+def test_any_files_give_a_mesh_or_one_file_error(files: list[tuple[str, bytes]]) -> None:
+    try:
+        mesh = read_mesh_files(files)
+    except MeshFileError as error:
+        refused = error
+    else:
+        refused = None
+        assert len(mesh.faces) > 0
+        if len(files) > 1:
+            assert mesh.files and mesh.notes[0].startswith(f"Read {mesh.files[0]}")
+    if refused is not None:
+        assert 400 <= refused.status_code < 500
+        assert str(refused).endswith(".") and "\n" not in str(refused)

@@ -204,7 +204,9 @@ def test_gltf_alone_with_an_external_bin_says_to_send_a_zip_or_glb() -> None:
     with pytest.raises(MeshFileError) as error:
         read_mesh(data, "x.gltf")
     assert error.value.status_code == 400
-    assert "model.bin" in str(error.value) and "send a .zip" in str(error.value)
+    assert "model.bin" in str(error.value) and "together in one request, or in a .zip" in str(
+        error.value
+    )
     assert ".glb" in str(error.value)
 
 
