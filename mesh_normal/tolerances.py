@@ -81,3 +81,11 @@ ORIENT_EVIDENCE = 4.0
 #: size) stays below it in any position, so such a side is never decided by its wobble; a
 #: curved piece (a hemisphere, a scan patch, an open box) is far above it.
 ORIENT_OPEN_SINE = 2.0**-20
+
+#: The largest weld tolerance that the report, the fix and their front ends accept, as a
+#: fraction of the bounding-box diagonal (``mn.analyse(..., weld=)``, ``--weld``, the API's
+#: ``weld``). A weld is for pieces that miss each other by rounding: a float32 step is about
+#: 6e-8 of a coordinate, six decimals in an OBJ 1e-6 of a unit; 1e-6 to 1e-4 covers them. Past
+#: one percent of the mesh's size a weld no longer repairs rounding but closes real gaps and
+#: collapses small features (thin walls, fine detail), which is modelling, not checking.
+WELD_LIMIT = 0.01

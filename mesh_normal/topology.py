@@ -471,15 +471,16 @@ def _welded(vertices: FloatArray, weld: float, point: IndexArray | None) -> Inde
     cell are closer than s in every coordinate. Joins are transitive (a chain of close
     vertices becomes one point), as in every welding tool.
     """
-    low, high = vertices.min(axis=0), vertices.max(axis=0)
-    side = weld * float(np.linalg.norm(high - low))
+    low = vertices.min(axis=0)
+    side = weld_distance(vertices, weld)
     count = len(vertices)
     identity = np.arange(count)
     one, two = [identity], [identity if point is None else point]
-    with np.errstate(over="ignore"):
-        relative = (vertices - low) / side if side > 0 else np.empty((0, 3))
-    # A side so small that the cells overflow (a subnormal weld) joins nothing beyond equality.
-    if side > 0 and np.isfinite(relative).all():
+    with np.errstate(over="ignore", invalid="ignore"):
+        relative = (vertices - low) / side if 0 < side < math.inf else np.empty((0, 3))
+    # A side so small that the cells overflow (a subnormal weld), or one beyond the double
+    # range, joins nothing beyond equality.
+    if 0 < side < math.inf and np.isfinite(relative).all():
         for offset in np.ndindex(2, 2, 2):
             cells = np.floor(relative + 0.5 * np.array(offset, dtype=np.float64))
             same = _identical(cells)
@@ -489,3 +490,18 @@ def _welded(vertices: FloatArray, weld: float, point: IndexArray | None) -> Inde
     first, second = np.concatenate(one), np.concatenate(two)
     root, _ = _connected(count, first, second, np.zeros(len(first), dtype=np.intp))
     return root
+
+
+def weld_distance(vertices: FloatArray, weld: float) -> float:
+    """The weld tolerance as a distance: ``weld`` times the bounding-box diagonal.
+
+    Taken in halves and scaled, so that it is finite whenever the product is (a mesh from
+    -1e308 to 1e308 has a finite box, though its extent overflows); 0.0 without vertices.
+    """
+    if not len(vertices):
+        return 0.0
+    half = vertices.max(axis=0) / 2 - vertices.min(axis=0) / 2
+    scale = float(half.max())
+    if scale == 0:
+        return 0.0
+    return 2 * weld * scale * float(np.linalg.norm(half / scale))  # inf beyond the range

@@ -41,6 +41,7 @@ KEYS = [
     "file_normals",
     "object_count",
     "objects",
+    "weld",
     "notes",
     "problems",
 ]
