@@ -196,7 +196,8 @@ def _weld_hint(report: MeshReport) -> str:
         return ""
     return (
         " If its pieces should meet but miss each other by rounding, analyse it again with "
-        "a weld tolerance (weld=1e-6, a fraction of the mesh's size)."
+        "a weld tolerance such as 1e-6 of the mesh's size (weld=1e-6 in Python and the API, "
+        "--weld 1e-6 on the command line)."
     )
 
 

@@ -27,6 +27,7 @@ from mesh_normal.analysis import analyse_mesh, build_report
 from mesh_normal.exports import FORMATS, KINDS
 from mesh_normal.files import WRITABLE
 from mesh_normal.files.formats import ACCEPTED_SUFFIXES
+from mesh_normal.tolerances import WELD_LIMIT
 from mesh_normal.vertices import Weighting
 
 router = APIRouter(include_in_schema=False)
@@ -44,6 +45,7 @@ def _form_context(request: Request) -> dict[str, Any]:
         "suffixes": [suffix.lstrip(".") for suffix in ACCEPTED_SUFFIXES],
         "limit": limit,
         "limit_text": size_text(limit),
+        "weld_limit": WELD_LIMIT,
         "report": None,
         "error": None,
     }
@@ -51,9 +53,10 @@ def _form_context(request: Request) -> dict[str, Any]:
 
 def _report_context(upload: Upload, base_url: str) -> dict[str, Any]:
     """Analyse the upload (in a worker thread): the report, its figures and the downloads."""
-    analysis = analyse_mesh(load(upload), upload.filename, len(upload.data))
+    analysis = analyse_mesh(load(upload), upload.filename, len(upload.data), weld=upload.weld)
     report = build_report(analysis)
     name = upload.filename or "mesh"
+    weld = "" if upload.weld is None else f" -F weld={upload.weld!r}"
     return {
         "report": report,
         # The JSON twin is the API's own JSON (non-finite floats already null), parsed back
@@ -62,7 +65,7 @@ def _report_context(upload: Upload, base_url: str) -> dict[str, Any]:
         "figures": mesh_figures(analysis),
         "classes": CLASSES,
         "stem": stem(upload.filename),
-        "curl": f"curl -F {shlex.quote('file=@' + name)} {base_url}api/mesh",
+        "curl": f"curl -F {shlex.quote('file=@' + name)}{weld} {base_url}api/mesh",
         "kinds": KINDS,
         "weightings": get_args(Weighting),
         "formats": FORMATS,

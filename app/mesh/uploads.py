@@ -7,6 +7,8 @@ it is closed. We close it as soon as its bytes are read, so no upload outlives i
 
 from __future__ import annotations
 
+import copy
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -14,8 +16,9 @@ from fastapi import Request
 from starlette.datastructures import UploadFile
 from starlette.exceptions import HTTPException
 
-from app.web.errors import ApiError
+from app.web.errors import ApiError, clip
 from mesh_normal.files.formats import ACCEPTED_SUFFIXES
+from mesh_normal.tolerances import WELD_LIMIT
 
 #: A tetrahedron as OBJ text: the example upload in the API documentation.
 EXAMPLE_FILE = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
@@ -54,10 +57,57 @@ UPLOAD_BODY: dict[str, Any] = {
 }
 
 
+#: What the optional ``weld`` input means, for the API documentation.
+WELD_HELP = (
+    "Optional, off by default: also treat vertices closer than this fraction of the "
+    f"bounding-box diagonal (0 to {WELD_LIMIT:g}; 1e-6 covers float32 rounding) as one point, "
+    "for files whose pieces miss each other by rounding. The vertices are kept."
+)
+
+#: UPLOAD_BODY with the optional multipart field ``weld``: the report and the fix take it.
+UPLOAD_WELD_BODY: dict[str, Any] = copy.deepcopy(UPLOAD_BODY)
+UPLOAD_WELD_BODY["requestBody"]["content"]["multipart/form-data"]["schema"]["properties"][
+    "weld"
+] = {
+    "type": "number",
+    "minimum": 0,
+    "maximum": WELD_LIMIT,
+    "description": WELD_HELP + " With a raw body, send it as the query parameter weld.",
+}
+
+
 @dataclass(frozen=True, slots=True)
 class Upload:
     data: bytes
     filename: str | None
+    weld: float | None = None  # the multipart field weld, checked
+
+
+def weld_field(text: str) -> float | None:
+    """The ``weld`` form field as a number 0 to WELD_LIMIT; an empty field is off."""
+    if not text.strip():
+        return None
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and 0 <= value <= WELD_LIMIT):
+        raise ApiError(
+            422,
+            f"weld must be a number from 0 to {WELD_LIMIT:g} (a fraction of the bounding-box "
+            f"diagonal), not {clip(text)!r}.",
+            "weld",
+        )
+    return value
+
+
+def upload_weld(upload: Upload, query: float | None) -> float | None:
+    """The weld of a request: the form field or the query parameter, not both."""
+    if upload.weld is not None and query is not None:
+        raise ApiError(
+            422, "weld is given twice: send it as a form field or a query parameter.", "weld"
+        )
+    return query if upload.weld is None else upload.weld
 
 
 async def read_upload(request: Request) -> Upload:
@@ -89,6 +139,9 @@ async def _multipart(request: Request) -> Upload:
         if not isinstance(item, UploadFile):
             given = "is missing" if item is None else "must be a file, not a text field"
             raise ApiError(422, f"file {given}: send the mesh as the multipart field file.", "file")
+        weld = form.get("weld")
+        if weld is not None and not isinstance(weld, str):
+            raise ApiError(422, "weld must be a text field holding a number, not a file.", "weld")
         data = await item.read()
         filename = item.filename
     finally:
@@ -97,4 +150,4 @@ async def _multipart(request: Request) -> Upload:
         raise ApiError(
             422, f"The uploaded file {filename or ''} is empty.".replace("  ", " "), "file"
         )
-    return Upload(data, filename)
+    return Upload(data, filename, None if weld is None else weld_field(weld))

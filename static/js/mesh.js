@@ -15,6 +15,7 @@
   const progressText = document.getElementById("mesh-progress-text");
   const status = document.getElementById("mesh-status");
   const output = document.getElementById("mesh-output");
+  const weldInput = document.getElementById("mesh-weld");
   const limit = Number(form.dataset.limit) || Infinity;
   const PLOT_CONFIG = {
     displaylogo: false, responsive: true, displayModeBar: window.innerWidth < 600 ? false : "hover",
@@ -68,10 +69,16 @@
           form.dataset.limitText + ".", "error");
       return;
     }
+    if (weldInput && !weldInput.validity.valid) {
+      say("The weld tolerance must be a number from 0 to " + weldInput.max + ", or empty.", "error");
+      weldInput.focus();
+      return;
+    }
     if (request) request.abort();
     file = chosen;
     const body = new FormData();
     body.append("file", chosen, chosen.name);
+    if (weldInput && weldInput.value !== "") body.append("weld", weldInput.value);
     const xhr = new XMLHttpRequest();
     request = xhr;
     xhr.open("POST", "/mesh?part=report");
@@ -190,7 +197,7 @@
     return match ? match[1] : fallback;
   }
 
-  function fetchDownload(path, params, fallback, button) {
+  function fetchDownload(path, params, fallback, button, fields) {
     if (!file && input.files.length) file = input.files[0];
     if (!file) {
       downloadStatus("Choose the file again: the page no longer holds it.", "error");
@@ -198,6 +205,7 @@
     }
     const body = new FormData();
     body.append("file", file, file.name);
+    Object.keys(fields || {}).forEach(function (key) { body.append(key, fields[key]); });
     if (button) button.disabled = true;
     downloadStatus("Preparing " + fallback + "…", "");
     return fetch(path + "?" + new URLSearchParams(params).toString(), { method: "POST", body: body })
@@ -241,7 +249,10 @@
 
   function downloadFix(button) {
     const format = document.getElementById("fix-format").value;
-    return fetchDownload("/api/mesh/fix", { format: format }, "fixed." + format, button);
+    // The weld the report was made with, so that the file is the fix the report describes.
+    const view = document.getElementById("mesh-report-view");
+    const fields = view && view.dataset.weld ? { weld: view.dataset.weld } : {};
+    return fetchDownload("/api/mesh/fix", { format: format }, "fixed." + format, button, fields);
   }
 
   function downloadReport() {
@@ -323,6 +334,8 @@
   document.addEventListener("change", function (event) {
     if (event.target.id === "normals-kind") syncFields();
   });
+  // A new weld tolerance analyses the file the page holds again.
+  if (weldInput) weldInput.addEventListener("change", function () { if (file) upload(file); });
 
   // A report the server rendered (the form posted without this script) is drawn too.
   if (document.getElementById("mesh-report")) { syncFields(); drawFigures(); }
