@@ -192,7 +192,7 @@ def _open(report: MeshReport) -> Problem | None:
 
 
 def _weld_hint(report: MeshReport) -> str:
-    if report.weld is not None:
+    if report.weld is not None and report.weld.tolerance > 0:
         return ""
     return (
         " If its pieces should meet but miss each other by rounding, analyse it again with "
