@@ -53,11 +53,14 @@ class MeshAnalysis:
     orientation: Orientation
     unused_vertices: int
     weld: Weld | None
+    welded_points: IndexArray | None  # with a weld: same_points' map (None: all apart)
 
     def faces_by_position(self) -> IndexArray:
         """(m, 3) intp: the faces as the topology saw them, each vertex by its point."""
-        tolerance = None if self.weld is None else self.weld.tolerance
-        return by_position(self.geometry.mesh, tolerance)
+        faces = self.geometry.mesh.faces
+        if self.weld is None:
+            return by_position(self.geometry.mesh)
+        return faces if self.welded_points is None else self.welded_points[faces]
 
 
 def checked_weld(weld: object) -> float | None:
@@ -82,14 +85,18 @@ def checked_weld(weld: object) -> float | None:
 
 def weld_summary(vertices: FloatArray, weld: float | None) -> Weld | None:
     """What a weld tolerance (checked) meant for these vertices, or ``None`` when it is off."""
-    if weld is None:
-        return None
+    return None if weld is None else _welded(vertices, weld)[0]
+
+
+def _welded(vertices: FloatArray, weld: float) -> tuple[Weld, IndexArray | None]:
+    """The weld's summary and the map of :func:`~mesh_normal.topology.same_points`."""
     exact, welded = same_points(vertices), same_points(vertices, weld)
-    return Weld(
+    summary = Weld(
         tolerance=weld,
         distance=weld_distance(vertices, weld),
         joined_vertices=_point_count(exact, len(vertices)) - _point_count(welded, len(vertices)),
     )
+    return summary, welded
 
 
 def _point_count(point: IndexArray | None, count: int) -> int:
@@ -113,6 +120,7 @@ def analyse_mesh(
     orientation = orient(geometry, weld=weld)
     used = np.zeros(len(mesh.vertices), dtype=bool)
     used[mesh.faces.ravel()] = True
+    summary, points = (None, None) if weld is None else _welded(mesh.vertices, weld)
     return MeshAnalysis(
         mesh=mesh,
         name=name,
@@ -122,7 +130,8 @@ def analyse_mesh(
         topology=orientation.topology,
         orientation=orientation,
         unused_vertices=int(len(used) - np.count_nonzero(used)),
-        weld=weld_summary(mesh.vertices, weld),
+        weld=summary,
+        welded_points=points,
     )
 
 
