@@ -8,6 +8,8 @@ library's ``mn.analyse``.
 
 from __future__ import annotations
 
+import math
+import numbers
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -30,9 +32,12 @@ from mesh_normal.report import (
     Fix,
     MeshReport,
     ObjectReport,
+    Weld,
 )
 from mesh_normal.stored_normals import stored_normal_agreement
-from mesh_normal.topology import MeshTopology, by_position
+from mesh_normal.tolerances import WELD_LIMIT
+from mesh_normal.topology import MeshTopology, by_position, same_points, weld_distance
+from mesh_normal.types import FloatArray, IndexArray
 
 
 @dataclass(frozen=True, slots=True)
@@ -47,20 +52,75 @@ class MeshAnalysis:
     topology: MeshTopology
     orientation: Orientation
     unused_vertices: int
+    weld: Weld | None
+    welded_points: IndexArray | None  # with a weld: same_points' map (None: all apart)
+
+    def faces_by_position(self) -> IndexArray:
+        """(m, 3) intp: the faces as the topology saw them, each vertex by its point."""
+        faces = self.geometry.mesh.faces
+        if self.weld is None:
+            return by_position(self.geometry.mesh)
+        return faces if self.welded_points is None else self.welded_points[faces]
 
 
-def analyse_mesh(mesh: LoadedMesh, name: str | None = None, size: int = 0) -> MeshAnalysis:
+def checked_weld(weld: object) -> float | None:
+    """``weld`` as a float, or ``None`` (off); refuses anything but a number 0 to WELD_LIMIT.
+
+    Raises
+    ------
+    ValueError
+        When ``weld`` is not a finite number from 0 to WELD_LIMIT (a fraction of the
+        bounding-box diagonal).
+    """
+    if weld is None:
+        return None
+    number = float(weld) if isinstance(weld, numbers.Real) and not isinstance(weld, bool) else None
+    if number is None or not (math.isfinite(number) and 0 <= number <= WELD_LIMIT):
+        raise ValueError(
+            f"weld must be a number from 0 to {WELD_LIMIT:g} (a fraction of the bounding-box "
+            f"diagonal), not {weld!r}."
+        )
+    return number
+
+
+def weld_summary(vertices: FloatArray, weld: float | None) -> Weld | None:
+    """What a weld tolerance (checked) meant for these vertices, or ``None`` when it is off."""
+    return None if weld is None else _welded(vertices, weld)[0]
+
+
+def _welded(vertices: FloatArray, weld: float) -> tuple[Weld, IndexArray | None]:
+    """The weld's summary and the map of :func:`~mesh_normal.topology.same_points`."""
+    exact, welded = same_points(vertices), same_points(vertices, weld)
+    summary = Weld(
+        tolerance=weld,
+        distance=weld_distance(vertices, weld),
+        joined_vertices=_point_count(exact, len(vertices)) - _point_count(welded, len(vertices)),
+    )
+    return summary, welded
+
+
+def _point_count(point: IndexArray | None, count: int) -> int:
+    """How many points a map of :func:`~mesh_normal.topology.same_points` leaves."""
+    return count if point is None else int(np.count_nonzero(point == np.arange(count)))
+
+
+def analyse_mesh(
+    mesh: LoadedMesh, name: str | None = None, size: int = 0, *, weld: float | None = None
+) -> MeshAnalysis:
     """Run every check of the core on ``mesh`` (read from a file of ``size`` bytes).
 
-    Returns the arrays (face normals, topology, orientation) that :func:`build_report` sums up
-    and the page draws; for the report alone use :func:`analyse`.
+    ``weld`` (see :func:`analyse`) also joins vertices closer than that fraction of the
+    bounding-box diagonal. Returns the arrays (face normals, topology, orientation) that
+    :func:`build_report` sums up and the page draws; for the report alone use :func:`analyse`.
     """
+    weld = checked_weld(weld)
     # One pass: the reader checked the arrays, and the cross products are taken once here for
     # the face normals, the orientation's volumes and the file-normal comparison alike.
     geometry = face_geometry(mesh.checked())
-    orientation = orient(geometry)
+    orientation = orient(geometry, weld=weld)
     used = np.zeros(len(mesh.vertices), dtype=bool)
     used[mesh.faces.ravel()] = True
+    summary, points = (None, None) if weld is None else _welded(mesh.vertices, weld)
     return MeshAnalysis(
         mesh=mesh,
         name=name,
@@ -70,16 +130,26 @@ def analyse_mesh(mesh: LoadedMesh, name: str | None = None, size: int = 0) -> Me
         topology=orientation.topology,
         orientation=orientation,
         unused_vertices=int(len(used) - np.count_nonzero(used)),
+        weld=summary,
+        welded_points=points,
     )
 
 
-def analyse(source: LoadedMesh | MeshSource, filename: str | None = None) -> MeshReport:
+def analyse(
+    source: LoadedMesh | MeshSource, filename: str | None = None, *, weld: float | None = None
+) -> MeshReport:
     """The report on a mesh: ``mn.analyse(path)``.
 
     ``source`` is a mesh already read (:class:`~mesh_normal.files.LoadedMesh`), or a path, the
     file's bytes or a binary file object; ``filename`` names it in the report (by default the
     path's or the file object's name) and, for bytes without a recognisable header, gives the
     format by its extension.
+
+    ``weld``, off by default, is a tolerance for files whose pieces miss each other by
+    rounding: vertices closer than this fraction of the bounding-box diagonal (0 to
+    ``WELD_LIMIT``, 0.01; 1e-6 covers float32 rounding) count as one point for the edges,
+    parts, winding and fix, as ``orient(..., weld=)`` does; the vertices themselves are kept.
+    The report's ``weld`` says what it meant for the mesh and how many vertices it joined.
 
     Returns
     -------
@@ -95,15 +165,19 @@ def analyse(source: LoadedMesh | MeshSource, filename: str | None = None) -> Mes
         When the path cannot be read.
     TypeError
         When a file object gives text, not bytes.
+    ValueError
+        When ``weld`` is not a number from 0 to 0.01.
     """
+    weld = checked_weld(weld)  # before reading: a bad option fails at once
     if isinstance(source, LoadedMesh):
-        return build_report(analyse_mesh(source, filename, 0))
+        return build_report(analyse_mesh(source, filename, 0, weld=weld))
     if isinstance(source, str | os.PathLike):  # read as a path: a .gltf finds its .bin beside it
         path = Path(source)
         named = filename or path.name
-        return build_report(analyse_mesh(read_mesh(path, named), named, path.stat().st_size))
+        mesh = read_mesh(path, named)
+        return build_report(analyse_mesh(mesh, named, path.stat().st_size, weld=weld))
     data, name = source_bytes(source, filename)
-    return build_report(analyse_mesh(read_mesh(data, name), name, len(data)))
+    return build_report(analyse_mesh(read_mesh(data, name), name, len(data), weld=weld))
 
 
 def build_report(analysis: MeshAnalysis) -> MeshReport:
@@ -134,6 +208,7 @@ def build_report(analysis: MeshAnalysis) -> MeshReport:
         file_normals=file_normal_agreement(analysis),
         object_count=0 if mesh.group_names is None else len(mesh.group_names),
         objects=_objects(analysis),
+        weld=analysis.weld,
         notes=list(mesh.notes),
         problems=[],  # the diagnosis reads the rest of the report
     )
@@ -145,7 +220,7 @@ def _objects(analysis: MeshAnalysis) -> list[ObjectReport]:
     if groups is None or names is None:
         return []
     # The faces by position again (one hash sort): the topology keeps only its sums.
-    points = by_position(analysis.geometry.mesh)
+    points = analysis.faces_by_position()
     return object_reports(groups, names, analysis.faces, analysis.orientation, points)
 
 

@@ -18,6 +18,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
+import math
 import sys
 import time
 from collections.abc import Collection, Iterator
@@ -26,10 +27,11 @@ from typing import TYPE_CHECKING, TextIO
 
 from mesh_normal import __version__
 from mesh_normal.files.formats import SUFFIXES, WRITABLE
+from mesh_normal.tolerances import WELD_LIMIT
 
 if TYPE_CHECKING:
     from mesh_normal.files import LoadedMesh
-    from mesh_normal.report import MeshReport
+    from mesh_normal.report import MeshReport, Weld
 
 EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE, EXIT_INPUT, EXIT_OUTPUT = 0, 1, 2, 3, 4
 NORMAL_SUFFIXES = (".npy", ".csv", ".json", ".ply")
@@ -92,7 +94,7 @@ def analyze(args: argparse.Namespace, progress: Progress) -> int:
 
     mesh, size = load(args.file, progress)
     progress.step("checking faces, edges and winding")
-    report = build_report(analyse_mesh(mesh, Path(args.file).name, size))
+    report = build_report(analyse_mesh(mesh, Path(args.file).name, size, weld=args.weld))
     progress.done()
     if args.json:  # the JSON of POST /api/mesh, indented; allow_nan=False: never NaN
         print(json.dumps(report.model_dump(mode="json"), indent=2, allow_nan=False))
@@ -113,6 +115,8 @@ def summary(report: MeshReport) -> str:
         f"{'watertight' if report.watertight else 'open'}, "
         f"winding {'consistent' if report.winding_consistent else 'inconsistent'}",
     ]
+    if report.weld is not None:
+        lines.append(weld_line(report.weld))
     if report.object_count > 1:  # one object is the mesh itself: the lines above say it all
         lines.append(f"{report.object_count:,} objects:")
         lines.extend(
@@ -126,8 +130,35 @@ def summary(report: MeshReport) -> str:
         lines.append("No problems found.")
     lines.extend(f"{item.severity}: {item.title}. {item.action}" for item in report.problems)
     if report.fix.faces_flipped:
-        lines.append(f"To fix the winding: mesh-normal fix {file.name} FIXED.ply (or .stl, .obj)")
+        weld = "" if report.weld is None else f" --weld {report.weld.tolerance!r}"
+        lines.append(
+            f"To fix the winding: mesh-normal fix{weld} {file.name} FIXED.ply (or .stl, .obj)"
+        )
     return "\n".join(lines)
+
+
+def weld_line(weld: Weld) -> str:
+    """The weld in words: ``weld 1e-06 of the diagonal (2.7e-06): 34 vertices joined``."""
+    distance = "beyond the double range" if weld.distance is None else f"{weld.distance:.3g}"
+    joined = weld.joined_vertices
+    return (
+        f"weld {weld.tolerance!r} of the diagonal ({distance}): {joined:,} "
+        f"{'vertex' if joined == 1 else 'vertices'} joined beyond exact equality"
+    )
+
+
+def weld_fraction(text: str) -> float:
+    """``--weld``: a number from 0 to WELD_LIMIT, or argparse's usage error naming it."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and 0 <= value <= WELD_LIMIT):
+        raise argparse.ArgumentTypeError(
+            f"must be a number from 0 to {WELD_LIMIT:g} (a fraction of the bounding-box "
+            f"diagonal), not {text!r}"
+        )
+    return value
 
 
 def normals(args: argparse.Namespace, progress: Progress) -> int:
@@ -173,14 +204,15 @@ def fix(args: argparse.Namespace, progress: Progress) -> int:
             f"suffix or --format), not {chosen or 'none'}",
             EXIT_USAGE,
         )
-    from mesh_normal.analysis import flips_by_component
+    from mesh_normal.analysis import flips_by_component, weld_summary
     from mesh_normal.files import MeshFileError, write_mesh
     from mesh_normal.files.write import unkept
     from mesh_normal.orientation import orient
 
     mesh, _ = load(args.input, progress)
     progress.step("making the winding consistent and outward")
-    fixed = orient(mesh.checked())
+    fixed = orient(mesh.checked(), weld=args.weld)
+    weld = weld_summary(mesh.vertices, args.weld)
     progress.step(f"writing {args.output}")
     try:
         data = write_mesh(mesh.vertices, fixed.faces, chosen, vertex_colors=mesh.vertex_colors)
@@ -197,6 +229,8 @@ def fix(args: argparse.Namespace, progress: Progress) -> int:
         f"flipped {flipped:,} of {len(mesh.faces):,} faces (component:faces {parts}); "
         f"orientation before: {fixed.orientation}"
     )
+    if weld is not None:
+        print(weld_line(weld))
     return EXIT_OK
 
 
@@ -258,6 +292,7 @@ def parser() -> argparse.ArgumentParser:
     )
     analyze_parser.add_argument("file")
     analyze_parser.add_argument("--json", action="store_true", help="the full report as JSON")
+    add_weld(analyze_parser)
     analyze_parser.set_defaults(run=analyze)
 
     normals_parser = commands.add_parser("normals", help="write face, vertex or corner normals")
@@ -290,6 +325,7 @@ def parser() -> argparse.ArgumentParser:
     fix_parser.add_argument("input")
     fix_parser.add_argument("output", help=f"OUT.{', OUT.'.join(FIX_FORMATS)}")
     fix_parser.add_argument("--format", choices=FIX_FORMATS)
+    add_weld(fix_parser)
     fix_parser.set_defaults(run=fix)
 
     serve_parser = commands.add_parser(
@@ -303,6 +339,18 @@ def parser() -> argparse.ArgumentParser:
     serve_parser.add_argument("--upload-limit-mb", help=argparse.SUPPRESS)
     serve_parser.set_defaults(run=serve)
     return main_parser
+
+
+def add_weld(command: argparse.ArgumentParser) -> None:
+    command.add_argument(
+        "--weld",
+        type=weld_fraction,
+        default=None,
+        metavar="FRACTION",
+        help="also treat vertices closer than FRACTION of the bounding-box diagonal as one "
+        "point, for pieces that miss each other by rounding (e.g. 1e-6; at most "
+        f"{WELD_LIMIT:g}); the vertices are kept. Default: off, only identical coordinates",
+    )
 
 
 def main(argv: list[str] | None = None) -> int:

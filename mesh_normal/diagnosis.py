@@ -8,11 +8,83 @@ are wrong as the file stands), ``"warning"`` (some results are missing or need c
 
 from __future__ import annotations
 
-from mesh_normal.report import FileNormals, MeshReport, Problem, ProblemCode, Severity
+from collections.abc import Sequence
+
+from mesh_normal.report import (
+    FileNormals,
+    MeshReport,
+    ObjectReport,
+    Problem,
+    ProblemCode,
+    Severity,
+)
+
+#: How many objects a sentence names before "and N more".
+NAMED_OBJECTS = 3
 
 
 def _count(number: int, one: str, many: str | None = None) -> str:
     return f"{number:,} {one if number == 1 else (many or one + 's')}"
+
+
+def _names(items: Sequence[ObjectReport], label: str = "{}") -> str:
+    """'a', 'b' and 'c', or 'a', 'b', 'c' and 4 more; ``label`` formats each name."""
+    named = [label.format(repr(item.name), item=item) for item in items[:NAMED_OBJECTS]]
+    rest = len(items) - len(named)
+    if rest:
+        return f"{', '.join(named)} and {rest:,} more"
+    return named[0] if len(named) == 1 else f"{', '.join(named[:-1])} and {named[-1]}"
+
+
+def _listed(report: MeshReport) -> str:
+    """Where the file has more objects than the report lists, which ones were looked at."""
+    if report.object_count > len(report.objects):
+        return f" (of the first {len(report.objects):,} objects)"
+    return ""
+
+
+def _flipped_objects(report: MeshReport) -> str:
+    """Which objects the fix turns, in words: empty unless the file has several objects."""
+    if report.object_count < 2:
+        return ""
+    flipped = [item for item in report.objects if item.faces_flipped]
+    inward = [item for item in flipped if item.orientation == "inward"]
+    partly = [item for item in flipped if item.orientation != "inward"]
+    sentences = []
+    if len(inward) == 1:
+        [item] = inward
+        whole = "its" if item.faces_flipped == item.faces else f"{item.faces_flipped:,} of its"
+        sentences.append(
+            f"The object {item.name!r} is wound inward: the fix flips {whole} "
+            f"{_count(item.faces, 'face')}{_listed(report)}."
+        )
+    elif inward:
+        names = _names(inward, "{} ({item.faces_flipped:,} faces)")
+        sentences.append(
+            f"The objects {names} are wound inward: the fix flips their faces{_listed(report)}."
+        )
+    if partly:
+        names = _names(partly, "{} ({item.faces_flipped:,} of {item.faces:,})")
+        which = "object" if len(partly) == 1 else "objects"
+        sentences.append(f"The fix flips some faces of the {which} {names}{_listed(report)}.")
+    return "".join(" " + sentence for sentence in sentences)
+
+
+def _open_objects(report: MeshReport) -> str:
+    """Which objects are open on their own, in words: empty unless there are several."""
+    if report.object_count < 2:
+        return ""
+    open_ones = [item for item in report.objects if not item.closed and item.faces]
+    if not open_ones:
+        return ""
+    if len(open_ones) == 1:
+        return f" The object {open_ones[0].name!r} is not closed on its own{_listed(report)}."
+    return f" The objects {_names(open_ones)} are not closed on their own{_listed(report)}."
+
+
+def _weld_argument(report: MeshReport) -> str:
+    """``, weld=1e-06`` when the report was made with a weld: the snippets repeat it."""
+    return "" if report.weld is None else f", weld={report.weld.tolerance!r}"
 
 
 def problems(report: MeshReport) -> list[Problem]:
@@ -45,9 +117,10 @@ def _winding(report: MeshReport) -> Problem | None:
         "Faces are wound against their neighbours",
         f"Across some shared edges the two faces run the same way, so their normals point to "
         f"opposite sides of the surface: shading shows dark patches, and the volume is "
-        f"meaningless. Making the winding consistent flips {_count(flipped, 'face')}.",
+        f"meaningless. Making the winding consistent flips {_count(flipped, 'face')}."
+        + _flipped_objects(report),
         "Download the fixed mesh, or call orient() in your own code.",
-        "import mesh_normal as mn\n\nfixed = mn.orient(vertices, faces)\n"
+        f"import mesh_normal as mn\n\nfixed = mn.orient(vertices, faces{_weld_argument(report)})\n"
         "faces = fixed.faces  # fixed.flipped marks the faces that were reversed",
     )
 
@@ -62,7 +135,7 @@ def _inward(report: MeshReport) -> Problem | None:
         "The winding is consistent, but every part whose outside can be decided is wound "
         "clockwise seen from outside: "
         "normals point into the solid, back-face culling hides the outside, and a closed "
-        "part's signed volume is negative.",
+        "part's signed volume is negative." + _flipped_objects(report),
         "Download the fixed mesh (every face reversed), or reverse each face's winding.",
         "faces = faces[:, ::-1]  # reverses every face: A, B, C becomes C, B, A",
     )
@@ -75,9 +148,10 @@ def _mixed(report: MeshReport) -> Problem | None:
         "mixed",
         "error",
         "Some parts point outward, others inward",
-        "Each part is wound consistently, but not all of them face out.",
+        "Each part is wound consistently, but not all of them face out." + _flipped_objects(report),
         "Download the fixed mesh: each part is turned to face outward on its own.",
-        "import mesh_normal as mn\n\nfaces = mn.orient(vertices, faces).faces",
+        "import mesh_normal as mn\n\n"
+        f"faces = mn.orient(vertices, faces{_weld_argument(report)}).faces",
     )
 
 
@@ -111,9 +185,20 @@ def _open(report: MeshReport) -> Problem | None:
         "Some edges belong to one face only, so the surface has holes or borders. A volume "
         "is not defined, so which side is outside is decided by visibility: the side from "
         "which rays escape past the rest of the mesh (as libigl's reorient_facets_raycast "
-        "does). Where both sides see alike, nothing is turned.",
+        "does). Where both sides see alike, nothing is turned." + _open_objects(report),
         "If the mesh should be closed, fill the holes in your modeller (Blender: select "
-        "the border, then Fill). Open sheets such as terrain are fine as they are.",
+        "the border, then Fill). Open sheets such as terrain are fine as they are."
+        + _weld_hint(report),
+    )
+
+
+def _weld_hint(report: MeshReport) -> str:
+    if report.weld is not None and report.weld.tolerance > 0:
+        return ""
+    return (
+        " If its pieces should meet but miss each other by rounding, analyse it again with "
+        "a weld tolerance such as 1e-6 of the mesh's size (weld=1e-6 in Python and the API, "
+        "--weld 1e-6 on the command line)."
     )
 
 

@@ -19,6 +19,7 @@ import numpy as np
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
 
 from mesh_normal.orientation import Method, Verdict
+from mesh_normal.tolerances import WELD_LIMIT
 from mesh_normal.vertices import Weighting
 
 #: How many face indices (or components) a list in the report holds at most; counts are full.
@@ -188,6 +189,26 @@ class ObjectReport(_Model):
     faces_flipped: int = Field(ge=0, description="How many of its faces the fix reverses.")
 
 
+class Weld(_Model):
+    """The weld tolerance the topology used: vertices this close count as one point."""
+
+    tolerance: Finite = Field(
+        ge=0,
+        le=WELD_LIMIT,
+        description="The tolerance asked for, as a fraction of the bounding-box diagonal "
+        f"(0 to {WELD_LIMIT:g}).",
+    )
+    distance: Measure = Field(
+        description="What it meant for this mesh: the tolerance times the diagonal, in the "
+        "file's units; null beyond the double range."
+    )
+    joined_vertices: int = Field(
+        ge=0,
+        description="How many vertices it joined beyond exact equality: the points with "
+        "identical coordinates, less the points after the weld.",
+    )
+
+
 class MeshReport(_Model):
     """The report on one mesh file: counts, checks, the fix and the diagnosis in plain words."""
 
@@ -238,6 +259,10 @@ class MeshReport(_Model):
     objects: list[ObjectReport] = Field(
         description=f"The first {INDEX_LIST_LIMIT} objects, in the order of their first face; "
         "empty when the file has none."
+    )
+    weld: Weld | None = Field(
+        description="The weld tolerance the edges, parts, winding and fix were judged with; "
+        "null when off (the default: only identical coordinates are one point).",
     )
     notes: list[str] = Field(description="What the reader noticed about the file, in words.")
     problems: list[Problem] = Field(description="Each problem found, the most serious first.")

@@ -74,3 +74,11 @@ FLOAT32_UNIT = 2.0**-24
 #: rounding the patch's coordinates (and computing the volume) could move it; see
 #: :mod:`mesh_normal.orientation`. Below that its sign may be noise, and nothing is flipped.
 ORIENT_EVIDENCE = 4.0
+
+#: The largest weld tolerance that the report, the fix and their front ends accept, as a
+#: fraction of the bounding-box diagonal (``mn.analyse(..., weld=)``, ``--weld``, the API's
+#: ``weld``). A weld is for pieces that miss each other by rounding: a float32 step is about
+#: 6e-8 of a coordinate, six decimals in an OBJ 1e-6 of a unit; 1e-6 to 1e-4 covers them. Past
+#: one percent of the mesh's size a weld no longer repairs rounding but closes real gaps and
+#: collapses small features (thin walls, fine detail), which is modelling, not checking.
+WELD_LIMIT = 0.01

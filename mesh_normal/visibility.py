@@ -104,7 +104,7 @@ def visible_sides(
     score = np.full(patches, np.nan)
     chosen = np.flatnonzero(candidates)
     low, high = points.min(axis=0, initial=0.0), points.max(axis=0, initial=0.0)
-    centre, half = (low + high) / 2, float(np.max(high - low)) / 2
+    centre, half = low / 2 + high / 2, float(np.max(high / 2 - low / 2))  # no overflow
     if len(chosen) == 0 or not half > 0 or not math.isfinite(half):
         return score
     most = RAYS // (2 * DIRECTIONS * FEWEST)

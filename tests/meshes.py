@@ -182,6 +182,21 @@ def separate_sides_cube(
     return np.concatenate(vertices), np.concatenate(faces)
 
 
+def stepped_sides_cube() -> tuple[np.ndarray, np.ndarray]:
+    """:func:`separate_sides_cube` (96 vertices, 56 positions) whose sides miss each other.
+
+    The two sides across x keep their float32 coordinates, the two across y move one float32
+    step up in every coordinate, the two across z one step down: every shared corner and edge
+    point then has copies a step or two apart, none identical, so without a weld the cube is
+    six open sides; a weld of 1e-6 joins the 96 vertices into the 56 points again.
+    """
+    vertices, faces = separate_sides_cube()
+    points = vertices.astype(np.float32).reshape(6, -1, 3)
+    points[2:4] = np.nextafter(points[2:4], np.float32(np.inf))
+    points[4:6] = np.nextafter(points[4:6], np.float32(-np.inf))
+    return points.reshape(-1, 3).astype(np.float64), faces
+
+
 def icosphere(subdivisions: int = 2, radius: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
     """trimesh's icosphere, wound outward."""
     mesh = trimesh.creation.icosphere(subdivisions=subdivisions, radius=radius)

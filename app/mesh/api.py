@@ -14,7 +14,14 @@ from fastapi import APIRouter, Query, Request
 from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import Response
 
-from app.mesh.uploads import UPLOAD_BODY, Upload, read_upload
+from app.mesh.uploads import (
+    UPLOAD_BODY,
+    UPLOAD_WELD_BODY,
+    WELD_HELP,
+    Upload,
+    read_upload,
+    upload_weld,
+)
 from app.web.errors import ERROR_RESPONSES, ApiError
 from app.web.jsonio import FastJSONResponse
 from mesh_normal.analysis import analyse_mesh, build_report, flips_by_component
@@ -24,6 +31,7 @@ from mesh_normal.files.formats import FORMATS, WRITABLE
 from mesh_normal.files.write import unkept
 from mesh_normal.orientation import orient
 from mesh_normal.report import MeshReport
+from mesh_normal.tolerances import WELD_LIMIT
 from mesh_normal.vertices import Weighting
 
 router = APIRouter(
@@ -38,6 +46,12 @@ router = APIRouter(
         },
     },
 )
+
+#: The optional weld tolerance as a query parameter (for a raw body; multipart sends the field).
+WeldQuery = Annotated[
+    float | None,
+    Query(ge=0, le=WELD_LIMIT, allow_inf_nan=False, description=WELD_HELP),
+]
 
 #: The library's WRITABLE, spelled out because FastAPI and mypy need a Literal (a test pins it).
 FixFormat = Literal["ply", "stl", "obj"]
@@ -71,17 +85,18 @@ def attachment(name: str) -> dict[str, str]:
     return {"content-disposition": f'attachment; filename="{name}"'}
 
 
-@router.post("", openapi_extra=UPLOAD_BODY, response_model=MeshReport)
-async def post_mesh(request: Request) -> FastJSONResponse:
+@router.post("", openapi_extra=UPLOAD_WELD_BODY, response_model=MeshReport)
+async def post_mesh(request: Request, weld: WeldQuery = None) -> FastJSONResponse:
     """Report on a mesh file: counts, area, volume, winding, orientation and problems."""
     upload = await read_upload(request)
+    tolerance = upload_weld(upload, weld)
     # The model is rendered once, by pydantic-core, with non-finite floats as null; returning
     # a response skips FastAPI's second validation and encoding of the same model.
-    return FastJSONResponse(await run_in_threadpool(_report, upload))
+    return FastJSONResponse(await run_in_threadpool(_report, upload, tolerance))
 
 
-def _report(upload: Upload) -> MeshReport:
-    return build_report(analyse_mesh(load(upload), upload.filename, upload.size))
+def _report(upload: Upload, weld: float | None) -> MeshReport:
+    return build_report(analyse_mesh(load(upload), upload.filename, upload.size, weld=weld))
 
 
 @router.post(
@@ -125,15 +140,17 @@ async def post_mesh_normals(
 
 @router.post(
     "/fix",
-    openapi_extra=UPLOAD_BODY,
+    openapi_extra=UPLOAD_WELD_BODY,
     response_class=Response,
     responses={
         200: {
             "description": "The mesh with consistent, outward winding; vertices untouched. "
             "X-Faces-Flipped (a count), X-Component-Faces-Flipped (component:faces "
             "for the first 100 components changed) and X-Orientation-Before say "
-            "what changed. Vertex colours are kept where the format holds them (PLY in "
-            "their own type, OBJ as v x y z r g b); X-Dropped, present only when "
+            "what changed; X-Weld (the tolerance, present only when a weld was asked for) "
+            "says how the parts were judged, as in the report. Vertex colours are kept "
+            "where the format holds them (PLY in their own type, OBJ as v x y z r g b); "
+            "X-Dropped, present only when "
             "something was left out, names what the chosen format could not hold, e.g. "
             '"vertex colours (STL holds none)" (several joined by "; ").',
             "content": {FORMATS[name].media_type: {} for name in WRITABLE},
@@ -151,19 +168,24 @@ async def post_mesh_fix(
             f"else {WRITABLE[0]}",
         ),
     ] = None,
+    weld: WeldQuery = None,
 ) -> Response:
     """The mesh file with consistent, outward winding (the vertices untouched)."""
     upload = await read_upload(request)
+    tolerance = upload_weld(upload, weld)
 
     def work() -> tuple[bytes, str, dict[str, str]]:
         mesh = load(upload)
         chosen = file_format or (mesh.format if mesh.format in WRITABLE else WRITABLE[0])
-        fixed = orient(mesh.checked())
+        # The same weld as the report's, so that the file is the fix the report described.
+        fixed = orient(mesh.checked(), weld=tolerance)
         headers = {
             "x-faces-flipped": str(int(np.count_nonzero(fixed.flipped))),
             "x-component-faces-flipped": flips_by_component(fixed),
             "x-orientation-before": fixed.orientation,
         }
+        if tolerance is not None:
+            headers["x-weld"] = repr(tolerance)
         dropped = unkept(chosen, mesh.vertex_colors)
         if dropped:  # do no harm: never leave data out without saying so
             headers["x-dropped"] = "; ".join(dropped)

@@ -15,8 +15,11 @@ if TYPE_CHECKING:
 def mesh_figures(analysis: MeshAnalysis) -> dict[str, Any]:
     """The page's figures for one analysed mesh: ``{"view", "histogram", "histogram_figure"}``."""
     mesh, topology = analysis.mesh, analysis.topology
+    # The edges name each point by its first vertex (see mesh_normal.topology): so do the faces
+    # here, or a face on a boundary whose corners are later copies would look fine.
+    faces = analysis.faces_by_position()
     classes = face_classes(
-        mesh.faces,
+        faces,
         len(mesh.vertices),
         analysis.faces.degenerate,
         analysis.orientation.flipped,
@@ -25,7 +28,7 @@ def mesh_figures(analysis: MeshAnalysis) -> dict[str, Any]:
     )
     view = build_view(
         mesh.vertices,
-        mesh.faces,
+        faces,
         analysis.faces.normals,
         classes,
         topology.boundary_edge_list,

@@ -30,6 +30,7 @@ from mesh_normal.files import WRITABLE, LoadedMesh
 from mesh_normal.files.formats import ACCEPTED_SUFFIXES, COMPANION_SUFFIXES
 from mesh_normal.files.formats import FORMATS as MESH_FORMATS
 from mesh_normal.files.write import unkept
+from mesh_normal.tolerances import WELD_LIMIT
 from mesh_normal.vertices import Weighting
 
 router = APIRouter(include_in_schema=False)
@@ -49,6 +50,7 @@ def _form_context(request: Request) -> dict[str, Any]:
         "accept": ",".join((*ACCEPTED_SUFFIXES, *COMPANION_SUFFIXES)),
         "limit": limit,
         "limit_text": size_text(limit),
+        "weld_limit": WELD_LIMIT,
         "report": None,
         "error": None,
     }
@@ -57,8 +59,9 @@ def _form_context(request: Request) -> dict[str, Any]:
 def _report_context(upload: Upload, base_url: str) -> dict[str, Any]:
     """Analyse the upload (in a worker thread): the report, its figures and the downloads."""
     mesh = load(upload)
-    analysis = analyse_mesh(mesh, upload.filename, upload.size)
+    analysis = analyse_mesh(mesh, upload.filename, upload.size, weld=upload.weld)
     report = build_report(analysis)
+    weld = "" if upload.weld is None else f" -F weld={upload.weld!r}"
     return {
         "files": files_read(upload, mesh.files),
         "fix_dropped": fix_dropped(mesh),
@@ -71,6 +74,8 @@ def _report_context(upload: Upload, base_url: str) -> dict[str, Any]:
         "stem": stem(upload.filename),
         "curl": "curl "
         + "".join(f"-F {shlex.quote('file=@' + sent)} " for sent in upload.names)
+        + weld.lstrip()
+        + (" " if weld else "")
         + f"{base_url}api/mesh",
         "sent": upload.names,
         "kinds": KINDS,

@@ -11,6 +11,8 @@ it is closed. We close it as soon as its bytes are read, so no upload outlives i
 
 from __future__ import annotations
 
+import copy
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -19,10 +21,11 @@ from starlette.datastructures import UploadFile
 from starlette.exceptions import HTTPException
 
 from app.config import UPLOAD_FILES
-from app.web.errors import ApiError
+from app.web.errors import ApiError, clip
 from mesh_normal.files.archive import mesh_name
 from mesh_normal.files.errors import MeshFileError
 from mesh_normal.files.formats import ACCEPTED_SUFFIXES
+from mesh_normal.tolerances import WELD_LIMIT
 
 #: A tetrahedron as OBJ text: the example upload in the API documentation.
 EXAMPLE_FILE = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
@@ -67,6 +70,25 @@ UPLOAD_BODY: dict[str, Any] = {
 }
 
 
+#: What the optional ``weld`` input means, for the API documentation.
+WELD_HELP = (
+    "Optional, off by default: also treat vertices closer than this fraction of the "
+    f"bounding-box diagonal (0 to {WELD_LIMIT:g}; 1e-6 covers float32 rounding) as one point, "
+    "for files whose pieces miss each other by rounding. The vertices are kept."
+)
+
+#: UPLOAD_BODY with the optional multipart field ``weld``: the report and the fix take it.
+UPLOAD_WELD_BODY: dict[str, Any] = copy.deepcopy(UPLOAD_BODY)
+UPLOAD_WELD_BODY["requestBody"]["content"]["multipart/form-data"]["schema"]["properties"][
+    "weld"
+] = {
+    "type": "number",
+    "minimum": 0,
+    "maximum": WELD_LIMIT,
+    "description": WELD_HELP + " With a raw body, send it as the query parameter weld.",
+}
+
+
 @dataclass(frozen=True, slots=True)
 class Upload:
     """One mesh file, or several files read as one mesh (``parts``, by name; ``data`` is then
@@ -75,14 +97,15 @@ class Upload:
     data: bytes
     filename: str | None
     parts: tuple[tuple[str | None, bytes], ...] = ()
+    weld: float | None = None  # the multipart field weld, checked
 
     @classmethod
-    def several(cls, parts: tuple[tuple[str | None, bytes], ...]) -> Upload:
+    def several(cls, parts: tuple[tuple[str | None, bytes], ...], weld: float | None) -> Upload:
         try:
             filename: str | None = mesh_name((name or "" for name, _ in parts), "")
         except MeshFileError:  # reading the files says what is wrong, in its own sentence
             filename = None
-        return cls(b"", filename, parts)
+        return cls(b"", filename, parts, weld)
 
     @property
     def size(self) -> int:
@@ -95,6 +118,33 @@ class Upload:
         if not self.parts:
             return [self.filename or "mesh"]
         return [name or "mesh" for name, _ in self.parts]
+
+
+def weld_field(text: str) -> float | None:
+    """The ``weld`` form field as a number 0 to WELD_LIMIT; an empty field is off."""
+    if not text.strip():
+        return None
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and 0 <= value <= WELD_LIMIT):
+        raise ApiError(
+            422,
+            f"weld must be a number from 0 to {WELD_LIMIT:g} (a fraction of the bounding-box "
+            f"diagonal), not {clip(text)!r}.",
+            "weld",
+        )
+    return value
+
+
+def upload_weld(upload: Upload, query: float | None) -> float | None:
+    """The weld of a request: the form field or the query parameter, not both."""
+    if upload.weld is not None and query is not None:
+        raise ApiError(
+            422, "weld is given twice: send it as a form field or a query parameter.", "weld"
+        )
+    return query if upload.weld is None else upload.weld
 
 
 async def read_upload(request: Request) -> Upload:
@@ -133,14 +183,18 @@ async def _multipart(request: Request) -> Upload:
             given = "is missing" if not items else "must be a file, not a text field"
             raise ApiError(422, f"file {given}: send the mesh as the multipart field file.", "file")
         files = [item for item in items if isinstance(item, UploadFile)]
+        weld = form.get("weld")
+        if weld is not None and not isinstance(weld, str):
+            raise ApiError(422, "weld must be a text field holding a number, not a file.", "weld")
         parts = tuple([(item.filename, await item.read()) for item in files])
     finally:
         await form.close()  # the spooled temporary files go now, not at garbage collection
+    tolerance = None if weld is None else weld_field(weld)
     if len(parts) > 1:
-        return Upload.several(parts)
+        return Upload.several(parts, tolerance)
     filename, data = parts[0]
     if not data:
         raise ApiError(
             422, f"The uploaded file {filename or ''} is empty.".replace("  ", " "), "file"
         )
-    return Upload(data, filename)
+    return Upload(data, filename, weld=tolerance)

@@ -16,6 +16,7 @@
   const progressText = document.getElementById("mesh-progress-text");
   const status = document.getElementById("mesh-status");
   const output = document.getElementById("mesh-output");
+  const weldInput = document.getElementById("mesh-weld");
   const limit = Number(form.dataset.limit) || Infinity;
   const PLOT_CONFIG = {
     displaylogo: false, responsive: true, displayModeBar: window.innerWidth < 600 ? false : "hover",
@@ -86,9 +87,15 @@
           form.dataset.limitText + ".", "error");
       return;
     }
+    if (weldInput && !weldInput.validity.valid) {
+      say("The weld tolerance must be a number from 0 to " + weldInput.max + ", or empty.", "error");
+      weldInput.focus();
+      return;
+    }
     if (request) request.abort();
     files = list;
     const body = formData(list);
+    if (weldInput && weldInput.value !== "") body.append("weld", weldInput.value);
     const xhr = new XMLHttpRequest();
     request = xhr;
     xhr.open("POST", "/mesh?part=report");
@@ -207,13 +214,14 @@
     return match ? match[1] : fallback;
   }
 
-  function fetchDownload(path, params, fallback, button) {
+  function fetchDownload(path, params, fallback, button, fields) {
     if (!files.length && input.files.length) files = Array.prototype.slice.call(input.files);
     if (!files.length) {
       downloadStatus("Choose the file again: the page no longer holds it.", "error");
       return Promise.resolve();
     }
     const body = formData(files);
+    Object.keys(fields || {}).forEach(function (key) { body.append(key, fields[key]); });
     if (button) button.disabled = true;
     downloadStatus("Preparing " + fallback + "…", "");
     return fetch(path + "?" + new URLSearchParams(params).toString(), { method: "POST", body: body })
@@ -260,7 +268,10 @@
 
   function downloadFix(button) {
     const format = document.getElementById("fix-format").value;
-    return fetchDownload("/api/mesh/fix", { format: format }, "fixed." + format, button);
+    // The weld the report was made with, so that the file is the fix the report describes.
+    const view = document.getElementById("mesh-report-view");
+    const fields = view && view.dataset.weld ? { weld: view.dataset.weld } : {};
+    return fetchDownload("/api/mesh/fix", { format: format }, "fixed." + format, button, fields);
   }
 
   function downloadReport() {
@@ -354,6 +365,8 @@
     if (event.target.id === "normals-kind") syncFields();
     if (event.target.id === "fix-format") syncDropped();
   });
+  // A new weld tolerance analyses the file the page holds again.
+  if (weldInput) weldInput.addEventListener("change", function () { if (file) upload(file); });
 
   // A report the server rendered (the form posted without this script) is drawn too.
   if (document.getElementById("mesh-report")) { syncFields(); drawFigures(); }

@@ -14,7 +14,7 @@ from mesh_normal import vertex_normals
 from mesh_normal.files import read_mesh, write_mesh
 from mesh_normal.topology import mesh_topology
 from tests.browser.conftest import ConsoleWatch, NewPage
-from tests.meshes import CUBE_ONE_FLIPPED_OBJ
+from tests.meshes import CUBE_ONE_FLIPPED_OBJ, stepped_sides_cube
 from tests.paths import DATA, ROOT
 
 pytestmark = pytest.mark.browser
@@ -115,6 +115,31 @@ def test_downloads_send_the_file_again(page: Page) -> None:
     with page.expect_download() as info:
         page.get_by_role("button", name="Download report (JSON)").click()
     assert info.value.suggested_filename == "cube-report.json"
+
+
+def test_a_weld_analyses_again_and_goes_with_the_fix(page: Page) -> None:
+    vertices, faces = stepped_sides_cube()
+    data = write_mesh(vertices, faces[:, ::-1], "ply")  # six sides a step apart, inward
+    open_mesh_page(page)
+    page.set_input_files(
+        "#mesh-file", files=[{"name": "s.ply", "mimeType": "text/plain", "buffer": data}]
+    )
+    wait_for_report(page)
+    expect(page.locator("#problem-open")).to_be_visible()
+    expect(page.locator("#mesh-weld-used")).to_have_count(0)
+    page.locator(".mesh-options summary").click()
+    page.fill("#mesh-weld", "0.5")
+    page.locator("#mesh-weld").dispatch_event("change")
+    expect(page.locator("#mesh-status")).to_contain_text("from 0 to 0.01")
+    page.fill("#mesh-weld", "1e-6")
+    page.locator("#mesh-weld").dispatch_event("change")  # the held file is analysed again
+    expect(page.locator("#mesh-weld-used")).to_contain_text("joined 40 vertices")
+    expect(page.locator("#problem-inward")).to_be_visible()
+    with page.expect_download() as info:
+        page.locator("#problem-inward button[data-mesh-download=fix]").click()
+    fixed = read_mesh(Path(info.value.path()).read_bytes(), "fixed.ply")
+    # Every face turned (A, C, B), as the report said: the file's own winding again.
+    assert np.array_equal(fixed.faces, faces[:, ::-1][:, [0, 2, 1]])
 
 
 def test_a_bad_crease_angle_and_a_broken_file_are_said_inline(

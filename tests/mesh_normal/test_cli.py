@@ -13,8 +13,15 @@ import pytest
 
 from mesh_normal import face_normals, vertex_normals
 from mesh_normal.cli import main
-from mesh_normal.files import read_mesh
-from tests.meshes import CUBE_OBJ, CUBE_OBJ_FACES, CUBE_ONE_FLIPPED_OBJ, OPEN_BOX_OBJ, TETRA_OBJ
+from mesh_normal.files import read_mesh, write_mesh
+from tests.meshes import (
+    CUBE_OBJ,
+    CUBE_OBJ_FACES,
+    CUBE_ONE_FLIPPED_OBJ,
+    OPEN_BOX_OBJ,
+    TETRA_OBJ,
+    stepped_sides_cube,
+)
 
 
 @pytest.fixture
@@ -196,3 +203,72 @@ def test_face_normals_ply_carries_them_per_face(cube: Path, tmp_path: Path) -> N
     np.testing.assert_array_equal(
         written.file_face_normals, face_normals(mesh.vertices, mesh.faces).normals
     )
+
+
+# --- --weld -----------------------------------------------------------------------------------
+
+
+@pytest.fixture
+def stepped(tmp_path: Path) -> Path:
+    """The cube of six sides a float32 step apart, wound inward, as a float64 PLY."""
+    vertices, faces = stepped_sides_cube()
+    path = tmp_path / "stepped.ply"
+    path.write_bytes(write_mesh(vertices, faces[:, ::-1], "ply"))
+    return path
+
+
+def test_analyze_with_a_weld_says_so(stepped: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    # Six open sides, each seen from outside to face inward: a problem even without the weld.
+    assert main(["analyze", str(stepped)]) == 1
+    plain = capsys.readouterr().out
+    assert "6 component(s)" in plain and "open" in plain
+    assert not any(line.startswith("weld ") for line in plain.splitlines())
+    assert "--weld 1e-6 on the command line" in plain  # the open mesh suggests it
+    assert main(["analyze", "--weld", "1e-6", str(stepped)]) == 1  # one closed shell, inward
+    out = capsys.readouterr().out.splitlines()
+    assert "1 component(s)" in out[0] and "orientation inward, watertight" in out[1]
+    assert out[2].startswith("weld 1e-06 of the diagonal (") and out[2].endswith(
+        "): 40 vertices joined beyond exact equality"
+    )
+    assert out[-1].startswith("To fix the winding: mesh-normal fix --weld 1e-06 stepped.ply")
+    assert main(["analyze", "--json", "--weld", "1e-6", str(stepped)]) == 1
+    assert json.loads(capsys.readouterr().out)["weld"]["joined_vertices"] == 40
+
+
+def test_fix_with_the_weld_writes_what_the_report_described(
+    stepped: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "fixed.ply"
+    assert main(["fix", "--weld", "1e-6", str(stepped), str(out)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].startswith("flipped 108 of 108 faces") and "weld 1e-06" in lines[1]
+    before, after = read_mesh(stepped.read_bytes(), "s.ply"), read_mesh(out.read_bytes(), "f.ply")
+    np.testing.assert_array_equal(after.vertices, before.vertices)  # kept, in their order
+    np.testing.assert_array_equal(after.faces, before.faces[:, [0, 2, 1]])
+    assert main(["analyze", "--weld", "1e-6", str(out)]) == 0
+    assert "No problems found." in capsys.readouterr().out
+    # Without it: six open sides, decided one by one by visibility, turned all the same.
+    assert main(["fix", str(stepped), str(out)]) == 0
+    assert capsys.readouterr().out.startswith("flipped 108 of 108 faces")
+
+
+@pytest.mark.parametrize("command", ["analyze", "fix"])
+@pytest.mark.parametrize("value", ["-1e-6", "0.02", "nan", "inf", "abc"])
+def test_a_bad_weld_is_a_usage_error_naming_it(
+    command: str, value: str, cube: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    argv = [command, f"--weld={value}", str(cube)] + (
+        [str(tmp_path / "o.ply")] * (command == "fix")
+    )
+    with pytest.raises(SystemExit) as stop:
+        main(argv)
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    assert "argument --weld: must be a number from 0 to 0.01" in err and repr(value) in err
+
+
+def test_the_weld_option_is_explained(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit):
+        main(["fix", "--help"])
+    help_text = " ".join(capsys.readouterr().out.split())
+    assert "--weld FRACTION" in help_text and "of the bounding-box diagonal" in help_text

@@ -12,6 +12,7 @@ from mesh_normal.diagnosis import CHECKS, Problem, ProblemCode, problems
 from mesh_normal.files import read_mesh
 from mesh_normal.report import FileNormals, MeshReport
 from tests.meshes import CUBE_OBJ, CUBE_ONE_FLIPPED_OBJ
+from tests.paths import DATA
 
 
 def clean() -> MeshReport:
@@ -146,3 +147,101 @@ def test_the_python_snippets_use_the_public_api_and_run(item: Problem) -> None:
     assert results, "the snippet assigns faces or normals"
     assert all(isinstance(scope[name], np.ndarray) for name in results)
     assert all(len(scope[name]) for name in results)
+
+
+# --- naming the objects -----------------------------------------------------------------------
+
+
+def two_objects(turned: str | None = None, drop: str | None = None) -> MeshReport:
+    """tests/data/two_objects.obj (a cube and a tetrahedron on its corner), with the object
+    ``turned`` wound inside out (every face reversed), or ``drop``'s first face left out."""
+    lines, name, dropped = [], "", False
+    for line in (DATA / "two_objects.obj").read_text().splitlines():
+        if line.startswith("o "):
+            name = line.split()[1]
+        if line.startswith("f ") and name == turned:
+            line = " ".join(["f", *line.split()[:0:-1]])
+        if line.startswith("f ") and name == drop and not dropped:
+            dropped = True
+            continue
+        lines.append(line)
+    data = "\n".join(lines).encode()
+    return build_report(analyse_mesh(read_mesh(data, "two.obj"), "two.obj", len(data)))
+
+
+def detail(report: MeshReport, code: str) -> str:
+    [item] = [item for item in report.problems if item.code == code]
+    return item.detail
+
+
+def test_the_inside_out_object_is_named() -> None:
+    report = two_objects(turned="tetra")
+    assert report.orientation == "mixed"
+    assert "The object 'tetra' is wound inward: the fix flips its 4 faces." in detail(
+        report, "mixed"
+    )
+    assert "'cube'" not in detail(report, "mixed")
+    report = two_objects(turned="cube")
+    assert "The object 'cube' is wound inward: the fix flips its 12 faces." in detail(
+        report, "mixed"
+    )
+    assert "tetra" not in detail(report, "mixed")
+
+
+def test_every_object_inward_names_them_all() -> None:
+    data = (DATA / "two_objects.obj").read_text()
+    turned = "\n".join(
+        " ".join(["f", *line.split()[:0:-1]]) if line.startswith("f ") else line
+        for line in data.splitlines()
+    ).encode()
+    report = build_report(analyse_mesh(read_mesh(turned, "t.obj"), "t.obj", len(turned)))
+    assert report.orientation == "inward"
+    assert (
+        "The objects 'cube' (12 faces) and 'tetra' (4 faces) are wound inward: the fix flips "
+        "their faces." in detail(report, "inward")
+    )
+
+
+def test_a_clean_file_with_objects_names_none() -> None:
+    report = two_objects()
+    assert all("'cube'" not in item.detail for item in report.problems)
+
+
+def test_an_object_with_some_faces_flipped_is_named_with_its_count() -> None:
+    from tests.mesh_normal.test_objects import two_cubes
+    from tests.meshes import CUBE_OBJ_FACES
+
+    text = two_cubes([CUBE_OBJ_FACES[0][::-1], *CUBE_OBJ_FACES[1:]], "lid").encode()
+    report = build_report(analyse_mesh(read_mesh(text, "c.obj"), "c.obj", len(text)))
+    assert "The fix flips some faces of the object 'lid' (1 of 12)." in detail(report, "winding")
+
+
+def test_many_inward_objects_are_named_up_to_three_then_counted() -> None:
+    from tests.mesh_normal.test_objects import cube_points, faces
+    from tests.meshes import CUBE_OBJ_FACES
+
+    inward = [face[::-1] for face in CUBE_OBJ_FACES]
+    text = "".join(
+        f"o box{i}\n" + cube_points(3 * i) + faces(inward if i else CUBE_OBJ_FACES, 8 * i)
+        for i in range(6)
+    ).encode()
+    report = build_report(analyse_mesh(read_mesh(text, "b.obj"), "b.obj", len(text)))
+    assert (
+        "The objects 'box1' (12 faces), 'box2' (12 faces), 'box3' (12 faces) and 2 more are "
+        "wound inward" in detail(report, "mixed")
+    )
+
+
+def test_an_open_object_is_named() -> None:
+    report = two_objects(drop="tetra")
+    assert "The object 'tetra' is not closed on its own." in detail(report, "open")
+    assert "'cube'" not in detail(report, "open")
+
+
+def test_the_snippets_repeat_the_weld() -> None:
+    flipped = changed(
+        orientation="mixed", weld={"tolerance": 1e-6, "distance": 1.7e-6, "joined_vertices": 3}
+    )
+    [item] = problems(flipped)
+    assert item.python is not None and "mn.orient(vertices, faces, weld=1e-06)" in item.python
+    assert "weld=" not in (problems(changed(orientation="mixed"))[0].python or "")

@@ -15,10 +15,11 @@ from hypothesis import strategies as st
 
 from mesh_normal.checks import checked_mesh
 from mesh_normal.orientation import orient
-from mesh_normal.topology import mesh_topology, same_points
+from mesh_normal.topology import mesh_topology, row_hashes, same_points
 from tests.meshes import (
     HARD_CASES,
     far_triangle,
+    icosphere,
     load,
     random_rotation,
     separate_sides_cube,
@@ -316,3 +317,14 @@ def test_a_subnormal_weld_joins_nothing_beyond_equality(weld: float) -> None:
         warnings.simplefilter("error")
         found = orient(vertices, np.concatenate([faces, faces + 4]), weld=weld)
     assert found.topology.components == 2
+
+
+@pytest.mark.parametrize("kind", ["grid cells", "sphere"])
+def test_the_position_hash_keeps_rows_apart(kind: str) -> None:
+    """Whole numbers (a weld's cells) and a subdivided sphere's vertices get distinct keys."""
+    if kind == "grid cells":
+        rows = np.indices((60, 60, 60)).reshape(3, -1).T.astype(np.float64) + 1e5
+    else:
+        rows, _ = icosphere(6)
+    keys = row_hashes((rows + 0.0).view(np.uint64))
+    assert len(np.unique(keys)) >= len(rows) - 1

@@ -8,6 +8,7 @@ import math
 from pathlib import Path
 from typing import Any, get_args
 
+import numpy as np
 import pytest
 from pydantic import BaseModel, ValidationError
 
@@ -15,7 +16,14 @@ import mesh_normal as mn
 from mesh_normal.analysis import analyse, analyse_mesh, build_report
 from mesh_normal.files import SUFFIXES, read_mesh, write_mesh
 from mesh_normal.report import Bounds, FileInfo, MeshFormat, MeshReport
-from tests.meshes import CUBE_OBJ, CUBE_ONE_FLIPPED_OBJ, HUGE_TETRA_OBJ, OPEN_BOX_OBJ, TETRA_OBJ
+from tests.meshes import (
+    CUBE_OBJ,
+    CUBE_ONE_FLIPPED_OBJ,
+    HUGE_TETRA_OBJ,
+    OPEN_BOX_OBJ,
+    TETRA_OBJ,
+    stepped_sides_cube,
+)
 
 #: The report's keys, in the order the JSON has always had them.
 KEYS = [
@@ -41,6 +49,7 @@ KEYS = [
     "file_normals",
     "object_count",
     "objects",
+    "weld",
     "notes",
     "problems",
 ]
@@ -254,3 +263,90 @@ def test_an_unreadable_source_raises_the_file_error(tmp_path: Path) -> None:
     (tmp_path / "cube.obj").write_text(CUBE_OBJ)
     with (tmp_path / "cube.obj").open() as text, pytest.raises(TypeError, match="binary mode"):
         mn.analyse(text)  # type: ignore[arg-type]
+
+
+# --- the weld tolerance -----------------------------------------------------------------------
+
+
+def stepped_cube(shift: float = 0.0, scale: float = 1.0, inward: bool = False) -> mn.LoadedMesh:
+    """The cube of six sides a float32 step apart (tests.meshes), moved and scaled."""
+    vertices, faces = stepped_sides_cube()
+    return mn.LoadedMesh(vertices * scale + shift, faces[:, ::-1] if inward else faces, "ply", 108)
+
+
+def test_without_a_weld_the_stepped_cube_is_six_open_sides() -> None:
+    report = mn.analyse(stepped_cube())
+    assert report.weld is None
+    assert (report.watertight, report.components, report.boundary_edges) == (False, 6, 72)
+    # Six open sides; each sees the others on its inner side: outward by visibility.
+    assert report.volume is None and report.orientation == "outward"
+    assert [c.method for c in report.fix.components] == ["visibility"] * 6
+    assert [p.code for p in report.problems] == ["open", "components"]
+    assert "weld" in report.problems[0].action  # the open mesh suggests one
+
+
+def test_a_weld_makes_the_stepped_cube_one_closed_outward_shell() -> None:
+    vertices, _ = stepped_sides_cube()
+    report = mn.analyse(stepped_cube(), weld=1e-6)
+    assert (report.watertight, report.components, report.boundary_edges) == (True, 1, 0)
+    assert report.winding_consistent and report.orientation == "outward"
+    assert report.volume == pytest.approx(1.0, rel=1e-6)
+    assert report.problems == [] and report.fix.faces_flipped == 0
+    assert report.weld is not None and report.weld.tolerance == 1e-6
+    diagonal = math.dist(vertices.min(axis=0), vertices.max(axis=0))
+    assert report.weld.distance == pytest.approx(1e-6 * diagonal, rel=1e-12)
+    # 96 vertices, none identical, become the cube's 56 points: 40 joined.
+    assert report.weld.joined_vertices == 40
+    assert report.vertices == 96  # the vertices are kept
+    inward = mn.analyse(stepped_cube(inward=True), weld=1e-6)
+    assert inward.orientation == "inward" and inward.fix.faces_flipped == 108
+    assert [p.code for p in inward.problems] == ["inward"]
+
+
+@pytest.mark.parametrize(("shift", "scale"), [(1e4, 1.0), (1e8, 1.0), (0.0, 1e3), (-1e4, 1e-3)])
+def test_the_weld_is_relative_to_the_mesh(shift: float, scale: float) -> None:
+    report = mn.analyse(stepped_cube(shift, scale), weld=1e-6)
+    assert (report.watertight, report.components, report.orientation) == (True, 1, "outward")
+    assert report.fix.faces_flipped == 0
+    inward = mn.analyse(stepped_cube(shift, scale, inward=True), weld=1e-6)
+    assert inward.orientation == "inward" and inward.fix.faces_flipped == 108
+    assert report.weld is not None and report.weld.distance is not None
+    original = mn.analyse(stepped_cube(), weld=1e-6).weld
+    assert original is not None and original.distance is not None
+    assert report.weld.distance == pytest.approx(original.distance * scale, rel=1e-6)
+    # Far out, float64 rounding may already merge a few copies near zero: fewer to join.
+    assert 0 < report.weld.joined_vertices <= 40
+    if shift == 0.0:
+        assert report.weld.joined_vertices == 40
+
+
+def test_a_weld_of_zero_is_shown_and_joins_nothing() -> None:
+    report = mn.analyse(stepped_cube(), weld=0.0)
+    assert report.weld is not None
+    assert (report.weld.tolerance, report.weld.distance, report.weld.joined_vertices) == (0, 0, 0)
+    assert report.model_dump(exclude={"weld"}) == mn.analyse(stepped_cube()).model_dump(
+        exclude={"weld"}
+    )
+
+
+@pytest.mark.parametrize("weld", [-1e-6, 0.0101, 1.0, math.nan, math.inf, "1e-6", True])
+def test_a_weld_out_of_range_is_a_value_error_naming_it(weld: Any) -> None:
+    with pytest.raises(ValueError, match=r"^weld must be a number from 0 to 0\.01 .*\.$"):
+        mn.analyse(CUBE_OBJ.encode(), "cube.obj", weld=weld)
+
+
+def test_the_weld_in_the_json() -> None:
+    data = strict_json(mn.analyse(stepped_cube(), weld=1e-6).model_dump_json())
+    assert list(data["weld"]) == ["tolerance", "distance", "joined_vertices"]
+    assert data["weld"]["joined_vertices"] == 40
+    assert strict_json(mn.analyse(stepped_cube()).model_dump_json())["weld"] is None
+
+
+def test_a_weld_over_a_box_beyond_the_double_range_joins_nothing_wrongly() -> None:
+    # The box's extent (4e308) overflows; the distance does not, and nothing far apart joins.
+    vertices = np.array([[-1e308, 0, 0], [1e308, 0, 0], [0, 1e308, 0], [0, 0, 1e308]])
+    mesh = mn.LoadedMesh(vertices, np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]), "ply", 4)
+    report = mn.analyse(mesh, weld=0.01)
+    assert report.weld is not None and report.weld.joined_vertices == 0
+    assert report.weld.distance == pytest.approx(0.01 * math.sqrt(4 + 1 + 1) * 1e308)
+    assert report.watertight

@@ -615,3 +615,96 @@ def test_stored_corner_and_vertex_normals_are_compared(client: TestClient) -> No
     assert vertex["file_normals"]["kind"] == "vertex"
     assert vertex["file_normals"]["opposite"] == 8 and vertex["file_normals"]["agreeing"] == 0
     assert "file_normals" in [item["code"] for item in vertex["problems"]]
+
+
+# --- the weld tolerance -----------------------------------------------------------------------
+
+
+@pytest.fixture
+def stepped() -> bytes:
+    """The cube of six sides a float32 step apart, wound inward, as a float64 PLY."""
+    from mesh_normal.files import write_mesh
+    from tests.meshes import stepped_sides_cube
+
+    vertices, faces = stepped_sides_cube()
+    return write_mesh(vertices, faces[:, ::-1], "ply")
+
+
+def test_the_weld_field_joins_the_sides(client: TestClient, stepped: bytes) -> None:
+    plain = upload(client, "/api/mesh", stepped, "s.ply").json()
+    assert plain["weld"] is None and plain["components"] == 6 and not plain["watertight"]
+    response = client.post("/api/mesh", files={"file": ("s.ply", stepped)}, data={"weld": "1e-6"})
+    report = response.json()
+    assert (report["components"], report["watertight"], report["orientation"]) == (
+        1,
+        True,
+        "inward",
+    )
+    assert report["weld"]["tolerance"] == 1e-6 and report["weld"]["joined_vertices"] == 40
+    # A raw body takes it as a query parameter; an empty form field is off.
+    raw = client.post("/api/mesh", content=stepped, params={"filename": "s.ply", "weld": "1e-6"})
+    assert raw.json() == report
+    empty = client.post("/api/mesh", files={"file": ("s.ply", stepped)}, data={"weld": " "})
+    assert empty.json() == plain
+
+
+def test_the_fix_uses_the_same_weld(client: TestClient, stepped: bytes) -> None:
+    response = client.post(
+        "/api/mesh/fix", files={"file": ("s.ply", stepped)}, data={"weld": "1e-6"}
+    )
+    assert response.status_code == 200, response.text
+    assert response.headers["x-faces-flipped"] == "108" and response.headers["x-weld"] == "1e-06"
+    assert response.headers["x-orientation-before"] == "inward"
+    fixed, before = read_mesh(response.content, "f.ply"), read_mesh(stepped, "s.ply")
+    np.testing.assert_array_equal(fixed.vertices, before.vertices)
+    np.testing.assert_array_equal(fixed.faces, before.faces[:, [0, 2, 1]])
+    again = client.post(
+        "/api/mesh", files={"file": ("f.ply", response.content)}, data={"weld": "1e-6"}
+    )
+    assert again.json()["orientation"] == "outward" and again.json()["problems"] == []
+    # Without the weld: six open sides, each seen from outside to face inward, turned too.
+    plain = upload(client, "/api/mesh/fix", stepped, "s.ply")
+    assert plain.headers["x-faces-flipped"] == "108" and "x-weld" not in plain.headers
+    assert plain.headers["x-orientation-before"] == "inward"
+
+
+@pytest.mark.parametrize("path", ["/api/mesh", "/api/mesh/fix"])
+@pytest.mark.parametrize("value", ["-1e-6", "0.02", "nan", "inf", "abc", "1e400"])
+def test_a_bad_weld_field_is_a_422_naming_it(client: TestClient, path: str, value: str) -> None:
+    response = client.post(path, files={"file": ("c.obj", CUBE_OBJ.encode())}, data={"weld": value})
+    assert_error(response, 422, "weld", "weld must be a number from 0 to 0.01", repr(value))
+
+
+@pytest.mark.parametrize("path", ["/api/mesh", "/api/mesh/fix"])
+@pytest.mark.parametrize("value", ["-1e-6", "0.02", "nan", "abc"])
+def test_a_bad_weld_query_is_a_422_naming_it(client: TestClient, path: str, value: str) -> None:
+    response = client.post(path, content=CUBE_OBJ.encode(), params={"weld": value})
+    assert_error(response, 422, "weld", "weld")
+
+
+def test_a_weld_given_twice_or_as_a_file_is_a_422(client: TestClient) -> None:
+    twice = client.post(
+        "/api/mesh",
+        files={"file": ("c.obj", CUBE_OBJ.encode())},
+        data={"weld": "1e-6"},
+        params={"weld": "1e-6"},
+    )
+    assert_error(twice, 422, "weld", "given twice")
+    as_file = client.post(
+        "/api/mesh", files={"file": ("c.obj", CUBE_OBJ.encode()), "weld": ("w.txt", b"1e-6")}
+    )
+    assert_error(as_file, 422, "weld", "not a file")
+
+
+def test_openapi_documents_the_weld(client: TestClient, stepped: bytes) -> None:
+    spec = client.get("/openapi.json").json()
+    for path in ("/api/mesh", "/api/mesh/fix"):
+        operation = spec["paths"][path]["post"]
+        form = operation["requestBody"]["content"]["multipart/form-data"]["schema"]
+        assert form["properties"]["weld"]["maximum"] == 0.01
+        assert "weld" in [item["name"] for item in operation["parameters"]]
+    normals = spec["paths"]["/api/mesh/normals"]["post"]["requestBody"]["content"]
+    assert "weld" not in normals["multipart/form-data"]["schema"]["properties"]
+    report = client.post("/api/mesh", files={"file": ("s.ply", stepped)}, data={"weld": "1e-6"})
+    schema = {"$ref": "#/components/schemas/MeshReport"}
+    assert undocumented(spec, schema, report.json(), "report") == []

@@ -179,3 +179,65 @@ def test_objects_table_says_when_it_lists_only_the_first(client: TestClient) -> 
     _, html = post(client, many_triangles(105), part="report")
     assert "105 objects in the file; the first 100 are listed" in html.text("mesh-objects")
     assert html.find("tr", id="mesh-object-99") and not html.find("tr", id="mesh-object-100")
+
+
+# --- the weld tolerance -----------------------------------------------------------------------
+
+
+def stepped_ply() -> bytes:
+    """The cube of six sides a float32 step apart, as a float64 PLY."""
+    from mesh_normal.files import write_mesh
+    from tests.meshes import stepped_sides_cube
+
+    return write_mesh(*stepped_sides_cube(), "ply")
+
+
+def test_the_form_offers_an_optional_weld(client: TestClient) -> None:
+    html = Page(client.get("/mesh").text)
+    field = html.one("input", id="mesh-weld")
+    assert (field["name"], field["type"], field["min"], field["max"]) == (
+        "weld",
+        "number",
+        "0",
+        "0.01",
+    )
+    assert field.get("required") is None and field["value"] == ""
+    assert "bounding-box diagonal" in html.text("mesh-weld-help")
+    assert html.find("label", for_="mesh-weld")
+
+
+def test_a_weld_shows_in_the_results_and_goes_to_the_fix(client: TestClient) -> None:
+    response = client.post("/mesh", files={"file": ("s.ply", stepped_ply())}, data={"weld": "1e-6"})
+    assert response.status_code == 200, response.text[:800]
+    report = response.context["report"]  # type: ignore[attr-defined]
+    assert report.watertight and report.weld.joined_vertices == 40
+    html = Page(response.text)
+    assert "joined 40 vertices beyond identical coordinates" in html.text("mesh-weld-used")
+    assert html.one("div", id="mesh-report-view")["data-weld"] == "1e-06"  # the fix sends it
+    assert html.one("input", id="mesh-weld")["value"] == "1e-06"  # the form keeps it
+    assert "-F weld=1e-06" in html.text("mesh-curl")
+    assert json_block(html, "mesh-report")["weld"]["tolerance"] == 1e-6
+    _, plain = post(client, stepped_ply(), "s.ply", part="report")
+    assert not plain.find("p", id="mesh-weld-used")
+    assert plain.one("div", id="mesh-report-view").get("data-weld") is None
+
+
+def test_a_bad_weld_is_a_422_page(client: TestClient) -> None:
+    response = client.post(
+        "/mesh", files={"file": ("c.obj", CUBE_OBJ.encode())}, data={"weld": "1"}
+    )
+    assert response.status_code == 422
+    assert "weld must be a number from 0 to 0.01" in response.text
+
+
+def test_boundary_faces_of_separate_sides_are_marked(client: TestClient) -> None:
+    """The view names faces by position, like the edges: copies of a corner count too."""
+    from mesh_normal.files import write_mesh
+    from tests.meshes import separate_sides_cube
+
+    vertices, faces = separate_sides_cube()  # 6 sides of 18 faces; drop the first
+    response, html = post(client, write_mesh(vertices, faces[18:], "ply"), "open.ply", "report")
+    assert "The mesh is open: 12 boundary edges" in html.text("problem-open")
+    # One face of the four neighbouring sides along each of the hole's 12 edges, though the
+    # points there are named by other sides' copies.
+    assert response.context["figures"]["view"]["counts"]["boundary"] == 12
