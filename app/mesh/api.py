@@ -130,9 +130,9 @@ async def post_mesh_normals(
             "X-Faces-Flipped (a count), X-Component-Faces-Flipped (component:faces "
             "for the first 100 components changed) and X-Orientation-Before say "
             "what changed. Vertex colours are kept where the format holds them (PLY in "
-            "their own type, OBJ as v x y z r g b); X-Dropped, present only when "
-            "something was left out, names what the chosen format could not hold, e.g. "
-            '"vertex colours (STL holds none)" (several joined by "; ").',
+            "their own type, OBJ as v x y z r g b), face colours in PLY; X-Dropped, present "
+            "only when something was left out, names what the chosen format could not hold, "
+            'e.g. "vertex colours (STL holds none)" (several joined by "; ").',
             "content": {FORMATS[name].media_type: {} for name in WRITABLE},
         }
     },
@@ -161,11 +161,17 @@ async def post_mesh_fix(
             "x-component-faces-flipped": flips_by_component(fixed),
             "x-orientation-before": fixed.orientation,
         }
-        dropped = unkept(chosen, mesh.vertex_colors)
+        dropped = unkept(chosen, mesh.vertex_colors, mesh.face_colors)
         if dropped:  # do no harm: never leave data out without saying so
             headers["x-dropped"] = "; ".join(dropped)
         try:
-            data = write_mesh(mesh.vertices, fixed.faces, chosen, vertex_colors=mesh.vertex_colors)
+            data = write_mesh(
+                mesh.vertices,
+                fixed.faces,
+                chosen,
+                vertex_colors=mesh.vertex_colors,
+                face_colors=mesh.face_colors,
+            )
             return data, chosen, headers
         except MeshFileError as error:  # e.g. coordinates beyond what STL's floats hold
             raise ApiError(error.status_code, str(error), "format") from None

@@ -7,7 +7,8 @@ GLB reader sees one shape of input and never opens a file itself. On the way:
 - every ``extensionsRequired`` entry we cannot honour is a 415 naming it (trimesh would
   otherwise read such accessors as zeros, or fail with an index error);
 - normalized integer accessors (``KHR_mesh_quantization``) become float32 per the glTF
-  specification, which trimesh does not do (it would read an int16 position as up to 32767).
+  specification, which trimesh does not do (it would read an int16 position as up to 32767);
+  ``COLOR_0`` bytes and shorts stay integers, as vertex colours are kept.
 """
 
 from __future__ import annotations
@@ -256,9 +257,10 @@ def _decode_normalized(header: dict[str, Any], blob: bytearray) -> int:
     """Rewrite each normalized integer accessor as a float32 one appended to ``blob``."""
     decoded = 0
     views = header.get("bufferViews") or []
-    for accessor in header.get("accessors") or []:
+    colors = _color_only(header)
+    for index, accessor in enumerate(header.get("accessors") or []):
         kind = accessor.get("componentType")
-        if not accessor.get("normalized") or kind not in _NORMALIZED:
+        if not accessor.get("normalized") or kind not in _NORMALIZED or index in colors:
             continue
         if "sparse" in accessor:
             raise unsupported("This glTF has a sparse normalized accessor, which is not supported.")
@@ -279,6 +281,26 @@ def _decode_normalized(header: dict[str, Any], blob: bytearray) -> int:
     if header.get("buffers"):
         header["buffers"][0]["byteLength"] = len(blob)
     return decoded
+
+
+def _color_only(header: dict[str, Any]) -> set[int]:
+    """Accessors of unsigned bytes or shorts that only ``COLOR_n`` attributes use: left as
+    integers, which is how vertex colours are kept (0-255, 0-65535), never decoded to floats."""
+    used: dict[bool, set[int]] = {True: set(), False: set()}
+    for mesh in header.get("meshes") or []:
+        for primitive in mesh.get("primitives") or []:
+            for name, index in (primitive.get("attributes") or {}).items():
+                used[str(name).startswith("COLOR_")].add(index)
+            for target in primitive.get("targets") or []:
+                used[False].update((target or {}).values())
+    accessors = header.get("accessors") or []
+    return {
+        index
+        for index in used[True] - used[False]
+        if isinstance(index, int)
+        and 0 <= index < len(accessors)
+        and accessors[index].get("componentType") in (5121, 5123)
+    }
 
 
 def _dequantized(
