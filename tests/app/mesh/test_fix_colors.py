@@ -84,3 +84,17 @@ def test_a_meshlab_files_colours_survive_the_fix(client: TestClient) -> None:
     np.testing.assert_array_equal(fixed.vertices, original.vertices)
     dropped = fix(client, data, "colors_meshlab.ply", "stl").headers["x-dropped"]
     assert dropped == "vertex colours (STL holds none)"
+
+
+def test_ply_face_colours_survive_the_fix_and_are_named_elsewhere(client: TestClient) -> None:
+    data = write_mesh(TETRA_VERTICES, FLIPPED, "ply", face_colors=UCHAR)
+    response = fix(client, data, "f.ply", "ply")
+    assert response.headers["x-faces-flipped"] == "1"
+    assert "x-dropped" not in response.headers
+    fixed = read_mesh(response.content, "fixed.ply")
+    assert fixed.face_colors is not None and fixed.face_colors.tobytes() == UCHAR.tobytes()
+    assert fix(client, data, "f.ply", "obj").headers["x-dropped"] == "face colours (OBJ holds none)"
+    both = write_mesh(TETRA_VERTICES, FLIPPED, "ply", vertex_colors=UCHAR, face_colors=UCHAR)
+    assert fix(client, both, "b.ply", "stl").headers["x-dropped"] == (
+        "vertex colours (STL holds none); face colours (STL holds none)"
+    )
