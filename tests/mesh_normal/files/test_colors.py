@@ -300,7 +300,14 @@ def test_the_fix_keeps_each_face_its_colour() -> None:
 
 
 @pytest.mark.parametrize(
-    "name", ["off_face_colors.off", "off_whitespace.off", "gltf/cube_vertex_colors.glb"]
+    "name",
+    [
+        "off_face_colors.off",
+        "off_whitespace.off",
+        "gltf/cube_vertex_colors.glb",
+        "threemf_basematerials.3mf",
+        "colors_meshlab.ply",
+    ],
 )
 def test_real_files_colours_survive_the_fix(name: str) -> None:
     mesh = read_mesh((DATA / name).read_bytes(), name)
