@@ -3,7 +3,9 @@
 Every triangle primitive of every node of the scene is taken, in the order trimesh walks the
 scene graph, with its node's world transform applied (a mesh used by two nodes appears twice).
 ``NORMAL`` attributes, when every primitive has them, become the vertex normals, transformed by
-the inverse transpose of the transform and normalised. A node whose transform mirrors (negative
+the inverse transpose of the transform and normalised. ``COLOR_0`` becomes the vertex colours
+in its accessor's type (normalized bytes or shorts stay integers, floats 0-1), inside Draco too;
+a primitive without one is white, as glTF draws it. A node whose transform mirrors (negative
 determinant) has its triangles' winding reversed, as the glTF specification asks, so fronts
 stay fronts. Point and line primitives are skipped with a note.
 

@@ -212,6 +212,14 @@ def _decode_draco(header: dict[str, Any], blob: bytearray) -> int:
                     target = accessors[primitive["attributes"][name]]
                     values = np.asarray(by_id[ids[name]], dtype=np.float32).reshape(-1, 3)
                     attributes[name] = _append(header, blob, values, 5126, target)
+            if (
+                "COLOR_0" in ids
+                and ids["COLOR_0"] in by_id
+                and "COLOR_0" in primitive.get("attributes", {})
+            ):
+                target = accessors[primitive["attributes"]["COLOR_0"]]
+                values, component = _draco_colors(by_id[ids["COLOR_0"]], target)
+                attributes["COLOR_0"] = _append(header, blob, values, component, None)
             primitive["attributes"] = attributes
             faces = getattr(draco, "faces", None)  # a point cloud has none
             if faces is None:
@@ -221,6 +229,21 @@ def _decode_draco(header: dict[str, Any], blob: bytearray) -> int:
                 primitive["indices"] = _append(header, blob, indices, 5125, None)
             decoded += 1
     return decoded
+
+
+#: glTF component types of colours, by NumPy type.
+_COLOR_COMPONENTS = {"u1": 5121, "u2": 5123, "f4": 5126}
+
+
+def _draco_colors(data: Any, accessor: dict[str, Any]) -> tuple[NDArray[Any], int]:
+    """A Draco ``COLOR_0`` as its accessor declares it: bytes, shorts or float32 0-1."""
+    kind = {5121: "u1", 5123: "u2"}.get(accessor.get("componentType", 5126), "f4")
+    width = _WIDTH.get(accessor.get("type", ""), 3)
+    values = np.asarray(data)
+    values = values.reshape(len(values), -1)[:, :width] if values.size else values.reshape(0, width)
+    if kind == "f4" and values.dtype.kind in "ui":  # integers where floats are declared
+        values = values / float(np.iinfo(values.dtype.str).max)
+    return np.ascontiguousarray(values.astype(kind)), _COLOR_COMPONENTS[kind]
 
 
 def _append(
@@ -239,7 +262,7 @@ def _append(
     views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": values.nbytes})
     blob += np.ascontiguousarray(values).tobytes()
     accessors = header.setdefault("accessors", [])
-    kind = "SCALAR" if values.ndim == 1 else "VEC3"
+    kind = "SCALAR" if values.ndim == 1 else f"VEC{values.shape[1]}"
     accessors.append(
         {
             "bufferView": len(views) - 1,

@@ -346,3 +346,18 @@ def test_a_gltf_without_meshes_says_so() -> None:
     header = {"asset": {"version": "2.0"}, "nodes": [{"name": "a"}], "scenes": [{"nodes": [0]}]}
     with pytest.raises(MeshFileError, match=r"^The glTF file holds no meshes\.$"):
         read_mesh(glb(header, b""), "empty_nodes.glb")
+
+
+@pytest.mark.parametrize("draco", [False, True], ids=["plain", "draco"])
+def test_trimesh_exported_vertex_colours_come_back(draco: bool) -> None:
+    """trimesh writes COLOR_0 as normalized RGBA bytes, inside Draco too."""
+    box = trimesh.creation.box()
+    colors = np.zeros((8, 4), dtype=np.uint8)
+    colors[:, 0], colors[:, 1], colors[:, 3] = np.arange(8) * 30, 7, 255
+    box.visual.vertex_colors = colors
+    data = trimesh.Scene(box).export(file_type="glb", extension_draco=draco)
+    mesh = read_mesh(data, "box.glb")
+    assert mesh.vertex_colors is not None and mesh.vertex_colors.dtype == np.uint8
+    # Draco may reorder the vertices: each position keeps its colour
+    order = [int(np.flatnonzero((box.vertices == point).all(axis=1))[0]) for point in mesh.vertices]
+    np.testing.assert_array_equal(mesh.vertex_colors, colors[order])
