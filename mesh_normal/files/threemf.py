@@ -19,6 +19,7 @@ expansion.
 
 from __future__ import annotations
 
+import functools
 import io
 import posixpath
 import re
@@ -151,8 +152,9 @@ def _parse(xml: bytes) -> ET.Element:
         raise MeshFileError(f"The 3MF file's XML is broken: {error}.") from error
 
 
-#: Colour resources by id: each one's colours in order, uint8 RGBA.
-Palettes = dict[str, NDArray[np.uint8]]
+#: Colour resources by id: the text of each one's colours, in order (read when a triangle
+#: uses one, so that a broken colour nobody uses breaks nothing).
+Palettes = dict[str, list[str]]
 
 
 def _palettes(root: ET.Element) -> Palettes:
@@ -163,11 +165,13 @@ def _palettes(root: ET.Element) -> Palettes:
         ("colorgroup", "color", "color"),
     ):
         for group in root.iterfind(f"{{*}}resources/{{*}}{tag}"):
-            colors = [_rgba(item.get(key, "")) for item in group.iterfind(f"{{*}}{child}")]
-            palettes[group.get("id", "")] = np.array(colors, dtype=np.uint8).reshape(-1, 4)
+            palettes[group.get("id", "")] = [
+                item.get(key, "") for item in group.iterfind(f"{{*}}{child}")
+            ]
     return palettes
 
 
+@functools.cache
 def _rgba(text: str) -> tuple[int, int, int, int]:
     """``#RRGGBB`` or ``#RRGGBBAA`` as four bytes."""
     digits = text.strip().lstrip("#")
@@ -182,7 +186,7 @@ def _rgba(text: str) -> tuple[int, int, int, int]:
     return value[0], value[1], value[2], value[3]
 
 
-def _object(obj: ET.Element, number: int, palettes: Palettes | None = None) -> _Object:
+def _object(obj: ET.Element, number: int, palettes: Palettes) -> _Object:
     mesh = obj.find("{*}mesh")
     if mesh is None:
         if any(
@@ -205,7 +209,7 @@ def _object(obj: ET.Element, number: int, palettes: Palettes | None = None) -> _
     points = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
     faces = np.asarray(triangles, dtype=np.intp).reshape(-1, 3)
     _check_indices(faces, len(points), number)
-    colors, colored, corners = _triangle_colors(obj, elements, palettes or {}, number)
+    colors, colored, corners = _triangle_colors(obj, elements, palettes, number)
     return _Object(number, points, faces, colors=colors, colored=colored, corner_colored=corners)
 
 
@@ -225,12 +229,16 @@ def _triangle_colors(
         if palette is None or index is None:
             continue
         try:
-            colors[row] = palette[int(index)]
+            position = int(index)
+            if position < 0:
+                raise IndexError(position)
+            text = palette[position]
         except (ValueError, IndexError):
             raise MeshFileError(
                 f"Triangle {row:,} (counting from 0) of object {number} names colour "
                 f"{index[:20]!r} of group {group!r}, which has {len(palette)}."
             ) from None
+        colors[row] = _rgba(text)
         colored[row] = True
         corners += any(triangle.get(key, index) != index for key in ("p2", "p3"))
     return colors, colored, corners

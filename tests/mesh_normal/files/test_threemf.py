@@ -328,6 +328,7 @@ def test_no_colours_no_note() -> None:
     [
         ('pid="6" p1="2"', "names colour '2' of group '6', which has 2"),
         ('pid="6" p1="x"', "names colour 'x'"),
+        ('pid="6" p1="-1"', "names colour '-1'"),
     ],
 )
 def test_colour_indices_out_of_range_are_one_sentence(triangle: str, words: str) -> None:
@@ -336,11 +337,13 @@ def test_colour_indices_out_of_range_are_one_sentence(triangle: str, words: str)
     assert str(error.value).startswith("Triangle 0 (counting from 0) of object 1")
 
 
-def test_a_colour_that_is_not_hex_is_one_sentence() -> None:
-    with zipfile.ZipFile(io.BytesIO(coloured(["", "", "", ""]))) as source:
-        xml = source.read("3D/3dmodel.model").replace(b"#102030", b"blue")
+def test_a_colour_that_is_not_hex_is_one_sentence_where_used() -> None:
+    with zipfile.ZipFile(io.BytesIO(coloured(['pid="6" p1="1"', "", "", ""]))) as source:
+        xml = source.read("3D/3dmodel.model").replace(b"#102030", b"blue").decode()
     with pytest.raises(MeshFileError, match=r"not #RRGGBB\[AA\]: 'blue'"):
-        read_mesh(package(xml.decode()), "c.3mf")
+        read_mesh(package(xml), "c.3mf")
+    unused = xml.replace('pid="6" p1="1"', "")  # a broken colour nobody uses breaks nothing
+    assert read_mesh(package(unused), "c.3mf").face_colors is not None
 
 
 def test_a_real_file_with_base_materials() -> None:
