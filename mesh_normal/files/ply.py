@@ -72,7 +72,7 @@ def read_ply(data: bytes) -> LoadedMesh:
     encoding, elements, body = _header(data)
     notes = []
     if encoding == "ascii":
-        notes = _read_ascii(elements, data[body:], data.count(b"\n", 0, body) + 1)
+        notes = _read_ascii(elements, data[body:])
     else:
         _read_binary(elements, data, body, _ENDIAN[encoding])
     return _mesh(elements, notes)
@@ -243,7 +243,7 @@ def _binary_records(element: _Element, data: bytes, offset: int, endian: str) ->
     return offset
 
 
-def _read_ascii(elements: list[_Element], body: bytes, first_line: int) -> list[str]:
+def _read_ascii(elements: list[_Element], body: bytes) -> list[str]:
     """Read the elements number by number; where that fails or leaves numbers over, line by
     line (:func:`_read_lines`), which reads files whose lines hold more than the header says.
     Returns the notes."""
@@ -251,13 +251,13 @@ def _read_ascii(elements: list[_Element], body: bytes, first_line: int) -> list[
     try:
         position = _read_tokens(elements, tokens)
     except MeshFileError:
-        by_line = _read_lines(elements, body, first_line)
+        by_line = _read_lines(elements, body)
         if by_line is None:
             raise
         return _adopt(elements, *by_line)
     if position == len(tokens):
         return []
-    by_line = _read_lines(elements, body, first_line)
+    by_line = _read_lines(elements, body)
     if by_line is not None and by_line[1]:
         return _adopt(elements, *by_line)
     return [f"Ignored {len(tokens) - position:,} numbers after the PLY file's last element."]
@@ -287,21 +287,17 @@ _GEOMETRY = frozenset({"x", "y", "z", "vertex_indices", "vertex_index"})
 
 
 def _read_lines(
-    elements: list[_Element], body: bytes, first_line: int
+    elements: list[_Element], body: bytes
 ) -> tuple[list[dict[str, object]], list[str]] | None:
     """Each record from its own line, as PLY writers write them; ``None`` when the lines do
     not fit the header.
 
-    A line may hold more numbers than the header declares (MeshLab writes per-corner colours
-    it does not declare, for one): then which number is which is unsure beyond the first
-    property, so that element keeps only its coordinates or corner indices, and a note says
-    what was not kept.
+    A line may hold more numbers than the header declares (trimesh's ``fuze_ascii.ply``,
+    written by MeshLab, ends each face with ten numbers where its header names four): then which
+    number is which is unsure, so that element keeps only its coordinates or corner indices
+    (every writer puts them first), and a note says what was not kept.
     """
-    rows = [
-        (number, line.split())
-        for number, line in enumerate(body.split(b"\n"), first_line)
-        if line.strip()
-    ]
+    rows = [words for words in map(bytes.split, body.split(b"\n")) if words]
     row, found, notes = 0, [], []
     for element in elements:
         records = rows[row : row + element.count]
@@ -324,13 +320,13 @@ def _read_lines(
 
 
 def _line_columns(
-    element: _Element, records: list[tuple[int, list[bytes]]]
+    element: _Element, records: list[list[bytes]]
 ) -> tuple[dict[str, object], int] | None:
     """The element's columns read from one line per record, and how many lines hold more
     numbers than it declares; ``None`` when a line holds fewer."""
     columns: dict[str, list[object]] = {name: [] for name in element.order}
     longer = 0
-    for _, words in records:
+    for words in records:
         at = 0
         for name in element.order:
             if name in element.lists:
