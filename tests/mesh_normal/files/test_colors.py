@@ -8,6 +8,8 @@ import struct
 import numpy as np
 import pytest
 import trimesh
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from mesh_normal.files import LoadedMesh, read_mesh, write_mesh
 from mesh_normal.files.loaded import build
@@ -320,3 +322,46 @@ def test_real_files_colours_survive_the_fix(name: str) -> None:
         if before is not None and after is not None:
             assert after.dtype == before.dtype and after.tobytes() == before.tobytes()
     assert mesh.vertex_colors is not None or mesh.face_colors is not None
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.lists(st.integers(3, 7), min_size=1, max_size=8),
+    st.sampled_from(["ascii", "binary_little_endian", "binary_big_endian"]),
+    st.integers(0, 2**32 - 1),
+)
+def test_every_triangle_has_its_polygons_colour(sizes: list[int], encoding: str, seed: int) -> None:
+    """Convex polygons of any size in a row: triangle i of polygon p has p's colour, in file
+    order, and the colours survive a PLY round trip bit for bit."""
+    rng = np.random.default_rng(seed)
+    colors = rng.integers(0, 256, size=(len(sizes), 4)).astype(np.uint8)
+    points, polygons = [], []
+    for size in sizes:  # each polygon its own regular polygon on z = len(polygons)
+        angles = 2 * np.pi * np.arange(size) / size
+        polygons.append(list(range(len(points), len(points) + size)))
+        points += [(float(np.cos(a)), float(np.sin(a)), float(len(polygons))) for a in angles]
+    header = (
+        f"ply\nformat {encoding} 1.0\nelement vertex {len(points)}\nproperty double x\n"
+        "property double y\nproperty double z\n"
+        f"element face {len(polygons)}\nproperty list uchar int vertex_indices\n"
+        "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar alpha\n"
+        "end_header\n"
+    ).encode()
+    if encoding == "ascii":
+        body = "".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in points) + "".join(
+            f"{len(p)} {' '.join(map(str, p))} {' '.join(map(str, c))}\n"
+            for p, c in zip(polygons, colors.tolist(), strict=True)
+        )
+        data = header + body.encode()
+    else:
+        end = ">" if encoding == "binary_big_endian" else "<"
+        data = header + np.array(points, dtype=end + "f8").tobytes()
+        for polygon, color in zip(polygons, colors, strict=True):
+            data += struct.pack(f"{end}B{len(polygon)}i", len(polygon), *polygon)
+            data += color.tobytes()
+    mesh = read_mesh(data, "p.ply")
+    expected = np.repeat(colors, [size - 2 for size in sizes], axis=0)
+    assert mesh.face_colors is not None
+    np.testing.assert_array_equal(mesh.face_colors, expected)
+    again = read_mesh(write_mesh(mesh.vertices, mesh.faces, "ply", face_colors=mesh.face_colors))
+    assert again.face_colors is not None and again.face_colors.tobytes() == expected.tobytes()
