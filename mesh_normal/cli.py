@@ -215,12 +215,18 @@ def fix(args: argparse.Namespace, progress: Progress) -> int:
     weld = weld_summary(mesh.vertices, args.weld)
     progress.step(f"writing {args.output}")
     try:
-        data = write_mesh(mesh.vertices, fixed.faces, chosen, vertex_colors=mesh.vertex_colors)
+        data = write_mesh(
+            mesh.vertices,
+            fixed.faces,
+            chosen,
+            vertex_colors=mesh.vertex_colors,
+            face_colors=mesh.face_colors,
+        )
     except MeshFileError as error:
         raise Failure(f"cannot write {args.output}: {error}", EXIT_OUTPUT) from None
     write(args.output, data)
     progress.done()
-    dropped = unkept(chosen, mesh.vertex_colors)
+    dropped = unkept(chosen, mesh.vertex_colors, mesh.face_colors)
     if dropped:  # do no harm: never leave data out without saying so
         print(f"mesh-normal: {args.output} leaves out {'; '.join(dropped)}", file=sys.stderr)
     flipped = int(fixed.flipped.sum())

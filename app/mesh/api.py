@@ -149,10 +149,10 @@ async def post_mesh_normals(
             "for the first 100 components changed) and X-Orientation-Before say "
             "what changed; X-Weld (the tolerance, present only when a weld was asked for) "
             "says how the parts were judged, as in the report. Vertex colours are kept "
-            "where the format holds them (PLY in their own type, OBJ as v x y z r g b); "
-            "X-Dropped, present only when "
-            "something was left out, names what the chosen format could not hold, e.g. "
-            '"vertex colours (STL holds none)" (several joined by "; ").',
+            "where the format holds them (PLY in their own type, OBJ as v x y z r g b), face "
+            "colours in PLY; X-Dropped, present only when something was left out, names what "
+            'the chosen format could not hold, e.g. "vertex colours (STL holds none)" '
+            '(several joined by "; ").',
             "content": {FORMATS[name].media_type: {} for name in WRITABLE},
         }
     },
@@ -186,11 +186,17 @@ async def post_mesh_fix(
         }
         if tolerance is not None:
             headers["x-weld"] = repr(tolerance)
-        dropped = unkept(chosen, mesh.vertex_colors)
+        dropped = unkept(chosen, mesh.vertex_colors, mesh.face_colors)
         if dropped:  # do no harm: never leave data out without saying so
             headers["x-dropped"] = "; ".join(dropped)
         try:
-            data = write_mesh(mesh.vertices, fixed.faces, chosen, vertex_colors=mesh.vertex_colors)
+            data = write_mesh(
+                mesh.vertices,
+                fixed.faces,
+                chosen,
+                vertex_colors=mesh.vertex_colors,
+                face_colors=mesh.face_colors,
+            )
             return data, chosen, headers
         except MeshFileError as error:  # e.g. coordinates beyond what STL's floats hold
             raise ApiError(error.status_code, str(error), "format") from None

@@ -21,8 +21,8 @@ if TYPE_CHECKING:
     from mesh_normal.files.loaded import LoadedMesh
 
     Reader = Callable[[bytes], LoadedMesh]
-    #: ``(points, triangles[, vertex_colors]) -> bytes``, the first two already checked by
-    #: ``check_mesh``; only formats that hold colours take the third.
+    #: ``(points, triangles, *, vertex_colors=..., face_colors=...) -> bytes``, the first two
+    #: already checked by ``check_mesh``; only formats that hold a kind of colour take it.
     Writer = Callable[..., bytes]
 
 #: What the writers put in the comment of a file's header.
@@ -55,16 +55,20 @@ class MeshFormat:
         points: NDArray[np.float64],
         triangles: NDArray[np.intp],
         vertex_colors: NDArray[np.generic] | None = None,
+        face_colors: NDArray[np.generic] | None = None,
     ) -> bytes:
         """The bytes of the file; ``points`` and ``triangles`` must be checked already.
-        ``vertex_colors`` are written where the format holds them (:data:`HOLDS_COLORS`) and
-        left out elsewhere."""
+        Colours are written where the format holds them (:data:`HOLDS_COLORS`,
+        :data:`HOLDS_FACE_COLORS`) and left out elsewhere."""
         if not self.writable:
             raise ValueError(f"{self.title} files cannot be written.")
         writer = cast("Writer", self._function("write"))
-        if vertex_colors is None or self.name not in HOLDS_COLORS:
-            return writer(points, triangles)
-        return writer(points, triangles, vertex_colors)
+        colors = {}
+        if vertex_colors is not None and self.name in HOLDS_COLORS:
+            colors["vertex_colors"] = vertex_colors
+        if face_colors is not None and self.name in HOLDS_FACE_COLORS:
+            colors["face_colors"] = face_colors
+        return writer(points, triangles, **colors)
 
     def _function(self, verb: str) -> object:
         module = importlib.import_module(f"mesh_normal.files.{self.module}")
@@ -88,6 +92,8 @@ FORMATS: dict[str, MeshFormat] = {
 
 #: Writable formats whose writer takes vertex colours, and what of them each keeps.
 HOLDS_COLORS: dict[str, str] = {"ply": "rgba", "obj": "rgb"}
+#: Writable formats whose writer takes face colours (one per triangle), and what it keeps.
+HOLDS_FACE_COLORS: dict[str, str] = {"ply": "rgba"}
 
 #: File extension (lower case, with the dot) to format name.
 SUFFIXES: dict[str, str] = {

@@ -3,7 +3,9 @@
 Every triangle primitive of every node of the scene is taken, in the order trimesh walks the
 scene graph, with its node's world transform applied (a mesh used by two nodes appears twice).
 ``NORMAL`` attributes, when every primitive has them, become the vertex normals, transformed by
-the inverse transpose of the transform and normalised. A node whose transform mirrors (negative
+the inverse transpose of the transform and normalised. ``COLOR_0`` becomes the vertex colours
+in its accessor's type (normalized bytes or shorts stay integers, floats 0-1), inside Draco too;
+a primitive without one is white, as glTF draws it. A node whose transform mirrors (negative
 determinant) has its triangles' winding reversed, as the glTF specification asks, so fronts
 stay fronts. Point and line primitives are skipped with a note.
 
@@ -50,6 +52,8 @@ def _read(
 
     check_extensions(header)
     packed = packed_glb(header, chunk, resolve)
+    if not header.get("meshes"):  # trimesh would fail on the missing accessors
+        raise MeshFileError("The glTF file holds no meshes.")
     scene = load_glb(io.BytesIO(packed.glb), merge_primitives=False, skip_materials=True)
     mesh = _flatten(scene, file_format)
     notes = []
@@ -89,6 +93,7 @@ def _world_transforms(scene: dict[str, Any]) -> list[tuple[NDArray[np.float64], 
 def _flatten(scene: dict[str, Any], file_format: str) -> LoadedMesh:
     geometry = scene.get("geometry") or {}
     parts: list[tuple[NDArray[np.float64], NDArray[np.intp], NDArray[np.float64] | None]] = []
+    colors: list[NDArray[Any] | None] = []
     names: list[str] = []  # one group per primitive placed, named by its node: the objects
     skipped = mirrored = placed = 0
     for transform, name, node in _world_transforms(scene):
@@ -112,6 +117,8 @@ def _flatten(scene: dict[str, Any], file_format: str) -> LoadedMesh:
                 np.asarray(normals, dtype=np.float64).reshape(-1, 3) @ np.linalg.inv(linear)
             )  # row vectors: n @ inv(A) is inv(A).T @ n
         parts.append((vertices @ linear.T + transform[:3, 3], faces, normals))
+        found = kwargs.get("vertex_colors")
+        colors.append(None if found is None else np.asarray(found).reshape(len(vertices), -1))
         names.append(node)
     notes = []
     if skipped:
@@ -129,16 +136,61 @@ def _flatten(scene: dict[str, Any], file_format: str) -> LoadedMesh:
     if all(part[2] is not None and len(part[2]) == len(part[0]) for part in parts):
         normals = np.concatenate([part[2] for part in parts])
     groups = np.repeat(np.arange(len(parts)), [len(part[1]) for part in parts])
+    vertex_colors = _joined_colors(colors, [len(part[0]) for part in parts], notes)
     return build(
         file_format,
         vertices,
         faces,
         source_faces=len(faces),
         vertex_normals=normals,
+        vertex_colors=vertex_colors,
         face_groups=groups,
         group_names=names,
         notes=notes,
     )
+
+
+def _joined_colors(
+    colors: list[NDArray[Any] | None], sizes: list[int], notes: list[str]
+) -> NDArray[Any] | None:
+    """One ``COLOR_0`` array for the joined vertices, or ``None`` when no primitive has one.
+
+    glTF multiplies the material's colour by ``COLOR_0``, so a primitive without one is white:
+    it gets the type's full value. Colours keep their accessor's type (uint8, uint16 or float32)
+    when all share it, else all become float32 0-1; RGB gets an opaque alpha beside RGBA.
+    """
+    if all(color is None for color in colors):
+        return None
+    given = [color for color in colors if color is not None]
+    width = max(color.shape[1] for color in given)
+    kinds = {color.dtype for color in given}
+    kind = kinds.pop() if len(kinds) == 1 else np.dtype(np.float32)
+    if kind.kind not in "uf" or width not in (3, 4):
+        notes.append("The glTF COLOR_0 attributes were not read: they are not RGB or RGBA colours.")
+        return None
+    full = np.iinfo(kind.str).max if kind.kind == "u" else 1.0
+    joined = np.full((sum(sizes), width), full, dtype=kind)
+    start = 0
+    for color, size in zip(colors, sizes, strict=True):
+        if color is not None:
+            joined[start : start + size, : color.shape[1]] = _scaled(color, kind)
+        start += size
+    if missing := sum(color is None for color in colors):
+        notes.append(
+            f"{missing:,} primitive{'s' if missing > 1 else ''} without COLOR_0 "
+            f"{'are' if missing > 1 else 'is'} white in the vertex colours, as glTF draws "
+            f"{'them' if missing > 1 else 'it'}."
+        )
+    return joined
+
+
+def _scaled(color: NDArray[Any], kind: np.dtype[Any]) -> NDArray[Any]:
+    """``color`` in ``kind``: integers to float32 0-1 when the types differ."""
+    if color.dtype == kind:
+        return color
+    if color.dtype.kind == "u":
+        return (color / float(np.iinfo(color.dtype.str).max)).astype(kind)
+    return color.astype(kind)
 
 
 def _unit(vectors: NDArray[np.float64]) -> NDArray[np.float64]:

@@ -7,7 +7,8 @@ GLB reader sees one shape of input and never opens a file itself. On the way:
 - every ``extensionsRequired`` entry we cannot honour is a 415 naming it (trimesh would
   otherwise read such accessors as zeros, or fail with an index error);
 - normalized integer accessors (``KHR_mesh_quantization``) become float32 per the glTF
-  specification, which trimesh does not do (it would read an int16 position as up to 32767).
+  specification, which trimesh does not do (it would read an int16 position as up to 32767);
+  ``COLOR_0`` bytes and shorts stay integers, as vertex colours are kept.
 """
 
 from __future__ import annotations
@@ -212,6 +213,14 @@ def _decode_draco(header: dict[str, Any], blob: bytearray) -> int:
                     target = accessors[primitive["attributes"][name]]
                     values = np.asarray(by_id[ids[name]], dtype=np.float32).reshape(-1, 3)
                     attributes[name] = _append(header, blob, values, 5126, target)
+            if (
+                "COLOR_0" in ids
+                and ids["COLOR_0"] in by_id
+                and "COLOR_0" in primitive.get("attributes", {})
+            ):
+                target = accessors[primitive["attributes"]["COLOR_0"]]
+                values, component = _draco_colors(by_id[ids["COLOR_0"]], target)
+                attributes["COLOR_0"] = _append(header, blob, values, component, None)
             primitive["attributes"] = attributes
             faces = getattr(draco, "faces", None)  # a point cloud has none
             if faces is None:
@@ -221,6 +230,21 @@ def _decode_draco(header: dict[str, Any], blob: bytearray) -> int:
                 primitive["indices"] = _append(header, blob, indices, 5125, None)
             decoded += 1
     return decoded
+
+
+#: glTF component types of colours, by NumPy type.
+_COLOR_COMPONENTS = {"u1": 5121, "u2": 5123, "f4": 5126}
+
+
+def _draco_colors(data: Any, accessor: dict[str, Any]) -> tuple[NDArray[Any], int]:
+    """A Draco ``COLOR_0`` as its accessor declares it: bytes, shorts or float32 0-1."""
+    kind = {5121: "u1", 5123: "u2"}.get(accessor.get("componentType", 5126), "f4")
+    width = _WIDTH.get(accessor.get("type", ""), 3)
+    values = np.asarray(data)
+    values = values.reshape(len(values), -1)[:, :width] if values.size else values.reshape(0, width)
+    if kind == "f4" and values.dtype.kind in "ui":  # integers where floats are declared
+        values = values / float(np.iinfo(values.dtype.str).max)
+    return np.ascontiguousarray(values.astype(kind)), _COLOR_COMPONENTS[kind]
 
 
 def _append(
@@ -239,7 +263,7 @@ def _append(
     views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": values.nbytes})
     blob += np.ascontiguousarray(values).tobytes()
     accessors = header.setdefault("accessors", [])
-    kind = "SCALAR" if values.ndim == 1 else "VEC3"
+    kind = "SCALAR" if values.ndim == 1 else f"VEC{values.shape[1]}"
     accessors.append(
         {
             "bufferView": len(views) - 1,
@@ -257,9 +281,10 @@ def _decode_normalized(header: dict[str, Any], blob: bytearray) -> int:
     """Rewrite each normalized integer accessor as a float32 one appended to ``blob``."""
     decoded = 0
     views = header.get("bufferViews") or []
-    for accessor in header.get("accessors") or []:
+    colors = _color_only(header)
+    for index, accessor in enumerate(header.get("accessors") or []):
         kind = accessor.get("componentType")
-        if not accessor.get("normalized") or kind not in _NORMALIZED:
+        if not accessor.get("normalized") or kind not in _NORMALIZED or index in colors:
             continue
         if "sparse" in accessor:
             raise unsupported("This glTF has a sparse normalized accessor, which is not supported.")
@@ -280,6 +305,26 @@ def _decode_normalized(header: dict[str, Any], blob: bytearray) -> int:
     if header.get("buffers"):
         header["buffers"][0]["byteLength"] = len(blob)
     return decoded
+
+
+def _color_only(header: dict[str, Any]) -> set[int]:
+    """Accessors of unsigned bytes or shorts that only ``COLOR_n`` attributes use: left as
+    integers, which is how vertex colours are kept (0-255, 0-65535), never decoded to floats."""
+    used: dict[bool, set[int]] = {True: set(), False: set()}
+    for mesh in header.get("meshes") or []:
+        for primitive in mesh.get("primitives") or []:
+            for name, index in (primitive.get("attributes") or {}).items():
+                used[str(name).startswith("COLOR_")].add(index)
+            for target in primitive.get("targets") or []:
+                used[False].update((target or {}).values())
+    accessors = header.get("accessors") or []
+    return {
+        index
+        for index in used[True] - used[False]
+        if isinstance(index, int)
+        and 0 <= index < len(accessors)
+        and accessors[index].get("componentType") in (5121, 5123)
+    }
 
 
 def _dequantized(

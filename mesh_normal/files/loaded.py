@@ -56,9 +56,17 @@ class LoadedMesh:
         Names of the groups, in order of their first triangle (each named group has one);
         ``None`` exactly when ``face_groups`` is.
     vertex_colors : (n, 3) or (n, 4) array or None
-        Vertex ``red green blue [alpha]`` as the file stores them, with their type: PLY
-        ``uchar`` (0-255) or ``float`` (0-1) properties, OBJ ``v x y z r g b`` (float64, 0-1);
-        read-only. ``None`` when the file has none.
+        Vertex ``red green blue [alpha]`` as the file stores them, with their type: integers
+        span their type's whole range (``uint8`` 0-255, ``uint16`` 0-65535), floats 0-1. PLY
+        properties in their declared type (``uchar``, ``float``, ...), OBJ ``v x y z r g b``
+        (float64), OFF ``COFF`` (uint8 when written as integers, else float64), glTF
+        ``COLOR_0`` (uint8, uint16 or float32 as its accessor stores it); read-only. ``None``
+        when the file has none.
+    face_colors : (m, 3) or (m, 4) array or None
+        The colour of each triangle, by the same rules: PLY face ``red green blue [alpha]``,
+        OFF colours after a face's corners, 3MF ``colorgroup`` and ``basematerials`` colours
+        (uint8 RGBA); each triangle of a polygon has its polygon's colour. ``None`` when the
+        file has none.
     notes : tuple of str
         Plain sentences about what reading did (welding, triangulation, skipped elements).
     files : tuple of str
@@ -79,6 +87,7 @@ class LoadedMesh:
     face_groups: IndexArray | None = None
     group_names: tuple[str, ...] | None = None
     vertex_colors: NDArray[np.generic] | None = None
+    face_colors: NDArray[np.generic] | None = None
     notes: tuple[str, ...] = ()
     files: tuple[str, ...] = ()
     from_reader: bool = field(default=False, repr=False, compare=False)
@@ -109,6 +118,7 @@ def build(
     face_groups: NDArray[np.integer] | None = None,
     group_names: Sequence[str] | None = None,
     vertex_colors: NDArray[np.generic] | None = None,
+    face_colors: NDArray[np.generic] | None = None,
     notes: Sequence[str] = (),
     vertex: Describe | None = None,
     face: Describe | None = None,
@@ -141,7 +151,8 @@ def build(
         file_corner_normals=_optional(corner_normals, (len(triangles), 3, 3)),
         face_groups=_groups(face_groups, group_names, len(triangles)),
         group_names=None if group_names is None else tuple(group_names),
-        vertex_colors=_colors(vertex_colors, len(points)),
+        vertex_colors=_colors(vertex_colors, len(points), "vertices"),
+        face_colors=_colors(face_colors, len(triangles), "triangles"),
         notes=tuple(notes),
         from_reader=True,
     )
@@ -214,15 +225,16 @@ def _groups(
     return result
 
 
-def _colors(colors: NDArray[np.generic] | None, count: int) -> NDArray[np.generic] | None:
-    """Vertex colours read-only, in the type the file stores them; a reader's mistake fails
-    loudly."""
+def _colors(
+    colors: NDArray[np.generic] | None, count: int, what: str
+) -> NDArray[np.generic] | None:
+    """Colours read-only, in the type the file stores them; a reader's mistake fails loudly."""
     if colors is None:
         return None
     result = np.array(colors, order="C")  # a copy: freezing it leaves the caller's alone
     if result.ndim != 2 or result.shape[0] != count or result.shape[1] not in (3, 4):
-        raise AssertionError(f"vertex colours of shape {result.shape} for {count} vertices")
+        raise AssertionError(f"colours of shape {result.shape} for {count} {what}")
     if result.dtype.kind not in "uif":
-        raise AssertionError(f"vertex colours of type {result.dtype}")
+        raise AssertionError(f"colours of type {result.dtype}")
     result.setflags(write=False)
     return result

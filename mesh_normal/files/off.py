@@ -1,9 +1,14 @@
 """OFF (Object File Format), ASCII, by our own small parser.
 
 The keyword may be ``OFF``, ``COFF``, ``NOFF``, ``CNOFF``, ``STOFF`` and the like: each vertex
-line then starts with x y z (and, after ``N``, nx ny nz, kept as vertex normals); anything after
-is ignored, as are colours after a face's indices and ``#`` comments. Vertices keep their order;
-polygons are fan-triangulated in file order. Binary OFF is not supported.
+line then holds x y z, after ``N`` nx ny nz (kept as vertex normals), after ``C`` a colour
+(kept as vertex colours), after ``ST`` texture coordinates (ignored), in that order. A face
+line may end with a colour (kept as face colours, each triangle of a polygon with its
+polygon's). A colour is 3 or 4 numbers (red green blue [alpha]): integers 0-255, kept as
+uint8, or floats 0-1, kept as float64; a file's colours count only when every vertex (or
+every face) has one of the same width, and a note says why those that do not were left out.
+``#`` starts a comment. Vertices keep their order; polygons are triangulated in file order.
+Binary OFF is not supported.
 """
 
 from __future__ import annotations
@@ -18,6 +23,9 @@ from mesh_normal.files.loaded import LoadedMesh, build
 from mesh_normal.files.polygons import triangulate
 
 _KEYWORD = re.compile(r"(ST)?(C)?(N)?(4)?(n)?OFF")
+_INTEGER = re.compile(r"[+-]?\d+")
+
+Rows = list[tuple[int, list[str]]]
 
 
 def read_off(data: bytes) -> LoadedMesh:
@@ -27,11 +35,13 @@ def read_off(data: bytes) -> LoadedMesh:
         for number, line in enumerate(data.decode("latin-1").splitlines(), 1)
     ]
     rows = [(number, words) for number, words in rows if words]
-    if not rows or not (match := _KEYWORD.fullmatch(rows[0][1][0])):
+    match = _KEYWORD.match(rows[0][1][0]) if rows else None
+    if match is None or not _keyword_ends(rows[0][1][0], match.end()):
         raise MeshFileError("The file does not start with OFF (or COFF, NOFF, ...).")
     if match.group(4) or match.group(5):
         raise unsupported("OFF files in 4D or n dimensions are not supported.")
-    rest = rows[0][1][1:]
+    glued = rows[0][1][0][match.end() :]  # "OFF8 6 12": the counts start inside the keyword
+    rest = ([glued] if glued else []) + rows[0][1][1:]
     if rest and rest[0].upper() == "BINARY":
         raise unsupported("Binary OFF files are not supported; save it as ASCII OFF.")
     if rest:  # counts on the keyword line
@@ -60,8 +70,12 @@ def read_off(data: bytes) -> LoadedMesh:
         )
     width = 6 if match.group(3) else 3
     table = _table(vertex_rows, width)
-    polygon_counts, flat = _faces(face_rows)
+    polygon_counts, flat, face_extra = _faces(face_rows)
     positions, source, notes = triangulate(polygon_counts, flat, table[:, :3])
+    texture = 2 if match.group(1) else 0  # ST: s t end each vertex line
+    vertex_extra = [words[width : len(words) - texture] for _, words in vertex_rows]
+    vertex_colors = _colors(vertex_extra, "vertex", notes) if match.group(2) else None
+    face_colors = _colors(face_extra, "face", notes)
     lines = np.array([number for number, _ in face_rows], dtype=np.intp)
     return build(
         "off",
@@ -69,13 +83,20 @@ def read_off(data: bytes) -> LoadedMesh:
         flat[positions],
         source_faces=face_count,
         vertex_normals=table[:, 3:6] if width == 6 else None,
+        vertex_colors=vertex_colors,
+        face_colors=None if face_colors is None else face_colors[source],
         notes=notes,
         vertex=lambda i: f"vertex {i:,} (counting from 0, line {vertex_rows[i][0]:,})",
         face=lambda i: f"the face on line {lines[source[i]]:,}",
     )
 
 
-def _table(rows: list[tuple[int, list[str]]], width: int) -> NDArray[np.float64]:
+def _keyword_ends(word: str, end: int) -> bool:
+    """Whether the keyword ends at ``end``: the word ends there or a count follows it."""
+    return end == len(word) or word[end:].isdigit() or word[end:].upper() == "BINARY"
+
+
+def _table(rows: Rows, width: int) -> NDArray[np.float64]:
     for number, words in rows:
         if len(words) < width:
             raise MeshFileError(
@@ -90,9 +111,11 @@ def _table(rows: list[tuple[int, list[str]]], width: int) -> NDArray[np.float64]
         raise
 
 
-def _faces(rows: list[tuple[int, list[str]]]) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+def _faces(rows: Rows) -> tuple[NDArray[np.intp], NDArray[np.intp], list[list[str]]]:
+    """Corner counts, the flat corner indices and the words after each face's corners."""
     counts = np.zeros(len(rows), dtype=np.intp)
     flat: list[int] = []
+    extra: list[list[str]] = []
     for row, (number, words) in enumerate(rows):
         size = _number(words[0], number, int)
         if size < 0 or len(words) < 1 + size:
@@ -102,7 +125,35 @@ def _faces(rows: list[tuple[int, list[str]]]) -> tuple[NDArray[np.intp], NDArray
             )
         counts[row] = size
         flat += [_number(word, number, int) for word in words[1 : 1 + size]]
-    return counts, np.array(flat, dtype=np.intp)
+        extra.append(words[1 + size :])
+    return counts, np.array(flat, dtype=np.intp), extra
+
+
+def _colors(words: list[list[str]], kind: str, notes: list[str]) -> NDArray[np.generic] | None:
+    """The colours ``words`` hold (one row per vertex or face), or ``None`` with a note on why
+    they were left out (nothing when no row has any)."""
+    widths = {len(row) for row in words}
+    if not words or widths == {0}:
+        return None
+    width = widths.pop() if len(widths) == 1 else 0
+    if width not in (3, 4):
+        notes.append(
+            f"The OFF {kind} colours were not read: only some {kind}s have one, or they are "
+            "not all 3 or 4 numbers (colour-map indices, say, which this reader does not "
+            "resolve)."
+        )
+        return None
+    try:
+        values = np.array(words, dtype=np.float64)
+    except ValueError:
+        notes.append(f"The OFF {kind} colours were not read: some are not numbers.")
+        return None
+    if all(_INTEGER.fullmatch(word) for row in words for word in row):
+        if values.min() < 0 or values.max() > 255:
+            notes.append(f"The OFF {kind} colours were not read: integers must be 0 to 255.")
+            return None
+        return values.astype(np.uint8)
+    return values
 
 
 def _number(word: str, line: int, kind: type[int] | type[float]) -> int:

@@ -11,11 +11,12 @@ scanned models and trimesh2 write them) follow the faces as triangles with the O
 a note says how many triangles the strips gave. Other elements are read past and named in a
 note.
 
-Vertex ``red green blue [alpha]`` are kept in the type the header declares (``uchar`` 0-255 or
-``float`` 0-1, say) and written back in it.
+Vertex and face ``red green blue [alpha]`` are kept in the type the header declares (``uchar``
+0-255 or ``float`` 0-1, say) and written back in it; each triangle of a polygon has its
+polygon's colour.
 
 Written as binary little-endian PLY with float64 coordinates (:func:`write_ply`), and with
-vertex or face normals or vertex colours beside them (:func:`ply_bytes`).
+vertex or face normals or colours beside them (:func:`ply_bytes`).
 """
 
 from __future__ import annotations
@@ -69,11 +70,12 @@ class _Element:
 def read_ply(data: bytes) -> LoadedMesh:
     """Read a PLY file (see the module docstring)."""
     encoding, elements, body = _header(data)
+    notes = []
     if encoding == "ascii":
-        _read_ascii(elements, data[body:])
+        notes = _read_ascii(elements, data[body:])
     else:
         _read_binary(elements, data, body, _ENDIAN[encoding])
-    return _mesh(elements)
+    return _mesh(elements, notes)
 
 
 def _header(data: bytes) -> tuple[str, list[_Element], int]:
@@ -241,8 +243,27 @@ def _binary_records(element: _Element, data: bytes, offset: int, endian: str) ->
     return offset
 
 
-def _read_ascii(elements: list[_Element], body: bytes) -> None:
+def _read_ascii(elements: list[_Element], body: bytes) -> list[str]:
+    """Read the elements number by number; where that fails or leaves numbers over, line by
+    line (:func:`_read_lines`), which reads files whose lines hold more than the header says.
+    Returns the notes."""
     tokens = body.split()
+    try:
+        position = _read_tokens(elements, tokens)
+    except MeshFileError:
+        by_line = _read_lines(elements, body)
+        if by_line is None:
+            raise
+        return _adopt(elements, *by_line)
+    if position == len(tokens):
+        return []
+    by_line = _read_lines(elements, body)
+    if by_line is not None and by_line[1]:
+        return _adopt(elements, *by_line)
+    return [f"Ignored {len(tokens) - position:,} numbers after the PLY file's last element."]
+
+
+def _read_tokens(elements: list[_Element], tokens: list[bytes]) -> int:
     position = 0
     for element in elements:
         if not element.lists:
@@ -258,6 +279,83 @@ def _read_ascii(elements: list[_Element], body: bytes) -> None:
             position = end
         else:
             position = _ascii_lists(element, tokens, position)
+    return position
+
+
+#: What an element whose lines disagree with the header keeps: its position in space.
+_GEOMETRY = frozenset({"x", "y", "z", "vertex_indices", "vertex_index"})
+
+
+def _read_lines(
+    elements: list[_Element], body: bytes
+) -> tuple[list[dict[str, object]], list[str]] | None:
+    """Each record from its own line, as PLY writers write them; ``None`` when the lines do
+    not fit the header.
+
+    A line may hold more numbers than the header declares (trimesh's ``fuze_ascii.ply``,
+    written by MeshLab, ends each face with ten numbers where its header names four): then which
+    number is which is unsure, so that element keeps only its coordinates or corner indices
+    (every writer puts them first), and a note says what was not kept.
+    """
+    rows = [words for words in map(bytes.split, body.split(b"\n")) if words]
+    row, found, notes = 0, [], []
+    for element in elements:
+        records = rows[row : row + element.count]
+        row += element.count
+        columns = _line_columns(element, records)
+        if len(records) < element.count or columns is None:
+            return None
+        data, longer = columns
+        if longer:
+            dropped = [name for name in element.order if name not in _GEOMETRY]
+            data = {name: column for name, column in data.items() if name in _GEOMETRY}
+            kept = ", ".join(data) or "nothing"
+            notes.append(
+                f"{longer:,} of the {element.count:,} {element.name} lines of the PLY file "
+                f"hold more numbers than its header declares; only their {kept} were read"
+                + (f", not {', '.join(dropped)}." if dropped else ".")
+            )
+        found.append(data)
+    return found, notes
+
+
+def _line_columns(
+    element: _Element, records: list[list[bytes]]
+) -> tuple[dict[str, object], int] | None:
+    """The element's columns read from one line per record, and how many lines hold more
+    numbers than it declares; ``None`` when a line holds fewer."""
+    columns: dict[str, list[object]] = {name: [] for name in element.order}
+    longer = 0
+    for words in records:
+        at = 0
+        for name in element.order:
+            if name in element.lists:
+                if at >= len(words) or not words[at].isdigit():
+                    return None
+                size = int(words[at])
+                columns[name].append(words[at + 1 : at + 1 + size])
+                at += 1 + size
+            else:
+                columns[name].append(words[at] if at < len(words) else b"")
+                at += 1
+        if at > len(words):
+            return None
+        longer += at < len(words)
+    kinds = dict(element.scalars)
+    try:
+        data: dict[str, object] = {
+            name: column if name in element.lists else _floats(column).astype(kinds[name])  # type: ignore[arg-type]
+            for name, column in columns.items()
+        }
+    except MeshFileError:
+        return None
+    return data, longer
+
+
+def _adopt(elements: list[_Element], data: list[dict[str, object]], notes: list[str]) -> list[str]:
+    for element, columns in zip(elements, data, strict=True):
+        element.data = columns
+    return notes
 
 
 def _short(element: _Element, held: int) -> MeshFileError:
@@ -321,13 +419,12 @@ def _ascii_lists(element: _Element, tokens: list[bytes], position: int) -> int:
     return position
 
 
-def _mesh(elements: list[_Element]) -> LoadedMesh:
+def _mesh(elements: list[_Element], notes: list[str]) -> LoadedMesh:
     named = {element.name: element for element in elements}
     vertex = named.get("vertex")
     if vertex is None or not {"x", "y", "z"} <= vertex.data.keys():
         raise MeshFileError("The PLY file has no vertex element with x, y and z.")
     vertices = np.stack([np.asarray(vertex.data[axis], dtype=np.float64) for axis in "xyz"], axis=1)
-    notes = []
     face = named.get("face")
     key = _indices_key(face)
     if face is None or key is None:
@@ -347,9 +444,14 @@ def _mesh(elements: list[_Element]) -> LoadedMesh:
     if others:
         notes.append(f"Ignored elements this reader does not use: {', '.join(others)}.")
     face_normals = _face_normals(face, source)
+    face_colors = None if face is None else _colors(face)
+    face_colors = None if face_colors is None else face_colors[source]
     if strips is not None and len(strips.triangles):
         faces = np.concatenate([faces, strips.triangles])
         face_normals = None  # strips carry none: normals for only some triangles say nothing
+        if face_colors is not None:
+            notes.append("Face colours were not kept: the triangle strips carry none.")
+            face_colors = None
     from_polygons = len(source)
     return build(
         "ply",
@@ -359,6 +461,7 @@ def _mesh(elements: list[_Element]) -> LoadedMesh:
         vertex_normals=_normals(vertex),
         face_normals=face_normals,
         vertex_colors=_colors(vertex),
+        face_colors=face_colors,
         notes=notes,
         face=lambda i: (
             f"face {source[i]:,} (counting from 0)"
@@ -490,8 +593,8 @@ def _normals(element: _Element | None) -> NDArray[np.float64] | None:
 
 
 def _colors(element: _Element) -> NDArray[np.generic] | None:
-    """Vertex ``red green blue [alpha]`` in the type the header declares them (one type for
-    all, NumPy's common type where the file mixes them)."""
+    """An element's ``red green blue [alpha]`` in the type the header declares them (one type
+    for all, NumPy's common type where the file mixes them)."""
     if not set(_COLOR[:3]) <= element.data.keys():
         return None
     names = _COLOR if "alpha" in element.data else _COLOR[:3]
@@ -511,17 +614,19 @@ def write_ply(
     points: NDArray[np.float64],
     triangles: NDArray[np.intp],
     vertex_colors: NDArray[np.generic] | None = None,
+    face_colors: NDArray[np.generic] | None = None,
 ) -> bytes:
     """Binary little-endian PLY with float64 coordinates: it reads back bit for bit, and so do
-    vertex colours (written in their own type, see :func:`ply_bytes`).
+    vertex and face colours (written in their own type, see :func:`ply_bytes`).
 
     Parameters
     ----------
     points : (n, 3) float64
     triangles : (m, 3) intp
     vertex_colors : (n, 3) or (n, 4), optional
+    face_colors : (m, 3) or (m, 4), optional
     """
-    return ply_bytes(points, triangles, vertex_colors=vertex_colors)
+    return ply_bytes(points, triangles, vertex_colors=vertex_colors, face_colors=face_colors)
 
 
 def ply_bytes(
@@ -530,10 +635,11 @@ def ply_bytes(
     vertex_normals: NDArray[np.float64] | None = None,
     face_normals: NDArray[np.float64] | None = None,
     vertex_colors: NDArray[np.generic] | None = None,
+    face_colors: NDArray[np.generic] | None = None,
 ) -> bytes:
     """Binary little-endian PLY: float64 ``x y z`` and int32 triangles, ``nx ny nz``
-    (float64) of the vertices or of the faces where those normals are given, and vertex
-    ``red green blue [alpha]`` where colours are given.
+    (float64) of the vertices or of the faces where those normals are given, and
+    ``red green blue [alpha]`` of the vertices or of the faces where colours are given.
 
     Parameters
     ----------
@@ -544,10 +650,13 @@ def ply_bytes(
     vertex_colors : (n, 3) or (n, 4) uint8, uint16, float32 or float64, optional
         Written in their own type (``uchar``, ``ushort``, ``float``, ``double``), so colours
         read from a PLY file go back as they were; other types as ``double``.
+    face_colors : (m, 3) or (m, 4), optional
+        The same, one per triangle, after the face normals.
     """
     normal_fields = [("nx", "<f8"), ("ny", "<f8"), ("nz", "<f8")]
     normal_lines = "".join(f"property double {name}\n" for name, _ in normal_fields)
     color_fields, color_lines = _color_fields(vertex_colors)
+    face_color_fields, face_color_lines = _color_fields(face_colors)
     vertices = np.empty(
         len(points),
         dtype=[("xyz", "<f8", (3,))]
@@ -557,7 +666,8 @@ def ply_bytes(
     faces = np.empty(
         len(triangles),
         dtype=[("count", "u1"), ("indices", "<i4", (3,))]
-        + (normal_fields if face_normals is not None else []),
+        + (normal_fields if face_normals is not None else [])
+        + face_color_fields,
     )
     vertices["xyz"] = points
     faces["count"] = 3
@@ -566,20 +676,24 @@ def ply_bytes(
         if normals is not None:
             for axis, (name, _) in enumerate(normal_fields):
                 records[name] = normals[:, axis]
-    for axis, (name, _) in enumerate(color_fields):
-        vertices[name] = vertex_colors[:, axis]  # type: ignore[index]
+    for records, fields, colors in (
+        (vertices, color_fields, vertex_colors),
+        (faces, face_color_fields, face_colors),
+    ):
+        for axis, (name, _) in enumerate(fields):
+            records[name] = colors[:, axis]  # type: ignore[index]
     header = (
         f"ply\nformat binary_little_endian 1.0\ncomment written by {MAKER}\n"
         f"element vertex {len(points)}\nproperty double x\nproperty double y\n"
         f"property double z\n{normal_lines if vertex_normals is not None else ''}{color_lines}"
         f"element face {len(triangles)}\nproperty list uchar int vertex_indices\n"
-        f"{normal_lines if face_normals is not None else ''}end_header\n"
+        f"{normal_lines if face_normals is not None else ''}{face_color_lines}end_header\n"
     )
     return header.encode() + vertices.tobytes() + faces.tobytes()
 
 
 def _color_fields(colors: NDArray[np.generic] | None) -> tuple[list[tuple[str, str]], str]:
-    """The record fields and header lines of vertex colours (none without colours)."""
+    """The record fields and header lines of colours (none without colours)."""
     if colors is None:
         return [], ""
     kind = colors.dtype.str[1:] if colors.dtype.str[1:] in _TYPE_NAMES else "f8"

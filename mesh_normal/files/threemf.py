@@ -7,6 +7,11 @@ appears twice. Each object's ``<vertex>`` elements keep their file order and its
 ``<triangle v1 v2 v3>`` their winding; a placement whose transform mirrors (negative
 determinant) has its winding reversed, so faces that pointed outwards still do.
 
+Colours: a triangle's ``pid`` and ``p1`` (or its object's ``pid`` and ``pindex``) naming a
+``<basematerials>`` ``displaycolor`` or a ``<m:colorgroup>`` ``color`` (``#RRGGBB[AA]``)
+become its face colour, uint8 RGBA. They are kept when every placed triangle has one; a
+triangle with a colour per corner (``p2``, ``p3``) keeps its first corner's, and a note says so.
+
 The package is opened with the guards of :mod:`mesh_normal.files.archive` (member count, unpack
 limit, names outside the archive); documents with a DTD are refused, which rules out entity
 expansion.
@@ -14,6 +19,7 @@ expansion.
 
 from __future__ import annotations
 
+import functools
 import io
 import posixpath
 import re
@@ -66,13 +72,18 @@ class _Object:
     vertices: NDArray[np.float64] | None
     triangles: NDArray[np.intp] | None
     components: tuple[tuple[str, NDArray[np.float64]], ...] = ()
+    #: (t, 4) uint8 RGBA of each triangle, None without one; (t,) whether it has one
+    colors: NDArray[np.uint8] | None = None
+    colored: NDArray[np.bool_] | None = None
+    corner_colored: int = 0  # triangles whose corners have colours of their own
 
 
 def read_3mf(data: bytes) -> LoadedMesh:
     """Read a 3MF package (see the module docstring)."""
     root = _parse(_model_bytes(data))
+    palettes = _palettes(root)
     objects = {
-        obj.get("id", ""): _object(obj, number)
+        obj.get("id", ""): _object(obj, number, palettes)
         for number, obj in enumerate(root.iterfind("{*}resources/{*}object"), start=1)
     }
     items = list(root.iterfind("{*}build/{*}item"))
@@ -141,7 +152,41 @@ def _parse(xml: bytes) -> ET.Element:
         raise MeshFileError(f"The 3MF file's XML is broken: {error}.") from error
 
 
-def _object(obj: ET.Element, number: int) -> _Object:
+#: Colour resources by id: the text of each one's colours, in order (read when a triangle
+#: uses one, so that a broken colour nobody uses breaks nothing).
+Palettes = dict[str, list[str]]
+
+
+def _palettes(root: ET.Element) -> Palettes:
+    """Every ``<basematerials>`` and ``<m:colorgroup>`` of the resources, by id."""
+    palettes: Palettes = {}
+    for tag, child, key in (
+        ("basematerials", "base", "displaycolor"),
+        ("colorgroup", "color", "color"),
+    ):
+        for group in root.iterfind(f"{{*}}resources/{{*}}{tag}"):
+            palettes[group.get("id", "")] = [
+                item.get(key, "") for item in group.iterfind(f"{{*}}{child}")
+            ]
+    return palettes
+
+
+@functools.cache
+def _rgba(text: str) -> tuple[int, int, int, int]:
+    """``#RRGGBB`` or ``#RRGGBBAA`` as four bytes."""
+    digits = text.strip().lstrip("#")
+    try:
+        if len(digits) not in (6, 8):
+            raise ValueError(digits)
+        value = bytes.fromhex(digits + "FF" * (len(digits) == 6))
+    except ValueError:
+        raise MeshFileError(
+            f"The 3MF file has a colour that is not #RRGGBB[AA]: {text[:40]!r}."
+        ) from None
+    return value[0], value[1], value[2], value[3]
+
+
+def _object(obj: ET.Element, number: int, palettes: Palettes) -> _Object:
     mesh = obj.find("{*}mesh")
     if mesh is None:
         if any(
@@ -159,11 +204,44 @@ def _object(obj: ET.Element, number: int) -> _Object:
         )
         return _Object(number, None, None, components)
     vertices = _numbers(mesh.iterfind("{*}vertices/{*}vertex"), ("x", "y", "z"), float, number)
-    triangles = _numbers(mesh.iterfind("{*}triangles/{*}triangle"), ("v1", "v2", "v3"), int, number)
+    elements = list(mesh.iterfind("{*}triangles/{*}triangle"))
+    triangles = _numbers(iter(elements), ("v1", "v2", "v3"), int, number)
     points = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
     faces = np.asarray(triangles, dtype=np.intp).reshape(-1, 3)
     _check_indices(faces, len(points), number)
-    return _Object(number, points, faces)
+    colors, colored, corners = _triangle_colors(obj, elements, palettes, number)
+    return _Object(number, points, faces, colors=colors, colored=colored, corner_colored=corners)
+
+
+def _triangle_colors(
+    obj: ET.Element, triangles: list[ET.Element], palettes: Palettes, number: int
+) -> tuple[NDArray[np.uint8], NDArray[np.bool_], int]:
+    """Each triangle's colour from its ``pid``/``p1`` or its object's ``pid``/``pindex``,
+    whether it has one, and how many have a colour per corner."""
+    colors = np.zeros((len(triangles), 4), dtype=np.uint8)
+    colored = np.zeros(len(triangles), dtype=bool)
+    corners = 0
+    default_group, default_index = obj.get("pid"), obj.get("pindex")
+    for row, triangle in enumerate(triangles):
+        group = triangle.get("pid", default_group)
+        index = triangle.get("p1", default_index if "pid" not in triangle.attrib else None)
+        palette = palettes.get(group or "")
+        if palette is None or index is None:
+            continue
+        try:
+            position = int(index)
+            if position < 0:
+                raise IndexError(position)
+            text = palette[position]
+        except (ValueError, IndexError):
+            raise MeshFileError(
+                f"Triangle {row:,} (counting from 0) of object {number} names colour "
+                f"{index[:20]!r} of group {group!r}, which has {len(palette)}."
+            ) from None
+        colors[row] = _rgba(text)
+        colored[row] = True
+        corners += any(triangle.get(key, index) != index for key in ("p2", "p3"))
+    return colors, colored, corners
 
 
 def _numbers(
@@ -261,6 +339,8 @@ def _join(
 ) -> LoadedMesh:
     parts: list[tuple[NDArray[np.float64], NDArray[np.intp]]] = []
     mirrored = 0
+    notes: list[str] = []
+    face_colors = _placed_colors([obj for obj, _ in placed], notes)
     for obj, transform in placed:
         assert obj.vertices is not None and obj.triangles is not None
         linear = transform[:3, :3]
@@ -273,7 +353,6 @@ def _join(
     offsets = np.cumsum([0] + [len(part[0]) for part in parts])
     vertices = np.concatenate([part[0] for part in parts])
     faces = np.concatenate([part[1] + offset for part, offset in zip(parts, offsets, strict=False)])
-    notes = []
     if len(parts) > 1:
         notes.append(
             f"Joined {len(parts):,} 3MF meshes from {items:,} build items, "
@@ -293,5 +372,27 @@ def _join(
         source_faces=len(faces),
         face_groups=groups.ravel(),
         group_names=[names[i] for i in used.tolist()],
+        face_colors=face_colors,
         notes=notes,
     )
+
+
+def _placed_colors(objects: list[_Object], notes: list[str]) -> NDArray[np.uint8] | None:
+    """The face colours of the placed meshes joined, when every triangle has one."""
+    colored = [obj.colored for obj in objects if obj.colored is not None]
+    have = sum(int(flags.sum()) for flags in colored)
+    if not have:
+        return None
+    total = sum(len(flags) for flags in colored)
+    if have < total:
+        notes.append(
+            f"The 3MF colours were not kept: {total - have:,} of {total:,} triangles have no "
+            "colour of their own or of their object (a texture, say, or none given)."
+        )
+        return None
+    if corners := sum(obj.corner_colored for obj in objects):
+        notes.append(
+            f"{corners:,} 3MF triangles have a colour per corner; each keeps its first "
+            "corner's as its face colour."
+        )
+    return np.concatenate([obj.colors for obj in objects if obj.colors is not None])

@@ -6,8 +6,9 @@ PLY stores float64 coordinates and OBJ the shortest text that reads back as the 
 facet normals are our face normals (:func:`mesh_normal.face_normals`), zero for degenerate faces.
 
 Vertex colours go where the format holds them: PLY in their own type (``uchar``, ``float``),
-OBJ as ``v x y z r g b`` (floats 0-1, without alpha); STL holds none. :func:`unkept` names
-what a format leaves out, for callers that must say so.
+OBJ as ``v x y z r g b`` (floats 0-1, without alpha); STL holds none. Face colours (one per
+triangle) go to PLY only, in their own type. :func:`unkept` names what a format leaves out,
+for callers that must say so.
 """
 
 from __future__ import annotations
@@ -21,7 +22,14 @@ from numpy.typing import ArrayLike, NDArray
 
 from mesh_normal.checks import check_mesh
 from mesh_normal.files.errors import unsupported
-from mesh_normal.files.formats import FORMATS, HOLDS_COLORS, WRITABLE, MeshFormat, suffix_format
+from mesh_normal.files.formats import (
+    FORMATS,
+    HOLDS_COLORS,
+    HOLDS_FACE_COLORS,
+    WRITABLE,
+    MeshFormat,
+    suffix_format,
+)
 
 StrPath = str | os.PathLike[str]
 
@@ -33,6 +41,7 @@ def write_mesh(
     file_format: str,
     *,
     vertex_colors: ArrayLike | None = None,
+    face_colors: ArrayLike | None = None,
 ) -> bytes: ...
 
 
@@ -44,6 +53,7 @@ def write_mesh(
     *,
     path: StrPath,
     vertex_colors: ArrayLike | None = None,
+    face_colors: ArrayLike | None = None,
 ) -> None: ...
 
 
@@ -54,6 +64,7 @@ def write_mesh(
     *,
     path: StrPath | None = None,
     vertex_colors: ArrayLike | None = None,
+    face_colors: ArrayLike | None = None,
 ) -> bytes | None:
     """The bytes of a mesh file, or, given ``path``, that file written.
 
@@ -78,6 +89,10 @@ def write_mesh(
         <mesh_normal.files.LoadedMesh.vertex_colors>` holds them). PLY writes them in their
         own type (``uchar`` 0-255, ``float`` 0-1, ...), OBJ as ``v x y z r g b`` floats 0-1
         (no alpha); STL holds none and writes none. :func:`unkept` names what is left out.
+    face_colors : (m, 3) or (m, 4), optional
+        The colour of each triangle (as :attr:`LoadedMesh.face_colors
+        <mesh_normal.files.LoadedMesh.face_colors>` holds them): PLY writes them on its faces
+        in their own type; STL and OBJ hold none.
 
     Raises
     ------
@@ -93,33 +108,45 @@ def write_mesh(
         raise TypeError("write_mesh needs a file_format or a path to take the format from.")
     entry = _writable(file_format, path)
     points, triangles = check_mesh(vertices, faces)
-    data = entry.write(points, triangles, _checked_colors(vertex_colors, len(points)))
+    data = entry.write(
+        points,
+        triangles,
+        _checked_colors(vertex_colors, len(points), "vertex_colors"),
+        _checked_colors(face_colors, len(triangles), "face_colors"),
+    )
     if path is None:
         return data
     replace_file(path, data)
     return None
 
 
-def unkept(file_format: str, vertex_colors: ArrayLike | None) -> list[str]:
-    """What of the given vertex colours a format cannot hold, in words; empty when it holds
-    all of them (or there are none).
+def unkept(
+    file_format: str, vertex_colors: ArrayLike | None, face_colors: ArrayLike | None = None
+) -> list[str]:
+    """What of the given colours a format cannot hold, in words; empty when it holds all of
+    them (or there are none).
 
     >>> unkept("stl", colors)
     ['vertex colours (STL holds none)']
     """
-    if vertex_colors is None:
-        return []
     title = FORMATS[file_format].title if file_format in FORMATS else file_format
-    held = HOLDS_COLORS.get(file_format, "")
-    if not held:
-        return [f"vertex colours ({title} holds none)"]
-    if np.shape(vertex_colors)[-1] > len(held):
-        return [f"vertex colour alpha ({title} holds red, green and blue only)"]
-    return []
+    dropped = []
+    for colors, held, kind in (
+        (vertex_colors, HOLDS_COLORS.get(file_format, ""), "vertex"),
+        (face_colors, HOLDS_FACE_COLORS.get(file_format, ""), "face"),
+    ):
+        if colors is None:
+            continue
+        if not held:
+            dropped.append(f"{kind} colours ({title} holds none)")
+        elif np.shape(colors)[-1] > len(held):
+            dropped.append(f"{kind} colour alpha ({title} holds red, green and blue only)")
+    return dropped
 
 
-def _checked_colors(colors: ArrayLike | None, count: int) -> NDArray[np.generic] | None:
-    """Colours as an ``(n, 3)`` or ``(n, 4)`` array of numbers; ``ValueError`` otherwise."""
+def _checked_colors(colors: ArrayLike | None, count: int, name: str) -> NDArray[np.generic] | None:
+    """Colours as an ``(count, 3)`` or ``(count, 4)`` array of numbers; ``ValueError``
+    otherwise."""
     if colors is None:
         return None
     result = np.asarray(colors)
@@ -129,10 +156,10 @@ def _checked_colors(colors: ArrayLike | None, count: int) -> NDArray[np.generic]
         or result.shape[1] not in (3, 4)
     ):
         raise ValueError(
-            f"vertex_colors must have shape ({count}, 3) or ({count}, 4), not {result.shape}."
+            f"{name} must have shape ({count}, 3) or ({count}, 4), not {result.shape}."
         )
     if result.dtype.kind not in "uif":
-        raise ValueError(f"vertex_colors must be numbers, not {result.dtype}.")
+        raise ValueError(f"{name} must be numbers, not {result.dtype}.")
     return result
 
 

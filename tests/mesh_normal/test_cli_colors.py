@@ -62,3 +62,19 @@ def test_fix_without_colours_says_nothing_of_them(
     source.write_text(TETRA_OBJ)
     assert main(["fix", str(source), str(tmp_path / "fixed.stl")]) == 0
     assert "leaves out" not in capsys.readouterr().err
+
+
+def test_fix_to_obj_says_the_face_colours_are_dropped(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    source = tmp_path / "faces.ply"
+    source.write_bytes(write_mesh(TETRA_VERTICES, FLIPPED, "ply", face_colors=UCHAR))
+    kept = tmp_path / "fixed.ply"
+    assert main(["fix", str(source), str(kept)]) == 0
+    fixed = read_mesh(kept.read_bytes(), "fixed.ply")
+    assert fixed.face_colors is not None and fixed.face_colors.tobytes() == UCHAR.tobytes()
+    out = tmp_path / "fixed.obj"
+    capsys.readouterr()
+    assert main(["fix", str(source), str(out)]) == 0
+    lines = [line for line in capsys.readouterr().err.splitlines() if "leaves out" in line]
+    assert lines == [f"mesh-normal: {out} leaves out face colours (OBJ holds none)"]

@@ -126,3 +126,17 @@ def test_the_page_says_before_the_download_what_each_format_leaves_out(
     for fmt, sentence in expected.items():  # in the words of the header of that download
         header = fix(client, data, "c.ply", fmt).headers.get("x-dropped", "")
         assert (header in sentence) if header else not sentence
+
+
+def test_ply_face_colours_survive_the_fix_and_are_named_elsewhere(client: TestClient) -> None:
+    data = write_mesh(TETRA_VERTICES, FLIPPED, "ply", face_colors=UCHAR)
+    response = fix(client, data, "f.ply", "ply")
+    assert response.headers["x-faces-flipped"] == "1"
+    assert "x-dropped" not in response.headers
+    fixed = read_mesh(response.content, "fixed.ply")
+    assert fixed.face_colors is not None and fixed.face_colors.tobytes() == UCHAR.tobytes()
+    assert fix(client, data, "f.ply", "obj").headers["x-dropped"] == "face colours (OBJ holds none)"
+    both = write_mesh(TETRA_VERTICES, FLIPPED, "ply", vertex_colors=UCHAR, face_colors=UCHAR)
+    assert fix(client, both, "b.ply", "stl").headers["x-dropped"] == (
+        "vertex colours (STL holds none); face colours (STL holds none)"
+    )

@@ -240,3 +240,126 @@ def test_nodes_that_place_too_many_triangles_are_refused(monkeypatch: pytest.Mon
     monkeypatch.setattr(gltf, "MAX_TRIANGLES", 1000)  # DenseSphere places 30,720
     with pytest.raises(MeshFileError, match="nodes place more than 1,000 triangles"):
         read_mesh(DATA / "gltf" / "DenseSphere.glb")
+
+
+def coloured_tetras(colors: list[np.ndarray | None], component: int = 5121) -> bytes:
+    """One tetrahedron primitive per entry, each with ``COLOR_0`` (normalized integers of
+    ``component``, or float32 when the array is) unless the entry is ``None``."""
+    blob = b""
+    views: list[dict[str, Any]] = []
+    accessors: list[dict[str, Any]] = []
+    primitives = []
+
+    def add(data: bytes, accessor: dict[str, Any]) -> int:
+        nonlocal blob
+        blob += b"\0" * (-len(blob) % 4)
+        views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": len(data)})
+        blob += data
+        accessors.append({"bufferView": len(views) - 1, **accessor})
+        return len(accessors) - 1
+
+    for color in colors:
+        position = add(
+            TETRA.astype("<f4").tobytes(),
+            {"componentType": 5126, "count": 4, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 1]},
+        )
+        indices = add(TETRA_FACES.tobytes(), {"componentType": 5123, "count": 12, "type": "SCALAR"})
+        attributes = {"POSITION": position}
+        if color is not None:
+            floats = color.dtype.kind == "f"
+            attributes["COLOR_0"] = add(
+                color.tobytes(),
+                {
+                    "componentType": 5126 if floats else component,
+                    "normalized": not floats,
+                    "count": 4,
+                    "type": f"VEC{color.shape[1]}",
+                },
+            )
+        primitives.append({"attributes": attributes, "indices": indices})
+    header = {
+        "asset": {"version": "2.0"},
+        "buffers": [{"byteLength": len(blob)}],
+        "bufferViews": views,
+        "accessors": accessors,
+        "meshes": [{"primitives": primitives}],
+        "nodes": [{"mesh": 0}],
+        "scenes": [{"nodes": [0]}],
+        "scene": 0,
+    }
+    return glb(header, blob)
+
+
+RGBA_BYTES = np.array([[255, 0, 0, 255], [0, 255, 0, 128], [0, 0, 255, 1], [7, 8, 9, 0]], np.uint8)
+
+
+@pytest.mark.parametrize(
+    ("colors", "component"),
+    [
+        (RGBA_BYTES, 5121),
+        (RGBA_BYTES[:, :3].astype("<u2") * 257, 5123),
+        (np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1], [0.25, 0.5, 0.75]], "<f4"), 5126),
+    ],
+    ids=["ubyte-rgba", "ushort-rgb", "float-rgb"],
+)
+def test_color_0_is_kept_in_its_accessors_type(colors: np.ndarray, component: int) -> None:
+    mesh = read_mesh(coloured_tetras([colors], component), "c.glb")
+    assert mesh.vertex_colors is not None
+    assert mesh.vertex_colors.dtype == colors.dtype.newbyteorder("=")
+    np.testing.assert_array_equal(mesh.vertex_colors, colors)
+    np.testing.assert_array_equal(mesh.vertices, TETRA)  # positions untouched by the colours
+    assert not any("quantized" in note for note in mesh.notes)  # colours are not "decoded"
+
+
+def test_primitives_without_color_0_are_white() -> None:
+    mesh = read_mesh(coloured_tetras([RGBA_BYTES[:, :3], None]), "c.glb")
+    assert mesh.vertex_colors is not None and mesh.vertex_colors.dtype == np.uint8
+    np.testing.assert_array_equal(mesh.vertex_colors[:4], RGBA_BYTES[:, :3])
+    assert mesh.vertex_colors[4:].tolist() == [[255, 255, 255]] * 4
+    assert "1 primitive without COLOR_0 is white in the vertex colours, as glTF draws it." in (
+        mesh.notes
+    )
+
+
+def test_color_0_of_mixed_types_become_floats_and_rgb_gets_an_opaque_alpha() -> None:
+    floats = np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1], [0.25, 0.5, 0.75]], "<f4")
+    mesh = read_mesh(coloured_tetras([RGBA_BYTES, floats]), "c.glb")
+    assert mesh.vertex_colors is not None and mesh.vertex_colors.dtype == np.float32
+    np.testing.assert_array_equal(mesh.vertex_colors[:4], (RGBA_BYTES / 255).astype(np.float32))
+    np.testing.assert_array_equal(mesh.vertex_colors[4:, :3], floats)
+    assert np.all(mesh.vertex_colors[4:, 3] == 1)
+
+
+def test_a_real_glb_with_vertex_colours_matches_trimesh() -> None:
+    path = DATA / "gltf" / "cube_vertex_colors.glb"
+    mesh = read_mesh(path.read_bytes(), path.name)
+    theirs = trimesh.load(path, force="mesh", process=False)
+    assert mesh.vertex_colors is not None and mesh.vertex_colors.shape == (54, 3)
+    assert mesh.vertex_colors.dtype == np.float32
+    np.testing.assert_array_equal(mesh.vertices, theirs.vertices)
+    # trimesh keeps them as bytes: the nearest to ours times 255
+    np.testing.assert_allclose(
+        mesh.vertex_colors * 255, theirs.visual.vertex_colors[:, :3], atol=0.5
+    )
+
+
+def test_a_gltf_without_meshes_says_so() -> None:
+    """As trimesh's models/empty_nodes.glb: nodes, no meshes, no accessors."""
+    header = {"asset": {"version": "2.0"}, "nodes": [{"name": "a"}], "scenes": [{"nodes": [0]}]}
+    with pytest.raises(MeshFileError, match=r"^The glTF file holds no meshes\.$"):
+        read_mesh(glb(header, b""), "empty_nodes.glb")
+
+
+@pytest.mark.parametrize("draco", [False, True], ids=["plain", "draco"])
+def test_trimesh_exported_vertex_colours_come_back(draco: bool) -> None:
+    """trimesh writes COLOR_0 as normalized RGBA bytes, inside Draco too."""
+    box = trimesh.creation.box()
+    colors = np.zeros((8, 4), dtype=np.uint8)
+    colors[:, 0], colors[:, 1], colors[:, 3] = np.arange(8) * 30, 7, 255
+    box.visual.vertex_colors = colors
+    data = trimesh.Scene(box).export(file_type="glb", extension_draco=draco)
+    mesh = read_mesh(data, "box.glb")
+    assert mesh.vertex_colors is not None and mesh.vertex_colors.dtype == np.uint8
+    # Draco may reorder the vertices: each position keeps its colour
+    order = [int(np.flatnonzero((box.vertices == point).all(axis=1))[0]) for point in mesh.vertices]
+    np.testing.assert_array_equal(mesh.vertex_colors, colors[order])

@@ -141,3 +141,68 @@ def test_nan_vertex() -> None:
     data = polygon_ply("ascii").replace(b"1 1 0 0 0 1 5", b"1 nan 0 0 0 1 5")
     with pytest.raises(MeshFileError, match="vertex 2 \\(counting from 0\\) include nan"):
         read_mesh(data, "p.ply")
+
+
+#: Faces as MeshLab writes them with per-corner texture coordinates, and per-corner colours
+#: (``9 r g b r g b r g b``) that its header does not declare: as in trimesh's
+#: ``models/fuze_ascii.ply``.
+MESHLAB_FACES = """ply
+format ascii 1.0
+comment VCGLIB generated
+comment TextureFile fuze uv.jpg
+element vertex 4
+property float x
+property float y
+property float z
+property uchar red
+property uchar green
+property uchar blue
+property uchar alpha
+element face 4
+property list uchar int vertex_indices
+property list uchar float texcoord
+property uchar red
+property uchar green
+property uchar blue
+property uchar alpha
+end_header
+"""
+
+
+def meshlab_faces(extra: str) -> bytes:
+    rows = "".join(f"{x} {y} {z} 10 20 30 255 \n" for x, y, z in TETRA_VERTICES.tolist())
+    faces = "".join(
+        f"3 {a} {b} {c} 6 0.1 0.2 0.3 0.4 0.5 0.6 {extra}\n" for a, b, c in TETRA_FACES.tolist()
+    )
+    return (MESHLAB_FACES + rows + faces).encode()
+
+
+def test_lines_longer_than_the_header_keep_their_corners_only() -> None:
+    mesh = read_mesh(meshlab_faces("9 1 1 1 1 1 1 1 1 1"), "fuze_ascii.ply")
+    np.testing.assert_array_equal(mesh.faces, TETRA_FACES)
+    assert mesh.vertex_colors is not None
+    assert mesh.vertex_colors.tolist() == [[10, 20, 30, 255]] * 4
+    assert mesh.face_colors is None  # "9 1 1 1" would be a wrong colour
+    assert mesh.notes == (
+        "4 of the 4 face lines of the PLY file hold more numbers than its header declares; "
+        "only their vertex_indices were read, not texcoord, red, green, blue, alpha.",
+    )
+
+
+def test_lines_that_fit_the_header_keep_every_property() -> None:
+    mesh = read_mesh(meshlab_faces("255 128 0 255"), "fuze_ascii.ply")
+    assert mesh.face_colors is not None and mesh.face_colors.dtype == np.uint8
+    assert mesh.face_colors.tolist() == [[255, 128, 0, 255]] * 4
+    assert mesh.notes == ()
+
+
+def test_a_line_shorter_than_the_header_is_still_an_error() -> None:
+    with pytest.raises(MeshFileError, match=r"has '0\.2' where a list length should be"):
+        read_mesh(meshlab_faces("255 128"), "short.ply")
+
+
+def test_numbers_after_the_last_element_are_named() -> None:
+    data = meshlab_faces("255 128 0 255") + b"7 7 7\n"
+    assert read_mesh(data, "x.ply").notes == (
+        "Ignored 3 numbers after the PLY file's last element.",
+    )

@@ -128,3 +128,14 @@ def test_an_unsigned_restart_is_all_ones(kind: str, code: str) -> None:
     records = struct.pack(f"<i{len(strip)}{code}", len(strip), *stored)
     mesh = read_mesh(header + b"end_header\n" + points + records, "unsigned.ply")
     np.testing.assert_array_equal(mesh.faces, [[0, 1, 2], [2, 3, 4]])
+
+
+def test_face_colours_beside_strips_are_named_not_kept() -> None:
+    """Strips carry no colour: colours for only some triangles would be no colours at all."""
+    data = strip_ply([[0, 1, 2, 3]], faces="3 0 2 4 0 0 1 255 0 0\n").replace(
+        b"property float nz\n",
+        b"property float nz\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n",
+    )
+    mesh = read_mesh(data, "row.ply")
+    assert len(mesh.faces) == 3 and mesh.face_colors is None
+    assert "Face colours were not kept: the triangle strips carry none." in mesh.notes

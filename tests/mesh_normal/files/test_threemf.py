@@ -13,6 +13,7 @@ from mesh_normal.files import MeshFileError, archive, read_mesh
 from mesh_normal.files.formats import ACCEPTED_SUFFIXES, FORMATS
 from mesh_normal.files.read import sniff
 from tests.conftest import assert_error
+from tests.paths import DATA
 
 TETRA_VERTICES = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)]
 #: Counter-clockwise seen from outside, as 3MF asks.
@@ -262,3 +263,92 @@ def test_components_that_double_at_every_level_are_refused_before_placing(
     data = package(model("".join(levels), '<item objectid="32"/>'))
     with pytest.raises(MeshFileError, match="makes more than 50,000,000 triangles"):
         read_mesh(data, "bomb.3mf")
+
+
+MATERIALS = 'xmlns:m="http://schemas.microsoft.com/3dmanufacturing/material/2015/02"'
+COLOURS = (
+    '<basematerials id="5"><base name="red" displaycolor="#FF0000"/>'
+    '<base name="clear" displaycolor="#00FF0080"/></basematerials>'
+    '<m:colorgroup id="6"><m:color color="#0000FFFF"/><m:color color="#102030"/></m:colorgroup>'
+)
+
+
+def coloured(triangles: list[str], object_colour: str = 'pid="5" pindex="1"') -> bytes:
+    """The tetrahedron with colour resources, a default colour on the object and attributes
+    on each triangle."""
+    points = "".join(f'<vertex x="{x}" y="{y}" z="{z}"/>' for x, y, z in TETRA_VERTICES)
+    faces = "".join(
+        f'<triangle v1="{a}" v2="{b}" v3="{c}" {extra}/>'
+        for (a, b, c), extra in zip(TETRA_TRIANGLES, triangles, strict=True)
+    )
+    obj = (
+        f'<object id="1" type="model" {object_colour}><mesh><vertices>{points}</vertices>'
+        f"<triangles>{faces}</triangles></mesh></object>"
+    )
+    xml = model(COLOURS + obj, '<item objectid="1"/>').replace("<model ", f"<model {MATERIALS} ")
+    return package(xml)
+
+
+def test_triangle_colours_from_colour_groups_and_base_materials() -> None:
+    data = coloured(['pid="6" p1="0"', "", 'pid="6" p1="1"', 'pid="5" p1="0"'])
+    mesh = read_mesh(data, "c.3mf")
+    assert mesh.face_colors is not None and mesh.face_colors.dtype == np.uint8
+    assert mesh.face_colors.tolist() == [
+        [0, 0, 255, 255],
+        [0, 255, 0, 128],  # the object's default: base 1 of group 5
+        [16, 32, 48, 255],  # #RRGGBB is opaque
+        [255, 0, 0, 255],
+    ]
+    assert mesh.notes == ()
+
+
+def test_a_colour_per_corner_keeps_the_first_corners() -> None:
+    mesh = read_mesh(coloured(['pid="6" p1="0" p2="1" p3="1"', "", "", ""]), "c.3mf")
+    assert mesh.face_colors is not None
+    assert mesh.face_colors[0].tolist() == [0, 0, 255, 255]
+    assert mesh.notes == (
+        "1 3MF triangles have a colour per corner; each keeps its first corner's as its "
+        "face colour.",
+    )
+
+
+def test_colours_on_only_some_triangles_are_not_kept_and_say_so() -> None:
+    mesh = read_mesh(coloured(['pid="6" p1="0"', "", "", ""], object_colour=""), "c.3mf")
+    assert mesh.face_colors is None
+    assert mesh.notes[0].startswith("The 3MF colours were not kept: 3 of 4 triangles have no")
+
+
+def test_no_colours_no_note() -> None:
+    mesh = read_mesh(coloured(["", "", "", ""], object_colour=""), "c.3mf")
+    assert mesh.face_colors is None and mesh.notes == ()
+
+
+@pytest.mark.parametrize(
+    ("triangle", "words"),
+    [
+        ('pid="6" p1="2"', "names colour '2' of group '6', which has 2"),
+        ('pid="6" p1="x"', "names colour 'x'"),
+        ('pid="6" p1="-1"', "names colour '-1'"),
+    ],
+)
+def test_colour_indices_out_of_range_are_one_sentence(triangle: str, words: str) -> None:
+    with pytest.raises(MeshFileError, match=words) as error:
+        read_mesh(coloured([triangle, "", "", ""]), "c.3mf")
+    assert str(error.value).startswith("Triangle 0 (counting from 0) of object 1")
+
+
+def test_a_colour_that_is_not_hex_is_one_sentence_where_used() -> None:
+    with zipfile.ZipFile(io.BytesIO(coloured(['pid="6" p1="1"', "", "", ""]))) as source:
+        xml = source.read("3D/3dmodel.model").replace(b"#102030", b"blue").decode()
+    with pytest.raises(MeshFileError, match=r"not #RRGGBB\[AA\]: 'blue'"):
+        read_mesh(package(xml), "c.3mf")
+    unused = xml.replace('pid="6" p1="1"', "")  # a broken colour nobody uses breaks nothing
+    assert read_mesh(package(unused), "c.3mf").face_colors is not None
+
+
+def test_a_real_file_with_base_materials() -> None:
+    """trimesh's models/featuretype.3MF: the object's pid and pindex name its one material."""
+    data = (DATA / "threemf_basematerials.3mf").read_bytes()
+    mesh = read_mesh(data, "featuretype.3mf")
+    assert mesh.face_colors is not None and mesh.face_colors.shape == (2208, 4)
+    assert np.unique(mesh.face_colors, axis=0).tolist() == [[0xCA, 0xD1, 0xEE, 0]]
