@@ -113,11 +113,10 @@ def visible_sides(
     per = int(np.clip(RAYS // (2 * DIRECTIONS * len(chosen)), FEWEST, SAMPLES))
     samples, owner = _samples(group, chosen, per)
     unit = (points - centre) / half
-    order, boxes, children, spans = _hierarchy(unit, faces)
+    order, boxes, children, spans, corners = _hierarchy(unit, faces)
     escaped = np.zeros((len(samples), 2))  # share of escaping rays: + side, - side of the plane
     weights = np.zeros(len(samples))
     against = np.zeros(len(samples), dtype=np.bool_)
-    corners = _corners(unit, faces, order)
     announce_compiling()
     with PARALLEL_KERNELS:
         _cast(
@@ -156,19 +155,28 @@ def _samples(group: IndexArray, chosen: IndexArray, per: int) -> tuple[IndexArra
 
 def _hierarchy(
     unit: FloatArray, faces: IndexArray
-) -> tuple[IndexArray, FloatArray, IndexArray, IndexArray]:
+) -> tuple[IndexArray, FloatArray, IndexArray, IndexArray, FloatArray]:
     """A bounding-volume hierarchy over the faces: their order along a Morton curve of their
-    centroids, and per node its box, children (-1 for a leaf) and span of that order."""
+    centroids; per node its box, children (-1 for a leaf) and span of that order; and the
+    faces' corners in that order (see :func:`_corners`).
+
+    About 110 bytes a face are kept (the corners 72, the order 8, the nodes about 30: a leaf
+    holds up to ``_LEAF`` faces), and 70 more for a moment while the nodes are made.
+    """
     code = np.empty(len(faces), dtype=np.int64)
     announce_compiling()
     _morton(unit, faces, code)
     order = np.argsort(code, kind="stable").astype(np.intp)
     nodes = max(1, 2 * len(faces))  # at least one face per leaf: fewer than 2 m nodes
-    boxes = np.empty((nodes, 6))
     children = np.full((nodes, 2), -1, dtype=np.intp)
     spans = np.zeros((nodes, 2), dtype=np.intp)
-    used = _build(unit, faces, order, code[order], boxes, children, spans)
-    return order, boxes[:used], children[:used], spans[:used]
+    used = _split(code[order], children, spans)
+    del code
+    children, spans = children[:used].copy(), spans[:used].copy()
+    corners = _corners(unit, faces, order)
+    boxes = np.empty((used, 6))
+    _boxes(corners, children, spans, boxes)
+    return order, boxes, children, spans, corners
 
 
 @kernel()
@@ -193,19 +201,11 @@ def _corners(unit: FloatArray, faces: IndexArray, order: IndexArray) -> FloatArr
 
 
 @kernel()
-def _build(
-    unit: FloatArray,
-    faces: IndexArray,
-    order: IndexArray,
-    codes: IndexArray,
-    boxes: FloatArray,
-    children: IndexArray,
-    spans: IndexArray,
-) -> int:
+def _split(codes: IndexArray, children: IndexArray, spans: IndexArray) -> int:
     """Split each span where the highest bit that differs in its Morton codes turns (the
-    halves of an octree cell; in the middle where the codes are all equal) down to leaves;
-    boxes from the leaves up."""
-    spans[0, 0], spans[0, 1] = 0, len(order)
+    halves of an octree cell; in the middle where the codes are all equal) down to leaves of
+    at most ``_LEAF`` faces; the number of nodes made."""
+    spans[0, 0], spans[0, 1] = 0, len(codes)
     used = 1
     node = 0
     while node < used:  # nodes are made in breadth order: children after their parent
@@ -225,23 +225,28 @@ def _build(
             spans[used + 1, 0], spans[used + 1, 1] = mid, hi
             used += 2
         node += 1
+    return used
+
+
+@kernel()
+def _boxes(corners: FloatArray, children: IndexArray, spans: IndexArray, boxes: FloatArray) -> None:
+    """Each node's box, a little larger than its faces' (by 2**-40), from the leaves up."""
     pad = 2.0**-40
-    for node in range(used - 1, -1, -1):
+    for node in range(len(children) - 1, -1, -1):
         if children[node, 0] < 0:
             for axis in range(3):
                 boxes[node, axis], boxes[node, axis + 3] = np.inf, -np.inf
             for k in range(spans[node, 0], spans[node, 1]):
                 for corner in range(3):
-                    p = faces[order[k], corner]
                     for axis in range(3):
-                        boxes[node, axis] = min(boxes[node, axis], unit[p, axis] - pad)
-                        boxes[node, axis + 3] = max(boxes[node, axis + 3], unit[p, axis] + pad)
+                        value = corners[k, 3 * corner + axis]
+                        boxes[node, axis] = min(boxes[node, axis], value - pad)
+                        boxes[node, axis + 3] = max(boxes[node, axis + 3], value + pad)
         else:
             left, right = children[node, 0], children[node, 1]
             for axis in range(3):
                 boxes[node, axis] = min(boxes[left, axis], boxes[right, axis])
                 boxes[node, axis + 3] = max(boxes[left, axis + 3], boxes[right, axis + 3])
-    return used
 
 
 @kernel()
