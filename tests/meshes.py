@@ -108,16 +108,17 @@ def binary_stl(
     return header.ljust(80, b" ") + struct.pack("<I", stated) + body
 
 
-def ascii_stl(corners: np.ndarray, normals: np.ndarray) -> bytes:
-    """An ASCII STL of (m, 3, 3) corners and (m, 3) stated normals, numbers as Python repr."""
-    lines = ["solid test"]
+def ascii_stl(corners: np.ndarray, normals: np.ndarray, name: str = "test") -> bytes:
+    """An ASCII STL of (m, 3, 3) corners and (m, 3) stated normals, numbers as Python repr:
+    one solid ``name``."""
+    lines = [f"solid {name}".rstrip()]
     for normal, triangle in zip(
         np.asarray(normals).tolist(), np.asarray(corners).tolist(), strict=True
     ):
         lines += [f"  facet normal {normal[0]} {normal[1]} {normal[2]}", "    outer loop"]
         lines += [f"      vertex {x!r} {y!r} {z!r}" for x, y, z in triangle]
         lines += ["    endloop", "  endfacet"]
-    lines.append("endsolid test")
+    lines.append(f"endsolid {name}".rstrip())
     return "\n".join(lines).encode()
 
 
