@@ -122,6 +122,26 @@ def ascii_stl(corners: np.ndarray, normals: np.ndarray, name: str = "test") -> b
     return "\n".join(lines).encode()
 
 
+def ascii_solids(*blocks: tuple[str, np.ndarray]) -> bytes:
+    """ASCII STL with one ``solid NAME`` block for each (name, (m, 3, 3) corners); the facet
+    normals all zero."""
+    return b"\n".join(
+        ascii_stl(corners, np.zeros((len(corners), 3)), name) for name, corners in blocks
+    )
+
+
+def obj_as_solids(text: str) -> bytes:
+    """An OBJ file's groups as the solids of an ASCII STL, one for each group."""
+    from mesh_normal.files import read_mesh
+
+    mesh = read_mesh(text.encode(), "groups.obj")
+    assert mesh.face_groups is not None and mesh.group_names is not None
+    corners = mesh.vertices[mesh.faces]
+    return ascii_solids(
+        *((name, corners[mesh.face_groups == index]) for index, name in enumerate(mesh.group_names))
+    )
+
+
 # --- the sample files in tests/data ---------------------------------------------------------
 
 #: The small sample files the differential tests compare with trimesh and libigl.

@@ -14,7 +14,14 @@ import pytest
 from mesh_normal import face_normals, vertex_normals
 from mesh_normal.cli import main
 from mesh_normal.files import read_mesh
-from tests.meshes import CUBE_OBJ, CUBE_OBJ_FACES, CUBE_ONE_FLIPPED_OBJ, OPEN_BOX_OBJ, TETRA_OBJ
+from tests.meshes import (
+    CUBE_OBJ,
+    CUBE_OBJ_FACES,
+    CUBE_ONE_FLIPPED_OBJ,
+    OPEN_BOX_OBJ,
+    TETRA_OBJ,
+    obj_as_solids,
+)
 
 
 @pytest.fixture
@@ -55,6 +62,22 @@ def test_analyze_lists_objects_one_line_each(
     path.write_text(many_triangles(103))
     main(["analyze", str(path)])
     assert "  and 3 more" in capsys.readouterr().out.splitlines()
+
+
+def test_analyze_lists_stl_solids_as_objects(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from tests.mesh_normal.test_objects import two_cubes
+
+    path = tmp_path / "two.stl"
+    path.write_bytes(obj_as_solids(two_cubes([face[::-1] for face in CUBE_OBJ_FACES], "turned")))
+    main(["analyze", str(path)])
+    lines = capsys.readouterr().out.splitlines()
+    start = lines.index("2 objects:")
+    assert lines[start + 1 : start + 3] == [
+        "  left: 12 faces, outward, closed, 0 flipped by the fix",
+        "  turned: 12 faces, inward, closed, 12 flipped by the fix",
+    ]
 
 
 def test_analyze_one_object_lists_none(cube: Path, capsys: pytest.CaptureFixture[str]) -> None:

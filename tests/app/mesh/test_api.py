@@ -28,6 +28,7 @@ from tests.meshes import (
     OPEN_BOX_OBJ,
     TETRA_OBJ,
     TETRA_OBJ_POINTS,
+    obj_as_solids,
     obj_text,
 )
 from tests.paths import DATA
@@ -403,6 +404,33 @@ def test_openapi_documents_every_key_of_the_objects(client: TestClient) -> None:
         "mixed",
         "undetermined",
     }
+
+
+def test_stl_solids_are_objects_like_obj_objects(client: TestClient) -> None:
+    """The same two cubes (the second turned inside out) as two OBJ objects and as two ASCII
+    STL solids: the same objects, with the same counts and verdicts."""
+    from tests.mesh_normal.test_objects import two_cubes
+
+    text = two_cubes([face[::-1] for face in CUBE_OBJ_FACES], "turned")
+    obj = upload(client, "/api/mesh", text, "two.obj").json()
+    stl = upload(client, "/api/mesh", obj_as_solids(text), "two.stl").json()
+    assert stl["file"]["format"] == "stl"
+    assert stl["object_count"] == obj["object_count"] == 2
+    assert [item["name"] for item in stl["objects"]] == ["left", "turned"]
+    assert stl["objects"] == obj["objects"]
+    assert [item["orientation"] for item in stl["objects"]] == ["outward", "inward"]
+
+
+def test_the_trimesh_multibody_stl_lists_both_bodies(client: TestClient) -> None:
+    report = upload(client, "/api/mesh", (DATA / "multibody.stl").read_bytes(), "m.stl").json()
+    assert report["object_count"] == 2
+    assert [(item["name"], item["faces"]) for item in report["objects"]] == [
+        ("bodyB", 12),
+        ("bodyA", 20),
+    ]
+    assert all(item["closed"] for item in report["objects"])
+    assert report["winding_consistent"] is False  # as trimesh finds for each body
+    assert any("Joined 2 ASCII STL solids" in note for note in report["notes"])
 
 
 def test_a_wrong_key_is_found_by_the_schema_check(client: TestClient) -> None:

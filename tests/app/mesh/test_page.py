@@ -16,6 +16,7 @@ from tests.meshes import (
     CUBE_ONE_FLIPPED_OBJ,
     HUGE_TETRA_OBJ,
     OPEN_BOX_OBJ,
+    obj_as_solids,
 )
 
 
@@ -164,6 +165,16 @@ def test_objects_table_names_the_inward_object(client: TestClient) -> None:
     assert html.text("mesh-object-0") == "left 12 6 yes outward 0"
     assert html.text("mesh-object-1") == "turned 12 6 yes inward 12"
     assert len(html.find("tr", id="mesh-object-2")) == 0
+
+
+def test_objects_table_lists_stl_solids(client: TestClient) -> None:
+    from tests.mesh_normal.test_objects import two_cubes
+
+    text = two_cubes([face[::-1] for face in CUBE_OBJ_FACES], "turned")
+    _, html = post(client, obj_as_solids(text), "two.stl", part="report")
+    assert "2 objects in the file" in html.text("mesh-objects")
+    assert html.text("mesh-object-0") == "left 12 6 yes outward 0"
+    assert html.text("mesh-object-1") == "turned 12 6 yes inward 12"
 
 
 def test_objects_table_is_hidden_for_one_object_or_none(client: TestClient) -> None:

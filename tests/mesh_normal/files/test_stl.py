@@ -13,6 +13,7 @@ from tests.meshes import (
     CUBE_VERTICES,
     TETRA_FACES,
     TETRA_VERTICES,
+    ascii_solids,
     ascii_stl,
     binary_stl,
 )
@@ -113,16 +114,9 @@ def test_empty_binary_stl() -> None:
 CUBE_CORNERS = CUBE_VERTICES[CUBE_FACES]
 
 
-def solids(*blocks: tuple[str, np.ndarray]) -> bytes:
-    """ASCII STL with one ``solid NAME`` block for each (name, corners); normals all zero."""
-    return b"\n".join(
-        ascii_stl(corners, np.zeros((len(corners), 3)), name) for name, corners in blocks
-    )
-
-
 def test_each_solid_is_an_object_and_the_welding_is_across_the_file() -> None:
     # The tetrahedron's four corners are corners of the cube: welded with them.
-    mesh = read_mesh(solids(("bodyA", CUBE_CORNERS), ("bodyB", CORNERS)), "two.stl")
+    mesh = read_mesh(ascii_solids(("bodyA", CUBE_CORNERS), ("bodyB", CORNERS)), "two.stl")
     assert mesh.group_names == ("bodyA", "bodyB")
     assert mesh.face_groups is not None
     np.testing.assert_array_equal(mesh.face_groups, [0] * 12 + [1] * 4)
@@ -146,7 +140,7 @@ def test_binary_stl_has_no_objects() -> None:
 
 
 def test_solids_without_a_name_are_numbered_and_taken_names_are_kept_apart() -> None:
-    data = solids(
+    data = ascii_solids(
         ("", CORNERS), ("part", CORNERS), ("part", CORNERS), ("solid 1", CORNERS), ("part", CORNERS)
     )
     names = read_mesh(data, "t.stl").group_names
@@ -154,7 +148,7 @@ def test_solids_without_a_name_are_numbered_and_taken_names_are_kept_apart() -> 
 
 
 def test_a_solid_without_facets_is_no_object_and_a_note_says_so() -> None:
-    data = solids(("lid", CORNERS), ("empty", CORNERS[:0]), ("", CORNERS[:0]), ("", CORNERS))
+    data = ascii_solids(("lid", CORNERS), ("empty", CORNERS[:0]), ("", CORNERS[:0]), ("", CORNERS))
     mesh = read_mesh(data, "t.stl")
     # The fourth solid is named by its place in the file, though the two before it are gone.
     assert mesh.group_names == ("lid", "solid 4")
@@ -163,14 +157,14 @@ def test_a_solid_without_facets_is_no_object_and_a_note_says_so() -> None:
 
 
 def test_one_empty_solid_is_named_in_the_note() -> None:
-    mesh = read_mesh(solids(("a", CORNERS), ("b", CORNERS[:0])), "t.stl")
+    mesh = read_mesh(ascii_solids(("a", CORNERS), ("b", CORNERS[:0])), "t.stl")
     assert mesh.group_names == ("a",)
     assert "Solid 2 ('b') of 2 holds no facets, so it is no object." in mesh.notes
 
 
 def test_only_empty_solids_are_no_mesh() -> None:
     with pytest.raises(MeshFileError, match="no vertices and no faces"):
-        read_mesh(solids(("a", CORNERS[:0]), ("b", CORNERS[:0])), "t.stl")
+        read_mesh(ascii_solids(("a", CORNERS[:0]), ("b", CORNERS[:0])), "t.stl")
 
 
 def test_concatenated_files_are_the_solids_of_one_mesh() -> None:
@@ -180,7 +174,7 @@ def test_concatenated_files_are_the_solids_of_one_mesh() -> None:
 
 
 def test_crlf_blank_lines_and_text_after_endsolid() -> None:
-    data = solids(("Part 1", CUBE_CORNERS), ("Part 2", CORNERS + 3))
+    data = ascii_solids(("Part 1", CUBE_CORNERS), ("Part 2", CORNERS + 3))
     data = data.replace(b"endsolid Part 1", b"endsolid Part 1 exported 2024-01-01\n\n\n")
     data = (data + b"\n\n% trailing words without keywords\n").replace(b"\n", b"\r\n")
     mesh = read_mesh(data, "t.stl")
@@ -189,7 +183,7 @@ def test_crlf_blank_lines_and_text_after_endsolid() -> None:
 
 
 def test_keywords_in_any_case() -> None:
-    data = solids(("Body", CUBE_CORNERS), ("Other", CORNERS + 3))
+    data = ascii_solids(("Body", CUBE_CORNERS), ("Other", CORNERS + 3))
     for word in (b"solid", b"facet normal", b"outer loop", b"vertex", b"endloop", b"endfacet"):
         data = data.replace(word, word.upper())
     data = data.replace(b"SOLID Other", b"Solid Other")
@@ -201,25 +195,25 @@ def test_keywords_in_any_case() -> None:
 
 
 def test_names_with_spaces_and_unicode() -> None:
-    data = solids(("Würfel (Körper 1)", CUBE_CORNERS), ("  padded  ", CORNERS + 3))
-    latin = solids(("a", CORNERS)).replace(b"solid a", "solid café".encode("latin-1"), 1)
+    data = ascii_solids(("Würfel (Körper 1)", CUBE_CORNERS), ("  padded  ", CORNERS + 3))
+    latin = ascii_solids(("a", CORNERS)).replace(b"solid a", "solid café".encode("latin-1"), 1)
     assert read_mesh(data, "t.stl").group_names == ("Würfel (Körper 1)", "padded")
     assert read_mesh(latin, "t.stl").group_names == ("café",)
 
 
 def test_a_byte_order_mark_before_the_text() -> None:
-    mesh = read_mesh(b"\xef\xbb\xbf" + solids(("a", CORNERS), ("b", CORNERS + 3)), "t.stl")
+    mesh = read_mesh(b"\xef\xbb\xbf" + ascii_solids(("a", CORNERS), ("b", CORNERS + 3)), "t.stl")
     assert mesh.group_names == ("a", "b") and len(mesh.faces) == 8
 
 
 def test_solid_inside_a_name_or_a_longer_word_starts_no_solid() -> None:
-    data = solids(("solid", CORNERS), ("b", CORNERS + 3))
+    data = ascii_solids(("solid", CORNERS), ("b", CORNERS + 3))
     data = data.replace(b"solid b", b"solidworks b\nsolid b", 1)  # "solidworks" is no keyword
     assert read_mesh(data, "t.stl").group_names == ("solid", "b")
 
 
 def test_a_solid_short_of_vertices_is_named() -> None:
-    data = solids(("a", CORNERS), ("b", CORNERS + 3))
+    data = ascii_solids(("a", CORNERS), ("b", CORNERS + 3))
     first = data.index(b"      vertex")  # the first vertex line of solid a, taken out
     broken = data[:first] + data[data.index(b"\n", first) + 1 :]
     with pytest.raises(
@@ -237,8 +231,8 @@ def test_any_split_into_solids_gives_the_same_mesh(cuts: list[int]) -> None:
     each facet is in the group of its solid (empty solids making none)."""
     bounds = [0, *sorted(cuts), 12]
     blocks = [(f"s{i}", CUBE_CORNERS[a:b]) for i, (a, b) in enumerate(itertools.pairwise(bounds))]
-    whole = read_mesh(solids(("all", CUBE_CORNERS)), "t.stl")
-    mesh = read_mesh(solids(*blocks), "t.stl")
+    whole = read_mesh(ascii_solids(("all", CUBE_CORNERS)), "t.stl")
+    mesh = read_mesh(ascii_solids(*blocks), "t.stl")
     np.testing.assert_array_equal(mesh.vertices, whole.vertices)
     np.testing.assert_array_equal(mesh.faces, whole.faces)
     kept = [name for name, corners in blocks if len(corners)]
