@@ -135,7 +135,8 @@ async def post_mesh_normals(
             "what changed. Vertex colours are kept where the format holds them (PLY in "
             "their own type, OBJ as v x y z r g b); X-Dropped, present only when "
             "something was left out, names what the chosen format could not hold, e.g. "
-            '"vertex colours (STL holds none)" (several joined by "; ").',
+            '"vertex colours (STL holds none)" or "the division into 2 objects (the STL '
+            'written is one mesh)" (several joined by "; ").',
             "content": {FORMATS[name].media_type: {} for name in WRITABLE},
         }
     },
@@ -164,7 +165,7 @@ async def post_mesh_fix(
             "x-component-faces-flipped": flips_by_component(fixed),
             "x-orientation-before": fixed.orientation,
         }
-        dropped = unkept(chosen, mesh.vertex_colors)
+        dropped = unkept(chosen, mesh.vertex_colors, len(mesh.group_names or ()))
         if dropped:  # do no harm: never leave data out without saying so
             headers["x-dropped"] = "; ".join(dropped)
         try:

@@ -6,8 +6,9 @@ PLY stores float64 coordinates and OBJ the shortest text that reads back as the 
 facet normals are our face normals (:func:`mesh_normal.face_normals`), zero for degenerate faces.
 
 Vertex colours go where the format holds them: PLY in their own type (``uchar``, ``float``),
-OBJ as ``v x y z r g b`` (floats 0-1, without alpha); STL holds none. :func:`unkept` names
-what a format leaves out, for callers that must say so.
+OBJ as ``v x y z r g b`` (floats 0-1, without alpha); STL holds none. Every file written is one
+mesh: the objects of the file read (OBJ groups, ASCII STL solids...) are not kept. :func:`unkept`
+names what is left out, for callers that must say so.
 """
 
 from __future__ import annotations
@@ -100,22 +101,30 @@ def write_mesh(
     return None
 
 
-def unkept(file_format: str, vertex_colors: ArrayLike | None) -> list[str]:
-    """What of the given vertex colours a format cannot hold, in words; empty when it holds
-    all of them (or there are none).
+def unkept(file_format: str, vertex_colors: ArrayLike | None, objects: int = 0) -> list[str]:
+    """What of the given vertex colours and objects a format's file cannot hold, in words;
+    empty when it holds all of them (or there are none).
+
+    ``objects`` is how many the mesh has (:attr:`LoadedMesh.group_names
+    <mesh_normal.files.LoadedMesh.group_names>`): every file written is one mesh, so two or
+    more are named as left out (one object is the mesh itself).
 
     >>> unkept("stl", colors)
     ['vertex colours (STL holds none)']
+    >>> unkept("stl", None, objects=2)
+    ['the division into 2 objects (the STL written is one mesh)']
     """
-    if vertex_colors is None:
-        return []
     title = FORMATS[file_format].title if file_format in FORMATS else file_format
-    held = HOLDS_COLORS.get(file_format, "")
-    if not held:
-        return [f"vertex colours ({title} holds none)"]
-    if np.shape(vertex_colors)[-1] > len(held):
-        return [f"vertex colour alpha ({title} holds red, green and blue only)"]
-    return []
+    left: list[str] = []
+    if vertex_colors is not None:
+        held = HOLDS_COLORS.get(file_format, "")
+        if not held:
+            left.append(f"vertex colours ({title} holds none)")
+        elif np.shape(vertex_colors)[-1] > len(held):
+            left.append(f"vertex colour alpha ({title} holds red, green and blue only)")
+    if objects > 1:
+        left.append(f"the division into {objects:,} objects (the {title} written is one mesh)")
+    return left
 
 
 def _checked_colors(colors: ArrayLike | None, count: int) -> NDArray[np.generic] | None:

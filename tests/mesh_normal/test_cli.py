@@ -80,6 +80,21 @@ def test_analyze_lists_stl_solids_as_objects(
     ]
 
 
+def test_fix_of_stl_solids_says_the_objects_are_left_out(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from tests.mesh_normal.test_objects import two_cubes
+
+    source, out = tmp_path / "two.stl", tmp_path / "fixed.stl"
+    source.write_bytes(obj_as_solids(two_cubes()))
+    assert main(["fix", str(source), str(out)]) == 0
+    lines = [line for line in capsys.readouterr().err.splitlines() if "leaves out" in line]
+    assert lines == [
+        f"mesh-normal: {out} leaves out the division into 2 objects (the STL written is one mesh)"
+    ]
+    assert len(read_mesh(out.read_bytes(), "fixed.stl").faces) == 24
+
+
 def test_analyze_one_object_lists_none(cube: Path, capsys: pytest.CaptureFixture[str]) -> None:
     cube.write_text("o only\n" + CUBE_OBJ)
     main(["analyze", str(cube)])

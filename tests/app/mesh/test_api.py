@@ -26,12 +26,17 @@ from tests.meshes import (
     CUBE_ONE_FLIPPED_OBJ,
     HUGE_TETRA_OBJ,
     OPEN_BOX_OBJ,
+    TETRA_FACES,
     TETRA_OBJ,
     TETRA_OBJ_POINTS,
+    TETRA_VERTICES,
+    ascii_stl,
     obj_as_solids,
     obj_text,
 )
 from tests.paths import DATA
+
+TETRA_CORNERS = TETRA_VERTICES[TETRA_FACES]
 
 
 def upload(client: TestClient, path: str, text: str | bytes, name: str = "mesh.obj", **params: str):  # type: ignore[no-untyped-def]
@@ -226,6 +231,34 @@ def test_fix_writes_each_format(client: TestClient, fmt: str) -> None:
     assert response.status_code == 200, response.text
     again = upload(client, "/api/mesh", response.content, f"fixed.{fmt}").json()
     assert again["faces"] == 10 and again["boundary_edges"] == 4
+
+
+@pytest.mark.parametrize("fmt", ["ply", "stl", "obj"])
+def test_fix_of_stl_solids_names_the_objects_it_leaves_out(client: TestClient, fmt: str) -> None:
+    """Every file the fix writes is one mesh (binary STL holds one): X-Dropped says the
+    division into solids is gone; the triangles are all there, the turned cube turned back."""
+    from tests.mesh_normal.test_objects import two_cubes
+
+    data = obj_as_solids(two_cubes([face[::-1] for face in CUBE_OBJ_FACES], "turned"))
+    response = upload(client, "/api/mesh/fix", data, "two.stl", format=fmt)
+    assert response.status_code == 200, response.text
+    title = FORMATS[fmt].title
+    assert response.headers["x-dropped"] == (
+        f"the division into 2 objects (the {title} written is one mesh)"
+    )
+    assert response.headers["x-faces-flipped"] == "12"
+    again = upload(client, "/api/mesh", response.content, f"fixed.{fmt}").json()
+    assert again["faces"] == 24 and again["orientation"] == "outward"
+
+
+def test_fix_of_one_object_drops_nothing(client: TestClient) -> None:
+    for data, name in (
+        (ascii_stl(TETRA_CORNERS, np.zeros((4, 3))), "t.stl"),
+        ("o only\n" + TETRA_OBJ, "t.obj"),
+    ):
+        response = upload(client, "/api/mesh/fix", data, name)
+        assert response.status_code == 200, response.text
+        assert "x-dropped" not in response.headers
 
 
 def test_the_fix_formats_are_the_librarys_writable_formats() -> None:
