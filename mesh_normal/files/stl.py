@@ -9,8 +9,9 @@ with ``solid``, so :func:`is_binary` (the ``84 + 50 * count`` rule) is asked bef
 Facet normals are kept as stored. Many exporters write zeros for "not given": when every one is
 zero, :attr:`LoadedMesh.file_face_normals` is ``None`` and a note says so.
 
-ASCII keywords count in any case (``SOLID``, ``Facet Normal``), only at the start of a line; a
-UTF-8 byte order mark before ``solid`` is skipped. Each ``solid NAME`` line starts a solid, up
+ASCII keywords count in any case (``SOLID``, ``Facet Normal``), only at the start of a line
+(lines end in ``\n``, ``\r\n`` or, without any ``\n``, ``\r``); a UTF-8 byte order mark
+before ``solid`` is skipped. Each ``solid NAME`` line starts a solid, up
 to the next one (CAD multi-body exports and concatenated files hold several); its facets are one
 group of :attr:`LoadedMesh.face_groups` (one solid is one object, as one OBJ ``o`` is), named by
 the rest of the line (UTF-8, else Latin-1; ``"solid 2"`` for the second solid when that is
@@ -104,6 +105,8 @@ def _read_ascii(data: bytes) -> LoadedMesh:
     if data.startswith(BOM):
         data = data[len(BOM) :]
     text = data.lower()  # same length: ASCII letters only, so the positions are the file's
+    if b"\n" not in text:  # old Mac line ends: each a "\r"
+        text = text.replace(b"\r", b"\n")
     solids = _solid_lines(text)  # looks_ascii saw one at the start
     starts = [0] + [start for start, _, _ in solids[1:]]
     names = [_name(data[start:end]) for _, start, end in solids] or [""]

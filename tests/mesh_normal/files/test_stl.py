@@ -182,6 +182,12 @@ def test_crlf_blank_lines_and_text_after_endsolid() -> None:
     assert len(mesh.faces) == 16 and len(mesh.vertices) == 12
 
 
+def test_old_mac_line_ends() -> None:
+    data = ascii_solids(("a", CUBE_CORNERS), ("b", CORNERS + 3)).replace(b"\n", b"\r")
+    mesh = read_mesh(data, "t.stl")
+    assert mesh.group_names == ("a", "b") and len(mesh.faces) == 16
+
+
 def test_keywords_in_any_case() -> None:
     data = ascii_solids(("Body", CUBE_CORNERS), ("Other", CORNERS + 3))
     for word in (b"solid", b"facet normal", b"outer loop", b"vertex", b"endloop", b"endfacet"):
