@@ -226,7 +226,8 @@ def fix(args: argparse.Namespace, progress: Progress) -> int:
         raise Failure(f"cannot write {args.output}: {error}", EXIT_OUTPUT) from None
     write(args.output, data)
     progress.done()
-    dropped = unkept(chosen, mesh.vertex_colors, mesh.face_colors)
+    objects = len(mesh.group_names or ())
+    dropped = unkept(chosen, mesh.vertex_colors, mesh.face_colors, objects=objects)
     if dropped:  # do no harm: never leave data out without saying so
         print(f"mesh-normal: {args.output} leaves out {'; '.join(dropped)}", file=sys.stderr)
     flipped = int(fixed.flipped.sum())

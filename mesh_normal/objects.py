@@ -1,5 +1,5 @@
-"""The report's objects: the file's groups (OBJ ``o`` and ``g``, glTF nodes, 3MF build items),
-each with its counts and verdicts.
+"""The report's objects: the file's groups (OBJ ``o`` and ``g``, ASCII STL solids, glTF nodes,
+3MF build items), each with its counts and verdicts.
 
 :func:`object_reports` sums the per-face arrays of the analysis up by group; the mesh totals of
 the report are not changed by it. Topology and orientation are those of the whole mesh: an

@@ -167,8 +167,8 @@ class FileNormals(_Model):
 
 
 class ObjectReport(_Model):
-    """One object of the file and what the fix does to it: an OBJ ``o`` or ``g`` group, a
-    glTF primitive as a node places it, or a 3MF build item."""
+    """One object of the file and what the fix does to it: an OBJ ``o`` or ``g`` group, an
+    ASCII STL ``solid``, a glTF primitive as a node places it, or a 3MF build item."""
 
     name: str = Field(description="The object's name as the file gives it.")
     faces: int = Field(ge=0, description="How many triangles it has.")
@@ -253,8 +253,8 @@ class MeshReport(_Model):
     )
     object_count: int = Field(
         ge=0,
-        description="How many objects the file has (OBJ o and g groups, glTF primitives "
-        "placed by nodes, 3MF build items); 0 for formats without them.",
+        description="How many objects the file has (OBJ o and g groups, ASCII STL solids, "
+        "glTF primitives placed by nodes, 3MF build items); 0 for formats without them.",
     )
     objects: list[ObjectReport] = Field(
         description=f"The first {INDEX_LIST_LIMIT} objects, in the order of their first face; "

@@ -108,17 +108,38 @@ def binary_stl(
     return header.ljust(80, b" ") + struct.pack("<I", stated) + body
 
 
-def ascii_stl(corners: np.ndarray, normals: np.ndarray) -> bytes:
-    """An ASCII STL of (m, 3, 3) corners and (m, 3) stated normals, numbers as Python repr."""
-    lines = ["solid test"]
+def ascii_stl(corners: np.ndarray, normals: np.ndarray, name: str = "test") -> bytes:
+    """An ASCII STL of (m, 3, 3) corners and (m, 3) stated normals, numbers as Python repr:
+    one solid ``name``."""
+    lines = [f"solid {name}".rstrip()]
     for normal, triangle in zip(
         np.asarray(normals).tolist(), np.asarray(corners).tolist(), strict=True
     ):
         lines += [f"  facet normal {normal[0]} {normal[1]} {normal[2]}", "    outer loop"]
         lines += [f"      vertex {x!r} {y!r} {z!r}" for x, y, z in triangle]
         lines += ["    endloop", "  endfacet"]
-    lines.append("endsolid test")
+    lines.append(f"endsolid {name}".rstrip())
     return "\n".join(lines).encode()
+
+
+def ascii_solids(*blocks: tuple[str, np.ndarray]) -> bytes:
+    """ASCII STL with one ``solid NAME`` block for each (name, (m, 3, 3) corners); the facet
+    normals all zero."""
+    return b"\n".join(
+        ascii_stl(corners, np.zeros((len(corners), 3)), name) for name, corners in blocks
+    )
+
+
+def obj_as_solids(text: str) -> bytes:
+    """An OBJ file's groups as the solids of an ASCII STL, one for each group."""
+    from mesh_normal.files import read_mesh
+
+    mesh = read_mesh(text.encode(), "groups.obj")
+    assert mesh.face_groups is not None and mesh.group_names is not None
+    corners = mesh.vertices[mesh.faces]
+    return ascii_solids(
+        *((name, corners[mesh.face_groups == index]) for index, name in enumerate(mesh.group_names))
+    )
 
 
 # --- the sample files in tests/data ---------------------------------------------------------

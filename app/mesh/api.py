@@ -151,8 +151,8 @@ async def post_mesh_normals(
             "says how the parts were judged, as in the report. Vertex colours are kept "
             "where the format holds them (PLY in their own type, OBJ as v x y z r g b), face "
             "colours in PLY; X-Dropped, present only when something was left out, names what "
-            'the chosen format could not hold, e.g. "vertex colours (STL holds none)" '
-            '(several joined by "; ").',
+            'the chosen format could not hold, e.g. "vertex colours (STL holds none)" or "the '
+            'division into 2 objects (the STL written is one mesh)" (several joined by "; ").',
             "content": {FORMATS[name].media_type: {} for name in WRITABLE},
         }
     },
@@ -186,7 +186,8 @@ async def post_mesh_fix(
         }
         if tolerance is not None:
             headers["x-weld"] = repr(tolerance)
-        dropped = unkept(chosen, mesh.vertex_colors, mesh.face_colors)
+        objects = len(mesh.group_names or ())
+        dropped = unkept(chosen, mesh.vertex_colors, mesh.face_colors, objects=objects)
         if dropped:  # do no harm: never leave data out without saying so
             headers["x-dropped"] = "; ".join(dropped)
         try:

@@ -89,7 +89,11 @@ def _report_context(upload: Upload, base_url: str) -> dict[str, Any]:
 def fix_dropped(mesh: LoadedMesh) -> dict[str, str]:
     """For each format of the fixed mesh, the sentence saying what of this mesh it leaves out,
     in the words of the fix's ``X-Dropped`` header; empty when it keeps everything."""
-    dropped = {name: unkept(name, mesh.vertex_colors, mesh.face_colors) for name in FIX_FORMATS}
+    objects = len(mesh.group_names or ())
+    dropped = {
+        name: unkept(name, mesh.vertex_colors, mesh.face_colors, objects=objects)
+        for name in FIX_FORMATS
+    }
     keeping = [MESH_FORMATS[name].title for name, left_out in dropped.items() if not left_out]
     keeps = " and ".join(keeping) + (" keeps" if len(keeping) == 1 else " keep")
     return {

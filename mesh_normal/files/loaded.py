@@ -51,7 +51,8 @@ class LoadedMesh:
         OBJ ``f v//vn`` normals per corner of each triangle, when every corner has one.
     face_groups : (m,) intp or None
         The group of each triangle, an index into ``group_names``; ``None`` when the file has
-        no groups (only OBJ ``o`` and ``g`` make them).
+        no groups (OBJ ``o`` and ``g``, ASCII STL ``solid`` blocks, glTF nodes' primitives and
+        3MF build items make them).
     group_names : tuple of str or None
         Names of the groups, in order of their first triangle (each named group has one);
         ``None`` exactly when ``face_groups`` is.

@@ -9,6 +9,16 @@ with ``solid``, so :func:`is_binary` (the ``84 + 50 * count`` rule) is asked bef
 Facet normals are kept as stored. Many exporters write zeros for "not given": when every one is
 zero, :attr:`LoadedMesh.file_face_normals` is ``None`` and a note says so.
 
+ASCII keywords count in any case (``SOLID``, ``Facet Normal``), only at the start of a line
+(lines end in ``\n``, ``\r\n`` or, without any ``\n``, ``\r``); a UTF-8 byte order mark
+before ``solid`` is skipped. Each ``solid NAME`` line starts a solid, up
+to the next one (CAD multi-body exports and concatenated files hold several); its facets are one
+group of :attr:`LoadedMesh.face_groups` (one solid is one object, as one OBJ ``o`` is), named by
+the rest of the line (UTF-8, else Latin-1; ``"solid 2"`` for the second solid when that is
+empty; a name already taken gets `` (2)``, `` (3)``...: each solid is a body of its own, unlike
+OBJ's repeated ``g``). A solid without facets makes no group, and a note says so. Binary STL
+holds one object and has no groups. The welding is across the whole file, as for one solid.
+
 :func:`write_stl` writes binary STL: float32 corners, our face normals as facet normals.
 """
 
@@ -28,10 +38,13 @@ HEADER = 84
 RECORD = np.dtype([("normal", "<f4", (3,)), ("corners", "<f4", (3, 3)), ("attribute", "<u2")])
 
 _NUMBER = rb"\s+(\S+)\s+(\S+)\s+(\S+)"
-# Keywords count only at the start of a line, so that a solid named "vertex colours" is fine.
+# Keywords count only at the start of a line, so that a solid named "vertex colours" is fine;
+# the patterns search the file in lower case (case-insensitive patterns take half as long again).
 _VERTEX = re.compile(rb"(?m)^[ \t]*vertex" + _NUMBER)
 _NORMAL = re.compile(rb"(?m)^[ \t]*facet\s+normal" + _NUMBER)
 _FACET = re.compile(rb"(?m)^[ \t]*facet\b")
+#: The UTF-8 byte order mark some editors put before the text.
+BOM = b"\xef\xbb\xbf"
 
 
 def triangle_count(data: bytes) -> int | None:
@@ -47,9 +60,9 @@ def is_binary(data: bytes) -> bool:
 
 def looks_ascii(data: bytes) -> bool:
     """Whether the file reads as ASCII STL: ``solid``, then text with a ``facet`` or the end."""
-    head = data[:4096]
+    head = data[:4096].removeprefix(BOM).lower()
     return (
-        head.lstrip()[:5].lower() == b"solid"
+        head.lstrip()[:5] == b"solid"
         and b"\0" not in head
         and (b"facet" in head or b"endsolid" in head)
     )
@@ -89,16 +102,113 @@ def _read_binary(data: bytes) -> LoadedMesh:
 
 
 def _read_ascii(data: bytes) -> LoadedMesh:
-    corners = _numbers(_VERTEX.findall(data), "vertex")
-    normals = _numbers(_NORMAL.findall(data), "facet normal")
-    facets = len(_FACET.findall(data))
+    if data.startswith(BOM):
+        data = data[len(BOM) :]
+    text = data.lower()  # same length: ASCII letters only, so the positions are the file's
+    if b"\n" not in text:  # old Mac line ends: each a "\r"
+        text = text.replace(b"\r", b"\n")
+    solids = _solid_lines(text)  # looks_ascii saw one at the start
+    starts = [0] + [start for start, _, _ in solids[1:]]
+    names = [_name(data[start:end]) for _, start, end in solids] or [""]
+    corners: list[NDArray[np.float64]] = []
+    normals: list[NDArray[np.float64]] = []
+    facets: list[int] = []
+    for number, (start, end) in enumerate(zip(starts, [*starts[1:], len(data)], strict=True)):
+        found = _solid(text, start, end, number, names)
+        corners.append(_numbers(found[0], "vertex"))
+        normals.append(_numbers(found[1], "facet normal"))
+        facets.append(found[2])
+    notes, groups, group_names = _solid_groups(names, facets)
+    return _welded(np.concatenate(corners), np.concatenate(normals), notes, groups, group_names)
+
+
+def _solid_lines(text: bytes) -> list[tuple[int, int, int]]:
+    """Where each ``solid`` line starts, and its name (the rest of the line) starts and ends.
+
+    Found with ``bytes.find`` (a regular expression would read the file a fourth time):
+    ``solid`` counts with only spaces before it on its line (not ``endsolid``) and no letter,
+    digit or underscore after it.
+    """
+    found = []
+    position = text.find(b"solid")
+    while position >= 0:
+        line = text.rfind(b"\n", 0, position) + 1
+        after = text[position + 5 : position + 6]
+        if not text[line:position].strip() and not (after.isalnum() or after == b"_"):
+            end = text.find(b"\n", position)
+            found.append((line, position + 5, len(text) if end < 0 else end))
+        position = text.find(b"solid", position + 5)
+    return found
+
+
+def _solid(
+    data: bytes, start: int, end: int, number: int, names: list[str]
+) -> tuple[list[tuple[bytes, bytes, bytes]], list[tuple[bytes, bytes, bytes]], int]:
+    """The vertex and facet normal numbers and the facet count of ``data[start:end]``, the
+    solid ``number`` (0-based) of ``names``."""
+    corners = _VERTEX.findall(data, start, end)
+    normals = _NORMAL.findall(data, start, end)
+    facets = len(_FACET.findall(data, start, end))
     if len(corners) != 3 * facets or len(normals) != facets:
+        where = "The ASCII STL" if len(names) == 1 else f"Solid {_describe(number, names)}"
+        short = " (is the file cut short?)" if end == len(data) else ""
         raise MeshFileError(
-            f"The ASCII STL has {facets:,} facets, {len(normals):,} facet "
+            f"{where} has {facets:,} facets, {len(normals):,} facet "
             f"normals and {len(corners):,} vertices; each facet needs one normal "
-            "and exactly three vertices (is the file cut short?)."
+            f"and exactly three vertices{short}."
         )
-    return _welded(corners, normals, [])
+    return corners, normals, facets
+
+
+def _name(raw: bytes) -> str:
+    """A solid's name as written: UTF-8 where it decodes, else Latin-1; spaces stripped."""
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError:
+        text = raw.decode("latin-1")
+    return text.strip()
+
+
+def _describe(number: int, names: list[str]) -> str:
+    """``1 ('lid')`` or ``2`` (without a name), for error sentences and notes."""
+    name = names[number]
+    return f"{number + 1:,} ({name[:40]!r})" if name else f"{number + 1:,}"
+
+
+def _solid_groups(
+    names: list[str], facets: list[int]
+) -> tuple[list[str], NDArray[np.intp] | None, list[str] | None]:
+    """Notes on solids without facets, each facet's group and the groups' names (see the
+    module docstring); no groups when no solid has a facet (the mesh has no faces)."""
+    notes = []
+    empty = [number for number, count in enumerate(facets) if not count]
+    if empty and len(empty) < len(facets):
+        listed = [_describe(number, names) for number in empty[:5]]
+        if len(empty) > 5:
+            listed.append(f"{len(empty) - 5:,} more")
+        which = listed[0] if len(listed) == 1 else f"{', '.join(listed[:-1])} and {listed[-1]}"
+        notes.append(
+            f"Solid {which} of {len(facets):,} holds no facets, so it is no object."
+            if len(empty) == 1
+            else f"Solids {which} of {len(facets):,} hold no facets, so they are no objects."
+        )
+    kept = [number for number, count in enumerate(facets) if count]
+    if not kept:
+        return notes, None, None
+    taken: set[str] = set()
+    group_names = []
+    for number in kept:
+        base = names[number] or f"solid {number + 1}"
+        name, copy = base, 1
+        while name in taken:
+            copy += 1
+            name = f"{base} ({copy})"
+        taken.add(name)
+        group_names.append(name)
+    if len(kept) > 1:
+        notes.append(f"Joined {len(kept):,} ASCII STL solids into one mesh, each an object.")
+    groups = np.repeat(np.arange(len(kept), dtype=np.intp), [facets[number] for number in kept])
+    return notes, groups, group_names
 
 
 def _numbers(matches: list[tuple[bytes, bytes, bytes]], keyword: str) -> NDArray[np.float64]:
@@ -117,7 +227,11 @@ def _numbers(matches: list[tuple[bytes, bytes, bytes]], keyword: str) -> NDArray
 
 
 def _welded(
-    corners: NDArray[np.floating], normals: NDArray[np.floating], notes: list[str]
+    corners: NDArray[np.floating],
+    normals: NDArray[np.floating],
+    notes: list[str],
+    groups: NDArray[np.intp] | None = None,
+    group_names: list[str] | None = None,
 ) -> LoadedMesh:
     bad = first_bad_vertex(corners)
     if bad is not None:
@@ -143,6 +257,8 @@ def _welded(
         index.reshape(-1, 3),
         source_faces=len(normals),
         face_normals=face_normals,
+        face_groups=groups,
+        group_names=group_names,
         notes=notes,
     )
 

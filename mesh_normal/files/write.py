@@ -7,8 +7,9 @@ facet normals are our face normals (:func:`mesh_normal.face_normals`), zero for 
 
 Vertex colours go where the format holds them: PLY in their own type (``uchar``, ``float``),
 OBJ as ``v x y z r g b`` (floats 0-1, without alpha); STL holds none. Face colours (one per
-triangle) go to PLY only, in their own type. :func:`unkept` names what a format leaves out,
-for callers that must say so.
+triangle) go to PLY only, in their own type. Every file written is one mesh: the objects of the
+file read (OBJ groups, ASCII STL solids...) are not kept. :func:`unkept` names what a format
+leaves out, for callers that must say so.
 """
 
 from __future__ import annotations
@@ -121,13 +122,23 @@ def write_mesh(
 
 
 def unkept(
-    file_format: str, vertex_colors: ArrayLike | None, face_colors: ArrayLike | None = None
+    file_format: str,
+    vertex_colors: ArrayLike | None,
+    face_colors: ArrayLike | None = None,
+    *,
+    objects: int = 0,
 ) -> list[str]:
-    """What of the given colours a format cannot hold, in words; empty when it holds all of
-    them (or there are none).
+    """What of the given colours and objects a format's file cannot hold, in words; empty
+    when it holds all of them (or there are none).
+
+    ``objects`` is how many the mesh has (:attr:`LoadedMesh.group_names
+    <mesh_normal.files.LoadedMesh.group_names>`): every file written is one mesh, so two or
+    more are named as left out (one object is the mesh itself).
 
     >>> unkept("stl", colors)
     ['vertex colours (STL holds none)']
+    >>> unkept("stl", None, objects=2)
+    ['the division into 2 objects (the STL written is one mesh)']
     """
     title = FORMATS[file_format].title if file_format in FORMATS else file_format
     dropped = []
@@ -141,6 +152,8 @@ def unkept(
             dropped.append(f"{kind} colours ({title} holds none)")
         elif np.shape(colors)[-1] > len(held):
             dropped.append(f"{kind} colour alpha ({title} holds red, green and blue only)")
+    if objects > 1:
+        dropped.append(f"the division into {objects:,} objects (the {title} written is one mesh)")
     return dropped
 
 

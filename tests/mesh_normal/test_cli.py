@@ -20,6 +20,7 @@ from tests.meshes import (
     CUBE_ONE_FLIPPED_OBJ,
     OPEN_BOX_OBJ,
     TETRA_OBJ,
+    obj_as_solids,
     stepped_sides_cube,
 )
 
@@ -62,6 +63,37 @@ def test_analyze_lists_objects_one_line_each(
     path.write_text(many_triangles(103))
     main(["analyze", str(path)])
     assert "  and 3 more" in capsys.readouterr().out.splitlines()
+
+
+def test_analyze_lists_stl_solids_as_objects(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from tests.mesh_normal.test_objects import two_cubes
+
+    path = tmp_path / "two.stl"
+    path.write_bytes(obj_as_solids(two_cubes([face[::-1] for face in CUBE_OBJ_FACES], "turned")))
+    main(["analyze", str(path)])
+    lines = capsys.readouterr().out.splitlines()
+    start = lines.index("2 objects:")
+    assert lines[start + 1 : start + 3] == [
+        "  left: 12 faces, outward, closed, 0 flipped by the fix",
+        "  turned: 12 faces, inward, closed, 12 flipped by the fix",
+    ]
+
+
+def test_fix_of_stl_solids_says_the_objects_are_left_out(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from tests.mesh_normal.test_objects import two_cubes
+
+    source, out = tmp_path / "two.stl", tmp_path / "fixed.stl"
+    source.write_bytes(obj_as_solids(two_cubes()))
+    assert main(["fix", str(source), str(out)]) == 0
+    lines = [line for line in capsys.readouterr().err.splitlines() if "leaves out" in line]
+    assert lines == [
+        f"mesh-normal: {out} leaves out the division into 2 objects (the STL written is one mesh)"
+    ]
+    assert len(read_mesh(out.read_bytes(), "fixed.stl").faces) == 24
 
 
 def test_analyze_one_object_lists_none(cube: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -26,11 +26,17 @@ from tests.meshes import (
     CUBE_ONE_FLIPPED_OBJ,
     HUGE_TETRA_OBJ,
     OPEN_BOX_OBJ,
+    TETRA_FACES,
     TETRA_OBJ,
     TETRA_OBJ_POINTS,
+    TETRA_VERTICES,
+    ascii_stl,
+    obj_as_solids,
     obj_text,
 )
 from tests.paths import DATA
+
+TETRA_CORNERS = TETRA_VERTICES[TETRA_FACES]
 
 
 def upload(client: TestClient, path: str, text: str | bytes, name: str = "mesh.obj", **params: str):  # type: ignore[no-untyped-def]
@@ -227,6 +233,34 @@ def test_fix_writes_each_format(client: TestClient, fmt: str) -> None:
     assert again["faces"] == 10 and again["boundary_edges"] == 4
 
 
+@pytest.mark.parametrize("fmt", ["ply", "stl", "obj"])
+def test_fix_of_stl_solids_names_the_objects_it_leaves_out(client: TestClient, fmt: str) -> None:
+    """Every file the fix writes is one mesh (binary STL holds one): X-Dropped says the
+    division into solids is gone; the triangles are all there, the turned cube turned back."""
+    from tests.mesh_normal.test_objects import two_cubes
+
+    data = obj_as_solids(two_cubes([face[::-1] for face in CUBE_OBJ_FACES], "turned"))
+    response = upload(client, "/api/mesh/fix", data, "two.stl", format=fmt)
+    assert response.status_code == 200, response.text
+    title = FORMATS[fmt].title
+    assert response.headers["x-dropped"] == (
+        f"the division into 2 objects (the {title} written is one mesh)"
+    )
+    assert response.headers["x-faces-flipped"] == "12"
+    again = upload(client, "/api/mesh", response.content, f"fixed.{fmt}").json()
+    assert again["faces"] == 24 and again["orientation"] == "outward"
+
+
+def test_fix_of_one_object_drops_nothing(client: TestClient) -> None:
+    for data, name in (
+        (ascii_stl(TETRA_CORNERS, np.zeros((4, 3))), "t.stl"),
+        ("o only\n" + TETRA_OBJ, "t.obj"),
+    ):
+        response = upload(client, "/api/mesh/fix", data, name)
+        assert response.status_code == 200, response.text
+        assert "x-dropped" not in response.headers
+
+
 def test_the_fix_formats_are_the_librarys_writable_formats() -> None:
     # FixFormat stays a Literal for FastAPI and mypy: this keeps it in step with the table.
     assert get_args(FixFormat) == WRITABLE
@@ -403,6 +437,33 @@ def test_openapi_documents_every_key_of_the_objects(client: TestClient) -> None:
         "mixed",
         "undetermined",
     }
+
+
+def test_stl_solids_are_objects_like_obj_objects(client: TestClient) -> None:
+    """The same two cubes (the second turned inside out) as two OBJ objects and as two ASCII
+    STL solids: the same objects, with the same counts and verdicts."""
+    from tests.mesh_normal.test_objects import two_cubes
+
+    text = two_cubes([face[::-1] for face in CUBE_OBJ_FACES], "turned")
+    obj = upload(client, "/api/mesh", text, "two.obj").json()
+    stl = upload(client, "/api/mesh", obj_as_solids(text), "two.stl").json()
+    assert stl["file"]["format"] == "stl"
+    assert stl["object_count"] == obj["object_count"] == 2
+    assert [item["name"] for item in stl["objects"]] == ["left", "turned"]
+    assert stl["objects"] == obj["objects"]
+    assert [item["orientation"] for item in stl["objects"]] == ["outward", "inward"]
+
+
+def test_the_trimesh_multibody_stl_lists_both_bodies(client: TestClient) -> None:
+    report = upload(client, "/api/mesh", (DATA / "multibody.stl").read_bytes(), "m.stl").json()
+    assert report["object_count"] == 2
+    assert [(item["name"], item["faces"]) for item in report["objects"]] == [
+        ("bodyB", 12),
+        ("bodyA", 20),
+    ]
+    assert all(item["closed"] for item in report["objects"])
+    assert report["winding_consistent"] is False  # as trimesh finds for each body
+    assert any("Joined 2 ASCII STL solids" in note for note in report["notes"])
 
 
 def test_a_wrong_key_is_found_by_the_schema_check(client: TestClient) -> None:

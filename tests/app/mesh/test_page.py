@@ -16,6 +16,7 @@ from tests.meshes import (
     CUBE_ONE_FLIPPED_OBJ,
     HUGE_TETRA_OBJ,
     OPEN_BOX_OBJ,
+    obj_as_solids,
 )
 
 
@@ -164,6 +165,33 @@ def test_objects_table_names_the_inward_object(client: TestClient) -> None:
     assert html.text("mesh-object-0") == "left 12 6 yes outward 0"
     assert html.text("mesh-object-1") == "turned 12 6 yes inward 12"
     assert len(html.find("tr", id="mesh-object-2")) == 0
+
+
+def test_objects_table_lists_stl_solids(client: TestClient) -> None:
+    from tests.mesh_normal.test_objects import two_cubes
+
+    text = two_cubes([face[::-1] for face in CUBE_OBJ_FACES], "turned")
+    _, html = post(client, obj_as_solids(text), "two.stl", part="report")
+    assert "2 objects in the file" in html.text("mesh-objects")
+    assert html.text("mesh-object-0") == "left 12 6 yes outward 0"
+    assert html.text("mesh-object-1") == "turned 12 6 yes inward 12"
+
+
+def test_the_page_says_before_the_download_that_the_objects_are_left_out(
+    client: TestClient,
+) -> None:
+    from tests.mesh_normal.test_objects import two_cubes
+
+    response, html = post(client, obj_as_solids(two_cubes()), "two.stl", part="report")
+    expected = {
+        name: f"{title} leaves out the division into 2 objects (the {title} written is one mesh)."
+        for name, title in (("ply", "PLY"), ("stl", "STL"), ("obj", "OBJ"))
+    }
+    assert response.context["fix_dropped"] == expected  # type: ignore[attr-defined]
+    assert html.text("fix-dropped") == expected["stl"]  # the upload's format is chosen
+    for text in (CUBE_OBJ, "o only\n" + CUBE_OBJ):  # one object is the mesh itself
+        response, _ = post(client, text, part="report")
+        assert not any(response.context["fix_dropped"].values())  # type: ignore[attr-defined]
 
 
 def test_objects_table_is_hidden_for_one_object_or_none(client: TestClient) -> None:

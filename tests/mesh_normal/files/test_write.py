@@ -7,6 +7,7 @@ import pytest
 
 from mesh_normal import face_normals
 from mesh_normal.files import MeshFileError, read_mesh, write_mesh
+from mesh_normal.files.write import unkept
 from tests.meshes import TETRA_FACES, TETRA_VERTICES
 
 RNG = np.random.default_rng(7)
@@ -119,3 +120,21 @@ def test_a_failed_write_leaves_the_old_file_whole(
         write_mesh(TETRA_VERTICES, TETRA_FACES, path=path)
     assert path.read_bytes() == b"the old file"
     assert sorted(item.name for item in tmp_path.iterdir()) == ["tetra.ply"]  # no temporary left
+
+
+def test_two_objects_or_more_are_named_as_left_out() -> None:
+    """Every file written is one mesh; one object is the mesh itself."""
+    assert (
+        unkept("stl", None, objects=0)
+        == unkept("stl", None, objects=1)
+        == unkept("obj", None)
+        == []
+    )
+    assert unkept("ply", None, objects=2) == [
+        "the division into 2 objects (the PLY written is one mesh)"
+    ]
+    colours = np.zeros((4, 3), dtype=np.uint8)
+    assert unkept("stl", colours, objects=1_000) == [
+        "vertex colours (STL holds none)",
+        "the division into 1,000 objects (the STL written is one mesh)",
+    ]
