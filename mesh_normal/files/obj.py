@@ -236,7 +236,16 @@ def _triangle_groups(
     order = np.argsort(first, kind="stable")  # number groups by their first triangle
     renumber = np.empty_like(order)
     renumber[order] = np.arange(len(order))
-    return renumber[numbered.ravel()], [found.labels[label] for label in used[order]]
+    return renumber[numbered.ravel()], [_utf8(found.labels[label]) for label in used[order]]
+
+
+def _utf8(name: str) -> str:
+    """A name read as Latin-1 (one character a byte) decoded as UTF-8, which nearly every
+    writer uses today (``o Würfel``); as Latin-1 when its bytes are not UTF-8."""
+    try:
+        return name.encode("latin-1").decode("utf-8")
+    except UnicodeDecodeError:
+        return name
 
 
 def _numbers(lines: list[str], numbers: NDArray[np.intp], key: str) -> NDArray[np.float64]:

@@ -309,3 +309,11 @@ def test_real_blender_file_with_vertex_double_slash_normal_faces() -> None:
     cosines = np.einsum("ij,ij->i", geometric, stored[:, 0]) / np.linalg.norm(geometric, axis=1)
     assert np.all(cosines > 0.999)  # each side's vn is its own outward normal
     assert mesh.file_vertex_normals is None  # corners of a cube get three normals each
+
+
+def test_group_names_are_utf8_and_latin1_only_when_not() -> None:
+    body = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"
+    utf8 = read_mesh("o Würfel 立方体\n".encode() + body, "u.obj")
+    assert utf8.group_names == ("Würfel 立方体",)
+    latin1 = read_mesh("o Würfel\n".encode("latin-1") + body, "l.obj")  # b"\xfc": not UTF-8
+    assert latin1.group_names == ("Würfel",)
