@@ -22,7 +22,7 @@ from mesh_normal.faces import FaceGeometry, FaceNormals, face_geometry, face_nor
 from mesh_normal.files import LoadedMesh, read_mesh
 from mesh_normal.files.read import MeshSource, source_bytes
 from mesh_normal.objects import object_reports
-from mesh_normal.orientation import Orientation, orient
+from mesh_normal.orientation import Orientation, oriented
 from mesh_normal.report import (
     INDEX_LIST_LIMIT,
     Bounds,
@@ -53,14 +53,11 @@ class MeshAnalysis:
     orientation: Orientation
     unused_vertices: int
     weld: Weld | None
-    welded_points: IndexArray | None  # with a weld: same_points' map (None: all apart)
+    points: IndexArray  # (m, 3): the faces as the topology saw them, each vertex by its point
 
     def faces_by_position(self) -> IndexArray:
         """(m, 3) intp: the faces as the topology saw them, each vertex by its point."""
-        faces = self.geometry.mesh.faces
-        if self.weld is None:
-            return by_position(self.geometry.mesh)
-        return faces if self.welded_points is None else self.welded_points[faces]
+        return self.points
 
 
 def checked_weld(weld: object) -> float | None:
@@ -117,10 +114,14 @@ def analyse_mesh(
     # One pass: the reader checked the arrays, and the cross products are taken once here for
     # the face normals, the orientation's volumes and the file-normal comparison alike.
     geometry = face_geometry(mesh.checked())
-    orientation = orient(geometry, weld=weld)
+    if weld is None:
+        summary, points = None, by_position(geometry.mesh)
+    else:
+        summary, point = _welded(mesh.vertices, weld)
+        points = geometry.mesh.faces if point is None else point[geometry.mesh.faces]
+    orientation = oriented(geometry, points)  # the vertices matched once, for both
     used = np.zeros(len(mesh.vertices), dtype=bool)
     used[mesh.faces.ravel()] = True
-    summary, points = (None, None) if weld is None else _welded(mesh.vertices, weld)
     return MeshAnalysis(
         mesh=mesh,
         name=name,
@@ -131,7 +132,7 @@ def analyse_mesh(
         orientation=orientation,
         unused_vertices=int(len(used) - np.count_nonzero(used)),
         weld=summary,
-        welded_points=points,
+        points=points,
     )
 
 

@@ -297,8 +297,14 @@ def orient(
     ('inward', [True, True, True, True], 0.16666666666666666)
     """
     geometry = face_geometry(vertices, faces)
+    return oriented(geometry, by_position(geometry.mesh, weld))
+
+
+def oriented(geometry: FaceGeometry, points: IndexArray) -> Orientation:
+    """:func:`orient` on a geometry whose faces by position (each vertex replaced by the first
+    at its point, as :func:`~mesh_normal.topology.by_position` gives them) are known already:
+    for a caller that needs them too, so that the vertices are matched once."""
     indices = geometry.mesh.faces
-    points = by_position(geometry.mesh, weld)
     found = structure(points, len(geometry.mesh.vertices))
     topology, group, parity = found.topology, found.group, found.parity
     bins = found.patches + 1  # the last for faces with a repeated point
