@@ -205,8 +205,8 @@ def fix(args: argparse.Namespace, progress: Progress) -> int:
             EXIT_USAGE,
         )
     from mesh_normal.analysis import flips_by_component, weld_summary
-    from mesh_normal.files import MeshFileError, write_mesh
-    from mesh_normal.files.write import unkept
+    from mesh_normal.files import MeshFileError
+    from mesh_normal.files.write import write_fixed
     from mesh_normal.orientation import orient
 
     mesh, _ = load(args.input, progress)
@@ -215,19 +215,11 @@ def fix(args: argparse.Namespace, progress: Progress) -> int:
     weld = weld_summary(mesh.vertices, args.weld)
     progress.step(f"writing {args.output}")
     try:
-        data = write_mesh(
-            mesh.vertices,
-            fixed.faces,
-            chosen,
-            vertex_colors=mesh.vertex_colors,
-            face_colors=mesh.face_colors,
-        )
+        data, dropped = write_fixed(mesh, fixed.faces, chosen)
     except MeshFileError as error:
         raise Failure(f"cannot write {args.output}: {error}", EXIT_OUTPUT) from None
     write(args.output, data)
     progress.done()
-    objects = len(mesh.group_names or ())
-    dropped = unkept(chosen, mesh.vertex_colors, mesh.face_colors, objects=objects)
     if dropped:  # do no harm: never leave data out without saying so
         print(f"mesh-normal: {args.output} leaves out {'; '.join(dropped)}", file=sys.stderr)
     flipped = int(fixed.flipped.sum())
