@@ -80,7 +80,7 @@ def test_report_names_the_flipped_face_and_offers_the_fix(client: TestClient) ->
     assert "orient(vertices, faces)" in winding
     assert html.find("button", **{"data-mesh-download": "fix"})
     assert "1 problem needs fixing" in html.text("mesh-verdict")
-    assert "curl -F file=@cube.obj http://testserver/api/mesh" in html.text("mesh-curl")
+    assert "curl -F file=@cube.obj /api/mesh" in html.text("mesh-curl")  # relative: no Host
 
 
 def test_json_twin_equals_the_api(client: TestClient) -> None:
