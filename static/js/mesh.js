@@ -375,7 +375,7 @@
     if (event.target.id === "fix-format") syncDropped();
   });
   // A new weld tolerance analyses the file the page holds again.
-  if (weldInput) weldInput.addEventListener("change", function () { if (file) upload(file); });
+  if (weldInput) weldInput.addEventListener("change", function () { if (files.length) upload(files); });
 
   // A report the server rendered (the form posted without this script) is drawn too.
   if (document.getElementById("mesh-report")) { completeCurl(); syncFields(); drawFigures(); }
