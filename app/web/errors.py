@@ -44,7 +44,11 @@ ERROR_RESPONSES: dict[int | str, dict[str, Any]] = {
         (400, "The body is not valid JSON."),
         (413, "The body or the batch is too large."),
         (415, "The body is not sent as application/json."),
-        (422, "An input is missing or not a finite number, or a vector has the wrong length."),
+        (
+            422,
+            "An input is missing or not a finite number, a vector has the wrong length, "
+            "or a key is given twice.",
+        ),
     )
 }
 
