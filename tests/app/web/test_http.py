@@ -112,5 +112,12 @@ def test_without_a_temporary_folder_a_big_upload_is_a_503_that_says_so(
 
 
 def test_other_missing_files_are_still_a_crash() -> None:
-    assert handlers.NO_TEMP_DIR not in str(FileNotFoundError(2, "No such file", "x"))
-    assert handlers.temp_dir_problem() is None
+    assert handlers.temp_dir_problem() is None  # this machine has a temporary folder
+    app = create_app()
+
+    @app.get("/api/test-missing-file")
+    def missing() -> None:
+        raise FileNotFoundError(2, "No such file or directory", "/srv/missing")
+
+    response = TestClient(app, raise_server_exceptions=False).get("/api/test-missing-file")
+    assert_error(response, 500, None, "Something went wrong on our side")
