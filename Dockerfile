@@ -2,6 +2,10 @@
 #
 #   docker build -t mesh-normal-calculator .
 #   docker run --rm -p 8000:8000 mesh-normal-calculator
+#   docker run --rm --read-only --tmpfs /tmp -p 8000:8000 mesh-normal-calculator   # read-only root
+#
+# Nothing is written at run time but uploads over 1 MB, spooled to /tmp (a tmpfs there is enough):
+# the mesh kernels are compiled into the image, and numba reads their cache without writing it.
 #
 # Two stages: the builder installs the locked runtime dependencies (uv.lock: the library's own and
 # the `web` group) into /opt/venv; the final image gets that venv plus mesh_normal/, app/,
@@ -40,7 +44,8 @@ RUN /opt/uv/bin/uv sync --frozen --no-default-groups --group web --no-install-pr
 FROM python:3.11-slim
 
 # NUMBA_CACHE_DIR: the mesh kernels are compiled by numba while the image is built and
-# cached there; numba needs the folder writable at run time, so it belongs to the app user.
+# cached there. The folder stays root's: at run time it is only read (mesh_normal.kernels reads
+# a cache it may not write; a kernel missing from it, e.g. on another CPU, is compiled in memory).
 ENV PATH=/opt/venv/bin:$PATH \
     PYTHONDONTWRITEBYTECODE=1 \
     PYTHONUNBUFFERED=1 \
@@ -61,7 +66,7 @@ COPY templates ./templates
 COPY static ./static
 RUN python -m compileall -q mesh_normal app \
     && python -c "import mesh_normal as mn; mn.compile_kernels()" \
-    && chown -R 10001:10001 /var/cache/numba
+    && chmod -R a+rX,go-w /var/cache/numba
 
 USER 10001:10001
 
@@ -70,4 +75,12 @@ EXPOSE 8000
 HEALTHCHECK --interval=30s --timeout=5s --start-period=10s --retries=3 \
     CMD ["python", "-c", "import urllib.request; urllib.request.urlopen('http://127.0.0.1:8000/', timeout=4)"]
 
-CMD ["uvicorn", "app.main:app", "--host", "0.0.0.0", "--port", "8000"]
+# The server's limits (README, "Running it in public"): h11 caps a request's header at about
+# 16 KB (httptools takes any size), idle keep-alive connections close after 5 s, more than 100
+# connections at once get a 503, and a stop lets requests in flight finish for up to 8 s
+# (within `docker stop`'s 10 s). Read timeouts for headers and bodies belong to the proxy in
+# front. The same options are in the Makefile's `make run` (tests/app/test_server_limits.py).
+CMD ["uvicorn", "app.main:app", "--host", "0.0.0.0", "--port", "8000", \
+     "--http", "h11", "--h11-max-incomplete-event-size", "16384", \
+     "--timeout-keep-alive", "5", "--limit-concurrency", "100", "--backlog", "256", \
+     "--timeout-graceful-shutdown", "8"]

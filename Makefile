@@ -25,8 +25,12 @@ PORT ?= 8000
 
 env: .venv/.test
 
+# The server's limits, as in the Dockerfile's CMD (see the README's "Running it in public").
+SERVER_LIMITS := --http h11 --h11-max-incomplete-event-size 16384 --timeout-keep-alive 5 \
+	--limit-concurrency 100 --backlog 256 --timeout-graceful-shutdown 8
+
 run: .venv/.web
-	.venv/bin/uvicorn app.main:app --host $(HOST) --port $(PORT)
+	.venv/bin/uvicorn app.main:app --host $(HOST) --port $(PORT) $(SERVER_LIMITS)
 
 lint: .venv/.test
 	.venv/bin/ruff format --check mesh_normal app tests benchmarks

@@ -1,7 +1,7 @@
 """The service's limits and settings, in one declarative table.
 
 The constants are fixed by design; :class:`Settings` holds what an operator may change
-through the environment (today only ``MESH_UPLOAD_LIMIT_MB``).
+through the environment (``MESH_UPLOAD_LIMIT_MB``, ``MESH_PUBLIC_URL``).
 """
 
 from __future__ import annotations
@@ -30,15 +30,24 @@ UPLOAD_FILES = 100
 UPLOAD_LIMIT_VARIABLE = "MESH_UPLOAD_LIMIT_MB"
 DEFAULT_UPLOAD_LIMIT_MB = 200
 
+#: Environment variable that sets the public address for absolute links (default: relative).
+PUBLIC_URL_VARIABLE = "MESH_PUBLIC_URL"
+
 
 class Settings(BaseSettings):
-    """What the environment may set: ``MESH_UPLOAD_LIMIT_MB``, the mesh upload limit in MB."""
+    """What the environment may set: ``MESH_UPLOAD_LIMIT_MB``, the mesh upload limit in MB,
+    and ``MESH_PUBLIC_URL``, the server's public address."""
 
     model_config = SettingsConfigDict(
         env_prefix="MESH_", env_ignore_empty=True, extra="ignore", frozen=True
     )
 
     upload_limit_mb: float = Field(DEFAULT_UPLOAD_LIMIT_MB, gt=0, allow_inf_nan=False)
+    #: ``MESH_PUBLIC_URL``: the address users reach the server at (``https://normals.example``),
+    #: for the absolute links pasted elsewhere (the embed code, curl commands). Unset, the
+    #: server writes relative links (the page's script completes them from its own address):
+    #: the request's Host header, which anyone may forge, never goes into a link.
+    public_url: str | None = Field(None, pattern=r"^https?://[^\s/?#@]+(/[^\s?#]*)?$")
 
     @property
     def upload_limit(self) -> int:
@@ -51,7 +60,13 @@ def load_settings() -> Settings:
     try:
         return Settings()
     except ValidationError as error:
-        given = error.errors()[0].get("input")
+        first = error.errors()[0]
+        given = first.get("input")
+        if first.get("loc") == ("public_url",):
+            raise ValueError(
+                f"{PUBLIC_URL_VARIABLE} must be an http:// or https:// address without a query, "
+                f"such as https://normals.example.org/, not {given!r}."
+            ) from None
         raise ValueError(
             f"{UPLOAD_LIMIT_VARIABLE} must be a positive number of megabytes, not {given!r}."
         ) from None

@@ -16,7 +16,7 @@ from app.mesh import api as mesh_api
 from app.mesh import page as mesh_page
 from app.web import handlers
 from app.web.jsonio import FastJSONResponse
-from app.web.middleware import BodyLimit, PageCompression, SecurityHeaders
+from app.web.middleware import BodyLimit, HeadAsGet, PageCompression, SecurityHeaders
 from app.web.static import STATIC_DIR, CompressedStaticFiles
 from mesh_normal.precompile import compile_kernels
 
@@ -66,6 +66,7 @@ def create_app(upload_limit: int | None = None) -> FastAPI:
     )
     app.add_middleware(BodyLimit, upload_limit=app.state.upload_limit)
     app.add_middleware(SecurityHeaders)
+    app.add_middleware(HeadAsGet)
     return app
 
 

@@ -315,6 +315,21 @@ def _area(report: MeshReport) -> Problem | None:
     )
 
 
+def _underflow(report: MeshReport) -> Problem | None:
+    """A total area of 0.0 from faces that have a normal: it is below the smallest double."""
+    if report.area != 0.0 or report.faces <= report.degenerate_faces:
+        return None
+    return _problem(
+        "underflow",
+        "warning",
+        "The total area is below the smallest double",
+        "The coordinates are so small that the area underflows a 64-bit float (areas below "
+        "coordinates of about 1e-162); it is reported as 0.0, though the faces are not flat. "
+        "Normals are unaffected.",
+        "Scale the mesh up (by a power of two, which is exact) before measuring.",
+    )
+
+
 CHECKS = (
     _winding,
     _inward,
@@ -327,4 +342,5 @@ CHECKS = (
     _unused,
     _components,
     _area,
+    _underflow,
 )

@@ -66,6 +66,7 @@ ProblemCode = Literal[
     "unused_vertices",
     "components",
     "overflow",
+    "underflow",
 ]
 
 

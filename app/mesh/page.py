@@ -22,6 +22,7 @@ from app.mesh.classes import CLASSES
 from app.mesh.figures import mesh_figures
 from app.mesh.uploads import Upload, read_upload
 from app.web.errors import ApiError
+from app.web.links import public_url
 from app.web.middleware import size_text
 from app.web.templating import templates
 from mesh_normal.analysis import analyse_mesh, build_report
@@ -125,7 +126,7 @@ async def mesh_upload(request: Request) -> HTMLResponse:
     context = _form_context(request)
     try:
         upload = await read_upload(request)
-        context.update(await run_in_threadpool(_report_context, upload, str(request.base_url)))
+        context.update(await run_in_threadpool(_report_context, upload, public_url("/")))
     except ApiError as error:
         context["error"] = error
         name = "_mesh_error.html" if fragment else "mesh.html"

@@ -13,6 +13,7 @@ app/calculator/view3d.py; the axes then lose their numbers and the page says so.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -38,6 +39,8 @@ ARROW_LENGTH = 0.04
 TRUE_SCALE = (2.0**-20, 2.0**20)
 #: A mesh whose centre is this many half-extents from the origin is shifted to it.
 FAR_AWAY = 1e3
+#: Smallest extent that _rounded rounds (10**(6 - log10 of it) must stay a finite double).
+MIN_ROUNDED = 1e-290
 SEED = 20240607  # the sample is random but fixed: the same file draws the same faces
 
 ARROW_COLOR = DEEP_ACCENT
@@ -84,16 +87,24 @@ class ViewSpace:
 def view_space(vertices: NDArray[np.float64]) -> ViewSpace:
     """Coordinates a 32-bit WebGL view can draw, for finite float64 vertices of any size.
 
-    Halving before adding keeps the centre and extent finite even at ±1.8e308.
+    Halving before adding keeps the centre finite even at ±1.8e308. The extent is taken
+    whole where it is finite, so that a subnormal one (5e-324, whose half is 0) still sets
+    the scale; only an extent beyond the double range is taken from the halves.
     """
     if not len(vertices):
         return ViewSpace(np.zeros((0, 3)), 0, np.zeros(3), False)
     low, high = vertices.min(axis=0), vertices.max(axis=0)
     centre = low / 2 + high / 2
-    half = float((high / 2 - low / 2).max())
+    with np.errstate(over="ignore"):
+        span = float((high - low).max())
+    if math.isfinite(span):
+        half, power = span / 2, int(np.frexp(span)[1]) - 1  # 2**power: about the half-extent
+    else:
+        half = float((high / 2 - low / 2).max())
+        power = int(np.frexp(half)[1])
     exponent = 0
-    if half and not TRUE_SCALE[0] <= half <= TRUE_SCALE[1]:
-        exponent = int(np.frexp(half)[1])
+    if span and not TRUE_SCALE[0] <= half <= TRUE_SCALE[1]:
+        exponent = power
     shifted = exponent != 0 or float(np.abs(centre).max()) > FAR_AWAY * max(half, 1e-300)
     if not shifted:
         return ViewSpace(vertices, 0, np.zeros(3), False)
@@ -105,9 +116,13 @@ def view_space(vertices: NDArray[np.float64]) -> ViewSpace:
 
 
 def _rounded(points: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Points rounded to a millionth of their extent: all a 32-bit view shows, in short JSON."""
+    """Points rounded to a millionth of their extent: all a 32-bit view shows, in short JSON.
+
+    An extent below 1e-290 is left as it is: ``np.round`` multiplies by ``10**decimals``,
+    which is infinite beyond 1e308 (and would turn every zero into NaN).
+    """
     extent = float(np.abs(points).max(initial=0.0))
-    if not extent:
+    if not (MIN_ROUNDED <= extent < math.inf):
         return points
     return np.round(points, 6 - int(np.ceil(np.log10(extent))))
 

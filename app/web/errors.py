@@ -44,7 +44,11 @@ ERROR_RESPONSES: dict[int | str, dict[str, Any]] = {
         (400, "The body is not valid JSON."),
         (413, "The body or the batch is too large."),
         (415, "The body is not sent as application/json."),
-        (422, "An input is missing or not a finite number, or a vector has the wrong length."),
+        (
+            422,
+            "An input is missing or not a finite number, a vector has the wrong length, "
+            "or a key is given twice.",
+        ),
     )
 }
 
@@ -91,7 +95,17 @@ def from_validation(errors: Sequence[Any]) -> ApiError:
     given = first.get("input")
     context = first.get("ctx") or {}
     if kind == "json_invalid":
-        reason = context.get("error", "it cannot be parsed")
+        reason = str(context.get("error", "it cannot be parsed"))
+        if reason.startswith("number out of range"):
+            # An integer literal of more than 4,300 digits: out of range like 1e400, so a 422.
+            place = reason.removeprefix("number out of range").strip()
+            return ApiError(
+                422,
+                "A number in the request body"
+                + (f", {place}," if place else "")
+                + " is beyond the double range (about ±1.8e308); NaN, Infinity and larger "
+                "numbers are not accepted.",
+            )
         where = location[-1] if location and isinstance(location[-1], int) else None
         at = f" at character {where}" if where is not None else ""
         return ApiError(400, f"The request body is not valid JSON: {reason}{at}.")

@@ -8,12 +8,14 @@ raises an error imports a template.
 from __future__ import annotations
 
 import logging
+import tempfile
 
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import Response
 from starlette.exceptions import HTTPException as StarletteHTTPException
-from starlette.routing import Match
+from starlette.routing import Match, Mount
+from starlette.staticfiles import StaticFiles
 
 from app.web.errors import ApiError, from_validation
 from app.web.headers import security_headers
@@ -44,15 +46,21 @@ def render_error(request: Request, error: ApiError) -> Response:
 
 
 def _allowed_methods(request: Request) -> list[str]:
-    """Every method some route takes at this path (Starlette names only the first route's)."""
-    routes = request.app.router.routes
-    return [
+    """Every method some route takes at this path (Starlette names only the first route's).
+
+    HEAD goes with GET (:class:`app.web.middleware.HeadAsGet`). A path under a mount (the
+    static files) takes what the mounted app takes: GET and HEAD.
+    """
+    scope = request.scope
+    if isinstance(scope.get("endpoint"), StaticFiles):
+        return ["GET", "HEAD"]
+    routes = [route for route in request.app.router.routes if not isinstance(route, Mount)]
+    methods = [
         method
-        for method in ("GET", "HEAD", "POST", "PUT", "PATCH", "DELETE")
-        if any(
-            route.matches({**request.scope, "method": method})[0] == Match.FULL for route in routes
-        )
+        for method in ("GET", "POST", "PUT", "PATCH", "DELETE")
+        if any(route.matches({**scope, "method": method})[0] == Match.FULL for route in routes)
     ]
+    return [*methods[:1], "HEAD", *methods[1:]] if methods[:1] == ["GET"] else methods
 
 
 async def on_api_error(request: Request, exc: Exception) -> Response:
@@ -75,6 +83,38 @@ async def on_http(request: Request, exc: Exception) -> Response:
     return response
 
 
+#: What Python's tempfile says when no folder it tries (TMPDIR, /tmp, /var/tmp, ...) is writable.
+NO_TEMP_DIR = "No usable temporary directory"
+
+#: The answer then: the server's own state, said as such (not a 500, not the user's fault).
+NO_TEMP_DIR_SENTENCE = (
+    "The server has no writable temporary folder to hold an upload over 1 MB; "
+    "its operator must give it one (a tmpfs at /tmp)."
+)
+
+
+def temp_dir_problem() -> str | None:
+    """Why uploads over 1 MB cannot be spooled (no writable temporary folder), or None.
+
+    Starlette spools every multipart file over 1 MB to a temporary file; on a read-only
+    filesystem without a tmpfs at /tmp there is none to make.
+    """
+    try:
+        tempfile.gettempdir()
+    except FileNotFoundError as error:
+        return str(error)
+    return None
+
+
+async def on_file_not_found(request: Request, exc: Exception) -> Response:
+    """A missing temporary folder is a 503 that says so; any other missing file is a crash."""
+    assert isinstance(exc, FileNotFoundError)
+    if NO_TEMP_DIR not in str(exc):
+        return await on_crash(request, exc)
+    logger.error("%s: %s (mount a tmpfs at /tmp)", request.url.path, exc)
+    return render_error(request, ApiError(503, NO_TEMP_DIR_SENTENCE))
+
+
 async def on_crash(request: Request, _exc: Exception) -> Response:
     logger.exception("unhandled error on %s", request.url.path)
     response = render_error(request, ApiError(500, "Something went wrong on our side."))
@@ -84,7 +124,19 @@ async def on_crash(request: Request, _exc: Exception) -> Response:
 
 
 def install(app: FastAPI) -> None:
-    """Register the one set of handlers that turns every failure into an ApiError."""
+    """Register the one set of handlers that turns every failure into an ApiError.
+
+    At start-up, say in the log when there is no writable temporary folder: uploads over 1 MB
+    are then refused with 503 until one is mounted.
+    """
+    problem = temp_dir_problem()
+    if problem is not None:
+        logger.warning(
+            "%s: uploads over 1 MB will be refused (503) until a writable temporary folder "
+            "is mounted, e.g. `docker run --read-only --tmpfs /tmp ...`",
+            problem,
+        )
+    app.add_exception_handler(FileNotFoundError, on_file_not_found)
     app.add_exception_handler(ApiError, on_api_error)
     app.add_exception_handler(RequestValidationError, on_validation)
     app.add_exception_handler(StarletteHTTPException, on_http)

@@ -14,6 +14,8 @@ the tests that parse responses strictly are where it shows; a user never gets in
 
 from __future__ import annotations
 
+import json
+import re
 from typing import Any, TypeVar
 
 from fastapi import Request
@@ -21,9 +23,13 @@ from fastapi.responses import JSONResponse
 from pydantic import BaseModel, ValidationError
 from pydantic_core import to_json
 
-from app.web.errors import ApiError, from_validation
+from app.web.errors import ApiError, clip, from_validation
 
 Model = TypeVar("Model", bound=BaseModel)
+
+#: A body that pydantic refused is searched for duplicate keys (the first thing to say)
+#: only up to this size; a valid body always is.
+DUPLICATE_SCAN_LIMIT = 1024 * 1024
 
 
 def json_bytes(content: Any) -> bytes:
@@ -64,10 +70,65 @@ async def read_body(request: Request, model: type[Model]) -> Model:
 
 
 def parse_body(raw: bytes, model: type[Model]) -> Model:
+    """``raw`` as ``model``; a key given twice in one object is refused (a 422 naming it)."""
     try:
-        return model.model_validate_json(raw)
+        parsed = model.model_validate_json(raw)
     except ValidationError as error:
         errors = [
             {**item, "loc": ("body", *item["loc"])} for item in error.errors(include_url=False)
         ]
+        if errors[0].get("type") != "json_invalid" and len(raw) <= DUPLICATE_SCAN_LIMIT:
+            refuse_duplicate_keys(raw)  # the first thing wrong, before what "last wins" made
         raise from_validation(errors) from None
+    refuse_duplicate_keys(raw)
+    return parsed
+
+
+#: An object key: a string that a colon follows (in valid JSON, only a key is followed by one).
+_KEY = re.compile(rb'"(?:[^"\\]|\\.)*"\s*:')
+#: The tokens that tell which object a key is in: the keys, other strings and the braces.
+_TOKENS = re.compile(rb'"(?:[^"\\]|\\.)*"\s*:|"(?:[^"\\]|\\.)*"|[{}]')
+
+
+def refuse_duplicate_keys(raw: bytes) -> None:
+    """Raise a 422 naming the first key given twice in one object of the JSON text ``raw``.
+
+    pydantic's parser keeps the last of duplicate keys, silently; the service refuses them as
+    it refuses unknown ones. A key belongs to the innermost open object: an array cannot hold
+    keys itself, so only the braces need counting. A body with one object and no strings but
+    its keys (a batch of 100,000 triangles: one object, two keys) needs no counting at all:
+    its keys are found by a regex search, done in C (8 ms for 8.6 MB, where the token scan
+    takes 0.3 s). ``raw`` must be valid JSON.
+    """
+    if raw.count(b":") < 2:
+        return  # fewer than two keys: no colon to follow a second one
+    if raw.count(b"{") == 1:
+        keys = _KEY.findall(raw)
+        if raw.count(b'"') == 2 * len(keys):  # every string is a key: none was misread
+            _refuse_repeated(keys)
+            return
+    open_objects: list[list[bytes]] = []
+    for match in _TOKENS.finditer(raw):
+        token = match.group()
+        if token == b"{":
+            open_objects.append([])
+        elif token == b"}":
+            if open_objects:
+                _refuse_repeated(open_objects.pop())
+        elif token.endswith(b":") and open_objects:
+            open_objects[-1].append(token)
+
+
+def _refuse_repeated(tokens: list[bytes]) -> None:
+    """The 422 for the first key of one object that comes twice (``"a":`` tokens)."""
+    seen: set[str] = set()
+    for token in tokens:
+        key = json.loads(token[:-1].rstrip())  # "\\u0061" and "a" are the same key
+        if key in seen:
+            raise ApiError(
+                422,
+                f"{clip(key)} is given twice in one object of the request body; send each "
+                "field once.",
+                key,
+            )
+        seen.add(key)

@@ -32,6 +32,30 @@ class SecurityHeaders:
         await self.app(scope, receive, send_with_headers)
 
 
+class HeadAsGet:
+    """HEAD is answered as GET without the body (RFC 9110: same status and headers).
+
+    FastAPI's routes take only the methods they name, so without this ``HEAD /`` is a 405.
+    The request goes on as a GET; every body message is sent empty (the headers, with the
+    Content-Length of the GET's body, are kept).
+    """
+
+    def __init__(self, app: ASGIApp) -> None:
+        self.app = app
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http" or scope["method"] != "HEAD":
+            await self.app(scope, receive, send)
+            return
+
+        async def without_body(message: Message) -> None:
+            if message["type"] == "http.response.body":
+                message = {**message, "body": b""}
+            await send(message)
+
+        await self.app({**scope, "method": "GET"}, receive, without_body)
+
+
 class PageCompression:
     """Gzip for HTML pages, whose size grows with a mesh report's 3D view data.
 

@@ -14,6 +14,7 @@ from markupsafe import Markup
 
 from app.web.formatting import js_number
 from app.web.jsonio import json_bytes
+from app.web.links import public_url
 from app.web.static import static_url
 
 TEMPLATES_DIR = Path(__file__).resolve().parents[2] / "templates"
@@ -32,5 +33,6 @@ def number_text(value: float | None) -> str:
 
 templates = Jinja2Templates(directory=TEMPLATES_DIR)
 templates.env.globals["static_url"] = static_url
+templates.env.globals["public_url"] = public_url
 templates.env.filters["num"] = number_text
 templates.env.filters["json_script"] = json_script

@@ -24,7 +24,7 @@ import zipfile
 import zlib
 from collections.abc import Callable, Iterable, Iterator, Sequence
 
-from mesh_normal.files.errors import MeshFileError
+from mesh_normal.files.errors import MeshFileError, failure_reason
 from mesh_normal.files.formats import suffix_format
 from mesh_normal.files.loaded import LoadedMesh
 
@@ -193,9 +193,8 @@ def read_chosen(
     except MeshFileError:
         raise
     except Exception as error:  # trimesh's own exception, worded as read_mesh words it
-        reason = str(error).strip().rstrip(".") or type(error).__name__
         raise MeshFileError(
-            f"The file {chosen} could not be read as glTF: {reason[:200]}."
+            f"The file {chosen} could not be read as glTF: {failure_reason(error)}."
         ) from error
 
 

@@ -12,7 +12,7 @@ from typing import Protocol
 from urllib.parse import unquote
 
 from mesh_normal.files.archive import is_zip
-from mesh_normal.files.errors import MeshFileError, unsupported
+from mesh_normal.files.errors import MeshFileError, failure_reason, unsupported
 from mesh_normal.files.formats import FORMATS, SUFFIXES, suffix_format
 from mesh_normal.files.loaded import LoadedMesh
 from mesh_normal.files.stl import is_binary, looks_ascii
@@ -77,9 +77,8 @@ def read_mesh(source: MeshSource, filename: str | None = None) -> LoadedMesh:
     except MeshFileError:
         raise
     except Exception as error:  # a library's own exception: never a 500
-        reason = str(error).strip().rstrip(".") or type(error).__name__
         raise MeshFileError(
-            f"The file could not be read as {FORMATS[found].title}: {reason[:200]}."
+            f"The file could not be read as {FORMATS[found].title}: {failure_reason(error)}."
         ) from error
     if named is not None and named != found:
         named_as, holds = FORMATS[named].title, FORMATS[found].title

@@ -19,6 +19,11 @@
   let timer = null;
   let inFlight = null;
 
+  // The embed code comes with a relative address when the server has no MESH_PUBLIC_URL (it
+  // never builds links from the Host header): this page's own address goes in front.
+  const embedCode = document.getElementById("embed-code");
+  if (embedCode) embedCode.value = embedCode.value.replace('src="/', 'src="' + location.origin + "/");
+
   function setError(name, sentence) {
     const slot = form.querySelector('[data-error-for="' + name + '"]');
     const input = document.getElementById(name);

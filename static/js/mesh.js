@@ -172,8 +172,17 @@
     return drawHistogram();
   }
 
+  // The curl command comes with a relative address when the server has no MESH_PUBLIC_URL (it
+  // never builds links from the Host header): this page's own address goes in front.
+  function completeCurl() {
+    const curl = document.getElementById("mesh-curl");
+    const code = curl && (curl.querySelector("code") || curl);
+    if (code) code.textContent = code.textContent.replace(/ \/api\//, " " + location.origin + "/api/");
+  }
+
   function render(html) {
     output.innerHTML = html;
+    completeCurl();
     const report = data("mesh-report");
     const items = report ? report.problems : [];
     const count = items.filter(function (item) { return item.severity !== "info"; }).length;
@@ -369,6 +378,6 @@
   if (weldInput) weldInput.addEventListener("change", function () { if (files.length) upload(files); });
 
   // A report the server rendered (the form posted without this script) is drawn too.
-  if (document.getElementById("mesh-report")) { syncFields(); drawFigures(); }
+  if (document.getElementById("mesh-report")) { completeCurl(); syncFields(); drawFigures(); }
   window.meshUpload = upload;  // lets browser tests hand the page files directly
 })();

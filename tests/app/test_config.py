@@ -35,3 +35,19 @@ def test_a_bad_limit_is_one_clear_sentence(monkeypatch: pytest.MonkeyPatch, text
 def test_create_app_takes_the_limit_in_bytes(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("MESH_UPLOAD_LIMIT_MB", "abc")  # not read when the limit is given
     assert create_app(upload_limit=2000).state.upload_limit == 2000
+
+
+@pytest.mark.parametrize(
+    "text", ["normals.example.org", "ftp://x.example", "https://x.example/?a=1", "https://a b"]
+)
+def test_a_bad_public_url_is_one_clear_sentence(monkeypatch: pytest.MonkeyPatch, text: str) -> None:
+    monkeypatch.setenv("MESH_PUBLIC_URL", text)
+    with pytest.raises(ValueError, match=r"^MESH_PUBLIC_URL must be an http:// or https://"):
+        load_settings()
+
+
+def test_the_public_url_is_unset_by_default(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.delenv("MESH_PUBLIC_URL", raising=False)
+    assert load_settings().public_url is None
+    monkeypatch.setenv("MESH_PUBLIC_URL", "https://normals.example.org/calc/")
+    assert load_settings().public_url == "https://normals.example.org/calc/"

@@ -80,6 +80,9 @@ def test_choosing_a_file_uploads_it_and_shows_the_diagnosis(page: Page) -> None:
     colors = page.evaluate("""() => document.getElementById('mesh-view').data
         .find((t) => t.type === 'mesh3d').facecolor""")
     assert colors.count("#f76707") == 1 and len(colors) == 12
+    # The server writes the curl command's address relative; the page puts its own in front.
+    origin = page.evaluate("location.origin")
+    expect(page.locator("#mesh-curl")).to_have_text(f"curl -F file=@cube.obj {origin}/api/mesh")
 
 
 def test_downloads_send_the_file_again(page: Page) -> None:

@@ -46,6 +46,7 @@ def test_a_clean_report_has_no_problem() -> None:
         ({"components": 2}, ["components"]),
         ({"area": None}, ["overflow"]),
         ({"volume": None}, ["overflow"]),
+        ({"area": 0.0}, ["underflow"]),
     ],
 )
 def test_each_value_of_the_report_raises_its_problem(
@@ -71,6 +72,19 @@ def test_winding_reads_the_fix() -> None:
 def test_the_overflow_names_both_measures() -> None:
     [item] = problems(changed(area=None, volume=None))
     assert item.title == "The total area and volume are beyond the double range"
+
+
+def test_an_area_that_underflows_is_said_so() -> None:
+    # |B - A| * |C - A| = 1e-330: below the smallest double, though the face has a normal.
+    data = b"v 0 0 0\nv 1e-160 0 0\nv 0 1e-170 0\nf 1 2 3\n"
+    report = build_report(analyse_mesh(read_mesh(data, "tiny.obj"), "tiny.obj", len(data)))
+    assert (report.area, report.degenerate_faces) == (0.0, 0)
+    [item] = [item for item in problems(report) if item.code == "underflow"]
+    assert item.title == "The total area is below the smallest double"
+    assert "reported as 0.0" in item.detail
+    # Faces that are flat are a different problem: their area is 0.0 in truth.
+    flat = changed(area=0.0, degenerate_faces=12, repeated_index_faces=0)
+    assert "underflow" not in codes(flat)
 
 
 def test_file_normals_that_point_the_other_way() -> None:

@@ -69,3 +69,57 @@ def test_reading_and_checking_a_mesh_do_not_import_numba(tmp_path: Path) -> None
     )
     result = run(script, tmp_path)
     assert result.returncode == 0, result.stderr[-2000:]
+
+
+#: numba's writable locators refuse a folder they cannot write (each tests it by writing a
+#: temporary file there): made to refuse here, as on a read-only root filesystem.
+READ_ONLY = (
+    "from numba.core import caching\n"
+    "def refuse(self):\n"
+    "    raise PermissionError(30, 'Read-only file system', self.get_cache_path())\n"
+    "for name in ('UserProvidedCacheLocator', 'InTreeCacheLocator', 'UserWideCacheLocator'):\n"
+    "    getattr(caching, name).ensure_cache_path = refuse\n"
+)
+
+
+def _snapshot(folder: Path) -> dict[str, tuple[int, int]]:
+    return {
+        str(path): (path.stat().st_size, path.stat().st_mtime_ns)
+        for path in folder.rglob("*")
+        if path.is_file()
+    }
+
+
+def test_a_read_only_cache_is_read_and_never_written(tmp_path: Path) -> None:
+    compile_all = (
+        "from mesh_normal.precompile import compile_kernels\n"
+        "compile_kernels()\n"
+        "import mesh_normal as mn\n"
+        "print(mn.orient([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]]).orientation)\n"
+    )
+    built = run(compile_all, tmp_path)  # the image build: the cache is written
+    assert built.returncode == 0, built.stderr[-2000:]
+    before = _snapshot(tmp_path)
+    check = (
+        "from mesh_normal.kernels import _KERNELS\n"
+        "assert all(kernel._cache.read_only for kernel in _KERNELS)\n"
+    )
+    served = run(READ_ONLY + compile_all + check, tmp_path)  # run time: read only
+    assert served.returncode == 0, served.stderr[-2000:]
+    assert "cannot cache" not in served.stderr
+    assert MESSAGE not in served.stderr, "every kernel came from the read-only cache"
+    assert served.stdout == built.stdout
+    assert _snapshot(tmp_path) == before, "nothing was written"
+
+
+def test_without_a_usable_cache_the_kernels_are_compiled_in_memory(tmp_path: Path) -> None:
+    empty = tmp_path / "empty"
+    script = (
+        READ_ONLY + "import mesh_normal as mn\n"
+        "print(mn.face_normals([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]]).normals.tolist())\n"
+    )
+    result = run(script, empty)
+    assert result.returncode == 0, result.stderr[-2000:]
+    assert result.stdout.strip() == "[[0.0, 0.0, 1.0]]"
+    assert MESSAGE in result.stderr
+    assert not empty.exists() or not any(empty.rglob("*.nbi")), "nothing was saved"

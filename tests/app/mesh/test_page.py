@@ -80,7 +80,7 @@ def test_report_names_the_flipped_face_and_offers_the_fix(client: TestClient) ->
     assert "orient(vertices, faces)" in winding
     assert html.find("button", **{"data-mesh-download": "fix"})
     assert "1 problem needs fixing" in html.text("mesh-verdict")
-    assert "curl -F file=@cube.obj http://testserver/api/mesh" in html.text("mesh-curl")
+    assert "curl -F file=@cube.obj /api/mesh" in html.text("mesh-curl")  # relative: no Host
 
 
 def test_json_twin_equals_the_api(client: TestClient) -> None:
@@ -269,3 +269,22 @@ def test_boundary_faces_of_separate_sides_are_marked(client: TestClient) -> None
     # One face of the four neighbouring sides along each of the hole's 12 edges, though the
     # points there are named by other sides' copies.
     assert response.context["figures"]["view"]["counts"]["boundary"] == 12
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "v 0 0 0\nv 5e-324 0 0\nv 0 5e-324 0\nf 1 2 3\n",  # subnormal: the area underflows
+        "v 0 0 0\nv 1e300 0 0\nv 0 1e300 0\nf 1 2 3\n",  # huge: the area overflows
+        "v 0 0 0\nv 1e300 0 0\nv 0 1e-300 0\nv 5e-324 5e-324 5e-324\nf 1 2 3\nf 1 2 4\n",
+    ],
+    ids=["subnormal", "huge", "mixed"],
+)
+def test_extreme_coordinates_draw_a_page_like_the_api(client: TestClient, text: str) -> None:
+    api = client.post("/api/mesh", files={"file": ("t.obj", text.encode())})
+    assert api.status_code == 200, api.text
+    _, html = post(client, text, "t.obj")
+    assert json_block(html, "mesh-report") == api.json()
+    view = json_block(html, "mesh-view-data")
+    json.dumps(view, allow_nan=False)
+    assert view["data"], "something is drawn"

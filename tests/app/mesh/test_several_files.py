@@ -171,7 +171,7 @@ def test_the_page_takes_several_files_and_names_them(client: TestClient) -> None
     page = Page(response.text)
     assert page.text("mesh-files") == "Files: Box.gltf (read) · Box0.bin (read)"
     assert "Read Box.gltf with Box0.bin from the 2 files sent." in response.text
-    assert page.text("mesh-curl").startswith("curl -F file=@Box.gltf -F file=@Box0.bin http")
+    assert page.text("mesh-curl") == "curl -F file=@Box.gltf -F file=@Box0.bin /api/mesh"
 
 
 def test_the_page_lists_the_members_read_from_a_zip(client: TestClient) -> None:

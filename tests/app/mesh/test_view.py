@@ -96,3 +96,50 @@ def test_view_draws_huge_and_far_meshes_in_float32_range() -> None:
         assert view["note"] and "the file's" in view["note"]
         json.dumps(view, allow_nan=False)
     assert not view_space(np.eye(3)).transformed
+
+
+def _one_face_view(vertices: np.ndarray) -> dict:  # type: ignore[type-arg]
+    return build_view(
+        vertices,
+        np.array([[0, 1, 2]]),
+        np.array([[0.0, 0.0, 1.0]]),
+        np.array([OK], dtype=np.int8),
+        np.zeros((0, 2), int),
+        np.zeros((0, 2), int),
+    )
+
+
+def test_view_of_subnormal_coordinates_is_scaled_up_not_nan() -> None:
+    # 5e-324 = 2**-1074: its half is 0, so the scale comes from the whole extent.
+    tiny = 5e-324
+    for vertices in (
+        np.array([[0.0, 0, 0], [tiny, 0, 0], [0, tiny, 0]]),
+        np.array([[tiny, tiny, 0], [2 * tiny, tiny, 0], [tiny, 2 * tiny, 0]]),
+        np.array([[0.0, 0, 0], [1e-310, 0, 0], [0, 3e-320, 5e-324]]),
+    ):
+        space = view_space(vertices)
+        assert space.transformed and space.exponent < -1000
+        assert np.isfinite(space.points).all()
+        assert 0.5 <= np.abs(space.points).max() < 2.0**21
+        view = _one_face_view(vertices)
+        json.dumps(view, allow_nan=False)
+        assert view["note"] and "scaled by 2^" in view["note"]
+
+
+def test_view_of_mixed_scales_keeps_the_largest_and_stays_finite() -> None:
+    # One axis at 1e300, one at 1e-300, one subnormal: the largest extent sets the scale.
+    vertices = np.array([[0.0, 0, 0], [1e300, 0, 0], [0, 1e-300, 5e-324]])
+    space = view_space(vertices)
+    assert space.exponent > 900
+    assert np.isfinite(space.points).all() and np.abs(space.points).max() < 2.0
+    json.dumps(_one_face_view(vertices), allow_nan=False)
+    # Extents beyond the double range (high - low overflows) still get a finite scale.
+    edge = np.array([[-1.7e308, -1.7e308, 0], [1.7e308, -1.7e308, 0], [0, 1.7e308, 0]])
+    assert np.isfinite(view_space(edge).points).all()
+    json.dumps(_one_face_view(edge), allow_nan=False)
+
+
+def test_rounding_leaves_tiny_extents_alone() -> None:
+    points = np.array([[0.0, 5e-324, 1e-300]])
+    assert np.array_equal(mesh_view._rounded(points), points)
+    assert np.array_equal(mesh_view._rounded(np.zeros((2, 3))), np.zeros((2, 3)))

@@ -9,9 +9,12 @@ from typing import Any
 import pytest
 from fastapi import FastAPI
 from fastapi.testclient import TestClient
+from hypothesis import given
+from hypothesis import strategies as st
 
 from app.main import create_app
-from app.web.jsonio import FastJSONResponse, json_bytes
+from app.web.errors import ApiError
+from app.web.jsonio import FastJSONResponse, json_bytes, refuse_duplicate_keys
 from app.web.templating import json_script
 
 
@@ -70,3 +73,29 @@ def test_errors_and_the_partials_twin_are_strict_json(client: TestClient) -> Non
     ):
         assert response.headers["content-type"].startswith("application/json")
         strict(response.text)
+
+
+json_values = st.recursive(
+    st.none() | st.booleans() | st.floats(allow_nan=False) | st.text(max_size=5),
+    lambda inner: st.lists(inner, max_size=3) | st.dictionaries(st.text(max_size=3), inner),
+    max_leaves=12,
+)
+
+
+@given(json_values, st.booleans())
+def test_duplicate_keys_are_found_in_any_json(value, spaced: bool) -> None:  # type: ignore[no-untyped-def]
+    text = json.dumps(value, indent=1 if spaced else None)
+    refuse_duplicate_keys(text.encode())  # json.dumps never repeats a key
+    if isinstance(value, dict) and value:
+        key = next(iter(value))
+        doubled = text[:-1].rstrip() + f", {json.dumps(key)}: 1" + "}"
+        with pytest.raises(ApiError) as raised:
+            refuse_duplicate_keys(doubled.encode())
+        assert raised.value.status_code == 422
+        assert raised.value.field == key
+
+
+def test_duplicate_keys_in_nested_objects_and_strings_that_look_like_keys() -> None:
+    refuse_duplicate_keys(b'{"a": {"a": 1}, "b": [{"a": 1}, {"a": 2}], "c": "\\"a\\": 1"}')
+    with pytest.raises(ApiError, match=r"^x is given twice"):
+        refuse_duplicate_keys(b'{"a": [{"x": 1, "y": {"x": 2}, "x": 3}]}')
