@@ -51,11 +51,17 @@ SAMPLES = 32
 FEWEST = 4
 RAYS = 2**19
 #: A patch is decided when the escaping shares of its two sides differ by at least this.
-MARGIN = 0.375
+MARGIN = 0.35
 #: Hits nearer than this fraction of the half-diagonal of the mesh's box do not block a ray.
 T_MIN = 2.0**-30
 #: Faces per leaf of the hierarchy.
 _LEAF = 4
+#: What a ray meets (see :func:`_blocked`).
+_CLEAR, _HIT, _UNSURE = range(3)
+#: A hit this close (in barycentric coordinates, or in the sine of the angle to the face's
+#: plane) to a face's edge or plane is unsure: another position, turn or scale of the mesh
+#: may round it the other way. Far above rounding (about 1e-15 here), far below a real edge.
+_UNSURE_BAND = 2.0**-30
 
 
 def _directions() -> FloatArray:
@@ -103,9 +109,17 @@ def visible_sides(
     patches = len(candidates)
     score = np.full(patches, np.nan)
     chosen = np.flatnonzero(candidates)
-    low, high = points.min(axis=0, initial=0.0), points.max(axis=0, initial=0.0)
+    if len(chosen) == 0:
+        return score
+    # The box of the vertices the faces use (never the origin's: a mesh far from it is
+    # tested at its own size).
+    mask = np.zeros(len(points), dtype=bool)
+    mask[faces.ravel()] = True
+    used = points[mask]
+    low, high = used.min(axis=0), used.max(axis=0)
     centre, half = low / 2 + high / 2, float(np.max(high / 2 - low / 2))  # no overflow
-    if len(chosen) == 0 or not half > 0 or not math.isfinite(half):
+    del used
+    if not half > 0 or not math.isfinite(half):
         return score
     most = RAYS // (2 * DIRECTIONS * FEWEST)
     if len(chosen) > most:
@@ -115,23 +129,31 @@ def visible_sides(
     unit = (points - centre) / half
     order, boxes, children, spans, corners = _hierarchy(unit, faces)
     escaped = np.zeros((len(samples), 2))  # share of escaping rays: + side, - side of the plane
+    unsure = np.zeros((len(samples), 2))  # share of rays that may escape or not
     weights = np.zeros(len(samples))
     against = np.zeros(len(samples), dtype=np.bool_)
     announce_compiling()
     with PARALLEL_KERNELS:
         _cast(
             unit, faces, corners, order, boxes, children, spans, samples, _directions(), T_MIN,
-            escaped, weights, against,
+            escaped, unsure, weights, against,
         )  # fmt: skip
     # The side the patch faces when wound like its first face: + if the sample face is wound
     # like the increasing order of its vertex numbers (against is false), turned by its parity.
     facing = against ^ parity[samples].astype(bool)
     front = np.where(facing, escaped[:, 1], escaped[:, 0])
     back = np.where(facing, escaped[:, 0], escaped[:, 1])
+    doubt = unsure[:, 0] + unsure[:, 1]  # each unsure ray may swing the difference by one
     total = np.bincount(owner, weights, len(chosen))
     difference = np.bincount(owner, weights * (front - back), len(chosen))
+    swing = np.bincount(owner, weights * doubt, len(chosen))
     scored = total > 0
-    score[chosen[scored]] = difference[scored] / total[scored]
+    lowest = (difference - np.where(difference > 0, swing, 0.0))[scored] / total[scored]
+    highest = (difference + np.where(difference < 0, swing, 0.0))[scored] / total[scored]
+    # The score as counted with every unsure ray against it: its sign and size hold whichever
+    # way rounding takes those rays; where they could take it to zero or past it, zero.
+    surely = np.where(difference[scored] > 0, np.maximum(lowest, 0.0), np.minimum(highest, 0.0))
+    score[chosen[scored]] = surely
     return score
 
 
@@ -230,8 +252,10 @@ def _split(codes: IndexArray, children: IndexArray, spans: IndexArray) -> int:
 
 @kernel()
 def _boxes(corners: FloatArray, children: IndexArray, spans: IndexArray, boxes: FloatArray) -> None:
-    """Each node's box, a little larger than its faces' (by 2**-40), from the leaves up."""
-    pad = 2.0**-40
+    """Each node's box, a little larger than its faces' (by 2**-26, more than an unsure hit
+    can lie outside a face: 2 ``_UNSURE_BAND`` times its longest edge, at most 4), from the
+    leaves up."""
+    pad = 2.0**-26
     for node in range(len(children) - 1, -1, -1):
         if children[node, 0] < 0:
             for axis in range(3):
@@ -285,16 +309,20 @@ def _blocked(
     direction: FloatArray,
     t_min: float,
     stack: IndexArray,
-) -> bool:
-    """Whether the ray hits a face other than ``own`` farther than ``t_min``: depth first,
-    the nearer child first, so that a hit is found early and ends the search."""
+) -> int:
+    """Whether the ray hits a face other than ``own`` farther than ``t_min``: ``_CLEAR`` (no),
+    ``_HIT`` (yes) or ``_UNSURE`` (only within ``_UNSURE_BAND`` of a face's edge, of its plane
+    or of ``t_min``, where rounding may decide it either way). Depth first, the nearer child
+    first, so that a hit is found early and ends the search."""
     ox, oy, oz = origin[0], origin[1], origin[2]
     dx, dy, dz = direction[0], direction[1], direction[2]
     inverse = np.empty(3)
     for axis in range(3):
         inverse[axis] = 1.0 / direction[axis] if direction[axis] != 0.0 else np.inf
     if math.isinf(_entry(boxes, 0, origin, inverse, t_min)):
-        return False
+        return _CLEAR
+    unsure = False
+    band = _UNSURE_BAND
     top = 0
     stack[0] = 0
     while top >= 0:
@@ -323,20 +351,34 @@ def _blocked(
             e2x, e2y, e2z = corners[k, 6] - ax, corners[k, 7] - ay, corners[k, 8] - az
             px, py, pz = dy * e2z - dz * e2y, dz * e2x - dx * e2z, dx * e2y - dy * e2x
             det = e1x * px + e1y * py + e1z * pz
-            if det == 0.0:
+            # det = -d . (e1 x e2): the sine of the angle between the ray and the face's plane,
+            # times twice the face's area.
+            nx, ny, nz = e1y * e2z - e1z * e2y, e1z * e2x - e1x * e2z, e1x * e2y - e1y * e2x
+            twice = math.sqrt(nx * nx + ny * ny + nz * nz)
+            if twice == 0.0:
+                continue
+            if abs(det) <= band * twice:  # along the face's plane: it may just touch it
+                sx, sy, sz = ox - ax, oy - ay, oz - az
+                if abs(sx * nx + sy * ny + sz * nz) <= band * twice * 4.0:
+                    unsure = True
                 continue
             inverse_det = 1.0 / det
             sx, sy, sz = ox - ax, oy - ay, oz - az
             u = (sx * px + sy * py + sz * pz) * inverse_det
-            if u < 0.0 or u > 1.0:
+            if u < -band or u > 1.0 + band:
                 continue
             qx, qy, qz = sy * e1z - sz * e1y, sz * e1x - sx * e1z, sx * e1y - sy * e1x
             v = (dx * qx + dy * qy + dz * qz) * inverse_det
-            if v < 0.0 or u + v > 1.0:
+            if v < -band or u + v > 1.0 + band:
                 continue
-            if (e2x * qx + e2y * qy + e2z * qz) * inverse_det > t_min:
-                return True
-    return False
+            t = (e2x * qx + e2y * qy + e2z * qz) * inverse_det
+            if t < t_min * 0.5:
+                continue
+            if u < band or v < band or u + v > 1.0 - band or t < t_min * 2.0:
+                unsure = True  # on an edge or a corner, or near t_min: rounding decides
+                continue
+            return _HIT
+    return _UNSURE if unsure else _CLEAR
 
 
 @kernel(parallel=True)
@@ -352,12 +394,13 @@ def _cast(
     pattern: FloatArray,
     t_min: float,
     escaped: FloatArray,
+    unsure: FloatArray,
     weights: FloatArray,
     against: BoolArray,
 ) -> None:
-    """For each sample face: the share of its rays that escape on each side of its plane
-    (+ and - of the normal of its vertices in increasing order), its area, and whether it is
-    wound against that order."""
+    """For each sample face: the share of its rays that surely escape, and of those unsure,
+    on each side of its plane (+ and - of the normal of its vertices in increasing order), its
+    area, and whether it is wound against that order."""
     for s in prange(len(samples)):  # each sample writes its own rows: the same bits on any cores
         stack = np.empty(2 * 64 + 2, dtype=np.intp)
         origin, direction = np.empty(3), np.empty(3)
@@ -387,14 +430,18 @@ def _cast(
             origin[axis] = (unit[i, axis] + unit[j, axis] + unit[k, axis]) / 3
         for side in range(2):
             sign = 1.0 if side == 0 else -1.0
-            free = 0
+            free, maybe = 0, 0
             for r in range(len(pattern)):
                 a, b, c = pattern[r, 0], pattern[r, 1], sign * pattern[r, 2]
                 direction[0] = a * ux + b * wx + c * mx
                 direction[1] = a * uy + b * wy + c * my
                 direction[2] = a * uz + b * wz + c * mz
-                if not _blocked(
+                met = _blocked(
                     corners, order, boxes, children, spans, face, origin, direction, t_min, stack
-                ):
+                )
+                if met == _CLEAR:
                     free += 1
+                elif met == _UNSURE:
+                    maybe += 1
             escaped[s, side] = free / len(pattern)
+            unsure[s, side] = maybe / len(pattern)

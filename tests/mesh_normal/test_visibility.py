@@ -143,3 +143,17 @@ def test_a_random_triangle_soup_is_mostly_left_alone() -> None:
     r = orient(vertices, faces)
     assert np.array_equal(r.flipped, decided & (score < 0))
     assert decided.sum() <= 10
+
+
+@pytest.mark.parametrize("shift", [1e4, -1e4, 1e8])
+def test_the_scores_are_the_same_far_from_the_origin(shift: float) -> None:
+    # The rays are cast in the box of the mesh itself, never one stretched to the origin (a
+    # first version took the origin into the box: at 1e8 a triangle of trimesh's soup.stl
+    # scored -0.3125 instead of -0.625 and was left as it was).
+    vertices, faces = load("soup.stl")
+    here = scores(vertices, faces)
+    there = scores(vertices + shift * np.array([1.0, -0.7, 0.3]), faces)
+    assert np.array_equal(np.isnan(here), np.isnan(there))
+    decided = np.abs(np.nan_to_num(here)) >= visibility.MARGIN
+    assert np.array_equal(decided, np.abs(np.nan_to_num(there)) >= visibility.MARGIN)
+    np.testing.assert_allclose(there, here, atol=1 / visibility.DIRECTIONS / 2)
