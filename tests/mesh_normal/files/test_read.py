@@ -128,7 +128,7 @@ def _out_of_memory(*_: object, **__: object) -> None:
     [
         ("cow.obj", "mesh_normal.files.obj", "_numbers"),
         ("sphere.ply", "mesh_normal.files.ply", "triangulate"),
-        ("tetra.off", "mesh_normal.files.off", "_table"),
+        ("tetra.off", "mesh_normal.files.off", "triangulate"),
         ("ascii.stl", "mesh_normal.files.stl", "weld"),
         ("box.glb", "trimesh.exchange.gltf", "load_glb"),
     ],
