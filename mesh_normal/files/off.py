@@ -100,7 +100,7 @@ def _read_rows(data: bytes) -> LoadedMesh:
 #: What a plain OFF body holds: numbers, spaces, line ends (the letters of nan and inf too).
 _PLAIN_BYTES = b"0123456789+-.eE \t\r\nnaNAiIfFtTyY"
 _INDEX_BYTES = b"0123456789+- \t\r\n"
-_CHUNK = 1 << 22
+_CHUNK = 1 << 20
 
 
 def _read_plain(data: bytes) -> LoadedMesh | None:

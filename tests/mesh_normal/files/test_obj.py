@@ -309,3 +309,38 @@ def test_real_blender_file_with_vertex_double_slash_normal_faces() -> None:
     cosines = np.einsum("ij,ij->i", geometric, stored[:, 0]) / np.linalg.norm(geometric, axis=1)
     assert np.all(cosines > 0.999)  # each side's vn is its own outward normal
     assert mesh.file_vertex_normals is None  # corners of a cube get three normals each
+
+
+# --- Chunks of lines: the same mesh and the same sentences as all lines at once -------------
+
+CHUNKED = (
+    "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvn 0 0 1\n"
+    "f 1//1 2//1 3//1\nf 1//1 3//1 4//1\nf 1//1 2//1 4//1\nf 2//1 3//1 4//1\n"
+)
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        CHUNKED,
+        CHUNKED.replace("f 2//1 3//1 4//1", "f 2 3 4"),  # the last chunk has no normals
+        CHUNKED.replace("f 1//1 2//1 3//1", "f 1 2 3"),  # the first chunk has none
+        CHUNKED.replace("f 2//1 3//1 4//1", "f 2//1 3//1 4//1 # a lid"),
+        CHUNKED.replace("f 2//1 3//1 4//1", "f 2//1 3/x/1 4//1"),
+        CHUNKED.replace("f 2//1 3//1 4//1", "f 2//1 3//1 9//1"),
+        CHUNKED.replace("v 0 1 0", "v 0 1"),
+        CHUNKED.replace("v 0 1 0", "v 0 1 zero"),
+    ],
+)
+def test_chunks_of_lines_read_as_one(monkeypatch: pytest.MonkeyPatch, text: str) -> None:
+    def outcome() -> object:
+        try:
+            mesh = read_mesh(text.encode(), "c.obj")
+        except MeshFileError as error:
+            return str(error)
+        normals = mesh.file_corner_normals
+        return mesh.vertices.tolist(), mesh.faces.tolist(), normals is None, mesh.notes
+
+    whole = outcome()
+    monkeypatch.setattr("mesh_normal.files.obj._CHUNK", 1)
+    assert outcome() == whole
