@@ -528,15 +528,20 @@ def write_obj(
     triangles : (m, 3) intp
     vertex_colors : (n, 3) or (n, 4), optional
     """
-    lines = [f"# written by {MAKER}"]
-    if vertex_colors is None:
-        lines += [f"v {x!r} {y!r} {z!r}" for x, y, z in points.tolist()]
-    else:
-        rows = np.concatenate([points, unit_colors(vertex_colors)[:, :3]], axis=1)
-        lines += [f"v {x!r} {y!r} {z!r} {r!r} {g!r} {b!r}" for x, y, z, r, g, b in rows.tolist()]
-    lines += [f"f {a} {b} {c}" for a, b, c in (triangles + 1).tolist()]
-    lines.append("")
-    return "\n".join(lines).encode()
+    rows = (
+        points
+        if vertex_colors is None
+        else np.concatenate([points, unit_colors(vertex_colors)[:, :3]], axis=1)
+    )
+    # A chunk of lines at a time: the text of every line at once is several times the file.
+    parts = [f"# written by {MAKER}\n".encode()]
+    for start in range(0, len(rows), _CHUNK):
+        numbers = rows[start : start + _CHUNK].tolist()
+        parts.append("".join(f"v {' '.join(map(repr, row))}\n" for row in numbers).encode())
+    for start in range(0, len(triangles), _CHUNK):
+        corners = (triangles[start : start + _CHUNK] + 1).tolist()
+        parts.append("".join(f"f {a} {b} {c}\n" for a, b, c in corners).encode())
+    return b"".join(parts)
 
 
 def unit_colors(colors: NDArray[np.generic]) -> NDArray[np.float64]:
