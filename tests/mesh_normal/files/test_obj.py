@@ -344,3 +344,14 @@ def test_chunks_of_lines_read_as_one(monkeypatch: pytest.MonkeyPatch, text: str)
     whole = outcome()
     monkeypatch.setattr("mesh_normal.files.obj._CHUNK", 1)
     assert outcome() == whole
+
+
+def test_written_in_chunks_as_at_once(monkeypatch: pytest.MonkeyPatch) -> None:
+    from mesh_normal.files.obj import write_obj
+
+    points, faces = np.array(TETRA_VERTICES, dtype=float), np.array(TETRA_FACES)
+    colors = np.arange(12, dtype=np.uint8).reshape(4, 3)
+    whole = write_obj(points, faces), write_obj(points, faces, colors)
+    monkeypatch.setattr("mesh_normal.files.obj._CHUNK", 1)
+    assert (write_obj(points, faces), write_obj(points, faces, colors)) == whole
+    assert whole[0].endswith(b"\nf 2 3 4\n") or whole[0].endswith(b"\n")
