@@ -640,8 +640,12 @@ def _twinned(faces: IndexArray) -> BoolArray:
     if len(faces) == 0:
         return np.zeros(0, dtype=bool)
     ordered = np.sort(faces, axis=1)
-    rotations = [faces, np.roll(faces, 1, axis=1), np.roll(faces, 2, axis=1)]
-    even = np.logical_or.reduce([np.all(r == ordered, axis=1) for r in rotations])
+    # Wound as its sorted points (a rotation of them): two of the three steps a -> b -> c -> a
+    # go up, or a point repeats (then some rotation is the sorted order). No rolled copies.
+    a, b, c = faces.T
+    ascents = (a < b).view(np.int8) + (b < c).view(np.int8) + (c < a).view(np.int8)
+    even = (ascents == 2) | (a == b) | (b == c) | (c == a)
+    del ascents
     order = np.lexsort((even, ordered[:, 2], ordered[:, 1], ordered[:, 0]))
     key = ordered[order]
     run = np.cumsum(np.r_[True, np.any(key[1:] != key[:-1], axis=1)]) - 1

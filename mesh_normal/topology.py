@@ -42,7 +42,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from mesh_normal.checks import CheckedMesh, check_faces
 from mesh_normal.faces import FaceGeometry
@@ -200,7 +200,7 @@ def structure(faces: IndexArray, vertex_count: int) -> Structure:
     return Structure(topology, group, patches, parity, orientable, face_component[firsts], closed)
 
 
-def _edge_list(key: IndexArray, forward: IndexArray | None, vertex_count: int) -> IndexArray:
+def _edge_list(key: IndexArray, forward: NDArray[np.int8] | None, vertex_count: int) -> IndexArray:
     """(k, 2) vertex pairs of edge keys, smaller vertex first unless ``forward`` is 0."""
     edges = np.stack(np.divmod(key, max(vertex_count, 1)), axis=1)
     if forward is not None:
@@ -210,7 +210,7 @@ def _edge_list(key: IndexArray, forward: IndexArray | None, vertex_count: int) -
 
 def _sorted_half_edges(
     faces: IndexArray, valid: BoolArray, vertex_count: int
-) -> tuple[IndexArray, IndexArray, IndexArray]:
+) -> tuple[IndexArray, IndexArray, NDArray[np.int8]]:
     """The half-edges of valid faces sorted by edge, then by face.
 
     Returns the edge key min * n + max, the face, and 1 where the face runs along the edge
@@ -222,19 +222,27 @@ def _sorted_half_edges(
     following = faces[:, [1, 2, 0]]
     low, high = np.minimum(faces, following), np.maximum(faces, following)
     forward = (faces < following).view(np.int8)
+    del following  # each (m, 3) array is 24 bytes a face: free each as soon as it is used
     face = np.arange(len(faces))[:, None]
     if not valid.all():
         low, high, forward, face = low[valid], high[valid], forward[valid], face[valid]
     bits = len(faces).bit_length() + 1
     if vertex_count * vertex_count << bits < KEY_LIMIT:
         packed = low * vertex_count
+        del low
         packed += high
+        del high
         packed <<= bits
         packed |= face << 1
         packed |= forward
+        del forward
         packed = packed.ravel()
         packed.sort()
-        return packed >> bits, (packed >> 1) & ((1 << bits - 1) - 1), packed & 1
+        direction = (packed & 1).astype(np.int8)  # a byte, not eight, for a 0 or 1
+        face_of = packed >> 1
+        face_of &= (1 << bits - 1) - 1
+        packed >>= bits
+        return packed, face_of, direction
     face = np.broadcast_to(face, low.shape)
     low, high, face, forward = (np.ravel(array) for array in (low, high, face, forward))
     bits = len(low).bit_length()

@@ -190,7 +190,7 @@ def read_chosen(
 
     try:
         return read_gltf(data, resolve), used
-    except MeshFileError:
+    except (MeshFileError, MemoryError):  # memory running out is the server's, not the file's
         raise
     except Exception as error:  # trimesh's own exception, worded as read_mesh words it
         raise MeshFileError(

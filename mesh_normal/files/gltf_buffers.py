@@ -201,6 +201,8 @@ def _decode_draco(header: dict[str, Any], blob: bytearray) -> int:
             start = view.get("byteOffset", 0)
             try:
                 draco = DracoPy.decode(bytes(blob[start : start + view["byteLength"]]))
+            except MemoryError:  # the server's shortage, not a broken primitive
+                raise
             except Exception as error:  # DracoPy's own failures, worded once
                 raise MeshFileError(
                     f"A Draco-compressed glTF primitive is broken: {error}."

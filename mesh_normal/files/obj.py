@@ -70,8 +70,10 @@ class _Statements:
     colors : (n, 3) float64 or None
         ``r g b`` after the coordinates, when every ``v`` line has exactly six numbers.
     normals : (k, 3) float64
-    corners : list of str
-        Every face corner as written (``"3"``, ``"3/1"``, ``"3//2"``, ``"3/1/2"``).
+    vertex_fields : (c,) int64
+        The vertex index of every face corner as written (1-based or negative).
+    normal_fields : (c,) int64 or None
+        Its normal index, when every corner has one.
     counts : (p,) intp
         Corners of each face.
     face_lines : (p,) intp
@@ -87,7 +89,8 @@ class _Statements:
     vertex_lines: NDArray[np.intp]
     colors: NDArray[np.float64] | None
     normals: NDArray[np.float64]
-    corners: list[str]
+    vertex_fields: NDArray[np.int64]
+    normal_fields: NDArray[np.int64] | None
     counts: NDArray[np.intp]
     face_lines: NDArray[np.intp]
     vertices_before: NDArray[np.intp]
@@ -156,6 +159,7 @@ def _logical_lines(text: str) -> tuple[list[str], NDArray[np.intp]]:
 
 def _scan(text: str) -> _Statements:
     lines, numbers = _logical_lines(text)
+    del text  # the lines hold it now; each copy of the file counts
     # Most lines start "v ", "vn", "vt" or "f ": classify those by their first two characters,
     # and only the rest (comments, groups, indented or tab-separated lines) by splitting.
     kinds = np.fromiter((_KINDS.get(line[:2], -1) for line in lines), np.int8, len(lines))
@@ -175,19 +179,16 @@ def _scan(text: str) -> _Statements:
     vertex_text = [lines[row] for row in rows[VERTEX]]
     vertices = _numbers(vertex_text, numbers[rows[VERTEX]], "v")
     normals = _numbers([lines[row] for row in rows[NORMAL]], numbers[rows[NORMAL]], "vn")
-    # A comment may follow a face's corners: "f 1 2 3 # the lid".
-    corners, counts = _face_corners(
-        [
-            line.partition("#")[0] if "#" in line else line
-            for line in (lines[row] for row in rows[FACE])
-        ]
-    )
+    colors = _vertex_colors(vertex_text)
+    del vertex_text
+    vertex_fields, normal_fields, counts = _face_fields(lines, rows[FACE], numbers)
     return _Statements(
         vertices=vertices,
         vertex_lines=numbers[rows[VERTEX]],
-        colors=_vertex_colors(vertex_text),
+        colors=colors,
         normals=normals,
-        corners=corners,
+        vertex_fields=vertex_fields,
+        normal_fields=normal_fields,
         counts=counts,
         face_lines=numbers[rows[FACE]],
         vertices_before=np.searchsorted(rows[VERTEX], rows[FACE]),
@@ -248,8 +249,53 @@ def _utf8(name: str) -> str:
         return name
 
 
+#: Lines converted at once: the words of a chunk, not of the file, are held as strings.
+_CHUNK = 1 << 16
+
+
 def _numbers(lines: list[str], numbers: NDArray[np.intp], key: str) -> NDArray[np.float64]:
-    """The first three numbers after the keyword of each line."""
+    """The first three numbers after the keyword of each line, a chunk of lines at a time."""
+    values = np.empty((len(lines), 3))
+    for start in range(0, len(lines), _CHUNK):
+        end = start + _CHUNK
+        values[start:end] = _chunk_numbers(lines[start:end], numbers[start:end], key)
+    return values
+
+
+def _face_fields(
+    lines: list[str], rows: NDArray[np.intp], numbers: NDArray[np.intp]
+) -> tuple[NDArray[np.int64], NDArray[np.int64] | None, NDArray[np.intp]]:
+    """Vertex and normal index of every corner (see :func:`_fields`) and the corners of each
+    face, from the face lines ``rows``, a chunk of lines at a time."""
+    vertex_parts: list[NDArray[np.int64]] = []
+    normal_parts: list[NDArray[np.int64]] = []
+    count_parts: list[NDArray[np.intp]] = []
+    has_normals = True
+    for start in range(0, len(rows), _CHUNK):
+        chunk = rows[start : start + _CHUNK]
+        # A comment may follow a face's corners: "f 1 2 3 # the lid".
+        corners, counts = _face_corners(
+            [lines[row].partition("#")[0] if "#" in lines[row] else lines[row] for row in chunk]
+        )
+        try:
+            fields = _fields(corners)
+        except _BadCorner as bad:
+            face = int(np.searchsorted(np.cumsum(counts), bad.position, side="right"))
+            raise _BadCorner(bad.corner, bad.position, int(numbers[chunk[face]])) from None
+        del corners
+        vertex_parts.append(fields[0])
+        count_parts.append(counts)
+        if fields[2] is None:
+            has_normals = False
+        elif has_normals:
+            normal_parts.append(fields[2])
+    if not rows.size:
+        return np.zeros(0, np.int64), None, np.zeros(0, np.intp)
+    normals = np.concatenate(normal_parts) if has_normals else None
+    return np.concatenate(vertex_parts), normals, np.concatenate(count_parts)
+
+
+def _chunk_numbers(lines: list[str], numbers: NDArray[np.intp], key: str) -> NDArray[np.float64]:
     tokens = " ".join(lines).split()
     width = len(tokens) // len(lines) if lines else 4
     try:
@@ -281,8 +327,8 @@ def _numbers(lines: list[str], numbers: NDArray[np.intp], key: str) -> NDArray[n
 def _vertex_colors(lines: list[str]) -> NDArray[np.float64] | None:
     """``r g b`` of ``v x y z r g b`` lines (MeshLab, ZBrush), when every ``v`` line has
     exactly six numbers; a file mixing widths, or ``v x y z w``, has no colours."""
-    if not lines:
-        return None
+    if not lines or len(lines[0].partition("#")[0].split()) != 7:
+        return None  # the first line settles most files without a list of every line's words
     rows = [line.partition("#")[0].split()[4:] for line in lines]
     if any(len(row) != 3 for row in rows):
         return None
@@ -307,13 +353,8 @@ def _face_corners(lines: list[str]) -> tuple[list[str], NDArray[np.intp]]:
 def _corner_indices(found: _Statements) -> tuple[NDArray[np.intp], NDArray[np.intp] | None]:
     """0-based vertex index of every corner, and normal index when every corner has one."""
     face_of_corner = np.repeat(np.arange(len(found.counts)), found.counts)
-    try:
-        fields = _fields(found.corners)
-    except _BadCorner as bad:
-        line = int(found.face_lines[face_of_corner[bad.position]])
-        raise _BadCorner(bad.corner, bad.position, line) from None
     vertex_ids = _resolve(
-        fields[0],
+        found.vertex_fields,
         face_of_corner,
         found.vertices_before,
         found.face_lines,
@@ -321,9 +362,9 @@ def _corner_indices(found: _Statements) -> tuple[NDArray[np.intp], NDArray[np.in
         len(found.vertices),
     )
     normal_ids = None
-    if fields[2] is not None:
+    if found.normal_fields is not None:
         normal_ids = _resolve(
-            fields[2],
+            found.normal_fields,
             face_of_corner,
             found.normals_before,
             found.face_lines,
@@ -496,15 +537,20 @@ def write_obj(
     triangles : (m, 3) intp
     vertex_colors : (n, 3) or (n, 4), optional
     """
-    lines = [f"# written by {MAKER}"]
-    if vertex_colors is None:
-        lines += [f"v {x!r} {y!r} {z!r}" for x, y, z in points.tolist()]
-    else:
-        rows = np.concatenate([points, unit_colors(vertex_colors)[:, :3]], axis=1)
-        lines += [f"v {x!r} {y!r} {z!r} {r!r} {g!r} {b!r}" for x, y, z, r, g, b in rows.tolist()]
-    lines += [f"f {a} {b} {c}" for a, b, c in (triangles + 1).tolist()]
-    lines.append("")
-    return "\n".join(lines).encode()
+    rows = (
+        points
+        if vertex_colors is None
+        else np.concatenate([points, unit_colors(vertex_colors)[:, :3]], axis=1)
+    )
+    # A chunk of lines at a time: the text of every line at once is several times the file.
+    parts = [f"# written by {MAKER}\n".encode()]
+    for start in range(0, len(rows), _CHUNK):
+        numbers = rows[start : start + _CHUNK].tolist()
+        parts.append("".join(f"v {' '.join(map(repr, row))}\n" for row in numbers).encode())
+    for start in range(0, len(triangles), _CHUNK):
+        corners = (triangles[start : start + _CHUNK] + 1).tolist()
+        parts.append("".join(f"f {a} {b} {c}\n" for a, b, c in corners).encode())
+    return b"".join(parts)
 
 
 def unit_colors(colors: NDArray[np.generic]) -> NDArray[np.float64]:

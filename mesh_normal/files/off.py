@@ -30,6 +30,12 @@ Rows = list[tuple[int, list[str]]]
 
 def read_off(data: bytes) -> LoadedMesh:
     """Read an ASCII OFF file (see the module docstring)."""
+    plain = _read_plain(data)
+    return plain if plain is not None else _read_rows(data)
+
+
+def _read_rows(data: bytes) -> LoadedMesh:
+    """Any OFF file, line by line into lists of words (about 20 times the file's size)."""
     rows = [
         (number, line.split("#", 1)[0].split())
         for number, line in enumerate(data.decode("latin-1").splitlines(), 1)
@@ -89,6 +95,111 @@ def read_off(data: bytes) -> LoadedMesh:
         vertex=lambda i: f"vertex {i:,} (counting from 0, line {vertex_rows[i][0]:,})",
         face=lambda i: f"the face on line {lines[source[i]]:,}",
     )
+
+
+#: What a plain OFF body holds: numbers, spaces, line ends (the letters of nan and inf too).
+_PLAIN_BYTES = b"0123456789+-.eE \t\r\nnaNAiIfFtTyY"
+_INDEX_BYTES = b"0123456789+- \t\r\n"
+_CHUNK = 1 << 20
+
+
+def _read_plain(data: bytes) -> LoadedMesh | None:
+    """The common case in a few times the file's memory, or ``None`` for :func:`_read_rows`.
+
+    A plain ``OFF`` line, a counts line, then only numbers (no comment, colour or normal, no
+    other line end than ``\\n`` or ``\\r\\n``): every number is converted in chunks of lines
+    into one array, and each line's count of numbers says which are which. Anything else,
+    errors included, goes to :func:`_read_rows`, so both give the same mesh and sentences.
+    """
+    head = _plain_head(data)
+    if head is None:
+        return None
+    body, first_line, vertex_count, face_count = head
+    if not vertex_count or not face_count:
+        return None
+    parsed = _numbers_by_line(data, body)
+    if parsed is None:
+        return None
+    values, counts, lengths = parsed
+    rows = np.flatnonzero(counts)
+    if len(rows) < vertex_count + face_count:
+        return None
+    vertex_rows, face_rows = rows[:vertex_count], rows[vertex_count : vertex_count + face_count]
+    if np.any(counts[vertex_rows] != 3):
+        return None
+    starts = np.concatenate([[0], np.cumsum(counts)])
+    face_values = values[3 * vertex_count : starts[face_rows[-1] + 1]]
+    ends = np.concatenate([[0], np.cumsum(lengths)]) + body
+    if data[ends[face_rows[0]] : ends[face_rows[-1] + 1]].translate(None, _INDEX_BYTES):
+        return None  # "3.0" or "1e2" as an index: _read_rows names it
+    sizes = values[starts[face_rows]]
+    if np.any(counts[face_rows] != 1 + sizes) or np.abs(face_values).max(initial=0) > 2**53:
+        return None
+    is_size = np.zeros(len(face_values), dtype=bool)
+    is_size[starts[face_rows] - 3 * vertex_count] = True
+    flat = face_values[~is_size].astype(np.intp)
+    del face_values, is_size
+    vertices = values[: 3 * vertex_count].reshape(-1, 3)
+    polygon_counts = sizes.astype(np.intp)
+    positions, source, notes = triangulate(polygon_counts, flat, vertices)
+    vertex_lines = vertex_rows + first_line
+    face_lines = face_rows + first_line
+    return build(
+        "off",
+        vertices,
+        flat[positions],
+        source_faces=face_count,
+        notes=notes,
+        vertex=lambda i: f"vertex {i:,} (counting from 0, line {vertex_lines[i]:,})",
+        face=lambda i: f"the face on line {face_lines[source[i]]:,}",
+    )
+
+
+def _plain_head(data: bytes) -> tuple[int, int, int, int] | None:
+    """Where the body starts, the line number of its first line, and the counts, for a file
+    that starts with an ``OFF`` line and a counts line (nothing else on either)."""
+    position, number, found = 0, 0, list[list[bytes]]()
+    while len(found) < 2:
+        end = data.find(b"\n", position)
+        if end < 0:
+            return None
+        words = data[position:end].split()
+        position, number = end + 1, number + 1
+        if words:
+            found.append(words)
+    keyword, counts = found
+    if keyword != [b"OFF"] or len(counts) != 3 or not all(word.isdigit() for word in counts):
+        return None
+    return position, number + 1, int(counts[0]), int(counts[1])
+
+
+def _numbers_by_line(
+    data: bytes, body: int
+) -> tuple[NDArray[np.float64], NDArray[np.int32], NDArray[np.int64]] | None:
+    """Every number after ``body``, how many each line holds and each line's length in bytes
+    (its ``\\n`` included); ``None`` when a word is not a number."""
+    chunks, counts, lengths = [], [], []
+    position = body
+    while position < len(data):
+        end = data.find(b"\n", position + _CHUNK)
+        end = len(data) if end < 0 else end + 1
+        chunk = data[position:end]
+        if chunk.translate(None, _PLAIN_BYTES) or chunk.count(b"\r") != chunk.count(b"\r\n"):
+            return None
+        lines = chunk.split(b"\n")
+        if lines[-1] == b"":
+            lines.pop()  # after the last line end
+        words = [line.split() for line in lines]
+        counts.append(np.fromiter(map(len, words), np.int32, len(words)))
+        lengths.append(np.fromiter((len(line) + 1 for line in lines), np.int64, len(lines)))
+        try:
+            chunks.append(np.array([word for row in words for word in row], dtype=np.float64))
+        except ValueError:
+            return None
+        position = end
+    if not chunks:
+        return np.zeros(0), np.zeros(0, np.int32), np.zeros(0, np.int64)
+    return np.concatenate(chunks), np.concatenate(counts), np.concatenate(lengths)
 
 
 def _keyword_ends(word: str, end: int) -> bool:

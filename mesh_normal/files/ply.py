@@ -22,6 +22,7 @@ vertex or face normals or colours beside them (:func:`ply_bytes`).
 from __future__ import annotations
 
 import struct
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -246,7 +247,12 @@ def _binary_records(element: _Element, data: bytes, offset: int, endian: str) ->
 def _read_ascii(elements: list[_Element], body: bytes) -> list[str]:
     """Read the elements number by number; where that fails or leaves numbers over, line by
     line (:func:`_read_lines`), which reads files whose lines hold more than the header says.
-    Returns the notes."""
+    Returns the notes.
+
+    The common file (every number where the header says, lists of one size) is read a chunk
+    of words at a time (:func:`_read_chunks`); any other, as all its words at once."""
+    if _read_chunks(elements, body):
+        return []
     tokens = body.split()
     try:
         position = _read_tokens(elements, tokens)
@@ -261,6 +267,89 @@ def _read_ascii(elements: list[_Element], body: bytes) -> list[str]:
     if by_line is not None and by_line[1]:
         return _adopt(elements, *by_line)
     return [f"Ignored {len(tokens) - position:,} numbers after the PLY file's last element."]
+
+
+#: Bytes of the body split into words at once, for :func:`_read_chunks`.
+_CHUNK = 1 << 20
+
+
+def _word_chunks(body: bytes) -> Iterator[list[bytes]]:
+    """The body's words, in chunks of about ``_CHUNK`` bytes cut at line ends."""
+    position = 0
+    while position < len(body):
+        end = body.find(b"\n", position + _CHUNK)
+        end = len(body) if end < 0 else end + 1
+        yield body[position:end].split()
+        position = end
+
+
+def _read_chunks(elements: list[_Element], body: bytes) -> bool:
+    """Read the elements as :func:`_read_tokens` does, a chunk of words at a time; ``False``
+    (nothing kept) for any file where that would not give the same: a word that is not a
+    number, lists of several sizes or one elements with other properties, numbers short or
+    over. The list of every word (about 45 bytes each) is never made."""
+    chunks = _word_chunks(body)
+    words: list[bytes] = []
+    found: list[dict[str, object]] = []
+    for element in elements:
+        if not element.lists:
+            width = len(element.scalars)
+            values, words = _take(chunks, words, width * element.count)
+            if values is None:
+                return False
+            table = values.reshape(element.count, width)
+            found.append(
+                {name: table[:, i].astype(kind) for i, (name, kind) in enumerate(element.scalars)}
+            )
+        elif element.order == [*element.lists] and len(element.lists) == 1 and element.count:
+            if not words:
+                words = next(chunks, [])
+            size = words[0] if words else b""
+            if not size.isdigit():
+                return False
+            width = int(size) + 1
+            values, words = _take(chunks, words, width * element.count, size, width)
+            if values is None:
+                return False
+            found.append({element.order[0]: values.reshape(-1, width)[:, 1:]})
+        else:
+            return False
+    if words or next(chunks, None) is not None:
+        return False  # numbers over: _read_ascii says what it makes of them
+    for element, data in zip(elements, found, strict=True):
+        element.data = data
+    return True
+
+
+def _take(
+    chunks: Iterator[list[bytes]],
+    words: list[bytes],
+    count: int,
+    size: bytes | None = None,
+    width: int = 1,
+) -> tuple[NDArray[np.float64] | None, list[bytes]]:
+    """The next ``count`` words as floats, and the words of the chunk left over; ``None`` when
+    the words run out, one is not a number, or (``size``) a record of ``width`` words does not
+    start with ``size``."""
+    values = np.empty(count)
+    filled = 0
+    while filled < count:
+        if not words:
+            words = next(chunks, [])
+            if not words:
+                return None, []
+        taken = words[: count - filled]
+        if size is not None:
+            first = -filled % width
+            if taken[first::width].count(size) != len(range(first, len(taken), width)):
+                return None, []
+        try:
+            values[filled : filled + len(taken)] = np.array(taken, dtype=np.float64)
+        except ValueError:
+            return None, []
+        filled += len(taken)
+        words = words[len(taken) :]
+    return values, words
 
 
 def _read_tokens(elements: list[_Element], tokens: list[bytes]) -> int:

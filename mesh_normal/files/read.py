@@ -74,7 +74,7 @@ def read_mesh(source: MeshSource, filename: str | None = None) -> LoadedMesh:
             mesh = read_gltf(data, _beside(Path(source)))
         else:
             mesh = FORMATS[found].read(data)
-    except MeshFileError:
+    except (MeshFileError, MemoryError):  # memory running out is the server's, not the file's
         raise
     except Exception as error:  # a library's own exception: never a 500
         raise MeshFileError(

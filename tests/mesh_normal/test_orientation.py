@@ -412,3 +412,26 @@ def test_reversing_every_face_negates_the_volume(name: str) -> None:
     assert signed_volume(vertices, faces[:, [0, 2, 1]]) == -signed_volume(vertices, faces)
     r = orient(vertices, faces[:, [0, 2, 1]])
     assert r.orientation == "inward" and r.flipped.all()
+
+
+def test_twinned_faces_match_the_rotations_definition() -> None:
+    """A face is twinned when another has its points wound the other way: by rotations of the
+    sorted points, as it was computed before (without the rolled copies)."""
+    from mesh_normal.orientation import _twinned
+
+    def by_rotations(faces: np.ndarray) -> np.ndarray:
+        ordered = np.sort(faces, axis=1)
+        even = np.zeros(len(faces), dtype=bool)
+        for shift in range(3):
+            even |= np.all(np.roll(faces, shift, axis=1) == ordered, axis=1)
+        keys = [tuple(row) for row in ordered.tolist()]
+        kinds: dict[tuple[int, ...], set[bool]] = {}
+        for key, kind in zip(keys, even.tolist(), strict=True):
+            kinds.setdefault(key, set()).add(kind)
+        return np.array([len(kinds[key]) == 2 for key in keys], dtype=bool)
+
+    rng = np.random.default_rng(7)
+    for count in (1, 4, 40, 400):
+        for top in (2, 3, 6, 30):
+            faces = rng.integers(0, top, (count, 3)).astype(np.intp)
+            np.testing.assert_array_equal(_twinned(faces), by_rotations(faces))

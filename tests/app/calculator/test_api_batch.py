@@ -4,11 +4,14 @@ from __future__ import annotations
 
 import json
 import math
+import subprocess
+import sys
 
 import numpy as np
 import pytest
 
 from tests.conftest import assert_error
+from tests.paths import ROOT
 
 ITEM_KEYS = {"normal", "unit_normal", "magnitude", "area", "degenerate"}
 JSON = {"content-type": "application/json"}
@@ -145,3 +148,42 @@ def test_one_over_the_limit_is_413(client) -> None:  # type: ignore[no-untyped-d
     _, body = full_batch(LIMIT + 1)
     response = client.post("/api/normals", content=body, headers=JSON)
     assert_error(response, 413, "triangles", "100,000", "100,001")
+
+
+#: A child that serves one 49 MB batch of 1.9 million triangles under an address-space limit of
+#: 1 GB above what its imports took: parsing it whole (about 3.3 GB) cannot fit.
+_HUGE_BATCH_CHILD = """
+import resource, sys, warnings
+warnings.simplefilter("ignore")
+from fastapi.testclient import TestClient
+from app.main import create_app
+body = b'{"triangles": [' + b",".join([b"[[0,0,0],[1,0,0],[0,1,0]]"] * 1_900_000) + b"]}"
+with TestClient(create_app(), raise_server_exceptions=False) as client:
+    client.get("/api/normal?ax=0&ay=0&az=0&bx=1&by=0&bz=0&cx=0&cy=1&cz=0")
+    size = int(open("/proc/self/statm").read().split()[0]) * resource.getpagesize()
+    resource.setrlimit(resource.RLIMIT_AS, (size + 2**30, resource.RLIM_INFINITY))
+    response = client.post(
+        "/api/normals", content=body, headers={"content-type": "application/json"}
+    )
+print(len(body), response.status_code, response.json()["error"])
+"""
+
+
+def test_a_huge_batch_is_refused_before_it_is_parsed() -> None:
+    done = subprocess.run(
+        [sys.executable, "-c", _HUGE_BATCH_CHILD],
+        capture_output=True,
+        text=True,
+        check=False,
+        cwd=ROOT,
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    size, status, sentence = done.stdout.strip().split(" ", 2)
+    assert int(size) > 49_000_000 and status == "413", done.stdout
+    assert "at most 100,000 triangles" in sentence and "1,900,000" in sentence
+
+
+def test_brackets_in_a_string_are_not_triangles(client) -> None:  # type: ignore[no-untyped-def]
+    body = json.dumps({"triangles": [MIXED[0]], "swap_winding": '\\"[' * (4 * LIMIT)})
+    response = client.post("/api/normals", content=body, headers=JSON)
+    assert_error(response, 422, "swap_winding")

@@ -317,3 +317,49 @@ def test_group_names_are_utf8_and_latin1_only_when_not() -> None:
     assert utf8.group_names == ("Würfel 立方体",)
     latin1 = read_mesh("o Würfel\n".encode("latin-1") + body, "l.obj")  # b"\xfc": not UTF-8
     assert latin1.group_names == ("Würfel",)
+
+
+# --- Chunks of lines: the same mesh and the same sentences as all lines at once -------------
+
+CHUNKED = (
+    "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvn 0 0 1\n"
+    "f 1//1 2//1 3//1\nf 1//1 3//1 4//1\nf 1//1 2//1 4//1\nf 2//1 3//1 4//1\n"
+)
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        CHUNKED,
+        CHUNKED.replace("f 2//1 3//1 4//1", "f 2 3 4"),  # the last chunk has no normals
+        CHUNKED.replace("f 1//1 2//1 3//1", "f 1 2 3"),  # the first chunk has none
+        CHUNKED.replace("f 2//1 3//1 4//1", "f 2//1 3//1 4//1 # a lid"),
+        CHUNKED.replace("f 2//1 3//1 4//1", "f 2//1 3/x/1 4//1"),
+        CHUNKED.replace("f 2//1 3//1 4//1", "f 2//1 3//1 9//1"),
+        CHUNKED.replace("v 0 1 0", "v 0 1"),
+        CHUNKED.replace("v 0 1 0", "v 0 1 zero"),
+    ],
+)
+def test_chunks_of_lines_read_as_one(monkeypatch: pytest.MonkeyPatch, text: str) -> None:
+    def outcome() -> object:
+        try:
+            mesh = read_mesh(text.encode(), "c.obj")
+        except MeshFileError as error:
+            return str(error)
+        normals = mesh.file_corner_normals
+        return mesh.vertices.tolist(), mesh.faces.tolist(), normals is None, mesh.notes
+
+    whole = outcome()
+    monkeypatch.setattr("mesh_normal.files.obj._CHUNK", 1)
+    assert outcome() == whole
+
+
+def test_written_in_chunks_as_at_once(monkeypatch: pytest.MonkeyPatch) -> None:
+    from mesh_normal.files.obj import write_obj
+
+    points, faces = np.array(TETRA_VERTICES, dtype=float), np.array(TETRA_FACES)
+    colors = np.arange(12, dtype=np.uint8).reshape(4, 3)
+    whole = write_obj(points, faces), write_obj(points, faces, colors)
+    monkeypatch.setattr("mesh_normal.files.obj._CHUNK", 1)
+    assert (write_obj(points, faces), write_obj(points, faces, colors)) == whole
+    assert whole[0].endswith(b"\nf 2 3 4\n") or whole[0].endswith(b"\n")

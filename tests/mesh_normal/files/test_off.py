@@ -139,3 +139,58 @@ def test_counts_glued_to_the_keyword_after_whitespace() -> None:
     np.testing.assert_array_equal(glued.face_colors, spaced.face_colors)
     with pytest.raises(MeshFileError, match="does not start with OFF"):
         read_mesh(b"OFFX 3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "x.off")
+
+
+# --- The plain-file path (numbers by line, in chunks) gives what the line-by-line path gives ---
+
+PLAIN = b"OFF\n5 3 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0.5 0.5 1\n4 0 1 2 3\n3 0 4 1\n3 1 4 2\n"
+
+
+def _outcome(read: object, data: bytes) -> object:
+    try:
+        mesh = read(data)  # type: ignore[operator]
+    except MeshFileError as error:
+        return str(error), error.status_code
+    except OverflowError as error:  # read_mesh words it: the same for both paths
+        return type(error), str(error)
+    return mesh.vertices.tolist(), mesh.faces.tolist(), mesh.notes, mesh.source_faces
+
+
+@pytest.mark.parametrize(
+    "data",
+    [
+        PLAIN,
+        PLAIN.replace(b"\n", b"\r\n"),
+        PLAIN.rstrip(b"\n"),  # no line end after the last face
+        PLAIN.replace(b"0 1 0\n", b"0 1 0\n\n   \n"),  # blank lines are skipped
+        PLAIN.replace(b"0.5 0.5 1", b"5e-1 +.5 1."),
+        PLAIN.replace(b"0.5 0.5 1", b"nan 0.5 1"),
+        PLAIN.replace(b"0.5 0.5 1", b"0x1p3 0.5 1"),
+        PLAIN.replace(b"0.5 0.5 1", b"0.5 0.5"),
+        PLAIN.replace(b"0.5 0.5 1", b"0.5 0.5 1 7"),
+        PLAIN.replace(b"3 0 4 1", b"3 0 4"),
+        PLAIN.replace(b"3 0 4 1", b"3 0 4 1.0"),
+        PLAIN.replace(b"3 0 4 1", b"3 0 4 1e0"),
+        PLAIN.replace(b"3 0 4 1", b"3 0 4 -1"),
+        PLAIN.replace(b"3 0 4 1", b"3 0 4 99999999999999999999"),
+        PLAIN.replace(b"3 0 4 1", b"2 0 4"),
+        PLAIN.replace(b"3 0 4 1", b"3 0 4 1 255 0 0"),
+        PLAIN.replace(b"5 3 0", b"5 4 0"),
+        PLAIN.replace(b"5 3 0", b"5 0 0"),
+        PLAIN.replace(b"\n3 1 4 2", b"\r3 1 4 2"),
+        PLAIN + b"trailing words\n",
+        PLAIN + b"7 8 9\n",
+    ],
+)
+def test_plain_path_agrees_with_the_line_by_line_path(data: bytes) -> None:
+    from mesh_normal.files.off import _read_rows, read_off
+
+    assert _outcome(read_off, data) == _outcome(_read_rows, data)
+
+
+def test_plain_path_reads_across_chunks(monkeypatch: pytest.MonkeyPatch) -> None:
+    from mesh_normal.files import off
+
+    monkeypatch.setattr(off, "_CHUNK", 7)  # a chunk of a line or two
+    assert off._read_plain(PLAIN) is not None
+    assert _outcome(off.read_off, PLAIN) == _outcome(off._read_rows, PLAIN)

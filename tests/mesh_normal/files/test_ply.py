@@ -206,3 +206,56 @@ def test_numbers_after_the_last_element_are_named() -> None:
     assert read_mesh(data, "x.ply").notes == (
         "Ignored 3 numbers after the PLY file's last element.",
     )
+
+
+# --- ASCII read a chunk of words at a time: the same as all the words at once ---------------
+
+_HEAD = (
+    "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+    "property float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n"
+    "element face 2\nproperty list uchar int vertex_indices\nend_header\n"
+)
+_BODY = "0 0 0 255 0 0\n1 0 0 0 255 0\n1 1 0.1 0 0 255\n0 1 0 9 9 9\n3 0 1 2\n3 0 2 3\n"
+
+
+@pytest.mark.parametrize(
+    "body",
+    [
+        _BODY,
+        _BODY.replace("\n", "\r\n"),
+        _BODY.rstrip("\n"),
+        _BODY.replace("3 0 2 3", "4 0 1 2 3"),  # lists of two sizes
+        _BODY.replace("3 0 2 3", "3.0 0 2 3"),
+        _BODY.replace("3 0 2 3", "03 0 2 3"),
+        _BODY.replace("1 1 0.1", "1 1 x"),
+        _BODY.replace("3 0 2 3\n", ""),  # short
+        _BODY + "7 7\n",  # numbers over
+        _BODY.replace("3 0 2 3", "3 0 2 3 8 8"),  # a line longer than its header
+    ],
+)
+def test_ascii_chunks_read_as_all_words(monkeypatch: pytest.MonkeyPatch, body: str) -> None:
+    from mesh_normal.files import ply
+
+    def outcome() -> object:
+        try:
+            mesh = read_mesh((_HEAD + body).encode(), "c.ply")
+        except MeshFileError as error:
+            return str(error)
+        colors = mesh.vertex_colors
+        return mesh.vertices.tolist(), mesh.faces.tolist(), colors.tolist(), mesh.notes  # type: ignore[union-attr]
+
+    monkeypatch.setattr(ply, "_read_chunks", lambda *_: False)
+    whole = outcome()
+    monkeypatch.undo()
+    monkeypatch.setattr(ply, "_CHUNK", 3)  # a line or so a chunk
+    assert outcome() == whole
+    assert ply._read_chunks([ply._Element("vertex", 1, [("x", "f8")])], b"1\n2\n") is False
+
+
+def test_a_plain_ascii_file_is_read_in_chunks(monkeypatch: pytest.MonkeyPatch) -> None:
+    from mesh_normal.files import ply
+
+    monkeypatch.setattr(ply, "_CHUNK", 3)
+    _, elements, start = ply._header((_HEAD + _BODY).encode())
+    assert ply._read_chunks(elements, (_HEAD + _BODY).encode()[start:])
+    assert elements[1].data["vertex_indices"].tolist() == [[0, 1, 2], [0, 2, 3]]  # type: ignore[attr-defined]

@@ -5,7 +5,14 @@ import pytest
 import trimesh
 
 import mesh_normal as mn
-from mesh_normal.files import SUFFIXES, LoadedMesh, MeshFileError, read_mesh, write_mesh
+from mesh_normal.files import (
+    SUFFIXES,
+    LoadedMesh,
+    MeshFileError,
+    read_mesh,
+    read_mesh_files,
+    write_mesh,
+)
 from tests.meshes import TETRA_FACES, TETRA_OBJ, TETRA_VERTICES, ascii_stl
 from tests.paths import DATA
 
@@ -107,3 +114,45 @@ def test_a_mesh_built_by_hand_is_checked_before_the_core_trusts_it() -> None:
         mesh.checked()
     with pytest.raises(ValueError, match="refers to vertex 10000000"):
         mn.analyse(mesh)
+
+
+# --- Memory running out is the server's, never the file's (no 400 blaming the file) ---------
+
+
+def _out_of_memory(*_: object, **__: object) -> None:
+    raise MemoryError
+
+
+@pytest.mark.parametrize(
+    ("name", "module", "allocation"),
+    [
+        ("cow.obj", "mesh_normal.files.obj", "_numbers"),
+        ("sphere.ply", "mesh_normal.files.ply", "triangulate"),
+        ("tetra.off", "mesh_normal.files.off", "triangulate"),
+        ("ascii.stl", "mesh_normal.files.stl", "weld"),
+        ("box.glb", "trimesh.exchange.gltf", "load_glb"),
+    ],
+)
+def test_memory_error_inside_a_reader_propagates(
+    monkeypatch: pytest.MonkeyPatch, name: str, module: str, allocation: str
+) -> None:
+    monkeypatch.setattr(f"{module}.{allocation}", _out_of_memory)
+    with pytest.raises(MemoryError):
+        read_mesh(SAMPLES[name], name)
+
+
+def test_memory_error_inside_a_zipped_gltf_propagates(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr("trimesh.exchange.gltf.load_glb", _out_of_memory)
+    gltf = trimesh.creation.box().export(file_type="gltf")
+    files = [(name, data) for name, data in gltf.items()]
+    with pytest.raises(MemoryError):
+        read_mesh_files(files)
+
+
+def test_memory_error_in_draco_propagates(monkeypatch: pytest.MonkeyPatch) -> None:
+    import DracoPy
+
+    data = trimesh.Scene(trimesh.creation.box()).export(file_type="glb", extension_draco=True)
+    monkeypatch.setattr(DracoPy, "decode", _out_of_memory)
+    with pytest.raises(MemoryError):
+        read_mesh(data, "box.glb")
