@@ -54,7 +54,9 @@ async def lifespan(app: FastAPI) -> AsyncIterator[None]:
 def create_app(upload_limit: int | None = None, settings: config.Settings | None = None) -> FastAPI:
     """The app; ``upload_limit`` (bytes) overrides ``$MESH_UPLOAD_LIMIT_MB`` for mesh files,
     ``settings`` the environment's settings."""
-    settings = config.load_settings() if settings is None else settings
+    if settings is None:
+        given = {} if upload_limit is None else {"upload_limit_mb": upload_limit / 2**20}
+        settings = config.load_settings(**given)
     app = FastAPI(
         title="Mesh Normal Calculator",
         version=mesh_normal.__version__,

@@ -18,6 +18,7 @@ go out of band as raw bytes, so a 200 MB upload is not copied into a pickle on i
 from __future__ import annotations
 
 import asyncio
+import logging
 import multiprocessing
 import pickle
 import resource
@@ -34,6 +35,8 @@ from app.web.errors import ApiError
 #: memory exhausted, or a crash (the traceback, for the log).
 OK, REFUSED, NO_MEMORY, CRASHED = "ok", "refused", "memory", "crashed"
 
+
+logger = logging.getLogger(__name__)
 
 #: How long the first jobs wait for the first worker to be ready: compiling the kernels into
 #: an empty cache takes about 10 s on two cores (see mesh_normal.kernels.COMPILE_SECONDS).
@@ -77,15 +80,15 @@ def serve(
     """A worker's life: warm up, say so, then run one job after another until the pipe closes."""
     if memory_limit is not None:
         resource.setrlimit(resource.RLIMIT_AS, (memory_limit, memory_limit))
-    if warm is not None:
-        warm()
-    connection.send("ready")
-    while True:
-        try:
+    try:
+        if warm is not None:
+            warm()
+        connection.send("ready")
+        while True:
             function, args = receive(connection)
-        except (EOFError, OSError):
-            return
-        send(connection, run(function, args))
+            send(connection, run(function, args))
+    except (EOFError, OSError):  # the server closed the pipe: it no longer needs this worker
+        return
 
 
 def run(function: Callable[..., Any], args: Sequence[Any]) -> tuple[str, Any]:
@@ -230,12 +233,12 @@ class WorkerPool:
         if not first:
             await self._warmed.wait()
         while True:
-            worker = Worker(self.context, self.warm, self.memory_limit)
             try:
+                worker = Worker(self.context, self.warm, self.memory_limit)
                 await worker.ready()
                 break
-            except WorkerDied:  # e.g. the memory limit is too low even to start
-                worker.connection.close()
+            except (WorkerDied, OSError, RuntimeError) as error:  # e.g. a memory limit too low
+                logger.error("a worker process could not start (%s); trying again", error)
                 await asyncio.sleep(1)
         self._warmed.set()
         self.idle.append(worker)
