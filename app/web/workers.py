@@ -25,7 +25,7 @@ import resource
 import traceback
 from collections import deque
 from collections.abc import Callable, Sequence
-from multiprocessing.connection import Connection
+from multiprocessing.connection import Connection, wait
 from multiprocessing.process import BaseProcess
 from typing import Any
 
@@ -121,29 +121,15 @@ class Worker:
         child.close()
 
     async def readable(self) -> None:
-        """Wait (without a thread) until the worker has said something or has ended."""
-        loop = asyncio.get_running_loop()
-        done = loop.create_future()
-        descriptors = (self.connection.fileno(), self.process.sentinel)
-
-        def wake() -> None:
-            if not done.done():
-                done.set_result(None)
-
-        for descriptor in descriptors:
-            loop.add_reader(descriptor, wake)
-        try:
-            await done
-        finally:
-            for descriptor in descriptors:
-                loop.remove_reader(descriptor)
+        """Wait until the worker has said something or has ended. The wait is a thread's
+        (``connection.wait``; uvloop's ``add_reader`` on these descriptors did not wake
+        reliably); cancelling it leaves that thread until the worker is stopped."""
+        waited: list[Connection | int] = [self.connection, self.process.sentinel]
+        await asyncio.get_running_loop().run_in_executor(None, wait, waited)
 
     async def answer(self) -> Any:
         """The worker's next message; WorkerDied if it ended instead."""
-        await self.readable()
-        if not self.connection.poll():
-            self.process.join()
-            raise WorkerDied(self.process.exitcode)
+        await self.waited()
         try:
             # The message may be large: read it in a thread, not in the event loop.
             return await asyncio.get_running_loop().run_in_executor(None, receive, self.connection)
@@ -151,11 +137,18 @@ class Worker:
             self.process.join()
             raise WorkerDied(self.process.exitcode) from None
 
+    async def waited(self) -> None:
+        """Wait until the worker's message can be read; WorkerDied if it ended instead. A wake
+        without either (the loop may wake a reader early) waits again."""
+        while True:
+            await self.readable()
+            if self.connection.poll():
+                return
+            if not self.process.is_alive():
+                raise WorkerDied(self.process.exitcode)
+
     async def ready(self) -> None:
-        await self.readable()
-        if not self.connection.poll():
-            self.process.join()
-            raise WorkerDied(self.process.exitcode)
+        await self.waited()
         self.connection.recv()
 
     async def call(self, function: Callable[..., Any], args: Sequence[Any]) -> Any:
