@@ -1,10 +1,14 @@
 """The service's limits and settings, in one declarative table.
 
 The constants are fixed by design; :class:`Settings` holds what an operator may change
-through the environment (``MESH_UPLOAD_LIMIT_MB``, ``MESH_PUBLIC_URL``).
+through the environment (``MESH_UPLOAD_LIMIT_MB``, ``MESH_PUBLIC_URL`` and the heavy-job
+settings; the README's section for operators lists them).
 """
 
 from __future__ import annotations
+
+import os
+from typing import Any
 
 from pydantic import Field, ValidationError
 from pydantic_settings import BaseSettings, SettingsConfigDict
@@ -34,9 +38,39 @@ DEFAULT_UPLOAD_LIMIT_MB = 200
 PUBLIC_URL_VARIABLE = "MESH_PUBLIC_URL"
 
 
+#: Seconds a client is asked to wait (``Retry-After``) when the heavy-job slots are full.
+RETRY_AFTER_SECONDS = 5
+
+
+def machine_memory() -> int:
+    """Bytes of memory this process may use: the machine's, or its container's limit (cgroup v2)."""
+    total = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    try:
+        with open("/sys/fs/cgroup/memory.max") as limit:
+            text = limit.read().strip()
+    except OSError:
+        return total
+    return min(total, int(text)) if text.isdigit() else total
+
+
+def default_memory_budget_mb() -> float:
+    """Half of the memory the server may use: the rest for the server itself and the system."""
+    return machine_memory() / 2 / (1024 * 1024)
+
+
 class Settings(BaseSettings):
-    """What the environment may set: ``MESH_UPLOAD_LIMIT_MB``, the mesh upload limit in MB,
-    and ``MESH_PUBLIC_URL``, the server's public address."""
+    """What the environment may set (``MESH_`` and the name in capitals).
+
+    ``upload_limit_mb``: the mesh upload limit in MB. ``public_url``: the server's public
+    address (``MESH_PUBLIC_URL``). ``workers``: worker processes for the
+    heavy mesh work, which is also the most heavy jobs at once. ``memory_budget_mb``: the
+    memory the jobs running at once may use together, by their estimates (default half of the
+    machine's or container's memory). ``queue_seconds``: how long a job waits for a slot
+    before the answer is a 503. ``queue_length``: the most jobs waiting at once. ``in_process``:
+    run the jobs in threads of the server process instead (tests, debugging: no abort or
+    cancellation protection). ``worker_memory_mb``: an address-space limit per worker (off
+    by default).
+    """
 
     model_config = SettingsConfigDict(
         env_prefix="MESH_", env_ignore_empty=True, extra="ignore", frozen=True
@@ -48,27 +82,54 @@ class Settings(BaseSettings):
     #: server writes relative links (the page's script completes them from its own address):
     #: the request's Host header, which anyone may forge, never goes into a link.
     public_url: str | None = Field(None, pattern=r"^https?://[^\s/?#@]+(/[^\s?#]*)?$")
+    workers: int = Field(2, ge=1, le=64)
+    memory_budget_mb: float = Field(
+        default_factory=default_memory_budget_mb, gt=0, allow_inf_nan=False
+    )
+    queue_seconds: float = Field(5.0, ge=0, le=600, allow_inf_nan=False)
+    queue_length: int = Field(8, ge=0, le=10_000)
+    in_process: bool = False
+    worker_memory_mb: float | None = Field(None, gt=0, allow_inf_nan=False)
 
     @property
     def upload_limit(self) -> int:
         """The largest mesh upload, in bytes."""
         return int(self.upload_limit_mb * 1024 * 1024)
 
+    @property
+    def memory_budget(self) -> int:
+        """The heavy jobs' memory budget, in bytes."""
+        return int(self.memory_budget_mb * 1024 * 1024)
 
-def load_settings() -> Settings:
-    """The settings from the environment; a bad value is one clear ``ValueError``."""
+
+#: What each setting must be, for the one sentence naming a bad environment variable.
+_EXPECTED = {
+    "upload_limit_mb": "a positive number of megabytes",
+    "workers": "a whole number from 1 to 64",
+    "memory_budget_mb": "a positive number of megabytes",
+    "queue_seconds": "a number of seconds from 0 to 600",
+    "queue_length": "a whole number from 0 to 10000",
+    "in_process": "true or false",
+    "worker_memory_mb": "a positive number of megabytes",
+}
+
+
+def load_settings(**given: Any) -> Settings:
+    """The settings from the environment (``given`` ones win); a bad value is one clear
+    ``ValueError``."""
     try:
-        return Settings()
+        return Settings(**given)
     except ValidationError as error:
         first = error.errors()[0]
-        given = first.get("input")
         if first.get("loc") == ("public_url",):
             raise ValueError(
                 f"{PUBLIC_URL_VARIABLE} must be an http:// or https:// address without a query, "
-                f"such as https://normals.example.org/, not {given!r}."
+                f"such as https://normals.example.org/, not {first.get('input')!r}."
             ) from None
+        name = str(first["loc"][0]) if first.get("loc") else "upload_limit_mb"
         raise ValueError(
-            f"{UPLOAD_LIMIT_VARIABLE} must be a positive number of megabytes, not {given!r}."
+            f"MESH_{name.upper()} must be {_EXPECTED.get(name, 'valid')}, "
+            f"not {first.get('input')!r}."
         ) from None
 
 

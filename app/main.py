@@ -15,6 +15,7 @@ from app.calculator import pages
 from app.mesh import api as mesh_api
 from app.mesh import page as mesh_page
 from app.web import handlers
+from app.web.jobs import Jobs
 from app.web.jsonio import FastJSONResponse
 from app.web.middleware import BodyLimit, HeadAsGet, PageCompression, SecurityHeaders
 from app.web.static import STATIC_DIR, CompressedStaticFiles
@@ -36,15 +37,26 @@ consistent, outward winding. The server keeps no file after its response.
 
 
 @asynccontextmanager
-async def lifespan(_app: FastAPI) -> AsyncIterator[None]:
-    """Load the compiled mesh kernels from numba's cache in the background, so that the first
-    mesh upload does not wait for them while the server already answers everything else."""
-    threading.Thread(target=compile_kernels, name="compile-kernels", daemon=True).start()
-    yield
+async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+    """Start the worker processes for the heavy mesh work (they load the compiled kernels
+    from numba's cache as they start); with ``MESH_IN_PROCESS``, load the kernels here, in the
+    background, so that the first mesh upload does not wait for them."""
+    jobs: Jobs = app.state.jobs
+    if jobs.pool is None:
+        threading.Thread(target=compile_kernels, name="compile-kernels", daemon=True).start()
+    jobs.start()
+    try:
+        yield
+    finally:
+        jobs.close()
 
 
-def create_app(upload_limit: int | None = None) -> FastAPI:
-    """The app; ``upload_limit`` (bytes) overrides ``$MESH_UPLOAD_LIMIT_MB`` for mesh files."""
+def create_app(upload_limit: int | None = None, settings: config.Settings | None = None) -> FastAPI:
+    """The app; ``upload_limit`` (bytes) overrides ``$MESH_UPLOAD_LIMIT_MB`` for mesh files,
+    ``settings`` the environment's settings."""
+    if settings is None:
+        given = {} if upload_limit is None else {"upload_limit_mb": upload_limit / 2**20}
+        settings = config.load_settings(**given)
     app = FastAPI(
         title="Mesh Normal Calculator",
         version=mesh_normal.__version__,
@@ -61,9 +73,9 @@ def create_app(upload_limit: int | None = None) -> FastAPI:
     app.include_router(mesh_page.router)
     app.mount("/static", CompressedStaticFiles(directory=STATIC_DIR), name="static")
     app.add_middleware(PageCompression)
-    app.state.upload_limit = (
-        config.load_settings().upload_limit if upload_limit is None else upload_limit
-    )
+    app.state.upload_limit = settings.upload_limit if upload_limit is None else upload_limit
+    # The heavy mesh work: worker processes, started by the lifespan (or at the first job).
+    app.state.jobs = Jobs(settings, warm=compile_kernels, preload=("app.mesh.work",))
     app.add_middleware(BodyLimit, upload_limit=app.state.upload_limit)
     app.add_middleware(SecurityHeaders)
     app.add_middleware(HeadAsGet)

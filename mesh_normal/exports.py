@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import io
+from collections.abc import Iterator
 from typing import Literal
 
 import numpy as np
@@ -19,6 +20,9 @@ NormalsKind = Literal["face", "vertex", "corner"]
 NormalsFormat = Literal["json", "csv", "npy"]
 KINDS: tuple[NormalsKind, ...] = ("face", "vertex", "corner")
 FORMATS: tuple[NormalsFormat, ...] = ("json", "csv", "npy")
+#: Normals a block of a streamed file holds (faces for corner normals): each block is a
+#: short step, a few milliseconds.
+BLOCK_ROWS = 4096
 
 
 def compute_normals(
@@ -65,11 +69,37 @@ def normals_file(
     file_format: NormalsFormat,
 ) -> bytes:
     """Computed normals (see :func:`compute_normals`) as a JSON, CSV or ``.npy`` file."""
+    return b"".join(normals_blocks(normals, missing, kind, weighting, crease_angle, file_format))
+
+
+def normals_blocks(
+    normals: NDArray[np.float64],
+    missing: NDArray[np.bool_],
+    kind: NormalsKind,
+    weighting: Weighting,
+    crease_angle: float,
+    file_format: NormalsFormat,
+    rows: int = BLOCK_ROWS,
+) -> Iterator[bytes]:
+    """The same file as :func:`normals_file`, in pieces of ``rows`` normals each: a server
+    streams them, so the text of millions of normals is never whole in memory, and no single
+    step holds the GIL for long."""
     if file_format == "npy":
-        return npy_bytes(normals)
+        return _npy_blocks(normals, rows)
     if file_format == "csv":
-        return normals_csv(normals, kind)
-    return to_json(
+        return _csv_blocks(normals, kind, rows)
+    return _json_blocks(normals, missing, kind, weighting, crease_angle, rows)
+
+
+def _json_blocks(
+    normals: NDArray[np.float64],
+    missing: NDArray[np.bool_],
+    kind: NormalsKind,
+    weighting: Weighting,
+    crease_angle: float,
+    rows: int,
+) -> Iterator[bytes]:
+    head = to_json(
         {
             "kind": kind,
             "weighting": None if kind == "face" else weighting,
@@ -79,32 +109,53 @@ def normals_file(
             "missing_indices": np.argwhere(missing).tolist()
             if kind == "corner"
             else np.flatnonzero(missing).tolist(),
-            "normals": normals.tolist(),
         }
     )
+    yield head[:-1] + b',"normals":['
+    for start in range(0, len(normals), rows):
+        block = to_json(normals[start : start + rows].tolist())[1:-1]
+        yield (b"," + block) if start else block
+    yield b"]}"
 
 
 def npy_bytes(array: NDArray[np.float64]) -> bytes:
-    buffer = io.BytesIO()
-    np.save(buffer, np.ascontiguousarray(array, dtype=np.float64), allow_pickle=False)
-    return buffer.getvalue()
+    return b"".join(_npy_blocks(array, BLOCK_ROWS))
+
+
+def _npy_blocks(array: NDArray[np.float64], rows: int) -> Iterator[bytes]:
+    array = np.ascontiguousarray(array, dtype=np.float64)
+    header = io.BytesIO()
+    np.lib.format.write_array_header_1_0(header, np.lib.format.header_data_from_array_1_0(array))
+    yield header.getvalue()
+    for start in range(0, len(array), rows):
+        yield array[start : start + rows].tobytes()
 
 
 def normals_csv(normals: NDArray[np.float64], kind: NormalsKind) -> bytes:
     """One row per face, vertex or corner; 17 significant digits, so every value round-trips."""
-    rows = normals.reshape(-1, 3)
-    buffer = io.BytesIO()
+    return b"".join(_csv_blocks(normals, kind, BLOCK_ROWS))
+
+
+def _csv_blocks(normals: NDArray[np.float64], kind: NormalsKind, rows: int) -> Iterator[bytes]:
     if kind == "corner":
-        index = np.indices(normals.shape[:2]).reshape(2, -1).T
         header = "face,corner,nx,ny,nz"
         fmt = "%d,%d,%.17g,%.17g,%.17g"
     else:
-        index = np.arange(len(rows))[:, None]
         header = f"{kind},nx,ny,nz"
         fmt = "%d,%.17g,%.17g,%.17g"
-    table = np.hstack([index.astype(np.float64), rows])
-    np.savetxt(buffer, table, fmt=fmt, header=header, comments="", delimiter=",")
-    return buffer.getvalue()
+    yield header.encode() + b"\n"
+    for start in range(0, len(normals), rows):
+        block = normals[start : start + rows]
+        if kind == "corner":
+            index = (
+                (np.indices(block.shape[:2]) + np.array([start, 0])[:, None, None]).reshape(2, -1).T
+            )
+        else:
+            index = np.arange(start, start + len(block))[:, None]
+        table = np.hstack([index.astype(np.float64), block.reshape(-1, 3)])
+        buffer = io.BytesIO()
+        np.savetxt(buffer, table, fmt=fmt, delimiter=",")
+        yield buffer.getvalue()
 
 
 def normals_ply(mesh: LoadedMesh, normals: NDArray[np.float64], kind: NormalsKind) -> bytes:

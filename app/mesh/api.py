@@ -1,19 +1,21 @@
 """JSON API for whole meshes: the report, the normals and the fixed file.
 
-Every route takes the mesh file itself (the server keeps nothing between requests) and does
-its work in a worker thread, so other requests keep being served meanwhile.
+Every route takes the mesh file itself (the server keeps nothing between requests) and hands
+the work to a worker process (:mod:`app.mesh.work`, admitted by :mod:`app.web.jobs`), so other
+requests keep being served meanwhile.
 """
 
 from __future__ import annotations
 
 import re
-from typing import Annotated, Literal
+from collections.abc import Callable
+from typing import Annotated, Any, Literal, TypeVar
 
-import numpy as np
 from fastapi import APIRouter, Query, Request
-from fastapi.concurrency import run_in_threadpool
-from fastapi.responses import Response
+from fastapi.responses import Response, StreamingResponse
 
+from app.mesh import work
+from app.mesh.estimates import Task, estimate
 from app.mesh.uploads import (
     UPLOAD_BODY,
     UPLOAD_WELD_BODY,
@@ -22,17 +24,16 @@ from app.mesh.uploads import (
     read_upload,
     upload_weld,
 )
-from app.web.errors import ERROR_RESPONSES, ApiError
+from app.web.errors import ERROR_RESPONSES
+from app.web.jobs import Jobs
 from app.web.jsonio import FastJSONResponse
-from mesh_normal.analysis import analyse_mesh, build_report, flips_by_component
-from mesh_normal.exports import NormalsKind, export_normals
-from mesh_normal.files import LoadedMesh, MeshFileError, read_mesh, read_mesh_files, write_mesh
+from mesh_normal.exports import NormalsKind, normals_blocks
 from mesh_normal.files.formats import FORMATS, WRITABLE
-from mesh_normal.files.write import unkept
-from mesh_normal.orientation import orient
 from mesh_normal.report import MeshReport
 from mesh_normal.tolerances import WELD_LIMIT
 from mesh_normal.vertices import Weighting
+
+Value = TypeVar("Value")
 
 router = APIRouter(
     prefix="/api/mesh",
@@ -64,15 +65,12 @@ MEDIA_TYPES = {
 }
 
 
-def load(upload: Upload) -> LoadedMesh:
-    """Read the uploaded file (or files); a broken or unknown file becomes a 4xx naming the
-    problem."""
-    try:
-        if upload.parts:
-            return read_mesh_files(upload.parts)
-        return read_mesh(upload.data, upload.filename)
-    except MeshFileError as error:
-        raise ApiError(error.status_code, str(error), "file") from None
+async def run_job(
+    request: Request, task: Task, upload: Upload, function: Callable[..., Value], *args: Any
+) -> Value:
+    """``function(upload, *args)`` as a heavy job, charged the upload's estimate for ``task``."""
+    jobs: Jobs = request.app.state.jobs
+    return await jobs.run(request, estimate(upload, task), function, upload, *args)
 
 
 def stem(filename: str | None) -> str:
@@ -92,11 +90,7 @@ async def post_mesh(request: Request, weld: WeldQuery = None) -> FastJSONRespons
     tolerance = upload_weld(upload, weld)
     # The model is rendered once, by pydantic-core, with non-finite floats as null; returning
     # a response skips FastAPI's second validation and encoding of the same model.
-    return FastJSONResponse(await run_in_threadpool(_report, upload, tolerance))
-
-
-def _report(upload: Upload, weld: float | None) -> MeshReport:
-    return build_report(analyse_mesh(load(upload), upload.filename, upload.size, weld=weld))
+    return FastJSONResponse(await run_job(request, "report", upload, work.report, tolerance))
 
 
 @router.post(
@@ -128,14 +122,13 @@ async def post_mesh_normals(
 ) -> Response:
     """The face, vertex or corner normals of a mesh file, in the file's order."""
     upload = await read_upload(request)
-
-    def work() -> bytes:
-        mesh = load(upload)
-        return export_normals(mesh, kind, weighting, crease_angle, file_format)
-
-    body = await run_in_threadpool(work)
+    normals, missing = await run_job(
+        request, kind, upload, work.normals, kind, weighting, crease_angle
+    )
     name = f"{stem(upload.filename)}-{kind}-normals.{file_format}"
-    return Response(body, media_type=MEDIA_TYPES[file_format], headers=attachment(name))
+    # Written in blocks as the client reads: the text of millions of normals is never whole.
+    blocks = normals_blocks(normals, missing, kind, weighting, crease_angle, file_format)
+    return StreamingResponse(blocks, media_type=MEDIA_TYPES[file_format], headers=attachment(name))
 
 
 @router.post(
@@ -173,35 +166,6 @@ async def post_mesh_fix(
     """The mesh file with consistent, outward winding (the vertices untouched)."""
     upload = await read_upload(request)
     tolerance = upload_weld(upload, weld)
-
-    def work() -> tuple[bytes, str, dict[str, str]]:
-        mesh = load(upload)
-        chosen = file_format or (mesh.format if mesh.format in WRITABLE else WRITABLE[0])
-        # The same weld as the report's, so that the file is the fix the report described.
-        fixed = orient(mesh.checked(), weld=tolerance)
-        headers = {
-            "x-faces-flipped": str(int(np.count_nonzero(fixed.flipped))),
-            "x-component-faces-flipped": flips_by_component(fixed),
-            "x-orientation-before": fixed.orientation,
-        }
-        if tolerance is not None:
-            headers["x-weld"] = repr(tolerance)
-        objects = len(mesh.group_names or ())
-        dropped = unkept(chosen, mesh.vertex_colors, mesh.face_colors, objects=objects)
-        if dropped:  # do no harm: never leave data out without saying so
-            headers["x-dropped"] = "; ".join(dropped)
-        try:
-            data = write_mesh(
-                mesh.vertices,
-                fixed.faces,
-                chosen,
-                vertex_colors=mesh.vertex_colors,
-                face_colors=mesh.face_colors,
-            )
-            return data, chosen, headers
-        except MeshFileError as error:  # e.g. coordinates beyond what STL's floats hold
-            raise ApiError(error.status_code, str(error), "format") from None
-
-    body, chosen, headers = await run_in_threadpool(work)
+    body, chosen, headers = await run_job(request, "fix", upload, work.fix, file_format, tolerance)
     headers.update(attachment(f"{stem(upload.filename)}-fixed.{chosen}"))
-    return Response(body, media_type=MEDIA_TYPES[chosen], headers=headers)
+    return Response(body.data, media_type=MEDIA_TYPES[chosen], headers=headers)

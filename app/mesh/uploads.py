@@ -14,7 +14,8 @@ from __future__ import annotations
 import copy
 import math
 from dataclasses import dataclass
-from typing import Any
+from pickle import PickleBuffer
+from typing import Any, SupportsIndex
 
 from fastapi import Request
 from starlette.datastructures import UploadFile
@@ -107,6 +108,14 @@ class Upload:
             filename = None
         return cls(b"", filename, parts, weld)
 
+    def __reduce_ex__(self, protocol: SupportsIndex) -> Any:
+        """With protocol 5, the bytes are pickled out of band: they travel to a worker process
+        (:mod:`app.web.workers`) as they are, never copied into the pickle."""
+        if int(protocol) < 5:
+            return object.__reduce_ex__(self, protocol)
+        parts = tuple((name, PickleBuffer(data)) for name, data in self.parts)
+        return (_rebuilt, (PickleBuffer(self.data), self.filename, parts, self.weld))
+
     @property
     def size(self) -> int:
         """Bytes sent: the file's, or all the files' together."""
@@ -118,6 +127,15 @@ class Upload:
         if not self.parts:
             return [self.filename or "mesh"]
         return [name or "mesh" for name, _ in self.parts]
+
+
+def _rebuilt(
+    data: bytes,
+    filename: str | None,
+    parts: tuple[tuple[str | None, bytes], ...],
+    weld: float | None,
+) -> Upload:
+    return Upload(bytes(data), filename, tuple((name, bytes(part)) for name, part in parts), weld)
 
 
 def weld_field(text: str) -> float | None:

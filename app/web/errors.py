@@ -17,11 +17,18 @@ from app.config import BATCH_LIMIT
 class ApiError(Exception):
     """A request the service refuses, with the status, a sentence and the field to blame."""
 
-    def __init__(self, status_code: int, error: str, field: str | None = None) -> None:
+    def __init__(
+        self,
+        status_code: int,
+        error: str,
+        field: str | None = None,
+        headers: dict[str, str] | None = None,
+    ) -> None:
         super().__init__(error)
         self.status_code = status_code
         self.error = error
         self.field = field
+        self.headers = headers or {}  # e.g. Retry-After with a 503
 
     def body(self) -> dict[str, str | None]:
         return {"error": self.error, "field": self.field}

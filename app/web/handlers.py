@@ -39,9 +39,13 @@ def _is_api(request: Request) -> bool:
 def render_error(request: Request, error: ApiError) -> Response:
     """The error as JSON for the API, as the HTML error page for everything else."""
     if _is_api(request):
-        return FastJSONResponse(error.body(), status_code=error.status_code)
+        return FastJSONResponse(error.body(), status_code=error.status_code, headers=error.headers)
     return templates.TemplateResponse(
-        request, "error.html", {"error": error}, status_code=error.status_code
+        request,
+        "error.html",
+        {"error": error},
+        status_code=error.status_code,
+        headers=error.headers,
     )
 
 

@@ -14,9 +14,14 @@ import pytest
 import schemathesis
 from hypothesis import HealthCheck, settings
 
+from app.config import Settings
 from app.main import create_app
 
-schema = schemathesis.openapi.from_asgi("/openapi.json", create_app())
+# The mesh jobs in threads: Schemathesis calls the app from a new event loop each time, and
+# worker processes would start afresh for each (tests/app/mesh/test_work.py covers them).
+schema = schemathesis.openapi.from_asgi(
+    "/openapi.json", create_app(settings=Settings(in_process=True))
+)
 
 OPERATIONS = {
     "POST /api/normal",

@@ -486,21 +486,22 @@ def test_mesh_work_runs_off_the_event_loop(monkeypatch: pytest.MonkeyPatch) -> N
 
     import httpx
 
-    import app.mesh.api as api
+    import app.mesh.work as work
+    from app.config import Settings
     from tests.conftest import EXAMPLE_QUERY
 
     started, release = threading.Event(), threading.Event()
-    real = api.analyse_mesh
+    real = work.analyse_mesh
 
     def slow(*args, **kwargs):  # type: ignore[no-untyped-def]
         started.set()
         release.wait(10)
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(api, "analyse_mesh", slow)
+    monkeypatch.setattr(work, "analyse_mesh", slow)  # in a thread: the server's own process
 
     async def scenario() -> None:
-        transport = httpx.ASGITransport(app=create_app())
+        transport = httpx.ASGITransport(app=create_app(settings=Settings(in_process=True)))
         async with httpx.AsyncClient(transport=transport, base_url="http://test") as client:
             pending = asyncio.create_task(
                 client.post("/api/mesh", files={"file": ("cube.obj", CUBE_OBJ.encode())})

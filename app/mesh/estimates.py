@@ -1,0 +1,77 @@
+"""How much memory a mesh job may take, estimated from the upload before the work starts.
+
+The admission control (:mod:`app.web.jobs`) charges each job this estimate against the
+server's memory budget. The factors are the peak memory measured per byte of upload (issue
+10: binary STL 5.3-6.3, OBJ 14.5-16, binary PLY 12.9-14.7, ASCII PLY 11.3, OFF 26.3), rounded
+up; lower them here, in this one table, when the readers take less.
+"""
+
+from __future__ import annotations
+
+import io
+import zipfile
+from typing import Literal
+
+from app.mesh.uploads import Upload
+from mesh_normal.files.archive import is_zip, unpack_limit
+from mesh_normal.files.formats import suffix_format
+from mesh_normal.files.read import sniff
+
+#: Peak memory of reading and analysing a mesh, per byte of its file, by format. glTF, GLB
+#: and 3MF were not measured: GLB is counted like PLY, the text formats like OFF.
+MEMORY_PER_BYTE: dict[str, float] = {
+    "stl": 6,
+    "obj": 16,
+    "ply": 15,
+    "off": 26,
+    "glb": 15,
+    "gltf": 26,
+    "3mf": 26,
+}
+#: For a file whose format is not known before reading it: the largest factor.
+UNKNOWN_PER_BYTE = max(MEMORY_PER_BYTE.values())
+
+#: What each task adds per byte of the file to the reading's peak: the page's figures, the
+#: fixed file written, the normals kept for the answer (corner normals are 9 numbers a face).
+#: JSON and CSV normals are streamed in blocks, so their text is never whole in memory.
+Task = Literal["report", "page", "fix", "face", "vertex", "corner"]
+TASK_PER_BYTE: dict[Task, float] = {
+    "report": 0,
+    "page": 2,
+    "fix": 3,
+    "face": 1,
+    "vertex": 1,
+    "corner": 4,
+}
+
+#: Bytes every job takes whatever its size (its arrays' bookkeeping, the report, the pickles).
+JOB_OVERHEAD = 64 * 2**20
+
+
+def estimate(upload: Upload, task: Task) -> int:
+    """The bytes of memory this upload's job may take at its peak."""
+    files = upload.parts or ((upload.filename, upload.data),)
+    total = 0.0
+    for name, data in files:
+        size, per_byte = _size_and_factor(name, data)
+        total += size * (per_byte + TASK_PER_BYTE[task])
+    return int(total) + JOB_OVERHEAD
+
+
+def _size_and_factor(name: str | None, data: bytes) -> tuple[int, float]:
+    """The bytes to read and their factor; for a .zip, its members' unpacked sizes."""
+    if is_zip(data) and sniff(data) != "3mf":
+        return _zip_size(data), UNKNOWN_PER_BYTE
+    found = sniff(data) or suffix_format(name)
+    return len(data), MEMORY_PER_BYTE.get(found or "", UNKNOWN_PER_BYTE)
+
+
+def _zip_size(data: bytes) -> int:
+    """The members' unpacked size, as the archive's directory states it (capped where the
+    reader stops); a zip that cannot be opened counts as its own size (the reader refuses it)."""
+    try:
+        with zipfile.ZipFile(io.BytesIO(data)) as archive:
+            unpacked = sum(info.file_size for info in archive.infolist())
+    except (zipfile.BadZipFile, OSError, ValueError):
+        return len(data)
+    return min(max(unpacked, len(data)), unpack_limit(len(data)))

@@ -1,0 +1,141 @@
+"""The heavy mesh work, everything after the upload is read: what a worker process runs.
+
+Each function takes the upload and plain arguments and returns plain values (arrays, models,
+dicts), so that it can run in a worker process (:mod:`app.web.jobs`): the routes name them
+as ``work.report`` and so on, looked up when called.
+"""
+
+from __future__ import annotations
+
+import json
+import posixpath
+import shlex
+from typing import Any, get_args
+
+import numpy as np
+from numpy.typing import NDArray
+
+from app.mesh.classes import CLASSES
+from app.mesh.figures import mesh_figures
+from app.mesh.uploads import Upload
+from app.web.errors import ApiError
+from mesh_normal.analysis import analyse_mesh, build_report, flips_by_component
+from mesh_normal.exports import FORMATS, KINDS, NormalsKind, compute_normals
+from mesh_normal.files import LoadedMesh, MeshFileError, read_mesh, read_mesh_files
+from mesh_normal.files.formats import FORMATS as MESH_FORMATS
+from mesh_normal.files.formats import WRITABLE
+from mesh_normal.files.write import unkept, write_fixed
+from mesh_normal.orientation import orient
+from mesh_normal.report import MeshReport
+from mesh_normal.vertices import Weighting
+
+#: The formats the fixed mesh can be downloaded in: the library's writable ones.
+FIX_FORMATS = WRITABLE
+#: Problems that the fixed mesh (orient()) repairs: their card gets the download button.
+FIXED_BY_ORIENT = frozenset({"winding", "inward", "mixed"})
+
+
+def load(upload: Upload) -> LoadedMesh:
+    """Read the uploaded file (or files); a broken or unknown file becomes a 4xx naming the
+    problem."""
+    try:
+        if upload.parts:
+            return read_mesh_files(upload.parts)
+        return read_mesh(upload.data, upload.filename)
+    except MeshFileError as error:
+        raise ApiError(error.status_code, str(error), "file") from None
+
+
+def report(upload: Upload, weld: float | None) -> MeshReport:
+    """The report of ``POST /api/mesh``."""
+    return build_report(analyse_mesh(load(upload), upload.filename, upload.size, weld=weld))
+
+
+def normals(
+    upload: Upload, kind: NormalsKind, weighting: Weighting, crease_angle: float
+) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    """The normals and the mask of rows without one (the answer is written from them in
+    blocks, by the server)."""
+    return compute_normals(load(upload), kind, weighting, crease_angle)
+
+
+def fix(
+    upload: Upload, file_format: str | None, weld: float | None
+) -> tuple[NDArray[np.uint8], str, dict[str, str]]:
+    """The fixed file's bytes (as an array, so that they travel without a copy), its format
+    and the headers saying what changed."""
+    mesh = load(upload)
+    chosen = file_format or (mesh.format if mesh.format in WRITABLE else WRITABLE[0])
+    # The same weld as the report's, so that the file is the fix the report described.
+    fixed = orient(mesh.checked(), weld=weld)
+    headers = {
+        "x-faces-flipped": str(int(np.count_nonzero(fixed.flipped))),
+        "x-component-faces-flipped": flips_by_component(fixed),
+        "x-orientation-before": fixed.orientation,
+    }
+    if weld is not None:
+        headers["x-weld"] = repr(weld)
+    try:
+        data, dropped = write_fixed(mesh, fixed.faces, chosen)
+    except MeshFileError as error:  # e.g. coordinates beyond what STL's floats hold
+        raise ApiError(error.status_code, str(error), "format") from None
+    if dropped:  # do no harm: never leave data out without saying so
+        headers["x-dropped"] = "; ".join(dropped)
+    return np.frombuffer(data, dtype=np.uint8), chosen, headers
+
+
+def page(upload: Upload, stem: str, base_url: str) -> dict[str, Any]:
+    """The mesh page's context for an upload: the report, its figures and the downloads."""
+    mesh = load(upload)
+    analysis = analyse_mesh(mesh, upload.filename, upload.size, weld=upload.weld)
+    built = build_report(analysis)
+    weld = "" if upload.weld is None else f" -F weld={upload.weld!r}"
+    return {
+        "files": files_read(upload, mesh.files),
+        "fix_dropped": fix_dropped(mesh),
+        "report": built,
+        # The JSON twin is the API's own JSON (non-finite floats already null), parsed back
+        # so that the template's json_script escapes it for a <script> block.
+        "report_json": json.loads(built.model_dump_json()),
+        "figures": mesh_figures(analysis),
+        "classes": CLASSES,
+        "stem": stem,
+        "curl": "curl "
+        + "".join(f"-F {shlex.quote('file=@' + sent)} " for sent in upload.names)
+        + weld.lstrip()
+        + (" " if weld else "")
+        + f"{base_url}api/mesh",
+        "sent": upload.names,
+        "kinds": KINDS,
+        "weightings": get_args(Weighting),
+        "formats": FORMATS,
+        "fix_formats": FIX_FORMATS,
+        "fixed_by_orient": FIXED_BY_ORIENT,
+    }
+
+
+def fix_dropped(mesh: LoadedMesh) -> dict[str, str]:
+    """For each format of the fixed mesh, the sentence saying what of this mesh it leaves out,
+    in the words of the fix's ``X-Dropped`` header; empty when it keeps everything."""
+    objects = len(mesh.group_names or ())
+    dropped = {
+        name: unkept(name, mesh.vertex_colors, mesh.face_colors, objects=objects)
+        for name in FIX_FORMATS
+    }
+    keeping = [MESH_FORMATS[name].title for name, left_out in dropped.items() if not left_out]
+    keeps = " and ".join(keeping) + (" keeps" if len(keeping) == 1 else " keep")
+    return {
+        name: f"{MESH_FORMATS[name].title} leaves out {'; '.join(left_out)}"
+        + (f"; {keeps} everything." if keeping else ".")
+        if left_out
+        else ""
+        for name, left_out in dropped.items()
+    }
+
+
+def files_read(upload: Upload, read: tuple[str, ...]) -> list[tuple[str, bool]]:
+    """Each file sent with whether it was read; for a .zip, the members read. Empty for one
+    file read alone."""
+    if not upload.parts:
+        return [(name, True) for name in read]
+    return [(name, posixpath.normpath(name.replace("\\", "/")) in read) for name in upload.names]

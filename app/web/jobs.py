@@ -1,0 +1,216 @@
+"""Heavy jobs: admitted against a slot count and a memory budget, then run in a worker.
+
+A job says up front how much memory it may take (its estimate). It runs when a slot is free
+and its estimate fits in what the running jobs leave of the budget; otherwise it waits, at
+most ``queue_seconds`` and behind at most ``queue_length`` others, and then the answer is a
+503 with ``Retry-After``. A job whose estimate alone exceeds the whole budget is a 413: no
+wait would help. Pages, static files and the calculator never come here, so they never wait.
+
+The jobs run in :class:`app.web.workers.WorkerPool` processes (or, with ``in_process``, in
+threads of the server, for tests and debugging). A client that hangs up stops its job (its
+worker is killed and replaced); a worker that dies or runs out of memory is a 503 saying that
+the server ran out of memory, never a 400 blaming the file.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+from collections.abc import AsyncIterator, Callable
+from contextlib import asynccontextmanager, suppress
+from typing import Any, TypeVar
+
+from starlette.concurrency import run_in_threadpool
+from starlette.requests import Request
+
+from app.config import RETRY_AFTER_SECONDS, Settings
+from app.web.errors import ApiError
+from app.web.workers import WorkerCrashed, WorkerDied, WorkerOutOfMemory, WorkerPool
+
+logger = logging.getLogger(__name__)
+
+Value = TypeVar("Value")
+
+BUSY = (
+    "The server is busy with other files right now; try again in a few seconds "
+    "(Retry-After says when)."
+)
+NO_MEMORY = (
+    "The server ran out of memory while working on this file; try again later, "
+    "or send a smaller file."
+)
+
+
+def busy() -> ApiError:
+    return ApiError(503, BUSY, None, headers={"retry-after": str(RETRY_AFTER_SECONDS)})
+
+
+def out_of_memory() -> ApiError:
+    return ApiError(503, NO_MEMORY, None, headers={"retry-after": str(RETRY_AFTER_SECONDS)})
+
+
+def beyond_budget(estimate: int, budget: int) -> ApiError:
+    return ApiError(
+        413,
+        f"This file would need about {estimate / 2**20:,.0f} MB of memory, more than this "
+        f"server ever gives one file ({budget / 2**20:,.0f} MB); send a smaller file.",
+        "file",
+    )
+
+
+class Admission:
+    """How many jobs run and how much of the memory budget they hold, on one event loop."""
+
+    def __init__(self, slots: int, budget: int, wait_seconds: float, queue_length: int) -> None:
+        self.slots = slots
+        self.budget = budget
+        self.wait_seconds = wait_seconds
+        self.queue_length = queue_length
+        self.running = 0
+        self.charged = 0
+        self.waiting = 0
+        self._changed: asyncio.Event | None = None
+        self._loop: asyncio.AbstractEventLoop | None = None
+
+    def _fits(self, estimate: int) -> bool:
+        return self.running < self.slots and self.charged + estimate <= self.budget
+
+    def _event(self) -> asyncio.Event:
+        # Made on first use, in the loop that serves (a test client may bring its own loop).
+        loop = asyncio.get_running_loop()
+        if self._changed is None or self._loop is not loop:
+            self._changed, self._loop = asyncio.Event(), loop
+        return self._changed
+
+    @asynccontextmanager
+    async def admit(self, estimate: int) -> AsyncIterator[None]:
+        """Hold a slot and ``estimate`` bytes of the budget for the ``with`` block."""
+        if estimate > self.budget:
+            raise beyond_budget(estimate, self.budget)
+        if not self._fits(estimate):
+            await self._wait(estimate)
+        self.running += 1
+        self.charged += estimate
+        try:
+            yield
+        finally:
+            self.running -= 1
+            self.charged -= estimate
+            event, self._changed = self._event(), None
+            event.set()
+
+    async def _wait(self, estimate: int) -> None:
+        if self.waiting >= self.queue_length:
+            raise busy()
+        loop = asyncio.get_running_loop()
+        deadline = loop.time() + self.wait_seconds
+        self.waiting += 1
+        try:
+            while not self._fits(estimate):
+                left = deadline - loop.time()
+                if left <= 0:
+                    raise busy()
+                with suppress(TimeoutError):
+                    await asyncio.wait_for(self._event().wait(), left)
+        finally:
+            self.waiting -= 1
+
+
+class Jobs:
+    """The server's heavy jobs: admission, then a worker process (or a thread)."""
+
+    def __init__(
+        self,
+        settings: Settings,
+        *,
+        warm: Callable[[], object] | None = None,
+        preload: tuple[str, ...] = (),
+    ) -> None:
+        self.settings = settings
+        self.admission = Admission(
+            settings.workers,
+            settings.memory_budget,
+            settings.queue_seconds,
+            settings.queue_length,
+        )
+        limit = settings.worker_memory_mb
+        self.pool = (
+            None
+            if settings.in_process
+            else WorkerPool(
+                settings.workers,
+                warm=warm,
+                preload=preload,
+                memory_limit=None if limit is None else int(limit * 2**20),
+            )
+        )
+
+    def start(self) -> None:
+        if self.pool is not None:
+            self.pool.start()
+
+    def close(self) -> None:
+        if self.pool is not None:
+            self.pool.close()
+
+    async def run(
+        self,
+        request: Request,
+        estimate: int,
+        function: Callable[..., Value],
+        *args: Any,
+    ) -> Value:
+        """``function(*args)`` as a heavy job of about ``estimate`` bytes, for ``request``."""
+        async with self.admission.admit(estimate):
+            if self.pool is None:
+                try:
+                    return await run_in_threadpool(function, *args)
+                except MemoryError:
+                    raise out_of_memory() from None
+            return await self._in_worker(self.pool, request, function, args)
+
+    async def _in_worker(
+        self,
+        pool: WorkerPool,
+        request: Request,
+        function: Callable[..., Value],
+        args: tuple[Any, ...],
+    ) -> Value:
+        worker = await pool.acquire(self.settings.queue_seconds)
+        if worker is None:  # the workers are still starting, or being replaced
+            raise busy()
+        job = asyncio.ensure_future(worker.call(function, args))
+        gone = asyncio.ensure_future(disconnected(request))
+        clean = False
+        try:
+            await asyncio.wait({job, gone}, return_when=asyncio.FIRST_COMPLETED)
+            if not job.done():  # the client hung up: stop its work
+                job.cancel()
+                logger.info("client left during %s: its worker is stopped", request.url.path)
+                raise ApiError(499, "The client closed the connection before the answer.")
+            value: Value = job.result()
+            clean = True
+            return value
+        except ApiError as error:
+            clean = error.status_code != 499
+            raise
+        except (WorkerDied, WorkerOutOfMemory) as error:
+            logger.warning("a worker ran out of memory or ended on %s: %s", request.url.path, error)
+            raise out_of_memory() from None
+        except WorkerCrashed as error:
+            logger.error("a job failed on %s:\n%s", request.url.path, error)
+            raise
+        finally:
+            gone.cancel()
+            job.cancel()
+            with suppress(BaseException):
+                await job
+            pool.release(worker, clean)
+
+
+async def disconnected(request: Request) -> None:
+    """Return when the client hangs up (the body is read, so only ``http.disconnect`` is left)."""
+    while True:
+        message = await request.receive()
+        if message["type"] == "http.disconnect":
+            return

@@ -1,0 +1,284 @@
+"""A small pool of worker processes for the heavy work, one job at a time in each.
+
+Why processes, not threads: the heavy work holds the GIL for seconds (regular expressions over
+an ASCII file, ``tolist``), which would stall every page; an allocation that fails inside a
+native library aborts the whole process (pydantic-core: "memory allocation of N bytes
+failed", exit 134); and a thread cannot be stopped when its client hangs up. A worker that
+dies, or that is killed because its client left, is replaced; the server process lives on.
+
+The workers come from the ``forkserver`` context (a clean process, never a fork of the
+server's threads) with ``preload`` imported once in the fork server, and each runs ``warm``
+once as it starts (the numba kernels, loaded from their cache). The first worker warms alone,
+before the others start, so that a cold cache is compiled once, not by every worker at once.
+
+Jobs travel as pickles of protocol 5: large buffers (``pickle.PickleBuffer``, NumPy arrays)
+go out of band as raw bytes, so a 200 MB upload is not copied into a pickle on its way.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import multiprocessing
+import pickle
+import resource
+import traceback
+from collections import deque
+from collections.abc import Callable, Sequence
+from multiprocessing.connection import Connection, wait
+from multiprocessing.process import BaseProcess
+from typing import Any
+
+from app.web.errors import ApiError
+
+#: How a worker's job ended: its value, a refusal (an ApiError's status, sentence and field),
+#: memory exhausted, or a crash (the traceback, for the log).
+OK, REFUSED, NO_MEMORY, CRASHED = "ok", "refused", "memory", "crashed"
+
+
+logger = logging.getLogger(__name__)
+
+#: How long the first jobs wait for the first worker to be ready: compiling the kernels into
+#: an empty cache takes about 10 s on two cores (see mesh_normal.kernels.COMPILE_SECONDS).
+STARTUP_SECONDS = 60
+
+
+class WorkerDied(Exception):
+    """The worker ended before it answered (killed, or aborted: exit code ``exitcode``)."""
+
+    def __init__(self, exitcode: int | None) -> None:
+        super().__init__(f"the worker ended with exit code {exitcode}")
+        self.exitcode = exitcode
+
+
+class WorkerOutOfMemory(Exception):
+    """The job raised ``MemoryError`` in its worker (the worker itself lives on)."""
+
+
+class WorkerCrashed(Exception):
+    """The job raised an unexpected exception in its worker; the message is its traceback."""
+
+
+def send(connection: Connection, value: Any) -> None:
+    """Send ``value`` with its large buffers out of band (no copy into the pickle)."""
+    buffers: list[pickle.PickleBuffer] = []
+    header = pickle.dumps(value, protocol=5, buffer_callback=buffers.append)
+    connection.send((header, len(buffers)))
+    for buffer in buffers:
+        connection.send_bytes(buffer.raw())
+
+
+def receive(connection: Connection) -> Any:
+    header, count = connection.recv()
+    buffers = [connection.recv_bytes() for _ in range(count)]
+    return pickle.loads(header, buffers=buffers)
+
+
+def serve(
+    connection: Connection, warm: Callable[[], object] | None, memory_limit: int | None
+) -> None:
+    """A worker's life: warm up, say so, then run one job after another until the pipe closes."""
+    if memory_limit is not None:
+        resource.setrlimit(resource.RLIMIT_AS, (memory_limit, memory_limit))
+    try:
+        if warm is not None:
+            warm()
+        connection.send("ready")
+        while True:
+            function, args = receive(connection)
+            send(connection, run(function, args))
+    except (EOFError, OSError):  # the server closed the pipe: it no longer needs this worker
+        return
+
+
+def run(function: Callable[..., Any], args: Sequence[Any]) -> tuple[str, Any]:
+    """One job, its ending as ``(OK, value)``, ``(REFUSED, ...)``, ``(NO_MEMORY, None)`` or
+    ``(CRASHED, traceback)``."""
+    try:
+        return OK, function(*args)
+    except ApiError as error:
+        return REFUSED, (error.status_code, error.error, error.field)
+    except MemoryError:
+        return NO_MEMORY, None
+    except Exception:
+        return CRASHED, traceback.format_exc()
+
+
+class Worker:
+    """One worker process and the pipe to it."""
+
+    def __init__(
+        self,
+        context: multiprocessing.context.BaseContext,
+        warm: Callable[[], object] | None,
+        memory_limit: int | None,
+    ) -> None:
+        self.connection, child = context.Pipe()
+        self.process: BaseProcess = context.Process(  # type: ignore[attr-defined]
+            target=serve, args=(child, warm, memory_limit), daemon=True, name="mesh-worker"
+        )
+        self.process.start()
+        child.close()
+
+    async def readable(self) -> None:
+        """Wait until the worker has said something or has ended. The wait is a thread's
+        (``connection.wait``; uvloop's ``add_reader`` on these descriptors did not wake
+        reliably); cancelling it leaves that thread until the worker is stopped."""
+        waited: list[Connection | int] = [self.connection, self.process.sentinel]
+        await asyncio.get_running_loop().run_in_executor(None, wait, waited)
+
+    async def answer(self) -> Any:
+        """The worker's next message; WorkerDied if it ended instead."""
+        await self.waited()
+        try:
+            # The message may be large: read it in a thread, not in the event loop.
+            return await asyncio.get_running_loop().run_in_executor(None, receive, self.connection)
+        except (EOFError, OSError):
+            self.process.join()
+            raise WorkerDied(self.process.exitcode) from None
+
+    async def waited(self) -> None:
+        """Wait until the worker's message can be read; WorkerDied if it ended instead. A wake
+        without either (the loop may wake a reader early) waits again."""
+        while True:
+            await self.readable()
+            if self.connection.poll():
+                return
+            if not self.process.is_alive():
+                raise WorkerDied(self.process.exitcode)
+
+    async def ready(self) -> None:
+        await self.waited()
+        self.connection.recv()
+
+    async def call(self, function: Callable[..., Any], args: Sequence[Any]) -> Any:
+        """Run one job in this worker; cancelling the call is the caller's to follow with
+        :meth:`stop`."""
+        loop = asyncio.get_running_loop()
+        try:
+            await loop.run_in_executor(None, send, self.connection, (function, tuple(args)))
+        except (BrokenPipeError, OSError):
+            self.process.join()
+            raise WorkerDied(self.process.exitcode) from None
+        ending, value = await self.answer()
+        if ending == REFUSED:
+            raise ApiError(*value)
+        if ending == NO_MEMORY:
+            raise WorkerOutOfMemory()
+        if ending == CRASHED:
+            raise WorkerCrashed(value)
+        return value
+
+    def stop(self) -> None:
+        """End the worker now (SIGKILL: a job in a native loop does not look at signals)."""
+        self.process.kill()
+        self.process.join()
+        self.connection.close()
+
+
+class WorkerPool:
+    """``count`` workers; :meth:`acquire` lends an idle one, :meth:`release` takes it back
+    (replacing it when its job did not end cleanly)."""
+
+    def __init__(
+        self,
+        count: int,
+        *,
+        warm: Callable[[], object] | None = None,
+        preload: Sequence[str] = (),
+        memory_limit: int | None = None,
+    ) -> None:
+        self.count = count
+        self.warm = warm
+        self.memory_limit = memory_limit
+        self.context = multiprocessing.get_context("forkserver")
+        self.context.set_forkserver_preload(list(preload))
+        self.idle: deque[Worker] = deque()
+        self.busy: set[Worker] = set()
+        self.replaced = 0  # workers replaced after a crash or a cancelled job
+        self._changed: asyncio.Event | None = None
+        self._tasks: set[asyncio.Task[None]] = set()
+        self._started = False
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._warmed: asyncio.Event | None = None
+
+    def start(self) -> None:
+        """Start the workers in the background (from the event loop): the first warms alone."""
+        loop = asyncio.get_running_loop()
+        if self._started and self._loop is loop:
+            return
+        if self._started:  # a new event loop (a test client's): its workers start afresh
+            self.close()
+        self._started = True
+        self._loop = loop
+        self._changed = asyncio.Event()
+        self._warmed = asyncio.Event()
+        for place in range(self.count):
+            self._spawn(first=place == 0)
+
+    def _spawn(self, first: bool = False) -> None:
+        task = asyncio.get_running_loop().create_task(self._bring_up(first))
+        self._tasks.add(task)
+        task.add_done_callback(self._tasks.discard)
+
+    async def _bring_up(self, first: bool) -> None:
+        assert self._warmed is not None
+        if not first:
+            await self._warmed.wait()
+        while True:
+            try:
+                worker = Worker(self.context, self.warm, self.memory_limit)
+                await worker.ready()
+                break
+            except (WorkerDied, OSError, RuntimeError) as error:  # e.g. a memory limit too low
+                logger.error("a worker process could not start (%s); trying again", error)
+                await asyncio.sleep(1)
+        self._warmed.set()
+        self.idle.append(worker)
+        self._notify()
+
+    def _notify(self) -> None:
+        assert self._changed is not None
+        self._changed.set()
+        self._changed = asyncio.Event()
+
+    async def acquire(self, timeout: float) -> Worker | None:
+        """An idle worker within ``timeout`` seconds, or ``None``. Before the first worker is
+        ready (the kernels load, or compile into an empty cache), up to STARTUP_SECONDS."""
+        self.start()
+        assert self._warmed is not None
+        loop = asyncio.get_running_loop()
+        started = self._warmed.is_set()
+        deadline = loop.time() + (timeout if started else max(timeout, STARTUP_SECONDS))
+        while not self.idle:
+            assert self._changed is not None
+            left = deadline - loop.time()
+            if left <= 0:
+                return None
+            try:
+                await asyncio.wait_for(self._changed.wait(), left)
+            except TimeoutError:
+                return None
+        worker = self.idle.popleft()
+        self.busy.add(worker)
+        return worker
+
+    def release(self, worker: Worker, clean: bool) -> None:
+        """Take a worker back: idle again after a clean job, else stopped and replaced."""
+        self.busy.discard(worker)
+        if clean and worker.process.is_alive():
+            self.idle.append(worker)
+            self._notify()
+            return
+        worker.stop()
+        self.replaced += 1
+        self._spawn()
+
+    def close(self) -> None:
+        for task in self._tasks:
+            task.cancel()
+        for worker in [*self.idle, *self.busy]:
+            worker.stop()
+        self.idle.clear()
+        self.busy.clear()
+        self._started = False

@@ -1,0 +1,56 @@
+"""Jobs for the tests of the worker processes: top-level functions, so that a worker imports
+them by name (a test puts one in place of ``app.mesh.work.report``, which the routes look up
+when called). They find their folder of marker files from the upload's name."""
+
+from __future__ import annotations
+
+import os
+import time
+from pathlib import Path
+from typing import Any
+
+from app.mesh import work
+from app.mesh.uploads import Upload
+from app.web.errors import ApiError
+from mesh_normal.report import MeshReport
+
+#: The real report, taken before a test puts a hook in its place.
+REPORT = work.report
+
+
+def folder(upload: Upload) -> Path:
+    return Path(upload.filename or ".").parent
+
+
+def abort(*_args: Any) -> MeshReport:
+    """Die as pydantic-core does when an allocation fails (SIGABRT, exit code 134)."""
+    os.abort()
+
+
+def exhaust(*_args: Any) -> MeshReport:
+    raise MemoryError
+
+
+def held(upload: Upload, weld: float | None) -> MeshReport:
+    """Say ``started`` (with this process's id), then hold the GIL in pure Python until the
+    file ``release`` appears; then write ``finished`` and report as usual."""
+    here = folder(upload)
+    (here / "started").write_text(str(os.getpid()))
+    spins = 0
+    while not (here / "release").exists():
+        spins += sum(range(10_000))  # GIL-holding work, as a regex pass over a big file is
+    (here / "finished").write_text(str(spins))
+    return REPORT(upload, weld)
+
+
+def value(data: bytes, *, times: int = 1) -> tuple[int, bytes]:
+    return os.getpid(), data * times
+
+
+def sleep_forever(*_args: Any) -> None:
+    while True:
+        time.sleep(1)
+
+
+def refuse(*_args: Any) -> None:
+    raise ApiError(400, "No.", "file")

@@ -1,0 +1,56 @@
+"""app/mesh/estimates.py: a job's memory, estimated from its upload before the work starts."""
+
+from __future__ import annotations
+
+import io
+import zipfile
+
+import numpy as np
+import pytest
+
+from app.mesh.estimates import (
+    JOB_OVERHEAD,
+    MEMORY_PER_BYTE,
+    TASK_PER_BYTE,
+    UNKNOWN_PER_BYTE,
+    estimate,
+)
+from app.mesh.uploads import Upload
+from tests.meshes import CUBE_OBJ, ascii_stl
+
+OBJ = (CUBE_OBJ + "# padding\n" * 10_000).encode()
+
+
+@pytest.mark.parametrize("task", list(TASK_PER_BYTE))
+def test_the_content_decides_the_factor(task: str) -> None:
+    """OBJ bytes count as OBJ whatever their name says; the task adds its own share."""
+    for name in ("cube.obj", "cube.stl", None):
+        expected = len(OBJ) * (MEMORY_PER_BYTE["obj"] + TASK_PER_BYTE[task]) + JOB_OVERHEAD  # type: ignore[index]
+        assert estimate(Upload(OBJ, name), task) == int(expected)  # type: ignore[arg-type]
+
+
+def test_stl_costs_less_than_obj_and_unknown_bytes_the_most() -> None:
+    corners = np.tile(np.array([[[0.0, 0, 0], [1, 0, 0], [0, 1, 0]]]), (2000, 1, 1))
+    stl = ascii_stl(corners, np.tile([0.0, 0, 1], (2000, 1)))
+    unknown = b"\x01\x02" * 50_000
+    per_byte = {
+        label: (estimate(Upload(data, "x"), "report") - JOB_OVERHEAD) / len(data)
+        for label, data in (("stl", stl), ("obj", OBJ), ("unknown", unknown))
+    }
+    assert per_byte == pytest.approx({"stl": 6, "obj": 16, "unknown": UNKNOWN_PER_BYTE}, rel=1e-6)
+
+
+def test_a_zip_counts_its_members_unpacked() -> None:
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w", zipfile.ZIP_DEFLATED) as archive:
+        archive.writestr("cube.obj", OBJ)
+    data = buffer.getvalue()
+    assert len(data) < len(OBJ) / 10  # the padding compresses well
+    upload = Upload(data, "cube.zip")
+    assert estimate(upload, "report") == int(len(OBJ) * UNKNOWN_PER_BYTE) + JOB_OVERHEAD
+
+
+def test_several_files_add_up() -> None:
+    parts = (("cube.obj", OBJ), ("cube.mtl", b"newmtl a\n" * 100))
+    alone = [estimate(Upload(data, name), "fix") - JOB_OVERHEAD for name, data in parts]
+    assert estimate(Upload.several(parts, None), "fix") == sum(alone) + JOB_OVERHEAD

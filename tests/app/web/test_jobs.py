@@ -1,0 +1,81 @@
+"""app/web/jobs.py: admission against the job slots and the memory budget (no timed waits:
+every step is driven by the test)."""
+
+from __future__ import annotations
+
+import asyncio
+
+import pytest
+
+from app.web.errors import ApiError
+from app.web.jobs import BUSY, Admission
+
+MB = 2**20
+
+
+def run(coroutine):  # type: ignore[no-untyped-def]
+    return asyncio.run(coroutine)
+
+
+def test_a_job_beyond_the_whole_budget_is_a_413() -> None:
+    async def scenario() -> None:
+        admission = Admission(slots=2, budget=100 * MB, wait_seconds=0, queue_length=4)
+        with pytest.raises(ApiError) as caught:
+            async with admission.admit(101 * MB):
+                pass
+        assert caught.value.status_code == 413 and caught.value.field == "file"
+        assert "101 MB" in caught.value.error and "100 MB" in caught.value.error
+        async with admission.admit(100 * MB):  # exactly the budget fits
+            assert admission.charged == 100 * MB
+        assert (admission.running, admission.charged) == (0, 0)
+
+    run(scenario())
+
+
+@pytest.mark.parametrize(("first", "second"), [(10, 10), (60, 50)])
+def test_full_slots_or_budget_is_a_503_with_retry_after(first: int, second: int) -> None:
+    """One slot taken (10 + 10 MB) or the budget taken (60 + 50 > 100 MB): the next is busy."""
+
+    async def scenario() -> None:
+        slots = 1 if first == 10 else 2
+        admission = Admission(slots=slots, budget=100 * MB, wait_seconds=0, queue_length=4)
+        async with admission.admit(first * MB):
+            with pytest.raises(ApiError) as caught:
+                async with admission.admit(second * MB):
+                    pass
+        assert caught.value.status_code == 503 and caught.value.error == BUSY
+        assert int(caught.value.headers["retry-after"]) > 0
+        assert admission.waiting == 0
+
+    run(scenario())
+
+
+def test_a_waiting_job_starts_when_a_slot_frees() -> None:
+    async def scenario() -> None:
+        admission = Admission(slots=1, budget=100 * MB, wait_seconds=600, queue_length=1)
+        order: list[str] = []
+        release = asyncio.Event()
+
+        async def first() -> None:
+            async with admission.admit(MB):
+                order.append("first runs")
+                await release.wait()
+            order.append("first done")
+
+        async def second() -> None:
+            async with admission.admit(MB):
+                order.append("second runs")
+
+        one = asyncio.create_task(first())
+        await asyncio.sleep(0)
+        two = asyncio.create_task(second())
+        await asyncio.sleep(0)
+        assert admission.waiting == 1 and order == ["first runs"]
+        with pytest.raises(ApiError):  # the queue holds one: a third is refused at once
+            async with admission.admit(MB):
+                pass
+        release.set()
+        await asyncio.gather(one, two)
+        assert order == ["first runs", "first done", "second runs"]
+
+    run(scenario())
