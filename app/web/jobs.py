@@ -25,6 +25,7 @@ from starlette.requests import Request
 
 from app.config import RETRY_AFTER_SECONDS, Settings
 from app.web.errors import ApiError
+from app.web.handlers import temp_dir_problem
 from app.web.workers import WorkerCrashed, WorkerDied, WorkerOutOfMemory, WorkerPool
 
 logger = logging.getLogger(__name__)
@@ -134,9 +135,18 @@ class Jobs:
             settings.queue_length,
         )
         limit = settings.worker_memory_mb
+        # Worker processes need a writable temporary folder (the forkserver's socket): on a
+        # read-only root without one the jobs run in the server's threads instead, so that the
+        # pages and small uploads still work (handlers.install says what to mount).
+        homeless = temp_dir_problem() is not None
+        if homeless and not settings.in_process:
+            logger.warning(
+                "no writable temporary folder: the mesh jobs run in the server process, without "
+                "worker processes (mount a tmpfs at /tmp to have them)"
+            )
         self.pool = (
             None
-            if settings.in_process
+            if settings.in_process or homeless
             else WorkerPool(
                 settings.workers,
                 warm=warm,

@@ -79,3 +79,18 @@ def test_a_waiting_job_starts_when_a_slot_frees() -> None:
         assert order == ["first runs", "first done", "second runs"]
 
     run(scenario())
+
+
+def test_without_a_writable_temporary_folder_the_jobs_run_in_the_server(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # A read-only root without a tmpfs: worker processes cannot start (the forkserver needs a
+    # socket folder), so the pages and small uploads go on in the server's threads.
+    from app.config import load_settings
+    from app.web import jobs
+
+    monkeypatch.setattr(jobs, "temp_dir_problem", lambda: "No usable temporary directory")
+    assert jobs.Jobs(load_settings(in_process=False)).pool is None
+    monkeypatch.setattr(jobs, "temp_dir_problem", lambda: None)
+    pool = jobs.Jobs(load_settings(in_process=False)).pool
+    assert pool is not None  # made, not started: no process runs until start()
