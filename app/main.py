@@ -19,6 +19,7 @@ from app.web.jobs import Jobs
 from app.web.jsonio import FastJSONResponse
 from app.web.middleware import BodyLimit, HeadAsGet, PageCompression, SecurityHeaders
 from app.web.static import STATIC_DIR, CompressedStaticFiles
+from app.web.workers import tune_allocator
 from mesh_normal.precompile import compile_kernels
 
 DESCRIPTION = """
@@ -57,6 +58,7 @@ def create_app(upload_limit: int | None = None, settings: config.Settings | None
     if settings is None:
         given = {} if upload_limit is None else {"upload_limit_mb": upload_limit / 2**20}
         settings = config.load_settings(**given)
+    tune_allocator()  # large uploads and results go back to the system once freed
     app = FastAPI(
         title="Mesh Normal Calculator",
         version=mesh_normal.__version__,

@@ -55,6 +55,11 @@ def free_port() -> int:
 
 def resident_mb(pid: int) -> float:
     """The resident memory of the process and all its descendants (worker processes)."""
+    return sum(family_mb(pid).values())
+
+
+def family_mb(pid: int) -> dict[int, float]:
+    """The resident memory of the process and each of its descendants, by process id."""
     parents: dict[int, int] = {}
     for stat in Path("/proc").glob("[0-9]*/stat"):
         try:
@@ -70,15 +75,15 @@ def resident_mb(pid: int) -> float:
             if parent in family and child not in family:
                 family.add(child)
                 grown = True
-    total = 0
-    for member in family:
+    sizes: dict[int, float] = {}
+    for member in sorted(family):
         try:
             for line in Path(f"/proc/{member}/status").read_text().splitlines():
                 if line.startswith("VmRSS:"):
-                    total += int(line.split()[1])
+                    sizes[member] = int(line.split()[1]) / 1024
         except OSError:
             continue
-    return total / 1024
+    return sizes
 
 
 def torus(triangles: int) -> tuple[np.ndarray, np.ndarray]:
@@ -252,6 +257,7 @@ def main() -> None:
             http.post(base + "/api/mesh", files=[("file", p) for p in small["stl"]])
         time.sleep(1)
         before = resident_mb(server.pid)
+        parts_before = family_mb(server.pid)
         soak = Soak(base, args.seconds, files)
         threads = [threading.Thread(target=soak.client, args=(i,)) for i in range(args.clients)]
         threads.append(threading.Thread(target=soak.prober))
@@ -262,6 +268,7 @@ def main() -> None:
         time.sleep(2)
         alive = server.poll() is None
         after = resident_mb(server.pid) if alive else float("nan")
+        parts_after = family_mb(server.pid) if alive else {}
     finally:
         server.terminate()
         server.wait(timeout=20)
@@ -279,6 +286,13 @@ def main() -> None:
     print(f"worker alive at the end: {alive}")
     print(
         f"resident memory: {before:.0f} MB before, {after:.0f} MB after ({after / before - 1:+.0%})"
+    )
+    print(
+        "by process (MB, before -> after): "
+        + ", ".join(
+            f"{p}: {parts_before.get(p, 0):.0f} -> {parts_after.get(p, 0):.0f}"
+            for p in sorted(set(parts_before) | set(parts_after))
+        )
     )
     print(
         f"GET / while soaking: {len(probe)} probes, p50 {statistics.median(probe) * 1000:.0f} ms, "

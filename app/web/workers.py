@@ -18,6 +18,7 @@ go out of band as raw bytes, so a 200 MB upload is not copied into a pickle on i
 from __future__ import annotations
 
 import asyncio
+import ctypes
 import logging
 import multiprocessing
 import pickle
@@ -80,15 +81,47 @@ def serve(
     """A worker's life: warm up, say so, then run one job after another until the pipe closes."""
     if memory_limit is not None:
         resource.setrlimit(resource.RLIMIT_AS, (memory_limit, memory_limit))
+    tune_allocator()
     try:
         if warm is not None:
             warm()
         connection.send("ready")
         while True:
             function, args = receive(connection)
-            send(connection, run(function, args))
+            outcome = run(function, args)
+            send(connection, outcome)
+            del function, args, outcome
+            give_back()
     except (EOFError, OSError):  # the server closed the pipe: it no longer needs this worker
         return
+
+
+#: glibc's ``mallopt`` parameter: blocks of at least this many bytes get their own mapping.
+_M_MMAP_THRESHOLD = -3
+_MAPPED_FROM = 2**20
+
+
+def tune_allocator() -> None:
+    """Give every block of 1 MB or more its own mapping (glibc's ``mallopt``), returned to the
+    system when freed. glibc otherwise raises that threshold (up to 32 MB) after large frees,
+    and then keeps what a large upload once took resident for good. Nothing elsewhere."""
+    try:
+        libc = ctypes.CDLL(None)
+        libc.mallopt(_M_MMAP_THRESHOLD, _MAPPED_FROM)
+    except (OSError, AttributeError):
+        return
+
+
+def give_back() -> None:
+    """Return the memory a finished job freed to the system (glibc's ``malloc_trim``): the
+    allocator otherwise keeps it resident for the next job, and a worker that once read a
+    large file would hold that much for good. Nothing where the C library has no such call."""
+    try:
+        libc = ctypes.CDLL(None)
+        trim = libc.malloc_trim
+    except (OSError, AttributeError):
+        return
+    trim(0)
 
 
 def run(function: Callable[..., Any], args: Sequence[Any]) -> tuple[str, Any]:
