@@ -55,10 +55,6 @@ class MeshAnalysis:
     weld: Weld | None
     points: IndexArray  # (m, 3): the faces as the topology saw them, each vertex by its point
 
-    def faces_by_position(self) -> IndexArray:
-        """(m, 3) intp: the faces as the topology saw them, each vertex by its point."""
-        return self.points
-
 
 def checked_weld(weld: object) -> float | None:
     """``weld`` as a float, or ``None`` (off); refuses anything but a number 0 to WELD_LIMIT.
@@ -221,7 +217,7 @@ def _objects(analysis: MeshAnalysis) -> list[ObjectReport]:
     if groups is None or names is None:
         return []
     # The faces by position again (one hash sort): the topology keeps only its sums.
-    points = analysis.faces_by_position()
+    points = analysis.points
     return object_reports(groups, names, analysis.faces, analysis.orientation, points)
 
 

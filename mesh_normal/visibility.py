@@ -182,8 +182,9 @@ def _hierarchy(
     centroids; per node its box, children (-1 for a leaf) and span of that order; and the
     faces' corners in that order (see :func:`_corners`).
 
-    About 110 bytes a face are kept (the corners 72, the order 8, the nodes about 30: a leaf
-    holds up to ``_LEAF`` faces), and 70 more for a moment while the nodes are made.
+    About 140 bytes a face are kept (the corners 72, the order 8, the nodes about 0.7 a face
+    at 80 bytes each: a leaf holds up to ``_LEAF`` faces), and 70 more for a moment while the
+    nodes are made (measured on 328k faces: 149 bytes a face kept, with the vertices).
     """
     code = np.empty(len(faces), dtype=np.int64)
     announce_compiling()

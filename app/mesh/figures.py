@@ -17,7 +17,7 @@ def mesh_figures(analysis: MeshAnalysis) -> dict[str, Any]:
     mesh, topology = analysis.mesh, analysis.topology
     # The edges name each point by its first vertex (see mesh_normal.topology): so do the faces
     # here, or a face on a boundary whose corners are later copies would look fine.
-    faces = analysis.faces_by_position()
+    faces = analysis.points
     classes = face_classes(
         faces,
         len(mesh.vertices),

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import asyncio
 import ctypes
+import functools
 import logging
 import multiprocessing
 import pickle
@@ -105,23 +106,27 @@ def tune_allocator() -> None:
     """Give every block of 1 MB or more its own mapping (glibc's ``mallopt``), returned to the
     system when freed. glibc otherwise raises that threshold (up to 32 MB) after large frees,
     and then keeps what a large upload once took resident for good. Nothing elsewhere."""
-    try:
-        libc = ctypes.CDLL(None)
-        libc.mallopt(_M_MMAP_THRESHOLD, _MAPPED_FROM)
-    except (OSError, AttributeError):
-        return
+    mallopt = _libc("mallopt")
+    if mallopt is not None:
+        mallopt(_M_MMAP_THRESHOLD, _MAPPED_FROM)
 
 
 def give_back() -> None:
     """Return the memory a finished job freed to the system (glibc's ``malloc_trim``): the
     allocator otherwise keeps it resident for the next job, and a worker that once read a
     large file would hold that much for good. Nothing where the C library has no such call."""
+    trim = _libc("malloc_trim")
+    if trim is not None:
+        trim(0)
+
+
+@functools.cache
+def _libc(name: str) -> Any:
+    """The C library's function ``name``, or None where there is none (not glibc)."""
     try:
-        libc = ctypes.CDLL(None)
-        trim = libc.malloc_trim
+        return getattr(ctypes.CDLL(None), name)
     except (OSError, AttributeError):
-        return
-    trim(0)
+        return None
 
 
 def run(function: Callable[..., Any], args: Sequence[Any]) -> tuple[str, Any]:
