@@ -59,8 +59,14 @@ def object_reports(
     decided, decided_flips = per_object(decidable), per_object(decidable & flipped)
     areas = np.bincount(groups, faces.areas, count)
     degenerate = per_object(faces.degenerate)
-    parts = _parts(groups[in_part], component[in_part], count)
-    closed = _closed(groups[in_part], points[in_part], count)
+    if count == 1:  # the one object is the mesh: its topology has counted what it holds
+        topology = orientation.topology
+        parts = np.array([topology.components], dtype=np.intp)
+        edges_ok = topology.boundary_edges == 0 and topology.nonmanifold_edges == 0
+        closed = np.array([bool(in_part.any()) and edges_ok])
+    else:
+        parts = _parts(groups[in_part], component[in_part], count)
+        closed = _closed(groups[in_part], points[in_part], count)
     verdicts = _verdicts(per_object(with_verdict) > 0, flips, decided, decided_flips)
     return [
         ObjectReport(
@@ -90,15 +96,41 @@ def _closed(groups: IndexArray, points: IndexArray, count: int) -> BoolArray:
     Judged on the group alone, by position like the mesh's topology: two closed objects that
     touch (a tetrahedron on a cube's corner) are each closed though the mesh is not.
     """
+    width = np.int64(points.max() + 1) if points.size else np.int64(1)
+    if count * int(width) ** 2 < 2**62:
+        # One int64 key (group, low, high) an edge, made a corner column at a time and sorted
+        # in place: 8 bytes a half-edge, where numbering the edges first takes several times that.
+        keys = np.empty((3, len(points)), dtype=np.int64)
+        for corner in range(3):
+            one, two = points[:, corner], points[:, (corner + 1) % 3]
+            np.multiply(groups, width * width, out=keys[corner])
+            keys[corner] += np.minimum(one, two) * width
+            keys[corner] += np.maximum(one, two)
+        flat = keys.ravel()
+        flat.sort()
+        starts = np.flatnonzero(np.r_[True, flat[1:] != flat[:-1]])
+        uses = np.diff(np.r_[starts, len(flat)])
+        owner = flat[starts] // (width * width)
+    else:
+        return _closed_numbered(groups, points, count)
+    return _uses_closed(owner, uses, count)
+
+
+def _closed_numbered(groups: IndexArray, points: IndexArray, count: int) -> BoolArray:
+    """:func:`_closed` for vertex counts too large for one key: the edges numbered first."""
     after = np.roll(points, -1, axis=1)
     low, high = np.minimum(points, after).ravel(), np.maximum(points, after).ravel()
     # Edges numbered 0 .. e - 1 (e <= 3m) first, so that (group, edge) fits one int64 key.
     _, edge = np.unique(low.astype(np.int64) * (high.max() + 1) + high, return_inverse=True)
-    width = np.int64(edge.max() + 1) if len(edge) else np.int64(1)
+    span = np.int64(edge.max() + 1) if len(edge) else np.int64(1)
     used, uses = np.unique(
-        np.repeat(groups, 3).astype(np.int64) * width + edge.ravel(), return_counts=True
+        np.repeat(groups, 3).astype(np.int64) * span + edge.ravel(), return_counts=True
     )
-    owner = used // width
+    return _uses_closed(used // span, uses, count)
+
+
+def _uses_closed(owner: IndexArray, uses: IndexArray, count: int) -> BoolArray:
+    """Closed: a group with edges, each used twice (``owner`` and ``uses`` an edge each)."""
     closed: BoolArray = (np.bincount(owner, minlength=count) > 0) & (
         np.bincount(owner, uses != 2, count) == 0
     )

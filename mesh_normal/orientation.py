@@ -80,8 +80,8 @@ from mesh_normal.tolerances import (
     MESH_FLAT_SINE,
     ORIENT_EVIDENCE,
 )
+from mesh_normal.topology import KEY_LIMIT, Structure, by_position, structure
 from mesh_normal.topology import MeshTopology as MeshTopology  # re-exported: Orientation has one
-from mesh_normal.topology import Structure, by_position, structure
 from mesh_normal.types import BoolArray, FloatArray, IndexArray
 from mesh_normal.visibility import MARGIN as VISIBILITY_MARGIN
 from mesh_normal.visibility import visible_sides
@@ -639,13 +639,44 @@ def _twinned(faces: IndexArray) -> BoolArray:
     """(m,) bool: which faces have the same three points as another face wound the other way."""
     if len(faces) == 0:
         return np.zeros(0, dtype=bool)
-    ordered = np.sort(faces, axis=1)
     # Wound as its sorted points (a rotation of them): two of the three steps a -> b -> c -> a
     # go up, or a point repeats (then some rotation is the sorted order). No rolled copies.
     a, b, c = faces.T
     ascents = (a < b).view(np.int8) + (b < c).view(np.int8) + (c < a).view(np.int8)
     even = (ascents == 2) | (a == b) | (b == c) | (c == a)
     del ascents
+    width = int(faces.max()) + 1
+    if width**3 * 2 >= KEY_LIMIT:
+        return _twinned_lexsorted(faces, even)
+    # One int64 key a face: its sorted points, then whether it is wound as they are sorted.
+    low = np.minimum(np.minimum(a, b), c)
+    high = np.maximum(np.maximum(a, b), c)
+    key = a + b
+    key += c
+    key -= low
+    key -= high  # the middle point
+    key += low * width
+    del low
+    key *= width
+    key += high
+    del high
+    key <<= 1
+    key |= even
+    del even
+    order = np.argsort(key)
+    key = key[order]
+    # A run of keys of one triangle holds both windings when its first and last bits differ.
+    starts = np.flatnonzero(np.r_[True, (key[1:] >> 1) != (key[:-1] >> 1)])
+    ends = np.r_[starts[1:], len(key)] - 1
+    both = ((key[starts] & 1) == 0) & ((key[ends] & 1) == 1)
+    twinned = np.empty(len(faces), dtype=bool)
+    twinned[order] = np.repeat(both, ends - starts + 1)
+    return twinned
+
+
+def _twinned_lexsorted(faces: IndexArray, even: BoolArray) -> BoolArray:
+    """:func:`_twinned` where the points are too many to pack a face into one key."""
+    ordered = np.sort(faces, axis=1)
     order = np.lexsort((even, ordered[:, 2], ordered[:, 1], ordered[:, 0]))
     key = ordered[order]
     run = np.cumsum(np.r_[True, np.any(key[1:] != key[:-1], axis=1)]) - 1

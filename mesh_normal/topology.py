@@ -39,6 +39,7 @@ compression, the smaller root wins) labels the patches in nearly O(m) work.
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass
 
 import numpy as np
@@ -165,23 +166,34 @@ def structure(faces: IndexArray, vertex_count: int) -> Structure:
     valid &= faces[:, 2] != faces[:, 0]
     key, face, forward = _sorted_half_edges(faces, valid, vertex_count)
     # At each sorted position: is the edge the same as the previous one, the next, the one
-    # after next? Edges used once, twice and more follow.
-    same_as_next = key[1:] == key[:-1]
-    before, after, after_next = (np.zeros(len(key), dtype=bool) for _ in range(3))
-    before[1:] = after[:-1] = same_as_next
+    # after next? Edges used once, twice and more follow. Each array of a half-edge is freed
+    # as soon as it is used: a mesh has three of them a face.
+    after = np.zeros(len(key), dtype=bool)
+    after[:-1] = key[1:] == key[:-1]
+    starting = np.ones(len(key), dtype=bool)
+    starting[1:] = ~after[:-1]
+    after_next = np.zeros(len(key), dtype=bool)
     after_next[:-1] = after[1:]
-    starting = ~before
+    first = starting & after
     boundary = np.flatnonzero(starting & ~after)
-    paired = np.flatnonzero(starting & after & ~after_next)
-    nonmanifold = np.flatnonzero(starting & after & after_next)
+    del after
+    paired = np.flatnonzero(first & ~after_next)
+    nonmanifold = np.flatnonzero(first & after_next)
+    del first, after_next
+    boundary_edge_list = _edge_list(key[boundary], forward[boundary], vertex_count)
+    nonmanifold_edge_list = _edge_list(key[nonmanifold], None, vertex_count)
+    del key
     # The two faces of each manifold edge, and whether they run along it the same way.
     one, two = face[paired], face[paired + 1]
     same = forward[paired] == forward[paired + 1]
+    del paired, forward
     root, parity = _connected(len(faces), one, two, same)
     patch, firsts = _numbered(root, valid)
+    del root
     patches = len(firsts)
     orientable = np.ones(patches, dtype=bool)
     orientable[patch[one[(parity[one] ^ parity[two]) != same]]] = False
+    del one, two
     face_component, components = _merged(patch, patches, face, starting, nonmanifold)
     closed = np.ones(components, dtype=bool)
     closed[face_component[face[np.r_[boundary, nonmanifold]]]] = False
@@ -193,8 +205,8 @@ def structure(faces: IndexArray, vertex_count: int) -> Structure:
         watertight=components > 0 and bool(closed.all()),
         winding_consistent=not same.any(),
         orientable=bool(orientable.all()),
-        boundary_edge_list=_edge_list(key[boundary], forward[boundary], vertex_count),
-        nonmanifold_edge_list=_edge_list(key[nonmanifold], None, vertex_count),
+        boundary_edge_list=boundary_edge_list,
+        nonmanifold_edge_list=nonmanifold_edge_list,
     )
     group = np.where(valid, patch, patches)
     return Structure(topology, group, patches, parity, orientable, face_component[firsts], closed)
@@ -238,9 +250,18 @@ def _sorted_half_edges(
         del forward
         packed = packed.ravel()
         packed.sort()
-        direction = (packed & 1).astype(np.int8)  # a byte, not eight, for a 0 or 1
-        face_of = packed >> 1
-        face_of &= (1 << bits - 1) - 1
+        direction = np.empty(len(packed), dtype=np.int8)  # a byte, not eight, for a 0 or 1
+        if bits <= 32 and sys.byteorder == "little":
+            # The face and direction are in the low 32 bits: read them there, 4 bytes a face.
+            low_word = packed.view(np.uint32)[::2]
+            np.bitwise_and(low_word, 1, out=direction, casting="unsafe")
+            faces_word = low_word >> 1
+            faces_word &= (1 << bits - 1) - 1  # the key's lowest bits are above the face's
+            face_of: IndexArray = faces_word.view(np.int32)
+        else:
+            np.bitwise_and(packed, 1, out=direction, casting="unsafe")
+            face_of = packed >> 1
+            face_of &= (1 << bits - 1) - 1
         packed >>= bits
         return packed, face_of, direction
     face = np.broadcast_to(face, low.shape)
@@ -268,12 +289,15 @@ def _connected(
     """
     root = np.empty(count, dtype=np.intp)
     parity = np.empty(count, dtype=np.intp)
+    # The edges' nodes in 4 bytes (as the half-edge sort gives them; one compiled kernel for
+    # every graph of fewer than 2**31 nodes), the parities in one.
+    node = np.int32 if count < 2**31 else np.intp
     announce_compiling()
     _union_find(
         count,
-        np.ascontiguousarray(one, dtype=np.intp),
-        np.ascontiguousarray(two, dtype=np.intp),
-        np.ascontiguousarray(same, dtype=np.intp),
+        np.ascontiguousarray(one, dtype=node),
+        np.ascontiguousarray(two, dtype=node),
+        np.ascontiguousarray(same, dtype=np.int8),
         root,
         parity,
     )
@@ -304,9 +328,14 @@ def _union_find(
     root: IndexArray,
     parity: IndexArray,
 ) -> None:
-    """Union-find with parities, one pass over the edges; the smaller root always wins."""
-    parent = np.arange(count)
-    relation = np.zeros(count, dtype=np.intp)
+    """Union-find with parities, one pass over the edges; the smaller root always wins.
+
+    ``root`` and ``parity`` serve as the forest's parents and relations: once every path is
+    compressed, each node's parent is its root and its relation its parity to it.
+    """
+    parent, relation = root, parity
+    for node in range(count):
+        parent[node], relation[node] = node, 0
     for edge in range(len(one)):
         a, a_parity = _find(parent, relation, one[edge])
         b, b_parity = _find(parent, relation, two[edge])
@@ -316,7 +345,7 @@ def _union_find(
         parent[high] = low
         relation[high] = a_parity ^ b_parity ^ same[edge]
     for node in range(count):
-        root[node], parity[node] = _find(parent, relation, node)
+        _find(parent, relation, node)
 
 
 def _merged(

@@ -25,11 +25,12 @@ from numpy.typing import NDArray
 
 from mesh_normal.files.errors import MeshFileError
 from mesh_normal.files.gltf_buffers import (
+    PACKED_URI,
     Resolver,
     check_extensions,
     glb_parts,
     gltf_header,
-    packed_glb,
+    packed_gltf,
 )
 from mesh_normal.files.loaded import MAX_TRIANGLES, LoadedMesh, build
 
@@ -46,23 +47,33 @@ def read_gltf(data: bytes, resolve: Resolver | None = None) -> LoadedMesh:
 
 
 def _read(
-    header: dict[str, Any], chunk: bytes | None, resolve: Resolver | None, file_format: str
+    header: dict[str, Any],
+    chunk: memoryview | None,
+    resolve: Resolver | None,
+    file_format: str,
 ) -> LoadedMesh:
-    from trimesh.exchange.gltf import load_glb  # imported on first use: trimesh is slow to import
+    from trimesh.exchange.gltf import load_gltf  # imported on first use: trimesh is slow
 
     check_extensions(header)
-    packed = packed_glb(header, chunk, resolve)
+    packed = packed_gltf(header, chunk, resolve)
+    del chunk  # the upload's view: the packed buffer holds what is needed of it
     if not header.get("meshes"):  # trimesh would fail on the missing accessors
         raise MeshFileError("The glTF file holds no meshes.")
-    scene = load_glb(io.BytesIO(packed.glb), merge_primitives=False, skip_materials=True)
+    draco, quantized = packed.draco, packed.quantized
+    scene = load_gltf(
+        io.BytesIO(packed.header),
+        resolver={PACKED_URI: memoryview(packed.blob)},
+        merge_primitives=False,
+        skip_materials=True,
+    )
+    del packed
     mesh = _flatten(scene, file_format)
+    del scene
     notes = []
-    if packed.draco:
-        notes.append(
-            f"Decoded {packed.draco:,} Draco-compressed (KHR_draco_mesh_compression) primitives."
-        )
-    if packed.quantized:
-        notes.append(f"Decoded {packed.quantized:,} quantized (normalized integer) glTF accessors.")
+    if draco:
+        notes.append(f"Decoded {draco:,} Draco-compressed (KHR_draco_mesh_compression) primitives.")
+    if quantized:
+        notes.append(f"Decoded {quantized:,} quantized (normalized integer) glTF accessors.")
     return dataclasses.replace(mesh, notes=(*notes, *mesh.notes)) if notes else mesh
 
 
@@ -116,7 +127,9 @@ def _flatten(scene: dict[str, Any], file_format: str) -> LoadedMesh:
             normals = _unit(
                 np.asarray(normals, dtype=np.float64).reshape(-1, 3) @ np.linalg.inv(linear)
             )  # row vectors: n @ inv(A) is inv(A).T @ n
-        parts.append((vertices @ linear.T + transform[:3, 3], faces, normals))
+        if not np.array_equal(transform, np.eye(4)):  # else no copy of every vertex
+            vertices = vertices @ linear.T + transform[:3, 3]
+        parts.append((vertices, faces, normals))
         found = kwargs.get("vertex_colors")
         colors.append(None if found is None else np.asarray(found).reshape(len(vertices), -1))
         names.append(node)
@@ -129,12 +142,7 @@ def _flatten(scene: dict[str, Any], file_format: str) -> LoadedMesh:
         notes.append(f"Joined {len(parts):,} primitives with their node transforms applied.")
     if not parts:
         raise MeshFileError("The glTF file holds no triangle meshes.")
-    offsets = np.cumsum([0] + [len(part[0]) for part in parts])
-    vertices = np.concatenate([part[0] for part in parts])
-    faces = np.concatenate([part[1] + offset for part, offset in zip(parts, offsets, strict=False)])
-    normals = None
-    if all(part[2] is not None and len(part[2]) == len(part[0]) for part in parts):
-        normals = np.concatenate([part[2] for part in parts])
+    vertices, faces, normals = _joined(parts)
     groups = np.repeat(np.arange(len(parts)), [len(part[1]) for part in parts])
     vertex_colors = _joined_colors(colors, [len(part[0]) for part in parts], notes)
     return build(
@@ -148,6 +156,26 @@ def _flatten(scene: dict[str, Any], file_format: str) -> LoadedMesh:
         group_names=names,
         notes=notes,
     )
+
+
+def _joined(
+    parts: list[tuple[NDArray[np.float64], NDArray[np.intp], NDArray[np.float64] | None]],
+) -> tuple[NDArray[np.float64], NDArray[np.intp], NDArray[np.float64] | None]:
+    """The primitives' vertices, faces (renumbered) and normals (if all have them), joined."""
+    if len(parts) == 1:  # as they are: a copy of a large mesh is most of the reader's memory
+        vertices, faces, normals = parts[0]
+        return (
+            vertices,
+            faces,
+            normals if normals is None or len(normals) == len(vertices) else None,
+        )
+    offsets = np.cumsum([0] + [len(part[0]) for part in parts])
+    vertices = np.concatenate([part[0] for part in parts])
+    faces = np.concatenate([part[1] + offset for part, offset in zip(parts, offsets, strict=False)])
+    normals = None
+    if all(part[2] is not None and len(part[2]) == len(part[0]) for part in parts):
+        normals = np.concatenate([part[2] for part in parts])
+    return vertices, faces, normals
 
 
 def _joined_colors(

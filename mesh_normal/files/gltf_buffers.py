@@ -62,7 +62,7 @@ _WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "M
 _FLOAT = 5126
 
 
-def glb_parts(data: bytes) -> tuple[dict[str, Any], bytes | None]:
+def glb_parts(data: bytes) -> tuple[dict[str, Any], memoryview | None]:
     """The JSON header and the binary chunk (``None`` if absent) of a GLB file."""
     # ValueError, which read_mesh words as "could not be read as GLB: ..."
     if len(data) < 20:
@@ -72,17 +72,18 @@ def glb_parts(data: bytes) -> tuple[dict[str, Any], bytes | None]:
         raise ValueError("it does not start with the GLB magic bytes")
     if version != 2:
         raise unsupported(f"This is GLB version {version}; only glTF 2.0 is supported.")
-    chunks: dict[int, bytes] = {}
+    chunks: dict[int, memoryview] = {}
+    view = memoryview(data)  # the chunks as views: the binary one is most of the file
     offset = 12
     while offset + 8 <= len(data):
         size, kind = struct.unpack_from("<II", data, offset)
         if offset + 8 + size > len(data):
             raise ValueError("it is truncated: a chunk runs past its end")
-        chunks.setdefault(kind, data[offset + 8 : offset + 8 + size])
+        chunks.setdefault(kind, view[offset + 8 : offset + 8 + size])
         offset += 8 + size
     if _JSON_CHUNK not in chunks:
         raise ValueError("it has no JSON chunk")
-    return _json(chunks[_JSON_CHUNK]), chunks.get(_BIN_CHUNK)
+    return _json(bytes(chunks[_JSON_CHUNK])), chunks.get(_BIN_CHUNK)
 
 
 def gltf_header(data: bytes) -> dict[str, Any]:
@@ -124,15 +125,27 @@ def check_extensions(header: dict[str, Any]) -> None:
 
 @dataclasses.dataclass(frozen=True, slots=True)
 class Packed:
-    """The GLB trimesh reads, and what was decoded on the way (for the notes)."""
+    """The glTF trimesh reads, and what was decoded on the way (for the notes).
 
-    glb: bytes
+    ``header`` names one buffer, :data:`PACKED_URI`, which is ``blob``: trimesh reads it
+    through a resolver as a memoryview, so that its views and accessors are not copies.
+    """
+
+    header: bytes
+    blob: bytearray
     quantized: int  # normalized integer accessors decoded
     draco: int  # Draco-compressed primitives decoded
 
 
-def packed_glb(header: dict[str, Any], glb_chunk: bytes | None, resolve: Resolver | None) -> Packed:
-    """One GLB holding every buffer, Draco and quantized accessors decoded."""
+#: The one buffer's name in a packed header.
+PACKED_URI = "packed.bin"
+
+
+def packed_gltf(
+    header: dict[str, Any], glb_chunk: bytes | memoryview | None, resolve: Resolver | None
+) -> Packed:
+    """One glTF JSON and one buffer holding every buffer, Draco and quantized accessors
+    decoded."""
     blob = bytearray()
     starts = []
     for index, buffer in enumerate(header.get("buffers") or []):
@@ -146,19 +159,23 @@ def packed_glb(header: dict[str, Any], glb_chunk: bytes | None, resolve: Resolve
         view["byteOffset"] = view.get("byteOffset", 0) + starts[buffer]
         view["buffer"] = 0
         view.pop("extensions", None)  # EXT_meshopt_compression's own buffers: we read fallbacks
-    header["buffers"] = [{"byteLength": len(blob)}] if blob else []
+    header["buffers"] = [{"byteLength": len(blob), "uri": PACKED_URI}] if blob else []
     draco = _decode_draco(header, blob)
     quantized = _decode_normalized(header, blob)
     for key in ("images", "textures", "samplers"):  # never read: the geometry needs none
         header.pop(key, None)
     for material in header.get("materials") or []:
         material.clear()
-    return Packed(_glb(header, bytes(blob)), quantized, draco)
+    text = json.dumps(header, separators=(",", ":")).encode("utf-8")
+    return Packed(text, blob, quantized, draco)
 
 
 def _buffer_bytes(
-    index: int, buffer: dict[str, Any], glb_chunk: bytes | None, resolve: Resolver | None
-) -> bytes:
+    index: int,
+    buffer: dict[str, Any],
+    glb_chunk: bytes | memoryview | None,
+    resolve: Resolver | None,
+) -> bytes | memoryview:
     uri = buffer.get("uri")
     length = int(buffer.get("byteLength", 0))
     if uri is None:
@@ -350,13 +367,3 @@ def _dequantized(
     rows = np.lib.stride_tricks.as_strided(raw, (count, item * width), (stride, 1))
     values = np.ascontiguousarray(rows).view(dtype).reshape(count, width) / divisor
     return np.maximum(values, -1.0).astype(np.float32)
-
-
-def _glb(header: dict[str, Any], blob: bytes) -> bytes:
-    text = json.dumps(header, separators=(",", ":")).encode("utf-8")
-    text += b" " * (-len(text) % 4)
-    chunks = struct.pack("<II", len(text), _JSON_CHUNK) + text
-    if blob:
-        blob += b"\0" * (-len(blob) % 4)
-        chunks += struct.pack("<II", len(blob), _BIN_CHUNK) + blob
-    return struct.pack("<III", _GLB_MAGIC, 2, 12 + len(chunks)) + chunks

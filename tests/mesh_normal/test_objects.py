@@ -4,8 +4,15 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+from numpy.typing import NDArray
+
 from mesh_normal.analysis import analyse_mesh, build_report
 from mesh_normal.files import read_mesh
+from mesh_normal.objects import _closed, _closed_numbered
 from mesh_normal.report import INDEX_LIST_LIMIT, MeshReport, ObjectReport
 from tests.meshes import CUBE_OBJ_FACES, CUBE_OBJ_POINTS
 from tests.paths import DATA
@@ -148,3 +155,25 @@ def test_objects_are_capped_and_counted() -> None:
     assert report.object_count == count
     assert len(report.objects) == INDEX_LIST_LIMIT
     assert [item.name for item in report.objects[:2]] == ["part0", "part1"]
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    faces=arrays(np.intp, st.tuples(st.integers(1, 40), st.just(3)), elements=st.integers(0, 7)),
+    seed=st.integers(0, 2**16),
+)
+def test_the_sorted_keys_and_the_numbered_edges_agree_on_closed(
+    faces: NDArray[np.intp], seed: int
+) -> None:
+    """Random faces over 8 points in up to 3 groups: both ways of counting edge uses agree."""
+    groups = np.random.default_rng(seed).integers(0, 3, len(faces)).astype(np.intp)
+    assert _closed(groups, faces, 3).tolist() == _closed_numbered(groups, faces, 3).tolist()
+
+
+def test_one_object_is_closed_as_its_mesh_is() -> None:
+    """A single object's verdicts come from the topology: the same as counting its edges."""
+    closed = report_of("o cube\n" + cube_points(0) + faces(CUBE_OBJ_FACES, 0))
+    opened = report_of("o cube\n" + cube_points(0) + faces(CUBE_OBJ_FACES[:-1], 0))
+    assert [o.closed for o in closed.objects] == [True]
+    assert [o.closed for o in opened.objects] == [False]
+    assert [o.components for o in closed.objects] == [1]

@@ -435,3 +435,6 @@ def test_twinned_faces_match_the_rotations_definition() -> None:
         for top in (2, 3, 6, 30):
             faces = rng.integers(0, top, (count, 3)).astype(np.intp)
             np.testing.assert_array_equal(_twinned(faces), by_rotations(faces))
+    # Points too many for one key a face: the lexsorted way, same definition.
+    faces = rng.integers(0, 6, (400, 3)).astype(np.intp) * 2**21
+    np.testing.assert_array_equal(_twinned(faces), by_rotations(faces))

@@ -82,7 +82,7 @@ def glb(header: dict[str, Any], blob: bytes) -> bytes:
     """A GLB written by hand: the JSON chunk, then the binary chunk."""
     text = json.dumps(header).encode()
     text += b" " * (-len(text) % 4)
-    blob += b"\0" * (-len(blob) % 4)
+    blob = bytes(blob) + b"\0" * (-len(blob) % 4)
     body = struct.pack("<II", len(text), 0x4E4F534A) + text
     body += struct.pack("<II", len(blob), 0x004E4942) + blob
     return struct.pack("<III", 0x46546C67, 2, 12 + len(body)) + body
@@ -252,7 +252,7 @@ def coloured_tetras(colors: list[np.ndarray | None], component: int = 5121) -> b
 
     def add(data: bytes, accessor: dict[str, Any]) -> int:
         nonlocal blob
-        blob += b"\0" * (-len(blob) % 4)
+        blob = bytes(blob) + b"\0" * (-len(blob) % 4)
         views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": len(data)})
         blob += data
         accessors.append({"bufferView": len(views) - 1, **accessor})

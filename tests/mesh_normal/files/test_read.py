@@ -130,7 +130,7 @@ def _out_of_memory(*_: object, **__: object) -> None:
         ("sphere.ply", "mesh_normal.files.ply", "triangulate"),
         ("tetra.off", "mesh_normal.files.off", "triangulate"),
         ("ascii.stl", "mesh_normal.files.stl", "weld"),
-        ("box.glb", "trimesh.exchange.gltf", "load_glb"),
+        ("box.glb", "trimesh.exchange.gltf", "load_gltf"),
     ],
 )
 def test_memory_error_inside_a_reader_propagates(
@@ -142,7 +142,7 @@ def test_memory_error_inside_a_reader_propagates(
 
 
 def test_memory_error_inside_a_zipped_gltf_propagates(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr("trimesh.exchange.gltf.load_glb", _out_of_memory)
+    monkeypatch.setattr("trimesh.exchange.gltf.load_gltf", _out_of_memory)
     gltf = trimesh.creation.box().export(file_type="gltf")
     files = [(name, data) for name, data in gltf.items()]
     with pytest.raises(MemoryError):
