@@ -12,8 +12,9 @@ runs once. The figure is the peak resident memory above that baseline (``VmHWM``
 (1.0 of each figure), as they do on a server.
 
 Paths: ``read`` (``read_mesh``), ``report`` (``analyse_mesh`` + ``build_report`` and its JSON,
-as ``POST /api/mesh`` does), ``face``, ``vertex``, ``corner`` (the normals as ``.npy``, as
-``export_normals`` makes them), ``corner-json`` (the same as JSON) and ``fix`` (``orient`` +
+as ``POST /api/mesh`` does), ``face``, ``vertex``, ``corner`` (the normals as ``.npy``, written
+in blocks by ``normals_blocks`` as the server streams them), ``corner-json`` (the same as JSON)
+and ``fix`` (``orient`` +
 ``write_mesh`` in the upload's format, PLY for those not writable, as ``POST /api/mesh/fix``).
 """
 
@@ -145,7 +146,7 @@ def make_file(kind: str, megabytes: float, folder: Path) -> Path:
 def run_path(path_name: str, data: bytes, filename: str) -> None:
     """One path of the server's work on the upload ``data``."""
     from mesh_normal.analysis import analyse_mesh, build_report
-    from mesh_normal.exports import export_normals
+    from mesh_normal.exports import compute_normals, normals_blocks
     from mesh_normal.files import read_mesh, write_mesh
     from mesh_normal.files.formats import WRITABLE
     from mesh_normal.orientation import orient
@@ -153,10 +154,13 @@ def run_path(path_name: str, data: bytes, filename: str) -> None:
     mesh = read_mesh(data, filename)
     if path_name == "report":
         build_report(analyse_mesh(mesh, filename, len(data))).model_dump_json()
-    elif path_name in ("face", "vertex", "corner"):
-        export_normals(mesh, path_name, "angle", 30.0, "npy")  # type: ignore[arg-type]
-    elif path_name == "corner-json":
-        export_normals(mesh, "corner", "angle", 30.0, "json")
+    elif path_name in ("face", "vertex", "corner", "corner-json"):
+        # As the server answers: the normals computed, then written in blocks as they are sent.
+        kind = "corner" if path_name == "corner-json" else path_name
+        normals, missing = compute_normals(mesh, kind, "angle", 30.0)  # type: ignore[arg-type]
+        chosen = "json" if path_name == "corner-json" else "npy"
+        for _block in normals_blocks(normals, missing, kind, "angle", 30.0, chosen):  # type: ignore[arg-type]
+            pass
     elif path_name == "fix":
         fixed = orient(mesh.checked())
         chosen = mesh.format if mesh.format in WRITABLE else WRITABLE[0]

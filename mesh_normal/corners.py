@@ -93,22 +93,24 @@ def corner_normals(
     geometry = face_geometry(source)
     smooth_normals, cancelled = smooth(geometry, weighting)
     indices, vertex_count = geometry.mesh.faces, len(geometry.mesh.vertices)
-    unit = np.ascontiguousarray(geometry.normals.T)  # (3, m): the layout the sums below use
-    weights = corner_weights(geometry, weighting)
     normals, missing = take_rows(smooth_normals, indices), cancelled[indices]
     if float(crease_angle) < 180.0:
         # Faces within half the crease of their vertex normal are all within the crease of
         # each other (the slack keeps that true after rounding): such a vertex's corners are
         # its vertex normal. Only the others need their corners compared pair by pair.
         half = math.cos(math.radians(crease_angle) / 2) + MESH_CREASE_SLACK
-        near = np.einsum("fka,af->fk", normals, unit) >= half
+        near = np.empty(indices.shape, dtype=bool)
+        for corner in range(3):  # a column at a time: 8 bytes a face, not 24, at once
+            dots = np.einsum("fa,fa->f", normals[:, corner], geometry.normals)
+            np.greater_equal(dots, half, out=near[:, corner])
         near[geometry.degenerate] = True  # weighs nothing either way
         creased = np.zeros(vertex_count, dtype=bool)
         creased[indices[~near]] = True
         corners = np.flatnonzero(creased[indices].ravel())
         if len(corners):
             groups = vertex_corners(indices, vertex_count, corners)
-            found, lost = _creased(geometry.normals, weights.T.ravel(), groups, threshold)
+            weights = corner_weights(geometry, weighting).T.ravel()  # only where creased
+            found, lost = _creased(geometry.normals, weights, groups, threshold)
             put_rows(normals.reshape(-1, 3), groups.order, found)
             missing.reshape(-1)[groups.order] = lost
     normals[geometry.degenerate] = 0.0

@@ -665,8 +665,13 @@ def _twinned(faces: IndexArray) -> BoolArray:
     del even
     order = np.argsort(key)
     key = key[order]
+    new = np.ones(len(key), dtype=bool)
+    np.not_equal(key[1:] >> 1, key[:-1] >> 1, out=new[1:])
+    if new.all():  # no triangle twice: nothing to find (the common case)
+        return np.zeros(len(faces), dtype=bool)
     # A run of keys of one triangle holds both windings when its first and last bits differ.
-    starts = np.flatnonzero(np.r_[True, (key[1:] >> 1) != (key[:-1] >> 1)])
+    starts = np.flatnonzero(new)
+    del new
     ends = np.r_[starts[1:], len(key)] - 1
     both = ((key[starts] & 1) == 0) & ((key[ends] & 1) == 1)
     twinned = np.empty(len(faces), dtype=bool)

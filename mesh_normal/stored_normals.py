@@ -124,10 +124,11 @@ def unit_rows(stored: FloatArray) -> tuple[FloatArray, BoolArray]:
         # underflow. The max of three columns: axis=1 reductions are slow.
         magnitude = np.abs(stored)
         largest = np.maximum(np.maximum(magnitude[:, 0], magnitude[:, 1]), magnitude[:, 2])
+        del magnitude
         usable = np.isfinite(largest) & (largest > 0)
-        scaled = stored / np.where(usable, largest, 1.0)[:, None]
-        lengths = np.sqrt(np.einsum("ij,ij->i", scaled, scaled))
-        unit = scaled / np.where(usable, lengths, 1.0)[:, None]
+        unit = stored / np.where(usable, largest, 1.0)[:, None]
+        lengths = np.sqrt(np.einsum("ij,ij->i", unit, unit))
+        unit /= np.where(usable, lengths, 1.0)[:, None]  # in place: one (k, 3) array, not two
     return unit, usable
 
 
@@ -142,15 +143,22 @@ def angles_between(unit: FloatArray, usable: BoolArray, candidate: Candidate) ->
     """
     compared = usable & ~candidate.missing
     rows = np.flatnonzero(compared)
-    theirs, ours = unit[rows], candidate.normals[rows]
-    difference, total = theirs - ours, theirs + ours
-    # tan(angle / 2) = |a - b| / |a + b| for unit a and b: no rounding to 0 near 0 (as an
-    # arccosine of a dot product has) nor loss of precision near 180 degrees.
-    radians = 2.0 * np.arctan2(
-        np.sqrt(np.einsum("ij,ij->i", difference, difference)),
-        np.sqrt(np.einsum("ij,ij->i", total, total)),
-    )
+    radians = np.empty(len(rows))
+    for start in range(0, len(rows), _BLOCK):  # a block at a time: no (k, 3) temporaries
+        block = rows[start : start + _BLOCK]
+        theirs, ours = unit[block], candidate.normals[block]
+        difference, total = theirs - ours, theirs + ours
+        # tan(angle / 2) = |a - b| / |a + b| for unit a and b: no rounding to 0 near 0 (as an
+        # arccosine of a dot product has) nor loss of precision near 180 degrees.
+        radians[start : start + _BLOCK] = 2.0 * np.arctan2(
+            np.sqrt(np.einsum("ij,ij->i", difference, difference)),
+            np.sqrt(np.einsum("ij,ij->i", total, total)),
+        )
     return Angles(candidate, radians)
+
+
+#: Rows compared at a time (a few MB of temporaries).
+_BLOCK = 1 << 16
 
 
 def best_match(
