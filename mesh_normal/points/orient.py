@@ -1,0 +1,274 @@
+"""Signs for unoriented point normals: along a spanning tree, or towards a reference.
+
+``"mst"`` (Hoppe et al. 1992, as in CGAL's ``mst_orient_normals``): the symmetric graph of each
+point's nearest neighbours, weighted by 1 - |n_i . n_j|, its minimum spanning tree (scipy's
+csgraph), and signs carried from a seed down the tree. A spanning tree of least weight is also
+one whose path between any two points has the smallest possible largest step, so a sign is
+never carried across an edge sharper than ``max_angle`` when a gentler path exists; points the
+seed reaches only across one are left unoriented and reported, as CGAL does.
+
+``"riemannian"``: the same tree over a graph without the edges that leave either point's
+tangent plane by more than ``max_angle`` (a neighbour across a thin wall or on a nearby sheet,
+whose normal line is parallel but whose side is not), each edge also weighted by how far it
+leaves them. It is the one to use for thin structures and sheets closer together than the
+spacing of their points.
+
+Each connected part of the graph is seeded on its own: at its point farthest from the centre of
+the cloud, which on a closed surface faces outward (the sphere about the centre through that
+point holds the whole surface), if that point's normal is within 60 degrees of the way out;
+otherwise at its point whose normal is nearest to vertical, turned up (an open terrain). A part
+with neither is left unoriented and says so.
+
+``"viewpoint"``, ``"direction"`` and ``"file"`` decide each point alone, towards a sensor, along
+a vector, or agreeing with stored normals; a point at right angles to its reference (to 2**-20)
+is left unoriented.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.sparse import coo_matrix  # type: ignore[import-untyped]
+from scipy.sparse.csgraph import (  # type: ignore[import-untyped]
+    breadth_first_order,
+    connected_components,
+    minimum_spanning_tree,
+)
+
+from mesh_normal.points._kernels import propagate_signs
+from mesh_normal.tolerances import ORIENT_POINT_COSINE, ORIENT_SEED_COSINE
+from mesh_normal.types import BoolArray, FloatArray, IndexArray
+
+OrientMode = Literal["mst", "riemannian", "viewpoint", "direction", "file", "none"]
+ORIENT_MODES: tuple[OrientMode, ...] = (
+    "mst",
+    "riemannian",
+    "viewpoint",
+    "direction",
+    "file",
+    "none",
+)
+
+#: Added to every edge weight: scipy's graphs take a zero weight for no edge. Adding the same
+#: amount to every edge does not change which spanning tree is least.
+_WEIGHT_FLOOR = 2.0**-30
+
+
+@dataclass(frozen=True, slots=True)
+class ComponentOrientation:
+    """How one connected part of the cloud was oriented.
+
+    ``points`` counts its points that have a normal; ``flipped`` those whose normal was turned;
+    ``unoriented`` those whose side could not be decided (their normal keeps its canonical sign);
+    ``reason`` says why in one sentence, or is empty when every point was oriented; ``seed`` is
+    the input index of the point that decided its side (-1 when none did).
+    """
+
+    points: int
+    flipped: int
+    unoriented: int
+    reason: str
+    seed: int
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class Signs:
+    """Which normals to flip and which are left unoriented, per point; and the parts.
+
+    Seeds in ``components`` index the arrays the caller passed (the caller maps them).
+    """
+
+    flip: BoolArray
+    unoriented: BoolArray
+    components: tuple[ComponentOrientation, ...]
+
+
+def towards(normals: FloatArray, valid: BoolArray, references: FloatArray, what: str) -> Signs:
+    """Turn each valid normal to make a positive dot product with its row of ``references``.
+
+    ``references`` is (n, 3) or (3,); a zero, non-finite or perpendicular one leaves the point
+    unoriented. The one summary is the whole cloud's (``what`` names the reference).
+    """
+    references = np.broadcast_to(references, normals.shape)
+    with np.errstate(invalid="ignore", over="ignore"):
+        lengths = np.sqrt(np.einsum("ij,ij->i", references, references))
+        dots = np.einsum("ij,ij->i", normals, references)
+    decided = (
+        np.isfinite(lengths) & np.isfinite(dots) & (np.abs(dots) > ORIENT_POINT_COSINE * lengths)
+    )
+    decided &= lengths > 0
+    flip = valid & decided & (dots < 0)
+    unoriented = valid & ~decided
+    left = int(unoriented.sum())
+    reason = f"{left} points are at right angles to the {what} or have none" if left else ""
+    summary = ComponentOrientation(int(valid.sum()), int(flip.sum()), left, reason, -1)
+    return Signs(flip, unoriented, (summary,) if valid.any() else ())
+
+
+def along_tree(
+    points: FloatArray,
+    normals: FloatArray,
+    valid: BoolArray,
+    graph: NDArray[np.int32],
+    max_angle: float,
+    offsets: bool,
+) -> Signs:
+    """Signs along minimum spanning trees of the neighbour graph; see the module docstring.
+
+    Parameters
+    ----------
+    points : (n, 3) float64
+        Coordinates centred on the cloud (the seeds look outward from the origin).
+    normals : (n, 3) float64
+        Unit rows where ``valid``.
+    valid : (n,) bool
+    graph : (n, g) int
+        Each point's nearest neighbours, -1 where there are fewer.
+    max_angle : float
+        Degrees, in (0, 90].
+    offsets : bool
+        The ``"riemannian"`` graph: drop edges that leave a tangent plane by over ``max_angle``.
+    """
+    n = len(points)
+    sharp_cosine = math.cos(math.radians(max_angle))
+    rows, cols, dots, extra = _edges(points, normals, valid, graph, offsets, sharp_cosine)
+    weights = 1.0 - np.abs(dots) + _WEIGHT_FLOOR + extra
+    tree = minimum_spanning_tree(coo_matrix((weights, (rows, cols)), shape=(n, n)).tocsr())
+    count, labels = connected_components(tree, directed=False)
+    seeds, seed_flip, decided = _seeds(points, normals, valid, labels, count)
+    # One breadth-first walk from a virtual root joined to every decided seed.
+    tree = tree.tocoo()
+    root = np.full(len(seeds[decided]), n)
+    walk = coo_matrix(
+        (
+            np.concatenate([tree.data, np.ones(len(root))]),
+            (np.concatenate([tree.row, root]), np.concatenate([tree.col, seeds[decided]])),
+        ),
+        shape=(n + 1, n + 1),
+    ).tocsr()
+    order, parent = breadth_first_order(walk, n, directed=False, return_predecessors=True)
+    order, parent = order[1:], parent[:n].copy()
+    parent[parent == n] = -1
+    reached = np.zeros(n, dtype=bool)
+    reached[order] = True
+    agrees, sharp = _tree_steps(normals, parent, reached, sharp_cosine)
+    flags = np.zeros(n, dtype=bool)
+    flags[seeds[decided]] = seed_flip[decided]
+    flip, cut = propagate_signs(order, parent, agrees, sharp, flags)
+    unoriented = valid & (cut | ~reached)
+    flip &= valid & ~unoriented
+    summaries = _summaries(labels, count, valid, flip, unoriented, seeds, decided, max_angle)
+    return Signs(flip, unoriented, summaries)
+
+
+def _edges(
+    points: FloatArray,
+    normals: FloatArray,
+    valid: BoolArray,
+    graph: NDArray[np.int32],
+    offsets: bool,
+    sharp_cosine: float,
+) -> tuple[IndexArray, IndexArray, FloatArray, FloatArray]:
+    """The graph's edges between valid points: ends, dot products, and the offset weights."""
+    rows = np.repeat(np.arange(len(points)), graph.shape[1])
+    cols = graph.ravel().astype(np.intp)
+    keep = cols >= 0
+    keep[keep] &= valid[rows[keep]] & valid[cols[keep]] & (rows[keep] != cols[keep])
+    rows, cols = rows[keep], cols[keep]
+    dots = np.einsum("ij,ij->i", normals[rows], normals[cols])
+    extra = np.zeros(len(rows))
+    if offsets:
+        steps = points[cols] - points[rows]
+        lengths = np.sqrt(np.einsum("ij,ij->i", steps, steps))
+        out = np.maximum(
+            np.abs(np.einsum("ij,ij->i", steps, normals[rows])),
+            np.abs(np.einsum("ij,ij->i", steps, normals[cols])),
+        )
+        sines = np.divide(out, lengths, out=np.zeros_like(out), where=lengths > 0)
+        # Leaves a tangent plane by more than max_angle: a neighbour across a wall.
+        level = sines <= math.sqrt(max(0.0, 1.0 - sharp_cosine**2))
+        rows, cols, dots, extra = rows[level], cols[level], dots[level], sines[level]
+    return rows, cols, dots, extra
+
+
+def _seeds(
+    points: FloatArray, normals: FloatArray, valid: BoolArray, labels: IndexArray, count: int
+) -> tuple[IndexArray, BoolArray, BoolArray]:
+    """Each part's seed, whether the seed must be flipped, and whether it decides at all."""
+    seeds = np.full(count, -1)
+    seed_flip = np.zeros(count, dtype=bool)
+    decided = np.zeros(count, dtype=bool)
+    members = np.flatnonzero(valid)
+    if len(members) == 0:
+        return seeds, seed_flip, decided
+    part = labels[members]
+    distances = np.einsum("ij,ij->i", points[members], points[members])
+    far = _first_per_part(part, -distances, members)
+    vertical = _first_per_part(part, -np.abs(normals[members, 2]), members)
+    for label in np.unique(part):
+        out = points[far[label]]
+        length = math.sqrt(float(out @ out))
+        cosine = float(normals[far[label]] @ out) / length if length > 0 else 0.0
+        if abs(cosine) >= ORIENT_SEED_COSINE:
+            seeds[label], seed_flip[label], decided[label] = far[label], cosine < 0, True
+            continue
+        up = float(normals[vertical[label], 2])
+        seeds[label] = vertical[label]
+        if abs(up) >= ORIENT_SEED_COSINE:
+            seed_flip[label], decided[label] = up < 0, True
+    return seeds, seed_flip, decided
+
+
+def _first_per_part(part: IndexArray, key: FloatArray, members: IndexArray) -> dict[int, int]:
+    """The member with the smallest ``key`` in each part (ties: the smallest index)."""
+    order = np.lexsort((members, key, part))
+    firsts = np.flatnonzero(np.r_[True, part[order][1:] != part[order][:-1]])
+    return dict(zip(part[order][firsts].tolist(), members[order][firsts].tolist(), strict=True))
+
+
+def _tree_steps(
+    normals: FloatArray, parent: IndexArray, reached: BoolArray, sharp_cosine: float
+) -> tuple[BoolArray, BoolArray]:
+    """Per point: whether its normal agrees with its parent's, and whether that step is sharp."""
+    child = np.flatnonzero(reached & (parent >= 0))
+    dots = np.einsum("ij,ij->i", normals[child], normals[parent[child]])
+    agrees = np.ones(len(parent), dtype=bool)
+    sharp = np.zeros(len(parent), dtype=bool)
+    agrees[child] = dots >= 0
+    sharp[child] = np.abs(dots) < sharp_cosine
+    return agrees, sharp
+
+
+def _summaries(
+    labels: IndexArray,
+    count: int,
+    valid: BoolArray,
+    flip: BoolArray,
+    unoriented: BoolArray,
+    seeds: IndexArray,
+    decided: BoolArray,
+    max_angle: float,
+) -> tuple[ComponentOrientation, ...]:
+    """One summary per part that has valid points, largest first."""
+    points = np.bincount(labels[valid], minlength=count)
+    flipped = np.bincount(labels[flip], minlength=count)
+    left = np.bincount(labels[unoriented], minlength=count)
+    summaries = []
+    for label in np.argsort(-points, kind="stable")[: int((points > 0).sum())]:
+        if not decided[label]:
+            reason = "no point of it faces clearly outward or up: give a viewpoint or a direction"
+        elif left[label]:
+            reason = f"reached only across edges sharper than {max_angle:g} degrees"
+        else:
+            reason = ""
+        seed = int(seeds[label]) if decided[label] else -1
+        summaries.append(
+            ComponentOrientation(
+                int(points[label]), int(flipped[label]), int(left[label]), reason, seed
+            )
+        )
+    return tuple(summaries)
