@@ -13,11 +13,12 @@ whose normal line is parallel but whose side is not), each edge also weighted by
 leaves them. It is the one to use for thin structures and sheets closer together than the
 spacing of their points.
 
-Each connected part of the graph is seeded on its own: at its point farthest from the centre of
-the cloud, which on a closed surface faces outward (the sphere about the centre through that
-point holds the whole surface), if that point's normal is within 60 degrees of the way out;
-otherwise at its point whose normal is nearest to vertical, turned up (an open terrain). A part
-with neither is left unoriented and says so.
+Each connected part of the graph is seeded on its own, at an extreme point: its highest, whose
+normal is turned up, if that normal is within 60 degrees of vertical; otherwise its farthest
+along +x, -x, +y, -y, then -z, the first whose normal is within 60 degrees of that axis. On a
+closed surface the extreme point along a direction has its outward normal along it (the plane
+through it holds the whole surface on one side), so a closed surface points out, and an open
+terrain up. A part with no such point is left unoriented and says so.
 
 ``"viewpoint"``, ``"direction"`` and ``"file"`` decide each point alone, towards a sensor, along
 a vector, or agreeing with stored normals; a point at right angles to its reference (to 2**-20)
@@ -56,6 +57,13 @@ ORIENT_MODES: tuple[OrientMode, ...] = (
 #: Added to every edge weight: scipy's graphs take a zero weight for no edge. Adding the same
 #: amount to every edge does not change which spanning tree is least.
 _WEIGHT_FLOOR = 2.0**-30
+
+#: The ways a part is looked at for its seed, in order: up first, so that an open terrain
+#: faces up; the first whose farthest point has a normal within 60 degrees of it decides.
+_SEED_DIRECTIONS = tuple(
+    np.array(d, dtype=np.float64)
+    for d in ((0, 0, 1), (1, 0, 0), (-1, 0, 0), (0, 1, 0), (0, -1, 0), (0, 0, -1))
+)
 
 
 @dataclass(frozen=True, slots=True)
@@ -203,31 +211,27 @@ def _seeds(
     seed_flip = np.zeros(count, dtype=bool)
     decided = np.zeros(count, dtype=bool)
     members = np.flatnonzero(valid)
-    if len(members) == 0:
-        return seeds, seed_flip, decided
+    members = members[np.argsort(labels[members], kind="stable")]
     part = labels[members]
-    distances = np.einsum("ij,ij->i", points[members], points[members])
-    far = _first_per_part(part, -distances, members)
-    vertical = _first_per_part(part, -np.abs(normals[members, 2]), members)
-    for label in np.unique(part):
-        out = points[far[label]]
-        length = math.sqrt(float(out @ out))
-        cosine = float(normals[far[label]] @ out) / length if length > 0 else 0.0
-        if abs(cosine) >= ORIENT_SEED_COSINE:
-            seeds[label], seed_flip[label], decided[label] = far[label], cosine < 0, True
-            continue
-        up = float(normals[vertical[label], 2])
-        seeds[label] = vertical[label]
-        if abs(up) >= ORIENT_SEED_COSINE:
-            seed_flip[label], decided[label] = up < 0, True
+    starts = np.flatnonzero(np.r_[True, part[1:] != part[:-1]]) if len(part) else part
+    for direction in _SEED_DIRECTIONS:
+        heights = points[members] @ direction
+        highest = members[_first_maximum(heights, starts)]
+        cosines = normals[highest] @ direction
+        take = ~decided[part[starts]] & (np.abs(cosines) >= ORIENT_SEED_COSINE)
+        chosen = part[starts][take]
+        seeds[chosen], seed_flip[chosen], decided[chosen] = highest[take], cosines[take] < 0, True
     return seeds, seed_flip, decided
 
 
-def _first_per_part(part: IndexArray, key: FloatArray, members: IndexArray) -> dict[int, int]:
-    """The member with the smallest ``key`` in each part (ties: the smallest index)."""
-    order = np.lexsort((members, key, part))
-    firsts = np.flatnonzero(np.r_[True, part[order][1:] != part[order][:-1]])
-    return dict(zip(part[order][firsts].tolist(), members[order][firsts].tolist(), strict=True))
+def _first_maximum(values: FloatArray, starts: IndexArray) -> IndexArray:
+    """Within each run of ``values`` from ``starts``, the position of its first maximum."""
+    if len(starts) == 0:
+        return starts
+    peaks = np.maximum.reduceat(values, starts)
+    run = np.repeat(np.arange(len(starts)), np.diff(np.r_[starts, len(values)]))
+    at_peak = np.flatnonzero(values == peaks[run])
+    return at_peak[np.r_[True, run[at_peak][1:] != run[at_peak][:-1]]]
 
 
 def _tree_steps(
