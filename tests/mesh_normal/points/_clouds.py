@@ -68,7 +68,10 @@ def terrain(n: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     rng = np.random.default_rng(seed)
     x, y = rng.uniform(-1, 1, n), rng.uniform(-1, 1, n)
     z = 0.1 * np.sin(3 * x) * np.cos(2 * y)
-    gradient_x, gradient_y = 0.3 * np.cos(3 * x) * np.cos(2 * y), -0.2 * np.sin(3 * x) * np.sin(2 * y)
+    gradient_x, gradient_y = (
+        0.3 * np.cos(3 * x) * np.cos(2 * y),
+        -0.2 * np.sin(3 * x) * np.sin(2 * y),
+    )
     normals = _unit(np.stack([-gradient_x, -gradient_y, np.ones(n)], axis=1))
     return np.stack([x, y, z], axis=1), normals
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -97,7 +99,7 @@ def test_curvature_is_the_surface_variation() -> None:
     result = point_normals(points)
     assert result.curvature[flat].max() < 1e-20
     sphere = point_normals(clouds.sphere(5_000)[0])
-    assert 0 < sphere.curvature.min() and sphere.curvature.max() < 0.01
+    assert sphere.curvature.min() > 0 and sphere.curvature.max() < 0.01
 
 
 def test_radius_neighbourhoods() -> None:
@@ -148,14 +150,16 @@ def test_duplicated_points_of_a_surface_keep_their_normals() -> None:
 
 
 def test_a_symmetric_neighbourhood_is_ambiguous() -> None:
-    star = np.array([[0.0, 0, 0], [1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]])
+    star = np.array(
+        [[0.0, 0, 0], [1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]]
+    )
     result = point_normals(star, k=7)
     assert np.all(result.status == PointStatus.ambiguous) and not result.normals.any()
     assert np.allclose(result.curvature, 1 / 3)
 
 
 def test_non_finite_points_get_a_status_and_are_no_ones_neighbours() -> None:
-    points, truth = clouds.sphere(2_000)
+    points, _ = clouds.sphere(2_000)
     broken = points.copy()
     broken[[3, 10, 500]] = [[np.nan, 0, 0], [np.inf, 1, 1], [0, 0, -np.inf]]
     result = point_normals(broken)
@@ -213,6 +217,5 @@ def test_the_status_codes_are_stable() -> None:
 )
 def test_bad_arguments_are_clear_errors(kwargs: dict, words: str) -> None:  # type: ignore[type-arg]
     arguments = {"points": np.random.default_rng(0).normal(size=(5, 3)), **kwargs}
-    with pytest.raises(ValueError, match=None) as error:
+    with pytest.raises(ValueError, match=re.escape(words)):
         point_normals(**arguments)
-    assert words in str(error.value)
