@@ -13,8 +13,9 @@ import math
 
 import numpy as np
 from numba import prange
+from numpy.typing import NDArray
 
-from mesh_normal.kernels import kernel
+from mesh_normal.kernels import dot, kernel
 from mesh_normal.tolerances import POINT_GAP_RATIO, POINT_LINE_RATIO
 from mesh_normal.types import BoolArray, FloatArray, IndexArray
 
@@ -204,3 +205,58 @@ def propagate_signs(
             cut[i] = sharp[i] or cut[p]
             flip[i] = (flip[p] != (not agrees[i])) and not cut[i]
     return flip, cut
+
+
+@kernel()
+def _listed(graph: NDArray[np.int32], row: int, value: int) -> bool:
+    found = False
+    for c in range(graph.shape[1]):
+        found |= graph[row, c] == value
+    return found
+
+
+@kernel()
+def graph_edges(
+    points: FloatArray,
+    normals: FloatArray,
+    valid: BoolArray,
+    graph: NDArray[np.int32],
+    floor: float,
+    sine_limit: float,
+    rows: NDArray[np.int32],
+    cols: NDArray[np.int32],
+    weights: FloatArray,
+) -> int:
+    """The edges of the neighbour graph between valid points, each once, into the outputs.
+
+    Weight 1 - |n_i . n_j| + ``floor``. With ``sine_limit`` below 1 (the ``"riemannian"``
+    graph), an edge leaves out where the step between the points leaves either tangent plane
+    by a sine over it, and otherwise weighs that sine more. Returns how many were written.
+    """
+    count = 0
+    for i in range(len(graph)):
+        if not valid[i]:
+            continue
+        ni = (normals[i, 0], normals[i, 1], normals[i, 2])
+        for c in range(graph.shape[1]):
+            j = graph[i, c]
+            if j < 0 or j == i or not valid[j] or (j < i and _listed(graph, j, i)):
+                continue  # (j, i) was written from j's list
+            nj = (normals[j, 0], normals[j, 1], normals[j, 2])
+            weight = 1.0 - abs(dot(ni, nj)) + floor
+            if sine_limit < 1.0:
+                step = (
+                    points[j, 0] - points[i, 0],
+                    points[j, 1] - points[i, 1],
+                    points[j, 2] - points[i, 2],
+                )
+                length = math.sqrt(dot(step, step))
+                sine = (
+                    0.0 if length == 0.0 else max(abs(dot(step, ni)), abs(dot(step, nj))) / length
+                )
+                if sine > sine_limit:
+                    continue
+                weight += sine
+            rows[count], cols[count], weights[count] = i, j, weight
+            count += 1
+    return count

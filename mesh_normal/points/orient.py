@@ -40,7 +40,7 @@ from scipy.sparse.csgraph import (  # type: ignore[import-untyped]
     minimum_spanning_tree,
 )
 
-from mesh_normal.points._kernels import propagate_signs
+from mesh_normal.points._kernels import graph_edges, propagate_signs
 from mesh_normal.tolerances import ORIENT_POINT_COSINE, ORIENT_SEED_COSINE
 from mesh_normal.types import BoolArray, FloatArray, IndexArray
 
@@ -143,9 +143,11 @@ def along_tree(
     """
     n = len(points)
     sharp_cosine = math.cos(math.radians(max_angle))
-    rows, cols, dots, extra = _edges(points, normals, valid, graph, offsets, sharp_cosine)
-    weights = 1.0 - np.abs(dots) + _WEIGHT_FLOOR + extra
-    tree = minimum_spanning_tree(coo_matrix((weights, (rows, cols)), shape=(n, n)).tocsr())
+    rows, cols, weights = _edges(points, normals, valid, graph, offsets, sharp_cosine)
+    graph_matrix = coo_matrix((weights, (rows, cols)), shape=(n, n)).tocsr()
+    del rows, cols, weights
+    tree = minimum_spanning_tree(graph_matrix, overwrite=True)
+    del graph_matrix
     count, labels = connected_components(tree, directed=False)
     seeds, seed_flip, decided = _seeds(points, normals, valid, labels, count)
     # One breadth-first walk from a virtual root joined to every decided seed.
@@ -180,27 +182,17 @@ def _edges(
     graph: NDArray[np.int32],
     offsets: bool,
     sharp_cosine: float,
-) -> tuple[IndexArray, IndexArray, FloatArray, FloatArray]:
-    """The graph's edges between valid points: ends, dot products, and the offset weights."""
-    rows = np.repeat(np.arange(len(points)), graph.shape[1])
-    cols = graph.ravel().astype(np.intp)
-    keep = cols >= 0
-    keep[keep] &= valid[rows[keep]] & valid[cols[keep]] & (rows[keep] != cols[keep])
-    rows, cols = rows[keep], cols[keep]
-    dots = np.einsum("ij,ij->i", normals[rows], normals[cols])
-    extra = np.zeros(len(rows))
-    if offsets:
-        steps = points[cols] - points[rows]
-        lengths = np.sqrt(np.einsum("ij,ij->i", steps, steps))
-        out = np.maximum(
-            np.abs(np.einsum("ij,ij->i", steps, normals[rows])),
-            np.abs(np.einsum("ij,ij->i", steps, normals[cols])),
-        )
-        sines = np.divide(out, lengths, out=np.zeros_like(out), where=lengths > 0)
-        # Leaves a tangent plane by more than max_angle: a neighbour across a wall.
-        level = sines <= math.sqrt(max(0.0, 1.0 - sharp_cosine**2))
-        rows, cols, dots, extra = rows[level], cols[level], dots[level], sines[level]
-    return rows, cols, dots, extra
+) -> tuple[NDArray[np.int32], NDArray[np.int32], FloatArray]:
+    """The graph's edges between valid points, each once: their ends and weights."""
+    size = graph.size
+    rows, cols = np.empty(size, dtype=np.int32), np.empty(size, dtype=np.int32)
+    weights = np.empty(size)
+    # Leaving a tangent plane by more than max_angle: a neighbour across a wall.
+    sine_limit = math.sqrt(max(0.0, 1.0 - sharp_cosine**2)) if offsets else 1.0
+    count = graph_edges(
+        points, normals, valid, graph, _WEIGHT_FLOOR, sine_limit, rows, cols, weights
+    )
+    return rows[:count], cols[:count], weights[:count]
 
 
 def _seeds(
