@@ -7,22 +7,11 @@ import re
 import numpy as np
 import pytest
 
-from mesh_normal.points import PointNormals, PointStatus, point_normals
+from mesh_normal.points import PointStatus, point_normals
 from tests.mesh_normal.points import _clouds as clouds
+from tests.mesh_normal.points._checks import assert_well_formed
 
 OFFSETS = (0.0, 1e6, 1e8)
-
-
-def assert_well_formed(result: PointNormals, n: int) -> None:
-    assert result.normals.shape == (n, 3) and result.normals.dtype == np.float64
-    assert result.curvature.shape == (n,) and result.status.dtype == np.uint8
-    assert np.isfinite(result.normals).all() and np.isfinite(result.curvature).all()
-    lengths = np.linalg.norm(result.normals, axis=1)
-    assert np.all(lengths[~result.valid] == 0.0)
-    np.testing.assert_allclose(lengths[result.valid], 1.0, rtol=0, atol=1e-15)
-    valid = (result.status == PointStatus.ok) | (result.status == PointStatus.unoriented)
-    np.testing.assert_array_equal(result.valid, valid)
-    assert np.all((result.curvature >= 0) & (result.curvature <= 1 / 3 + 1e-15))
 
 
 # --- accuracy on analytic clouds ---------------------------------------------------------------

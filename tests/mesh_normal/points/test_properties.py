@@ -6,7 +6,8 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mesh_normal.points import point_normals
+from mesh_normal.points import PointStatus, point_normals
+from tests.mesh_normal.points._checks import assert_well_formed
 
 PROPERTY = settings(max_examples=25, deadline=None)
 
@@ -65,3 +66,27 @@ def test_moving_and_scaling_change_nothing(seed: int, n: int, shift: float, powe
     moved = point_normals(points + shift, k=12)
     np.testing.assert_array_equal(moved.status, first.status)
     np.testing.assert_allclose(moved.normals, first.normals, rtol=0, atol=1e-6)
+
+
+coordinates = st.one_of(
+    st.sampled_from([0.0, 1.0, -1.0, 1e8, np.nan, np.inf, -np.inf]),
+    st.floats(-1e12, 1e12, allow_nan=False),
+)
+
+
+@PROPERTY
+@given(
+    st.lists(st.tuples(coordinates, coordinates, coordinates), max_size=60),
+    st.integers(3, 12),
+    st.sampled_from(["mst", "riemannian", "none", "direction"]),
+)
+def test_any_cloud_gives_unit_or_zero_rows_and_statuses(
+    rows: list[tuple[float, float, float]], k: int, orient: str
+) -> None:
+    points = np.array(rows, dtype=np.float64).reshape(-1, 3)
+    direction = [0.0, 0.0, 1.0] if orient == "direction" else None
+    result = point_normals(points, k=k, orient=orient, direction=direction)  # type: ignore[arg-type]
+    assert_well_formed(result, len(points))
+    assert np.all(result.status[~np.isfinite(points).all(axis=1)] == PointStatus.not_finite)
+    assert sum(result.counts().values()) == len(points)
+    assert result.unoriented == int((result.status == PointStatus.unoriented).sum())
