@@ -4,7 +4,8 @@ One kernel does the work of estimation: for each point of a block, the mean of i
 their covariance about that mean (two passes, float64) and its symmetric eigen solve by cyclic
 Jacobi rotations, which is accurate for flat, linear and isotropic neighbourhoods alike (no
 closed form to fall back from). Rows run in parallel and write disjoint outputs, so the bits do
-not depend on the number of cores. A second kernel carries signs down a spanning tree.
+not depend on the number of cores. Two more serve the orientation: the neighbour graph's edges
+and their weights, and signs carried down its spanning tree.
 """
 
 from __future__ import annotations
