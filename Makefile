@@ -6,7 +6,7 @@ UV := $(shell command -v uv 2>/dev/null || echo .tools/bin/uv)
 HOST ?= 127.0.0.1
 PORT ?= 8000
 
-.PHONY: run test lint bench bench-mesh bench-mesh-e2e bench-orient bench-soak bench-memory env clean vendor
+.PHONY: run test lint bench bench-mesh bench-mesh-e2e bench-orient bench-points bench-soak bench-memory env clean vendor
 
 # uv itself comes from PyPI when the machine does not have it yet.
 .tools/bin/uv:
@@ -52,6 +52,10 @@ bench-soak: .venv/.test
 
 bench-orient: .venv/.test
 	.venv/bin/python -m benchmarks.orientation
+
+# Point-cloud normals against Open3D (in the test group); ARGS=--quick for a fifth of the sizes.
+bench-points: .venv/.test
+	.venv/bin/python -m benchmarks.points $(ARGS)
 
 bench-memory: .venv/.test
 	.venv/bin/python -m benchmarks.memory

@@ -30,6 +30,7 @@ if TYPE_CHECKING:
     from mesh_normal.faces import FaceGeometry, FaceNormals, face_areas, face_geometry, face_normals
     from mesh_normal.files import LoadedMesh, MeshFileError, read_mesh, write_mesh
     from mesh_normal.orientation import Orientation, orient, signed_volume
+    from mesh_normal.points import ComponentOrientation, PointNormals, PointStatus, point_normals
     from mesh_normal.precompile import compile_kernels
     from mesh_normal.report import MeshReport
     from mesh_normal.topology import MeshTopology, mesh_topology
@@ -58,6 +59,10 @@ _HOMES = {
     "Orientation": "orientation",
     "orient": "orientation",
     "signed_volume": "orientation",
+    "ComponentOrientation": "points",
+    "PointNormals": "points",
+    "PointStatus": "points",
+    "point_normals": "points",
     "MeshReport": "report",
     "analyse": "analysis",  # mn.analyse(path) is the report
     "MeshTopology": "topology",
@@ -72,6 +77,7 @@ _HOMES = {
 __all__ = [
     "BatchNormals",
     "CheckedMesh",
+    "ComponentOrientation",
     "CornerNormals",
     "FaceGeometry",
     "FaceNormals",
@@ -80,6 +86,8 @@ __all__ = [
     "MeshReport",
     "MeshTopology",
     "Orientation",
+    "PointNormals",
+    "PointStatus",
     "TriangleNormal",
     "VertexNormals",
     "__version__",
@@ -92,6 +100,7 @@ __all__ = [
     "face_normals",
     "mesh_topology",
     "orient",
+    "point_normals",
     "read_mesh",
     "signed_volume",
     "triangle_normal",

@@ -8,6 +8,7 @@ from mesh_normal.corners import corner_normals
 from mesh_normal.faces import face_geometry, face_normals
 from mesh_normal.files.polygons import triangulate
 from mesh_normal.orientation import orient
+from mesh_normal.points import point_normals
 from mesh_normal.vertices import vertex_normals
 
 
@@ -30,3 +31,6 @@ def compile_kernels() -> None:
     triangulate(
         np.array([4]), np.arange(4), np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]])
     )
+    # Point clouds: the neighbourhood kernel (k nearest and within a radius take the same
+    # types) and the signs down the spanning tree.
+    point_normals(np.random.default_rng(0).normal(size=(40, 3)), k=10)

@@ -82,3 +82,35 @@ ORIENT_EVIDENCE = 4.0
 #: one percent of the mesh's size a weld no longer repairs rounding but closes real gaps and
 #: collapses small features (thin walls, fine detail), which is modelling, not checking.
 WELD_LIMIT = 0.01
+
+# Point clouds (mesh_normal.points). Relative again: a cloud in millimetres and the same cloud in
+# metres, or moved by 1e8, get the same verdicts.
+
+#: The coordinates are taken to be rounded by half a unit in the last place of the largest
+#: one (``EPSILON * max |x|``): at 1e8, 7.5e-9. A neighbourhood whose variance in a direction
+#: is at most this factor times that rounding, squared, is flat in that direction to rounding.
+POINT_ROUNDING_FACTOR = 16.0
+
+#: A neighbourhood is collinear when its middle eigenvalue is at most this fraction of its
+#: largest (plus the rounding above): it is then a line at most 2**-20 (1e-6) times as wide as
+#: it is long, and its normal is any direction across the line.
+POINT_LINE_RATIO = 2.0**-40
+
+#: A neighbourhood's normal is ambiguous when its two smallest eigenvalues differ by at most
+#: this fraction of the largest (plus the rounding above): the flattest direction is then not
+#: unique to within about 1e-4 rad (e.g. a corner sampled with three-fold symmetry).
+POINT_GAP_RATIO = 2.0**-40
+
+#: The orientation graph links each point to at most this many of its nearest neighbours
+#: (CGAL's ``mst_orient_normals`` uses 18; Open3D's consistent tangent plane takes k).
+ORIENT_NEIGHBOURS = 12
+
+#: The MST orientation does not carry a sign across two neighbours whose normal lines are
+#: further apart than this, in degrees; points reached only that way are left unoriented.
+ORIENT_MAX_ANGLE = 60.0
+
+#: A seed decides its component's side only if its normal makes at least this cosine with the
+#: reference (outward from the component's centre, or up); a per-point reference (a viewpoint,
+#: a direction, stored normals) decides a point only if the cosine is at least this in size.
+ORIENT_SEED_COSINE = 0.5
+ORIENT_POINT_COSINE = 2.0**-20

@@ -1,0 +1,387 @@
+"""Normals of a point cloud: the flattest direction of each point's neighbourhood.
+
+Each point's neighbours (its k nearest, those within a radius, or at most k within a radius,
+the point itself included) come from scipy's ``cKDTree``, built and queried with the points in
+Morton (Z-curve) order, so that neighbouring queries touch neighbouring memory; the results go
+back to input order. Coordinates are first moved so that the bounding box is centred on the
+origin and scaled by a power of two (exact) into [-1, 1]: the normals do not depend on where the
+cloud sits or its unit. The compiled kernel (:mod:`mesh_normal.points._kernels`) centres each
+neighbourhood on its mean, takes the covariance in float64 and solves it by Jacobi rotations;
+the normal is the eigenvector of the smallest eigenvalue, the curvature (surface variation)
+that eigenvalue over their sum.
+
+Where the neighbourhood does not determine a plane there is no normal (a zero row and a status
+that says why; never NaN, never a made-up direction). "To rounding" below is the variance that
+rounding the coordinates alone could give: ``(POINT_ROUNDING_FACTOR * EPSILON * max |x|)**2``.
+Non-finite points get ``not_finite`` and are no one's neighbours. Then the normals are oriented
+(:mod:`mesh_normal.points.orient`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+from dataclasses import dataclass
+from enum import IntEnum
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.spatial import cKDTree  # type: ignore[import-untyped]
+
+from mesh_normal.kernels import PARALLEL_KERNELS, announce_compiling
+from mesh_normal.points._kernels import neighbourhood_normals
+from mesh_normal.points.orient import (
+    ORIENT_MODES,
+    ComponentOrientation,
+    OrientMode,
+    Signs,
+    along_tree,
+    towards,
+)
+from mesh_normal.tolerances import (
+    EPSILON,
+    ORIENT_MAX_ANGLE,
+    ORIENT_NEIGHBOURS,
+    POINT_ROUNDING_FACTOR,
+)
+from mesh_normal.types import BoolArray, FloatArray, IndexArray
+
+#: Points queried at once: bounds the memory of the neighbour lists (2**17 points, k = 30:
+#: 31 MB of indices and as much of distances).
+QUERY_CHUNK = 2**17
+
+
+class PointStatus(IntEnum):
+    """Why a point has its normal, or has none (``PointNormals.status``, uint8)."""
+
+    ok = 0  #: a unit normal, oriented as asked
+    not_finite = 1  #: a coordinate is NaN or infinite
+    too_few_neighbours = 2  #: fewer than three points in its neighbourhood, itself included
+    duplicates = 3  #: its neighbourhood's points coincide (to rounding)
+    collinear = 4  #: they lie on a line (to rounding, or 2**-20 of their length)
+    ambiguous = 5  #: two directions are equally flat (e.g. a symmetric corner)
+    unoriented = 6  #: a unit normal, but its side could not be decided; see ``components``
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class PointNormals:
+    """One normal for each of ``n`` points, in input order.
+
+    Attributes
+    ----------
+    normals : (n, 3) float64
+        Unit normals where ``valid``, zero rows elsewhere.
+    curvature : (n,) float64
+        λ0 / (λ0 + λ1 + λ2) of the neighbourhood's covariance, in [0, 1/3]; 0 where its points
+        are fewer than three or coincide.
+    neighbours : (n,) int
+        How many points the neighbourhood held (the point itself included).
+    valid : (n,) bool
+        The point has a normal: status ``ok`` or ``unoriented``.
+    status : (n,) uint8
+        A :class:`PointStatus` per point.
+    orient : str
+        The orientation that was asked for.
+    components : tuple of ComponentOrientation
+        For ``"mst"`` and ``"riemannian"`` one per connected part of the neighbour graph that
+        has normals, largest first; for the per-point modes one for the whole cloud; none for
+        ``"none"``.
+    """
+
+    normals: FloatArray
+    curvature: FloatArray
+    neighbours: IndexArray
+    valid: BoolArray
+    status: NDArray[np.uint8]
+    orient: str
+    components: tuple[ComponentOrientation, ...]
+
+    @property
+    def flipped(self) -> int:
+        """Normals turned by the orientation, in all components."""
+        return sum(part.flipped for part in self.components)
+
+    @property
+    def unoriented(self) -> int:
+        """Normals whose side could not be decided, in all components."""
+        return sum(part.unoriented for part in self.components)
+
+    def counts(self) -> dict[str, int]:
+        """How many points have each status, by name (every status, zeros included)."""
+        found = np.bincount(self.status, minlength=len(PointStatus))
+        return {status.name: int(found[status]) for status in PointStatus}
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class _Frame:
+    """The finite points, centred and scaled, in Morton order, and where they came from."""
+
+    points: FloatArray  # (m, 3), C-contiguous
+    origin: IndexArray  # (m,) input index of each row
+    centre: FloatArray  # (3,) subtracted first
+    scale: float  # then divided by this power of two
+    tiny: float  # the variance of rounding alone, in these units
+
+
+def point_normals(
+    points: ArrayLike,
+    *,
+    k: int | None = 30,
+    radius: float | None = None,
+    orient: OrientMode = "mst",
+    viewpoint: ArrayLike | None = None,
+    direction: ArrayLike | None = None,
+    stored: ArrayLike | None = None,
+    max_angle: float = ORIENT_MAX_ANGLE,
+) -> PointNormals:
+    """Return the normal, curvature and status of every point of a cloud.
+
+    Parameters
+    ----------
+    points : (n, 3) float
+        Coordinates; NaN or infinite rows are allowed and get ``not_finite``.
+    k : int or None
+        The neighbourhood's size, the point itself included (at least 3); with ``radius``, at
+        most this many within it; None with a radius: all within it.
+    radius : float or None
+        Only neighbours within this distance, in the points' unit.
+    orient : {"mst", "riemannian", "viewpoint", "direction", "file", "none"}
+        How to choose each normal's side (see :mod:`mesh_normal.points.orient`). ``"none"``
+        leaves the canonical sign: each normal's largest component positive.
+    viewpoint : (3,) float
+        With ``orient="viewpoint"``: the sensor's position; normals face it.
+    direction : (3,) float
+        With ``orient="direction"``: normals make an acute angle with it (e.g. (0, 0, 1)).
+    stored : (n, 3) float
+        With ``orient="file"``: normals read with the points; each normal is turned to agree
+        with its stored one (zero or non-finite rows leave it unoriented).
+    max_angle : float
+        ``"mst"`` and ``"riemannian"``: the largest angle, in degrees, between neighbours'
+        normal lines that a sign is carried across.
+
+    Returns
+    -------
+    PointNormals
+        Full-length arrays in input order, and the orientation's summary.
+    """
+    cloud = _checked_points(points)
+    k, radius = _checked_neighbourhood(k, radius)
+    references = _checked_orientation(len(cloud), orient, viewpoint, direction, stored, max_angle)
+    n = len(cloud)
+    normals, curvature = np.zeros((n, 3)), np.zeros(n)
+    neighbours = np.zeros(n, dtype=np.intp)
+    status = np.full(n, PointStatus.not_finite, dtype=np.uint8)
+    frame = _frame(cloud)
+    m = len(frame.points)
+    if m == 0:
+        return PointNormals(normals, curvature, neighbours, status == 0, status, orient, ())
+    local_normals, local_curvature, used, codes, graph = _estimate(frame, k, radius)
+    signs = _signs(frame, local_normals, codes == 0, graph, orient, references, max_angle)
+    local_normals[signs.flip] *= -1.0
+    codes[signs.unoriented] = PointStatus.unoriented
+    origin = frame.origin
+    normals[origin], curvature[origin], neighbours[origin] = local_normals, local_curvature, used
+    status[origin] = codes
+    valid = (status == PointStatus.ok) | (status == PointStatus.unoriented)
+    components = tuple(
+        ComponentOrientation(
+            part.points,
+            part.flipped,
+            part.unoriented,
+            part.reason,
+            int(origin[part.seed]) if part.seed >= 0 else -1,
+        )
+        for part in signs.components
+    )
+    return PointNormals(normals, curvature, neighbours, valid, status, orient, components)
+
+
+# --- inputs -------------------------------------------------------------------------------
+
+
+def _checked_points(points: ArrayLike) -> FloatArray:
+    try:
+        cloud = np.asarray(points)
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"points must be an (n, 3) array of numbers: {error}") from None
+    if cloud.dtype.kind not in "biuf":
+        raise ValueError(f"points must be real numbers, not {cloud.dtype}")
+    if cloud.ndim != 2 or cloud.shape[1] != 3:
+        raise ValueError(f"points must have shape (n, 3), not {cloud.shape}")
+    return np.ascontiguousarray(cloud, dtype=np.float64)
+
+
+def _checked_neighbourhood(k: int | None, radius: float | None) -> tuple[int | None, float | None]:
+    if k is None and radius is None:
+        raise ValueError("give k, radius or both")
+    if k is not None:
+        if isinstance(k, bool) or not isinstance(k, int | np.integer):
+            raise ValueError(f"k must be a whole number, not {k!r}")
+        if k < 3:
+            raise ValueError(f"k must be at least 3 (the point and two neighbours), not {k}")
+    if radius is not None:
+        radius = float(radius)
+        if not (math.isfinite(radius) and radius > 0):
+            raise ValueError(f"radius must be a positive finite number, not {radius}")
+    return (None if k is None else int(k)), radius
+
+
+def _checked_vector(value: ArrayLike | None, name: str, orient: str) -> FloatArray:
+    if value is None:
+        raise ValueError(f'orient="{orient}" needs {name}')
+    vector = np.asarray(value, dtype=np.float64)
+    if vector.shape != (3,) or not np.isfinite(vector).all():
+        raise ValueError(f"{name} must be three finite numbers, not {value!r}")
+    return vector
+
+
+def _checked_orientation(
+    n: int,
+    orient: str,
+    viewpoint: ArrayLike | None,
+    direction: ArrayLike | None,
+    stored: ArrayLike | None,
+    max_angle: float,
+) -> FloatArray | None:
+    """The reference that ``orient`` needs, checked; and nothing it does not use."""
+    if orient not in ORIENT_MODES:
+        raise ValueError(f"orient must be one of {', '.join(ORIENT_MODES)}, not {orient!r}")
+    given = {"viewpoint": viewpoint, "direction": direction, "file": stored}
+    for mode, value in given.items():
+        if value is not None and mode != orient:
+            name = "stored" if mode == "file" else mode
+            raise ValueError(f'{name} is only used with orient="{mode}"')
+    if not (isinstance(max_angle, int | float) and 0 < max_angle <= 90):
+        raise ValueError(f"max_angle must be in degrees, over 0 and at most 90, not {max_angle!r}")
+    if orient == "viewpoint":
+        return _checked_vector(viewpoint, "viewpoint", orient)
+    if orient == "direction":
+        vector = _checked_vector(direction, "direction", orient)
+        if not vector.any():
+            raise ValueError("direction must not be zero")
+        return vector
+    if orient == "file":
+        if stored is None:
+            raise ValueError('orient="file" needs stored normals')
+        normals = np.asarray(stored)
+        if normals.dtype.kind not in "biuf" or normals.shape != (n, 3):
+            raise ValueError(f"stored normals must be ({n}, 3) numbers, not {normals.shape}")
+        return normals.astype(np.float64)
+    return None
+
+
+# --- the frame and the neighbourhoods -----------------------------------------------------------
+
+
+def _frame(cloud: FloatArray) -> _Frame:
+    finite = np.flatnonzero(np.isfinite(cloud).all(axis=1))
+    points = cloud[finite]
+    if len(points) == 0:
+        return _Frame(points, finite, np.zeros(3), 1.0, 0.0)
+    low, high = points.min(axis=0), points.max(axis=0)
+    centre = low / 2 + high / 2  # no overflow near the largest double
+    half = float((high / 2 - low / 2).max())
+    scale = math.ldexp(1.0, math.frexp(half)[1]) if half > 0 else 1.0  # 2**e >= half
+    rounding = EPSILON * float(np.abs(points).max())
+    local = (points - centre) / scale
+    order = _morton_order(local)
+    tiny = (POINT_ROUNDING_FACTOR * rounding / scale) ** 2
+    return _Frame(np.ascontiguousarray(local[order]), finite[order], centre, scale, tiny)
+
+
+def _morton_order(local: FloatArray) -> IndexArray:
+    """The order of the points along a Z curve through [-1, 1]**3, 21 bits an axis."""
+    cells = np.clip(((local + 1.0) * 2.0**20).astype(np.int64), 0, 2**21 - 1).astype(np.uint64)
+    code = np.zeros(len(local), dtype=np.uint64)
+    for axis in range(3):
+        code |= _spread(cells[:, axis]) << np.uint64(axis)
+    return np.argsort(code, kind="stable")
+
+
+def _spread(bits: NDArray[np.uint64]) -> NDArray[np.uint64]:
+    """Bit i of a 21-bit number moved to bit 3i."""
+    x = bits & np.uint64(0x1FFFFF)
+    for shift, mask in (
+        (32, 0x1F00000000FFFF),
+        (16, 0x1F0000FF0000FF),
+        (8, 0x100F00F00F00F00F),
+        (4, 0x10C30C30C30C30C3),
+        (2, 0x1249249249249249),
+    ):
+        x = (x | (x << np.uint64(shift))) & np.uint64(mask)
+    return x
+
+
+def _estimate(
+    frame: _Frame, k: int | None, radius: float | None
+) -> tuple[FloatArray, FloatArray, IndexArray, NDArray[np.uint8], NDArray[np.int32]]:
+    """Normals, curvature, counts, codes and the orientation graph, in the frame's order."""
+    m = len(frame.points)
+    tree = cKDTree(frame.points, balanced_tree=False, compact_nodes=False)
+    normals, curvature = np.empty((m, 3)), np.empty(m)
+    used, codes = np.empty(m, dtype=np.intp), np.empty(m, dtype=np.intp)
+    g = min(ORIENT_NEIGHBOURS, m if k is None else min(k, m))
+    graph = np.full((m, g), -1, dtype=np.int32)
+    bound = math.inf if radius is None else np.nextafter(radius / frame.scale, math.inf)
+    announce_compiling()
+    for start, indptr, indices, nearest in _neighbourhoods(tree, k, bound, g):
+        stop = start + len(indptr) - 1
+        with PARALLEL_KERNELS:
+            neighbourhood_normals(
+                frame.points,
+                indptr,
+                indices,
+                frame.tiny,
+                normals[start:stop],
+                curvature[start:stop],
+                used[start:stop],
+                codes[start:stop],
+            )
+        graph[start:stop] = np.where(nearest < m, nearest, -1)
+    return normals, curvature, used, codes.astype(np.uint8), graph
+
+
+def _neighbourhoods(
+    tree: cKDTree, k: int | None, bound: float, g: int
+) -> Iterator[tuple[int, IndexArray, IndexArray, IndexArray]]:
+    """Per chunk of queries: its start, the neighbour lists as CSR, and the g nearest."""
+    points: FloatArray = tree.data
+    m = len(points)
+    for start in range(0, m, QUERY_CHUNK):
+        queries = points[start : start + QUERY_CHUNK]
+        if k is not None:
+            count = min(k, m)
+            _, nearest = tree.query(queries, k=count, distance_upper_bound=bound, workers=-1)
+            nearest = nearest.reshape(len(queries), count)
+            indptr = np.arange(len(queries) + 1, dtype=np.intp) * count
+            yield start, indptr, nearest.ravel().astype(np.intp), nearest[:, :g]
+        else:
+            lists = tree.query_ball_point(queries, bound, workers=-1, return_sorted=False)
+            sizes = np.fromiter(map(len, lists), dtype=np.intp, count=len(lists))
+            indptr = np.concatenate([[0], np.cumsum(sizes)]).astype(np.intp)
+            indices = np.concatenate([np.asarray(x, dtype=np.intp) for x in lists])
+            _, nearest = tree.query(queries, k=g, distance_upper_bound=bound, workers=-1)
+            yield start, indptr, indices, nearest.reshape(len(queries), g)
+
+
+def _signs(
+    frame: _Frame,
+    normals: FloatArray,
+    valid: BoolArray,
+    graph: NDArray[np.int32],
+    orient: str,
+    references: FloatArray | None,
+    max_angle: float,
+) -> Signs:
+    """The orientation asked for, in the frame's order."""
+    m = len(normals)
+    if orient in ("mst", "riemannian"):
+        return along_tree(frame.points, normals, valid, graph, max_angle, orient == "riemannian")
+    if references is None:  # "none"
+        return Signs(np.zeros(m, dtype=bool), np.zeros(m, dtype=bool), ())
+    if orient == "viewpoint":
+        sensor = (references - frame.centre) / frame.scale
+        return towards(normals, valid, sensor - frame.points, "viewpoint")
+    if orient == "direction":
+        return towards(normals, valid, references, "direction")
+    return towards(normals, valid, references[frame.origin], "stored normals")

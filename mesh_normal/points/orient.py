@@ -1,0 +1,270 @@
+"""Signs for unoriented point normals: along a spanning tree, or towards a reference.
+
+``"mst"`` (Hoppe et al. 1992, as in CGAL's ``mst_orient_normals``): the symmetric graph of each
+point's nearest neighbours, weighted by 1 - |n_i . n_j|, its minimum spanning tree (scipy's
+csgraph), and signs carried from a seed down the tree. A spanning tree of least weight is also
+one whose path between any two points has the smallest possible largest step, so a sign is
+never carried across an edge sharper than ``max_angle`` when a gentler path exists; points the
+seed reaches only across one are left unoriented and reported, as CGAL does.
+
+``"riemannian"``: the same tree over a graph without the edges that leave either point's
+tangent plane by more than ``max_angle`` (a neighbour across a thin wall or on a nearby sheet,
+whose normal line is parallel but whose side is not), each edge also weighted by how far it
+leaves them. It is the one to use for thin structures and sheets closer together than the
+spacing of their points.
+
+Each connected part of the graph is seeded on its own, at an extreme point: its highest, whose
+normal is turned up, if that normal is within 60 degrees of vertical; otherwise its farthest
+along +x, -x, +y, -y, then -z, the first whose normal is within 60 degrees of that axis. On a
+closed surface the extreme point along a direction has its outward normal along it (the plane
+through it holds the whole surface on one side), so a closed surface points out, and an open
+terrain up. A part with no such point is left unoriented and says so.
+
+``"viewpoint"``, ``"direction"`` and ``"file"`` decide each point alone, towards a sensor, along
+a vector, or agreeing with stored normals; a point at right angles to its reference (to 2**-20)
+is left unoriented.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.sparse import coo_matrix  # type: ignore[import-untyped]
+from scipy.sparse.csgraph import (  # type: ignore[import-untyped]
+    breadth_first_order,
+    connected_components,
+    minimum_spanning_tree,
+)
+
+from mesh_normal.points._kernels import graph_edges, propagate_signs
+from mesh_normal.tolerances import ORIENT_POINT_COSINE, ORIENT_SEED_COSINE
+from mesh_normal.types import BoolArray, FloatArray, IndexArray
+
+OrientMode = Literal["mst", "riemannian", "viewpoint", "direction", "file", "none"]
+ORIENT_MODES: tuple[OrientMode, ...] = (
+    "mst",
+    "riemannian",
+    "viewpoint",
+    "direction",
+    "file",
+    "none",
+)
+
+#: Added to every edge weight: scipy's graphs take a zero weight for no edge. Adding the same
+#: amount to every edge does not change which spanning tree is least.
+_WEIGHT_FLOOR = 2.0**-30
+
+#: The ways a part is looked at for its seed, in order: up first, so that an open terrain
+#: faces up; the first whose farthest point has a normal within 60 degrees of it decides.
+_SEED_DIRECTIONS = tuple(
+    np.array(d, dtype=np.float64)
+    for d in ((0, 0, 1), (1, 0, 0), (-1, 0, 0), (0, 1, 0), (0, -1, 0), (0, 0, -1))
+)
+
+
+@dataclass(frozen=True, slots=True)
+class ComponentOrientation:
+    """How one connected part of the cloud was oriented.
+
+    ``points`` counts its points that have a normal; ``flipped`` those whose normal was turned;
+    ``unoriented`` those whose side could not be decided (their normal keeps its canonical sign);
+    ``reason`` says why in one sentence, or is empty when every point was oriented; ``seed`` is
+    the input index of the point that decided its side (-1 when none did).
+    """
+
+    points: int
+    flipped: int
+    unoriented: int
+    reason: str
+    seed: int
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class Signs:
+    """Which normals to flip and which are left unoriented, per point; and the parts.
+
+    Seeds in ``components`` index the arrays the caller passed (the caller maps them).
+    """
+
+    flip: BoolArray
+    unoriented: BoolArray
+    components: tuple[ComponentOrientation, ...]
+
+
+def towards(normals: FloatArray, valid: BoolArray, references: FloatArray, what: str) -> Signs:
+    """Turn each valid normal to make a positive dot product with its row of ``references``.
+
+    ``references`` is (n, 3) or (3,); a zero, non-finite or perpendicular one leaves the point
+    unoriented. The one summary is the whole cloud's (``what`` names the reference).
+    """
+    references = np.broadcast_to(references, normals.shape)
+    with np.errstate(invalid="ignore", over="ignore"):
+        lengths = np.sqrt(np.einsum("ij,ij->i", references, references))
+        dots = np.einsum("ij,ij->i", normals, references)
+    decided = (
+        np.isfinite(lengths) & np.isfinite(dots) & (np.abs(dots) > ORIENT_POINT_COSINE * lengths)
+    )
+    decided &= lengths > 0
+    flip = valid & decided & (dots < 0)
+    unoriented = valid & ~decided
+    left = int(unoriented.sum())
+    reason = f"{left} points are at right angles to the {what} or have none" if left else ""
+    summary = ComponentOrientation(int(valid.sum()), int(flip.sum()), left, reason, -1)
+    return Signs(flip, unoriented, (summary,) if valid.any() else ())
+
+
+def along_tree(
+    points: FloatArray,
+    normals: FloatArray,
+    valid: BoolArray,
+    graph: NDArray[np.int32],
+    max_angle: float,
+    offsets: bool,
+) -> Signs:
+    """Signs along minimum spanning trees of the neighbour graph; see the module docstring.
+
+    Parameters
+    ----------
+    points : (n, 3) float64
+        Coordinates centred on the cloud (the seeds look outward from the origin).
+    normals : (n, 3) float64
+        Unit rows where ``valid``.
+    valid : (n,) bool
+    graph : (n, g) int
+        Each point's nearest neighbours, -1 where there are fewer.
+    max_angle : float
+        Degrees, in (0, 90].
+    offsets : bool
+        The ``"riemannian"`` graph: drop edges that leave a tangent plane by over ``max_angle``.
+    """
+    n = len(points)
+    sharp_cosine = math.cos(math.radians(max_angle))
+    rows, cols, weights = _edges(points, normals, valid, graph, offsets, sharp_cosine)
+    graph_matrix = coo_matrix((weights, (rows, cols)), shape=(n, n)).tocsr()
+    del rows, cols, weights
+    tree = minimum_spanning_tree(graph_matrix, overwrite=True)
+    del graph_matrix
+    count, labels = connected_components(tree, directed=False)
+    seeds, seed_flip, decided = _seeds(points, normals, valid, labels, count)
+    # One breadth-first walk from a virtual root joined to every decided seed.
+    tree = tree.tocoo()
+    root = np.full(len(seeds[decided]), n)
+    walk = coo_matrix(
+        (
+            np.concatenate([tree.data, np.ones(len(root))]),
+            (np.concatenate([tree.row, root]), np.concatenate([tree.col, seeds[decided]])),
+        ),
+        shape=(n + 1, n + 1),
+    ).tocsr()
+    order, parent = breadth_first_order(walk, n, directed=False, return_predecessors=True)
+    order, parent = order[1:], parent[:n].copy()
+    parent[parent == n] = -1
+    reached = np.zeros(n, dtype=bool)
+    reached[order] = True
+    agrees, sharp = _tree_steps(normals, parent, reached, sharp_cosine)
+    flags = np.zeros(n, dtype=bool)
+    flags[seeds[decided]] = seed_flip[decided]
+    flip, cut = propagate_signs(order, parent, agrees, sharp, flags)
+    unoriented = valid & (cut | ~reached)
+    flip &= valid & ~unoriented
+    summaries = _summaries(labels, count, valid, flip, unoriented, seeds, decided, max_angle)
+    return Signs(flip, unoriented, summaries)
+
+
+def _edges(
+    points: FloatArray,
+    normals: FloatArray,
+    valid: BoolArray,
+    graph: NDArray[np.int32],
+    offsets: bool,
+    sharp_cosine: float,
+) -> tuple[NDArray[np.int32], NDArray[np.int32], FloatArray]:
+    """The graph's edges between valid points, each once: their ends and weights."""
+    size = graph.size
+    rows, cols = np.empty(size, dtype=np.int32), np.empty(size, dtype=np.int32)
+    weights = np.empty(size)
+    # Leaving a tangent plane by more than max_angle: a neighbour across a wall.
+    sine_limit = math.sqrt(max(0.0, 1.0 - sharp_cosine**2)) if offsets else 1.0
+    count = graph_edges(
+        points, normals, valid, graph, _WEIGHT_FLOOR, sine_limit, rows, cols, weights
+    )
+    return rows[:count], cols[:count], weights[:count]
+
+
+def _seeds(
+    points: FloatArray, normals: FloatArray, valid: BoolArray, labels: IndexArray, count: int
+) -> tuple[IndexArray, BoolArray, BoolArray]:
+    """Each part's seed, whether the seed must be flipped, and whether it decides at all."""
+    seeds = np.full(count, -1)
+    seed_flip = np.zeros(count, dtype=bool)
+    decided = np.zeros(count, dtype=bool)
+    members = np.flatnonzero(valid)
+    members = members[np.argsort(labels[members], kind="stable")]
+    part = labels[members]
+    starts = np.flatnonzero(np.r_[True, part[1:] != part[:-1]]) if len(part) else part
+    for direction in _SEED_DIRECTIONS:
+        heights = points[members] @ direction
+        highest = members[_first_maximum(heights, starts)]
+        cosines = normals[highest] @ direction
+        take = ~decided[part[starts]] & (np.abs(cosines) >= ORIENT_SEED_COSINE)
+        chosen = part[starts][take]
+        seeds[chosen], seed_flip[chosen], decided[chosen] = highest[take], cosines[take] < 0, True
+    return seeds, seed_flip, decided
+
+
+def _first_maximum(values: FloatArray, starts: IndexArray) -> IndexArray:
+    """Within each run of ``values`` from ``starts``, the position of its first maximum."""
+    if len(starts) == 0:
+        return starts
+    peaks = np.maximum.reduceat(values, starts)
+    run = np.repeat(np.arange(len(starts)), np.diff(np.r_[starts, len(values)]))
+    at_peak = np.flatnonzero(values == peaks[run])
+    return at_peak[np.r_[True, run[at_peak][1:] != run[at_peak][:-1]]]
+
+
+def _tree_steps(
+    normals: FloatArray, parent: IndexArray, reached: BoolArray, sharp_cosine: float
+) -> tuple[BoolArray, BoolArray]:
+    """Per point: whether its normal agrees with its parent's, and whether that step is sharp."""
+    child = np.flatnonzero(reached & (parent >= 0))
+    dots = np.einsum("ij,ij->i", normals[child], normals[parent[child]])
+    agrees = np.ones(len(parent), dtype=bool)
+    sharp = np.zeros(len(parent), dtype=bool)
+    agrees[child] = dots >= 0
+    sharp[child] = np.abs(dots) < sharp_cosine
+    return agrees, sharp
+
+
+def _summaries(
+    labels: IndexArray,
+    count: int,
+    valid: BoolArray,
+    flip: BoolArray,
+    unoriented: BoolArray,
+    seeds: IndexArray,
+    decided: BoolArray,
+    max_angle: float,
+) -> tuple[ComponentOrientation, ...]:
+    """One summary per part that has valid points, largest first."""
+    points = np.bincount(labels[valid], minlength=count)
+    flipped = np.bincount(labels[flip], minlength=count)
+    left = np.bincount(labels[unoriented], minlength=count)
+    summaries = []
+    for label in np.argsort(-points, kind="stable")[: int((points > 0).sum())]:
+        if not decided[label]:
+            reason = "no point of it faces clearly outward or up: give a viewpoint or a direction"
+        elif left[label]:
+            reason = f"reached only across edges sharper than {max_angle:g} degrees"
+        else:
+            reason = ""
+        seed = int(seeds[label]) if decided[label] else -1
+        summaries.append(
+            ComponentOrientation(
+                int(points[label]), int(flipped[label]), int(left[label]), reason, seed
+            )
+        )
+    return tuple(summaries)
