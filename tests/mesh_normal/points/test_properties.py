@@ -45,11 +45,14 @@ def test_the_order_of_the_points_does_not_matter(seed: int, n: int, orient: str)
 @PROPERTY
 @given(seeds, sizes)
 def test_rotating_the_cloud_rotates_its_normals(seed: int, n: int) -> None:
+    """Up to sign: the seeds of the orientation are extreme points along the axes, so on a
+    cloud this sparse (12 neighbours of 60 points) a rotation may seed it differently."""
     points, turn = ellipsoid(seed, n), rotation(seed)
-    first = point_normals(points, k=12)
-    turned = point_normals(points @ turn.T, k=12)
+    first = point_normals(points, k=12, orient="none")
+    turned = point_normals(points @ turn.T, k=12, orient="none")
     np.testing.assert_array_equal(turned.status, first.status)
-    np.testing.assert_allclose(turned.normals, first.normals @ turn.T, rtol=0, atol=1e-8)
+    agreement = np.einsum("ij,ij->i", turned.normals, first.normals @ turn.T)
+    np.testing.assert_allclose(np.abs(agreement), 1.0, rtol=0, atol=1e-8)
     np.testing.assert_allclose(turned.curvature, first.curvature, rtol=1e-6, atol=1e-15)
 
 
