@@ -16,6 +16,7 @@ holds costs one chunk, not the promise.
 from __future__ import annotations
 
 import io
+import struct
 from typing import Any
 
 import numpy as np
@@ -33,6 +34,20 @@ _NORMALS = (("normal_x", "normal_y", "normal_z"), ("nx", "ny", "nz"))
 
 def read_las(data: bytes) -> PointCloud:
     """Read a LAS or LAZ file (see the module docstring)."""
+    _check_header(data)
+    try:
+        return _read(data)
+    except (MeshFileError, MemoryError, KeyboardInterrupt, SystemExit):
+        raise
+    except BaseException as error:  # lazrs panics are BaseExceptions (pyo3's PanicException)
+        what = "LAZ" if data[104] & 0x80 else "LAS"
+        reason = str(error).strip().rstrip(".")[:80] or type(error).__name__
+        raise MeshFileError(
+            f"The {what} file cannot be read ({reason}): it looks truncated or broken."
+        ) from error
+
+
+def _read(data: bytes) -> PointCloud:
     import laspy  # type: ignore[import-untyped]  # on first use: only these files need it
 
     with laspy.open(io.BytesIO(data)) as reader:
@@ -50,17 +65,82 @@ def read_las(data: bytes) -> PointCloud:
         normal_names = next((n for n in _NORMALS if set(n) <= set(names)), None)
         parts: dict[str, list[NDArray[Any]]] = {"points": [], "colors": [], "normals": []}
         filled: set[str] = set()
-        try:
-            for chunk in reader.chunk_iterator(CHUNK_POINTS):
-                _take(chunk, names, normal_names, parts, filled)
-        except MeshFileError:
-            raise
-        except Exception as error:  # lazrs: "failed to fill whole buffer" and the like
-            raise MeshFileError(
-                f"The {'LAZ' if compressed else 'LAS'} file's points cannot be read "
-                f"({str(error)[:80]}): it looks truncated or broken."
-            ) from error
+        for chunk in reader.chunk_iterator(CHUNK_POINTS):
+            _take(chunk, names, normal_names, parts, filled)
     return _cloud(parts, names, normal_names, filled, compressed, count)
+
+
+#: Bytes of the smallest LAS header (1.0-1.2), of a VLR's header and of an EVLR's.
+_HEADER, _VLR, _EVLR = 227, 54, 60
+
+
+def _check_header(data: bytes) -> None:
+    """Refuse record counts the bytes cannot hold before laspy reads them: it reads as many
+    VLRs as the header says, past the end of the file (4 billion of them, for a bad count)."""
+    if len(data) < _HEADER:
+        raise MeshFileError(
+            f"The file is {len(data):,} bytes, too short for a LAS header ({_HEADER} bytes)."
+        )
+    minor = data[25]
+    header_size, point_offset, vlrs = struct.unpack_from("<HII", data, 94)
+    if not header_size <= point_offset <= len(data):
+        raise MeshFileError(
+            f"The LAS header puts the points at byte {point_offset:,}, outside the file's "
+            f"{len(data):,} bytes or inside its {header_size:,}-byte header."
+        )
+    if vlrs * _VLR > point_offset - header_size:
+        raise MeshFileError(
+            f"The LAS header says {vlrs:,} variable-length records, but only "
+            f"{point_offset - header_size:,} bytes lie between the header and the points."
+        )
+    if data[104] & 0x80:  # LAZ: the chunk table's count, which lazrs allocates for
+        _check_chunks(data, point_offset, vlrs, header_size)
+    if minor >= 4 and len(data) >= 247:
+        first, evlrs = struct.unpack_from("<QI", data, 235)
+        if evlrs and (first > len(data) or evlrs * _EVLR > len(data) - first):
+            raise MeshFileError(
+                f"The LAS header says {evlrs:,} extended variable-length records, but the "
+                "file is too short to hold them."
+            )
+
+
+def _check_chunks(data: bytes, point_offset: int, vlrs: int, header_size: int) -> None:
+    """What lazrs allocates for before reading a point: a buffer of a whole chunk (its size in
+    the ``laszip encoded`` VLR) and the chunk table (its offset is the first 8 bytes of the
+    point data), which must not count more chunks than the file has bytes."""
+    _check_chunk_size(data, vlrs, header_size)
+    if point_offset + 8 > len(data):
+        raise MeshFileError("The LAZ file ends where its points should start: it is truncated.")
+    (table,) = struct.unpack_from("<q", data, point_offset)
+    if point_offset + 8 <= table <= len(data) - 8:
+        (chunks,) = struct.unpack_from("<I", data, table + 4)
+        if chunks > len(data):
+            raise MeshFileError(
+                f"The LAZ file's chunk table counts {chunks:,} chunks, more than the file "
+                "could hold: it is broken."
+            )
+
+
+#: The most points a LAZ chunk may hold (100 times the 50,000 writers use): lazrs allocates
+#: a whole chunk at once, up to 335 MB at this size.
+MAX_CHUNK_POINTS = 5_000_000
+_VARIABLE_CHUNKS = 0xFFFFFFFF
+
+
+def _check_chunk_size(data: bytes, vlrs: int, position: int) -> None:
+    for _ in range(vlrs):
+        if position + _VLR > len(data):
+            return  # laspy says what is wrong
+        user, record, length = struct.unpack_from("<16sHH", data, position + 2)
+        start = position + _VLR
+        if user.rstrip(b"\0") == b"laszip encoded" and record == 22204 and start + 16 <= len(data):
+            (size,) = struct.unpack_from("<I", data, start + 12)
+            if MAX_CHUNK_POINTS < size != _VARIABLE_CHUNKS:
+                raise MeshFileError(
+                    f"The LAZ file's chunks hold {size:,} points each, more than this reader "
+                    f"takes ({MAX_CHUNK_POINTS:,})."
+                )
+        position = start + length
 
 
 def _take(

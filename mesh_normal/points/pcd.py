@@ -63,6 +63,8 @@ def _unique(name: str, index: int) -> str:
 def read_pcd(data: bytes) -> PointCloud:
     """Read a PCD file (see the module docstring)."""
     header = _header(data)
+    if not header.points:
+        raise MeshFileError("The file holds no points.")
     record = header.record()
     if header.data == "ascii":
         columns, describe = _ascii(data, header, record)

@@ -214,15 +214,16 @@ def sniff_points(data: bytes) -> str | None:
 
 
 def looks_like_table(data: bytes) -> bool:
-    """Whether the file starts as a text table of numbers: no NUL, and its first line that is
-    not a comment starts like a number."""
+    """Whether the file starts as a text table of points: no NUL, and its first line that is
+    not a comment starts like a number or names x, y and z (a header row)."""
     head = data[:4096]
     if b"\0" in head:
         return False
     for line in head.splitlines():
         stripped = line.strip()
         if stripped and not stripped.startswith((b"#", b"//")):
-            return bool(_NUMBER_ROW.match(stripped))
+            names = set(stripped.lower().replace(b",", b" ").split())
+            return bool(_NUMBER_ROW.match(stripped)) or {b"x", b"y", b"z"} <= names
     return False
 
 
