@@ -77,6 +77,8 @@ _HEADER, _VLR, _EVLR = 227, 54, 60
 def _check_header(data: bytes) -> None:
     """Refuse record counts the bytes cannot hold before laspy reads them: it reads as many
     VLRs as the header says, past the end of the file (4 billion of them, for a bad count)."""
+    if not data.startswith(b"LASF"):
+        raise MeshFileError("The file does not start with 'LASF', as LAS and LAZ files do.")
     if len(data) < _HEADER:
         raise MeshFileError(
             f"The file is {len(data):,} bytes, too short for a LAS header ({_HEADER} bytes)."

@@ -6,6 +6,10 @@ fields: ``x y z``, ``normal_x normal_y normal_z``, and ``rgb`` or ``rgba`` (pack
 in a float's or a uint32's bits, as PCL stores them); others (``curvature``, ``intensity``...)
 are named in a note, and ``_`` padding is read past.
 
+ASCII numbers in float fields are kept as written (float64), not rounded to the declared
+``SIZE 4``: writers print more digits than a float32 holds, as Open3D does, and Open3D reads
+them so.
+
 Points with a NaN (or infinite) coordinate are how organised clouds (``HEIGHT`` > 1, from depth
 cameras) mark missing pixels: they are left out, a note counts them, and ``kept`` maps the
 points returned to the file's rows. A NaN normal (PCL's "no normal") stays NaN.
@@ -188,8 +192,11 @@ def _ascii(
             raise MeshFileError(
                 f"The PCD field {name[:30]!r} holds a value that is not a whole number."
             )
-        # As declared: a packed rgb float holds the float32 nearest to its text.
-        columns[key] = part.astype(kind)
+        # Floats as written, not rounded to a declared SIZE 4: writers (Open3D) print more
+        # digits than a float32 holds, and georeferenced coordinates need them. A packed
+        # rgb float is the float32 nearest to its text, as its bits are the colour.
+        keep = kind[0] == "f" and name not in ("rgb", "rgba")
+        columns[key] = part if keep else part.astype(kind)
         start += count
     return columns, lambda row: f"the point on line {lines[row]:,}"
 

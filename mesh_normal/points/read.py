@@ -165,7 +165,7 @@ def colors_uint8(values: NDArray[np.generic], what: str = "colour") -> NDArray[n
     refused."""
     if values.dtype == np.uint8:
         return values.astype(np.uint8)  # the same type, for the type checker
-    if values.dtype.kind in "ui" and values.dtype.itemsize == 2:
+    if values.dtype == np.uint16:
         return np.round(values.astype(np.float64) / 257).astype(np.uint8)
     floats = values.astype(np.float64)
     if floats.size == 0:

@@ -5,7 +5,9 @@
   faces. Doubles, not floats: georeferenced coordinates (UTM eastings of 500 000 m and more)
   lose millimetres in float32.
 - ``"xyz"``: text, ``x y z nx ny nz`` a line, each number in Python's shortest form that reads
-  back to the same double (``repr``).
+  back to the same double (``repr``), under a comment ``# x y z nx ny nz`` naming the columns
+  (readers that skip ``#`` lines, Open3D's and CloudCompare's, read past it; ours reads the
+  names, so whole-number normals are never taken for colours).
 - ``"csv"``: the same numbers apart by commas, under a header row ``x,y,z,nx,ny,nz``.
 
 Without normals the files hold ``x y z`` alone.
@@ -46,17 +48,20 @@ def write_points(
         without a normal is written with zeros, say, not NaN, which no reader takes back).
     """
     xyz = _checked(points, "points")
-    columns = xyz if normals is None else np.hstack([xyz, _checked(normals, "normals")])
     if normals is not None and len(normals) != len(xyz):
         raise ValueError(f"{len(normals)} normals for {len(xyz)} points.")
+    columns = xyz if normals is None else np.hstack([xyz, _checked(normals, "normals")])
+    names = _NAMES[: columns.shape[1]]
     if fmt == "ply":
         return _ply(columns)
     if fmt == "xyz":
-        return _text(columns, " ")
+        return ("# " + " ".join(names) + "\n").encode() + _text(columns, " ")
     if fmt == "csv":
-        names = ["x", "y", "z", "nx", "ny", "nz"][: columns.shape[1]]
         return (",".join(names) + "\n").encode() + _text(columns, ",")
     raise ValueError(f"Point clouds are written as {', '.join(POINT_WRITE_FORMATS)}, not {fmt!r}.")
+
+
+_NAMES = ("x", "y", "z", "nx", "ny", "nz")
 
 
 def _checked(array: NDArray[np.floating], what: str) -> NDArray[np.float64]:
@@ -69,7 +74,7 @@ def _checked(array: NDArray[np.floating], what: str) -> NDArray[np.float64]:
 
 
 def _ply(columns: NDArray[np.float64]) -> bytes:
-    names = ["x", "y", "z", "nx", "ny", "nz"][: columns.shape[1]]
+    names = _NAMES[: columns.shape[1]]
     properties = "".join(f"property double {name}\n" for name in names)
     header = (
         f"ply\nformat binary_little_endian 1.0\ncomment written by {MAKER}\n"
