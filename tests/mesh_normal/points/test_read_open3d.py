@@ -10,6 +10,7 @@ import pytest
 
 from mesh_normal.points.read import read_points
 from mesh_normal.points.write import write_points
+from tests.paths import DATA
 
 o3d = pytest.importorskip("open3d")
 
@@ -85,3 +86,19 @@ def test_open3d_reads_what_we_write(tmp_path: Path, fmt: str) -> None:
     np.testing.assert_array_equal(np.asarray(theirs.points), POINTS)
     if fmt == "ply":
         np.testing.assert_array_equal(np.asarray(theirs.normals), NORMALS)
+
+
+@pytest.mark.parametrize(
+    ("name", "count", "normals"),
+    [("colored_cloud.pcd", 1000, True), ("pcl_logo.pcd", 12909, False)],
+)
+def test_files_pcl_wrote(name: str, count: int, normals: bool) -> None:
+    path = DATA / "points" / name
+    theirs, ours = o3d.io.read_point_cloud(str(path)), read_points(path)
+    assert len(ours.points) == count
+    np.testing.assert_array_equal(ours.points, np.asarray(theirs.points))
+    assert (ours.normals is not None) == normals
+    if normals:
+        np.testing.assert_array_equal(ours.normals, np.asarray(theirs.normals))
+    assert ours.colors is not None
+    np.testing.assert_array_equal(ours.colors, np.round(np.asarray(theirs.colors) * 255))
