@@ -84,12 +84,17 @@ def _nth(row: int) -> str:
     return f"point {row:,} (counting from 0)"
 
 
+#: A PCD header is a dozen short lines: a file that has not reached its DATA line after these
+#: is not PCD, and is not read line by line to its end.
+_MAX_HEADER_LINES, _MAX_LINE = 1000, 1 << 16
+
+
 def _header(data: bytes) -> _Header:
     values: dict[str, list[str]] = {}
     position, number = 0, 0
     while "DATA" not in values:
-        end = data.find(b"\n", position)
-        if end < 0:
+        end = data.find(b"\n", position, position + _MAX_LINE)
+        if end < 0 or number == _MAX_HEADER_LINES:
             raise MeshFileError(
                 "The PCD header has no 'DATA' line: the file is cut short or not PCD."
             )

@@ -116,7 +116,8 @@ def make_cloud(
             _refuse_nonfinite(normal, "normal", describe)
         elif first_bad_vertex(normal) is not None:
             missing = int(np.sum(~np.isfinite(normal).all(axis=1)))
-            notes.append(f"{_count(missing, 'point')} in the file have no normal (NaN).")
+            verb = "has" if missing == 1 else "have"
+            notes.append(f"{_count(missing, 'point')} in the file {verb} no normal (NaN).")
     order = _frozen(np.arange(len(xyz)) if kept is None else kept, np.int64)
     for array in (normal, colors):
         if array is not None and array.shape != xyz.shape:  # a reader's bug: fail loudly
@@ -306,8 +307,10 @@ _TITLES = {"pcd": "PCD", "las": "LAS or LAZ", "xyz": "a text table of points"}
 
 
 def _read(found: str, data: bytes, suffix: str | None) -> PointCloud:
+    from mesh_normal.points import vertices
+
     if found == "ply":
-        return read_ply_points(data)
+        return vertices.read_ply_points(data)
     if found == "xyz":
         from mesh_normal.points.xyz import read_xyz
 
@@ -320,72 +323,7 @@ def _read(found: str, data: bytes, suffix: str | None) -> PointCloud:
         from mesh_normal.points.las import read_las
 
         return read_las(data)
-    return mesh_vertices(data, found)
-
-
-def mesh_vertices(data: bytes, found: str) -> PointCloud:
-    """The vertices of a mesh file (read by :func:`~mesh_normal.files.read_mesh`), with the
-    vertex normals and colours it stores."""
-    from mesh_normal.files.read import read_mesh
-
-    mesh = read_mesh(data, f"mesh.{found}")
-    colors = mesh.vertex_colors
-    notes = [*mesh.notes]
-    notes.append(f"The file is a mesh: its {_count(len(mesh.faces), 'triangle')} are not used.")
-    return make_cloud(
-        mesh.format,
-        mesh.vertices,
-        normals=mesh.file_vertex_normals,
-        colors=None if colors is None else colors_uint8(colors[:, :3]),
-        source_kind="mesh vertices",
-        notes=notes,
-        describe=lambda row: f"vertex {row:,} (counting from 0)",
-    )
-
-
-#: PLY vertex properties a cloud uses.
-_PLY_USED = frozenset({"x", "y", "z", "nx", "ny", "nz", "red", "green", "blue"})
-
-
-def read_ply_points(data: bytes) -> PointCloud:
-    """The vertex element of a PLY file, with ``nx ny nz`` and ``red green blue`` if there;
-    faces (when there are any) are not used, and ``source_kind`` says "mesh vertices"."""
-    from mesh_normal.files.ply import read_elements
-
-    elements, notes = read_elements(data)
-    vertex = next((element for element in elements if element.name == "vertex"), None)
-    if vertex is None or not {"x", "y", "z"} <= vertex.data.keys():
-        raise MeshFileError("The PLY file has no vertex element with x, y and z.")
-    columns = vertex.data
-    declared = dict(vertex.scalars)
-    normals = _stack(columns, ("nx", "ny", "nz"), declared)
-    colors = _stack(columns, ("red", "green", "blue"), declared)
-    unused = [name for name in vertex.order if name not in _PLY_USED]
-    if unused:
-        notes.append(f"The file's vertex {', '.join(unused)} values are not used.")
-    faces = sum(element.count for element in elements if element.name in ("face", "tristrips"))
-    others = [f"{e.name} ({e.count:,})" for e in elements if e.name not in ("vertex",) and e.count]
-    if others:
-        notes.append(f"The file's other elements are not used: {', '.join(others)}.")
-    return make_cloud(
-        "ply",
-        _stack(columns, ("x", "y", "z"), declared),  # type: ignore[arg-type]
-        normals=normals,
-        colors=None if colors is None else colors_uint8(colors),
-        source_kind="mesh vertices" if faces else "points",
-        notes=notes,
-        describe=lambda row: f"vertex {row:,} (counting from 0)",
-    )
-
-
-def _stack(
-    columns: dict[str, object], names: tuple[str, ...], declared: dict[str, str]
-) -> NDArray[np.generic] | None:
-    """The named scalar columns side by side in their common declared type, or ``None``."""
-    if not all(name in declared and name in columns for name in names):
-        return None
-    kind = np.result_type(*(np.dtype(declared[name]) for name in names))
-    return np.stack([np.asarray(columns[name]).astype(kind) for name in names], axis=1)
+    return vertices.mesh_vertices(data, found)
 
 
 def _unknown(filename: str | None) -> MeshFileError:

@@ -127,3 +127,36 @@ def test_colours_become_8_bit(values: np.ndarray, expected: list[list[int]]) -> 
 def test_colours_out_of_range_are_refused(values: np.ndarray) -> None:
     with pytest.raises(MeshFileError, match="colour value"):
         colors_uint8(values)
+
+
+def test_an_obj_without_faces_is_its_v_lines() -> None:
+    text = b"# cloud\nv 1 2 3 1 0 0\nvn 0 0 1\nv 4 5 6 0 0.5 1\nvn 0 1 0\n"
+    with pytest.raises(MeshFileError, match="no faces"):
+        read_mesh(text, "cloud.obj")
+    cloud = read_points(text, "cloud.obj")
+    assert (cloud.format, cloud.source_kind) == ("obj", "points")
+    np.testing.assert_array_equal(cloud.points, [[1, 2, 3], [4, 5, 6]])
+    np.testing.assert_array_equal(cloud.normals, [[0, 0, 1], [0, 1, 0]])
+    np.testing.assert_array_equal(cloud.colors, [[255, 0, 0], [0, 128, 255]])
+    weights = read_points(b"v 1 2 3 1\nv 4 5 6 1\nvn 0 0 1\n")
+    assert weights.normals is None
+    assert weights.notes == (
+        "The file's vertex weights (w) are not used.",
+        "The file's 1 vn normals are not used: without faces they follow the 2 vertices "
+        "only when there are as many.",
+    )
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        (b"v 1 2 3\nv 4 5\n", "The OBJ vertex on line 2 has 2 numbers"),
+        (b"v 1 2 3\nv 4 five 6\n", "Line 2 has 'five' where a number should be"),
+        (b"v 1 2 3\nv 4 nan 6\n", "The coordinates of the vertex on line 2 include nan"),
+        (b"v 1 2 3\nvn 0 0\n", "The OBJ normal on line 2 is not 3 numbers"),
+        (b"v 1 2 3\nvn 0 0 x\n", "Line 2 has 'x' where a number should be"),
+    ],
+)
+def test_broken_obj_clouds(text: bytes, message: str) -> None:
+    with pytest.raises(MeshFileError, match=message):
+        read_points(text, "cloud.obj")

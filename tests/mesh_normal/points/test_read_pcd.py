@@ -126,7 +126,7 @@ def test_nan_normals_stay_nan_with_a_note() -> None:
     assert cloud.normals is not None
     assert np.isnan(cloud.normals[0]).all()
     np.testing.assert_array_equal(cloud.normals[1], [0, 0, 1])
-    assert cloud.notes == ("1 point in the file have no normal (NaN).",)
+    assert cloud.notes == ("1 point in the file has no normal (NaN).",)
 
 
 @given(st.lists(st.binary(min_size=1, max_size=40), max_size=30), st.data())
@@ -175,6 +175,8 @@ HEAD = pcd_header("x y z", "4 4 4", "F F F", 2)
         ),
         (HEAD.replace(b"POINTS 2", b"POINTS 1000000000000"), "WIDTH 2 and HEIGHT 1 make 2 points"),
         (HEAD.replace(b"DATA ascii\n", b""), "no 'DATA' line"),
+        (b"FIELDS x y z\n" + b"1 2 3\n" * 2000, "no 'DATA' line"),
+        (b"FIELDS x y z " + b"1" * 70000 + b"\nDATA ascii\n", "no 'DATA' line"),
         (HEAD.replace(b"DATA ascii", b"DATA zip"), "DATA 'zip' is not ascii"),
         (HEAD.replace(b"SIZE 4 4 4", b"SIZE 4 4"), "SIZE line is not 3 whole numbers"),
         (HEAD.replace(b"TYPE F F F", b"TYPE F F"), "names 3 fields but gives 2 TYPE"),
