@@ -5,6 +5,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from mesh_normal.files import MeshFileError, read_mesh
 from mesh_normal.points.read import PointCloud, colors_uint8, read_points
@@ -160,3 +162,38 @@ def test_an_obj_without_faces_is_its_v_lines() -> None:
 def test_broken_obj_clouds(text: bytes, message: str) -> None:
     with pytest.raises(MeshFileError, match=message):
         read_points(text, "cloud.obj")
+
+
+SAMPLES = {
+    "cloud.pcd": pcd_header("x y z rgb", "4 4 4 4", "F F F U", 2, "binary") + bytes(range(32)),
+    "cloud.ply": b"ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+    b"property float z\nproperty uchar red\nend_header\n0 0 0 1\n1 1 1 2\n",
+    "cloud.xyz": b"# x y z nx ny nz\n1 2 3 0 0 1\n4 5 6 0 1 0\n",
+    "cloud.pts": b"2\n1 2 3 0 10 20 30\n4 5 6 0 40 50 60\n",
+    "cloud.obj": b"v 1 2 3\nv 4 5 6\nvn 0 0 1\nvn 0 1 0\n",
+}
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.sampled_from(sorted(SAMPLES)), st.data())
+def test_damaged_files_give_a_cloud_or_a_sentence(name: str, data: st.DataObject) -> None:
+    """Bytes changed, cut or added anywhere: a cloud, or one MeshFileError, nothing else."""
+    damaged = bytearray(SAMPLES[name])
+    for _ in range(data.draw(st.integers(1, 4))):
+        position = data.draw(st.integers(0, len(damaged)))
+        damaged[position : position + data.draw(st.integers(0, 3))] = data.draw(
+            st.binary(max_size=3) | st.sampled_from([b"9", b" ", b"\n", b"nan", b"-"])
+        )
+    outcome = _read_or_refuse(bytes(damaged), name)
+    if isinstance(outcome, MeshFileError):
+        assert str(outcome)[:1].isupper() and str(outcome).endswith(".")
+        assert outcome.status_code in (400, 415)
+    else:
+        assert np.isfinite(outcome.points).all() and len(outcome.points) == len(outcome.kept)
+
+
+def _read_or_refuse(data: bytes, name: str) -> PointCloud | MeshFileError:
+    try:
+        return read_points(data, name)
+    except MeshFileError as error:
+        return error
