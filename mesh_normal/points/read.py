@@ -3,7 +3,8 @@
 :func:`read_points` reads PLY (vertices, with or without faces), XYZ-like text tables
 (:mod:`mesh_normal.points.xyz`), PCD (:mod:`mesh_normal.points.pcd`), LAS and LAZ
 (:mod:`mesh_normal.points.las`), and any mesh file :func:`~mesh_normal.files.read_mesh` reads,
-as the cloud of its vertices. It keeps the points in file order, the normals the file stores
+as the cloud of its vertices (:mod:`mesh_normal.points.vertices`, which also reads an OBJ file
+of ``v`` lines without faces). It keeps the points in file order, the normals the file stores
 (as stored, not normalised) and colours as ``uint8``; what the file holds beyond those is named
 in :attr:`PointCloud.notes`. Every problem is a :class:`~mesh_normal.files.MeshFileError` with
 one sentence: a non-finite coordinate is refused with its row, except in PCD files, whose
