@@ -40,9 +40,10 @@ _Item = TypeVar("_Item", bound=np.generic)
 Describe = Callable[[int], str]
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(frozen=True, slots=True, eq=False)
 class PointCloud:
-    """A point cloud as its file holds it; every array is read-only.
+    """A point cloud as its file holds it; every array is read-only. Compared by identity
+    (``==`` on arrays has no single truth value).
 
     Attributes
     ----------
