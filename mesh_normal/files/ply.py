@@ -70,13 +70,40 @@ class _Element:
 
 def read_ply(data: bytes) -> LoadedMesh:
     """Read a PLY file (see the module docstring)."""
+    elements, notes = read_elements(data)
+    return _mesh(elements, notes)
+
+
+#: One element of a PLY file as read: ``name``, ``count``, ``scalars`` (name and NumPy type
+#: code of each scalar property, in order) and ``data`` (property name to its column).
+PlyElement = _Element
+
+
+def read_elements(data: bytes) -> tuple[list[PlyElement], list[str]]:
+    """Every element of a PLY file, read as its header declares it, and the reading notes;
+    no mesh is built (a point cloud's reader takes the vertex element alone)."""
     encoding, elements, body = _header(data)
     notes = []
     if encoding == "ascii":
+        _check_words(elements, len(data) - body)
         notes = _read_ascii(elements, data[body:])
     else:
         _read_binary(elements, data, body, _ENDIAN[encoding])
-    return _mesh(elements, notes)
+    return elements, notes
+
+
+def _check_words(elements: list[_Element], size: int) -> None:
+    """Refuse, before allocating, counts that ``size`` bytes of text cannot hold: each number
+    takes a character and a separator, so a header claiming a billion vertices over a few
+    lines is found cheaply (the binary reader compares sizes the same way)."""
+    room = (size + 1) // 2
+    for element in elements:
+        room -= element.count * len(element.order)
+        if room < 0:
+            raise MeshFileError(
+                f"The PLY header says {element.count:,} {element.name} elements, but the "
+                "file is too short to hold them: it looks truncated."
+            )
 
 
 def _header(data: bytes) -> tuple[str, list[_Element], int]:
