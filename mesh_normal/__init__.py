@@ -30,7 +30,15 @@ if TYPE_CHECKING:
     from mesh_normal.faces import FaceGeometry, FaceNormals, face_areas, face_geometry, face_normals
     from mesh_normal.files import LoadedMesh, MeshFileError, read_mesh, write_mesh
     from mesh_normal.orientation import Orientation, orient, signed_volume
-    from mesh_normal.points import ComponentOrientation, PointNormals, PointStatus, point_normals
+    from mesh_normal.points import (
+        ComponentOrientation,
+        PointCloud,
+        PointNormals,
+        PointStatus,
+        point_normals,
+        read_points,
+        write_points,
+    )
     from mesh_normal.precompile import compile_kernels
     from mesh_normal.report import MeshReport
     from mesh_normal.topology import MeshTopology, mesh_topology
@@ -63,6 +71,9 @@ _HOMES = {
     "PointNormals": "points",
     "PointStatus": "points",
     "point_normals": "points",
+    "PointCloud": "points",
+    "read_points": "points",
+    "write_points": "points",
     "MeshReport": "report",
     "analyse": "analysis",  # mn.analyse(path) is the report
     "MeshTopology": "topology",
@@ -86,6 +97,7 @@ __all__ = [
     "MeshReport",
     "MeshTopology",
     "Orientation",
+    "PointCloud",
     "PointNormals",
     "PointStatus",
     "TriangleNormal",
@@ -102,11 +114,13 @@ __all__ = [
     "orient",
     "point_normals",
     "read_mesh",
+    "read_points",
     "signed_volume",
     "triangle_normal",
     "triangle_normals",
     "vertex_normals",
     "write_mesh",
+    "write_points",
 ]
 
 

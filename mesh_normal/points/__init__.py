@@ -1,22 +1,54 @@
-"""Point clouds: normals estimated from each point's neighbours, then oriented.
+"""Point clouds: normals estimated from each point's neighbours, then oriented; the files
+they come in (PLY, XYZ/PTS/TXT/CSV, PCD, LAS/LAZ, and any mesh file's vertices).
 
 >>> import mesh_normal as mn
->>> result = mn.point_normals(points, k=30)          # (n, 3) float: oriented outward / up
+>>> cloud = mn.read_points("scan.pcd")                # points, stored normals, viewpoint
+>>> result = mn.point_normals(cloud.points, k=30)     # (n, 3) float: oriented outward / up
 >>> result.normals.shape, result.counts()["ok"], result.components[0]
+
+Names are loaded on first use, like :mod:`mesh_normal`'s: reading a file needs no k-d tree.
 """
 
 from __future__ import annotations
 
-from mesh_normal.points.estimate import PointNormals, PointStatus, point_normals
-from mesh_normal.points.orient import ORIENT_MODES, ComponentOrientation, OrientMode
+from typing import TYPE_CHECKING
 
-# read_points: from mesh_normal.points.read (another session)
+from mesh_normal._lazy import lazy_names
+
+if TYPE_CHECKING:
+    from mesh_normal.points.estimate import PointNormals, PointStatus, point_normals
+    from mesh_normal.points.orient import ORIENT_MODES, ComponentOrientation, OrientMode
+    from mesh_normal.points.read import POINT_SUFFIXES, PointCloud, read_points
+    from mesh_normal.points.write import POINT_WRITE_FORMATS, write_points
+
+#: Public name to the module under ``mesh_normal.points`` that defines it.
+_HOMES = {
+    "ORIENT_MODES": "orient",
+    "ComponentOrientation": "orient",
+    "OrientMode": "orient",
+    "PointNormals": "estimate",
+    "PointStatus": "estimate",
+    "point_normals": "estimate",
+    "POINT_SUFFIXES": "read",
+    "PointCloud": "read",
+    "read_points": "read",
+    "POINT_WRITE_FORMATS": "write",
+    "write_points": "write",
+}
 
 __all__ = [
     "ORIENT_MODES",
+    "POINT_SUFFIXES",
+    "POINT_WRITE_FORMATS",
     "ComponentOrientation",
     "OrientMode",
+    "PointCloud",
     "PointNormals",
     "PointStatus",
     "point_normals",
+    "read_points",
+    "write_points",
 ]
+
+
+__getattr__, __dir__ = lazy_names(__name__, _HOMES, globals())
