@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mesh_normal.files.errors import MeshFileError
-from mesh_normal.points.read import PointCloud, colors_uint8, make_cloud
+from mesh_normal.points.cloud import PointCloud, colors_uint8, make_cloud
 
 #: Points decompressed at once: at most 67 bytes each (point format 10), about 17 MB.
 CHUNK_POINTS = 1 << 18

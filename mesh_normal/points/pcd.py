@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 
 from mesh_normal.files.errors import MeshFileError
 from mesh_normal.kernels import kernel
-from mesh_normal.points.read import PointCloud, make_cloud
+from mesh_normal.points.cloud import PointCloud, make_cloud
 from mesh_normal.points.xyz import read_rows
 
 #: Most bytes one LZF byte can become: a 3-byte back reference copies up to 264 bytes.

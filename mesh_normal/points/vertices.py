@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mesh_normal.files.errors import MeshFileError
-from mesh_normal.points.read import PointCloud, colors_uint8, make_cloud
+from mesh_normal.points.cloud import PointCloud, colors_uint8, make_cloud
 
 _OBJ_ELEMENT = re.compile(rb"^[ \t]*(?:f|l|p|curv|surf)[ \t]", re.MULTILINE)
 

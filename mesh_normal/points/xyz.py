@@ -38,7 +38,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mesh_normal.files.errors import MeshFileError
-from mesh_normal.points.read import PointCloud, colors_uint8, make_cloud
+from mesh_normal.points.cloud import PointCloud, colors_uint8, make_cloud
 
 #: Bytes of text read at once (cut at a line end): the words of one chunk are Python objects.
 _CHUNK = 1 << 20
