@@ -317,3 +317,12 @@ def test_unreadable_files_exit_3(tmp_path: Path, capsys: pytest.CaptureFixture[s
     empty.write_bytes(b"")
     code, _, err = run(["points", str(empty)], capsys)
     assert (code, err) == (3, f"mesh-normal: {empty}: The file is empty (0 bytes).\n")
+
+
+@pytest.mark.parametrize("argv", [["points"], ["points", "a.ply", "--k", "2"]])
+def test_usage_errors_answer_before_the_library_loads(argv: list[str]) -> None:
+    from tests.mesh_normal.test_cli_start import HEAVY, modules_after
+
+    loaded, code = modules_after(argv)
+    assert code == 2
+    assert not sorted(name for name in loaded if name.split(".")[0] in HEAVY)
