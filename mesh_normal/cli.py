@@ -504,11 +504,13 @@ def component_lines(found: dict[str, Any]) -> list[str]:
         f"{found['unoriented']:,} unoriented"
     ]
     for number, part in enumerate(parts[:LISTED_COMPONENTS], 1):
-        seed = f"seed point {part['seed']:,}" if part["seed"] >= 0 else "no seed"
+        seed = f", seed point {part['seed']:,}" if part["seed"] >= 0 else ", no seed"
+        if found["orient"] not in ("mst", "riemannian"):  # each point decided alone
+            seed = ""
         reason = f"; {part['reason']}" if part["reason"] else ""
         lines.append(
             f"  part {number}: {part['points']:,} points, {part['flipped']:,} flipped, "
-            f"{part['unoriented']:,} unoriented, {seed}{reason}"
+            f"{part['unoriented']:,} unoriented{seed}{reason}"
         )
     if count > LISTED_COMPONENTS:
         lines.append(f"  and {count - LISTED_COMPONENTS:,} more")
@@ -526,19 +528,19 @@ def stored_line(stored: dict[str, Any]) -> str:
 
 
 def written_line(found: dict[str, Any], output: str) -> str:
+    """What ``-o`` wrote, and what in it is not a normal oriented as asked."""
     line = f"wrote {found['points']:,} normals to {output}"
-    missing = found["without_normal"]
-    if not missing:
-        return line
-    reasons = ", ".join(
-        f"{count:,} {name}"
-        for name, count in found["counts"].items()
-        if count and name not in ("ok", "unoriented")
-    )
-    return (
-        f"{line}; {missing:,} point(s) without a normal are zero rows ({reasons}); "
-        "see `mesh-normal points FILE`"
-    )
+    missing, unoriented = found["without_normal"], found["counts"]["unoriented"]
+    if missing:
+        reasons = ", ".join(
+            f"{count:,} {name}"
+            for name, count in found["counts"].items()
+            if count and name not in ("ok", "unoriented")
+        )
+        line += f"; {missing:,} point(s) without a normal are zero rows ({reasons})"
+    if unoriented:
+        line += f"; {unoriented:,} normal(s) unoriented (their side could not be decided)"
+    return line + ("; see `mesh-normal points FILE`" if missing or unoriented else "")
 
 
 def vector3(text: str) -> list[float]:

@@ -169,6 +169,19 @@ def test_points_without_a_normal_are_zero_rows_and_said(
     assert not normals[N:].any() and np.allclose(np.linalg.norm(normals[:N], axis=1), 1)
 
 
+def test_unoriented_normals_are_said_when_written(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path, out = plane_pcd(tmp_path / "plane.pcd", "0 0 0 1 0 0 0"), tmp_path / "n.csv"
+    # The plane's normals are at right angles to +x: no side.
+    code, stdout, _ = run(["points", str(path), "--direction=1,0,0", "-o", str(out)], capsys)
+    assert (code, stdout) == (
+        0,
+        f"wrote 100 normals to {out}; 100 normal(s) unoriented (their side could not be "
+        "decided); see `mesh-normal points FILE`\n",
+    )
+
+
 def test_json_with_an_output_names_it(
     ply: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
