@@ -364,12 +364,17 @@ class PointsBar:
 
 
 def point_bytes(cloud: PointCloud, result: PointNormals, output_format: str | None) -> bytes:
-    """The file ``-o`` names: the normals alone (``.npy``) or the points with them; the
-    points without a normal have zero rows."""
+    """The file ``-o`` names: the normals alone (``.npy``), a row for each of the file's rows
+    (those it left out, a PCD's NaN points, as zeros, so that row i is the file's point i),
+    or the points read with their normals. Points without a normal have zero rows."""
     if output_format == "npy":
+        import numpy as np
+
         from mesh_normal.exports import npy_bytes
 
-        return npy_bytes(result.normals)
+        rows = np.zeros((cloud.file_points, 3))
+        rows[cloud.kept] = result.normals
+        return npy_bytes(rows)
     from mesh_normal.points import write_points
 
     return write_points(cloud.points, result.normals, output_format or "ply")
@@ -454,7 +459,8 @@ def points_text(found: dict[str, Any]) -> str:
         f"{found['with_normal']:,} with a normal, {found['without_normal']:,} without"
     ]
     if found["file_points"] != found["points"]:
-        lines.append(f"the file holds {found['file_points']:,} rows; only these points are used")
+        left_out = found["file_points"] - found["points"]
+        lines.append(f"the file holds {found['file_points']:,} rows: {left_out:,} left out")
     lines.extend(f"note: {note}" for note in found["notes"])
     lines.append(f"neighbourhood: {neighbourhood_words(found)}; {orientation_words(found)}")
     lines.extend(
@@ -529,7 +535,8 @@ def stored_line(stored: dict[str, Any]) -> str:
 
 def written_line(found: dict[str, Any], output: str) -> str:
     """What ``-o`` wrote, and what in it is not a normal oriented as asked."""
-    line = f"wrote {found['points']:,} normals to {output}"
+    rows = found["file_points"] if output.lower().endswith(".npy") else found["points"]
+    line = f"wrote {rows:,} normals to {output}"
     missing, unoriented = found["without_normal"], found["counts"]["unoriented"]
     if missing:
         reasons = ", ".join(
@@ -540,6 +547,9 @@ def written_line(found: dict[str, Any], output: str) -> str:
         line += f"; {missing:,} point(s) without a normal are zero rows ({reasons})"
     if unoriented:
         line += f"; {unoriented:,} normal(s) unoriented (their side could not be decided)"
+    left_out = found["file_points"] - found["points"]
+    if left_out and output.lower().endswith(".npy"):
+        line += f"; {left_out:,} row(s) the file left out are zero rows too"
     return line + ("; see `mesh-normal points FILE`" if missing or unoriented else "")
 
 

@@ -182,6 +182,34 @@ def test_unoriented_normals_are_said_when_written(
     )
 
 
+def test_npy_rows_are_the_file_rows_when_it_left_some_out(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A PCD's NaN points are left out when read; the .npy keeps a (zero) row for each, so
+    that row i is the file's point i. The point files hold the points read."""
+    x, y = np.meshgrid(np.arange(10.0), np.arange(10.0))
+    rows = [f"{a} {b} 0" for a, b in zip(x.ravel(), y.ravel(), strict=True)]
+    rows[7] = rows[50] = "nan nan nan"
+    path, out = tmp_path / "holes.pcd", tmp_path / "n.npy"
+    path.write_bytes(pcd_header("x y z", "4 4 4", "F F F", 100) + "\n".join(rows).encode() + b"\n")
+    code, stdout, _ = run(["points", str(path), "--direction=0,0,1", "-o", str(out)], capsys)
+    assert code == 0
+    assert stdout == (f"wrote 100 normals to {out}; 2 row(s) the file left out are zero rows too\n")
+    expected = np.tile([0.0, 0.0, 1.0], (100, 1))
+    expected[[7, 50]] = 0.0
+    np.testing.assert_array_equal(np.load(out), expected)
+    ply = tmp_path / "n.ply"
+    assert run(["points", str(path), "--direction=0,0,1", "-o", str(ply)], capsys)[1] == (
+        f"wrote 98 normals to {ply}\n"
+    )
+    summary = run(["points", str(path)], capsys)[1].splitlines()
+    assert summary[:2] == [
+        "holes.pcd: 98 points (PCD), 98 with a normal, 0 without",
+        "the file holds 100 rows: 2 left out",
+    ]
+    assert summary[2].startswith("note: 2 ")
+
+
 def test_json_with_an_output_names_it(
     ply: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
