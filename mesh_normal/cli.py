@@ -252,10 +252,10 @@ def fix(args: argparse.Namespace, progress: Progress) -> int:
 def points(args: argparse.Namespace, progress: Progress) -> int:
     """Normals of a point cloud: a file of them with ``-o``, else a summary on stdout."""
     output_format = point_output(args.file, args.output)
-    from mesh_normal.points import point_normals
-
     if args.k is None and args.radius is None:
         raise Failure("--k all needs --radius", EXIT_USAGE)
+    from mesh_normal.points import point_normals
+
     cloud = load_points(args.file, progress)
     orient, references = point_references(args, cloud)
     bar = PointsBar(progress, orient)
@@ -295,9 +295,19 @@ def point_output(source: str, output: str | None) -> str | None:
             f"the output must end in {', '.join(POINT_OUTPUTS)}, not {suffix or 'no suffix'}",
             EXIT_USAGE,
         )
-    if Path(output).resolve() == Path(source).resolve():
+    if same_file(output, source):
         raise Failure(f"{output} is the input file; write the normals to another file", EXIT_USAGE)
     return POINT_OUTPUTS[suffix]
+
+
+def same_file(one: str, other: str) -> bool:
+    """Whether two paths name one file: the same path once resolved, or a (hard) link."""
+    if Path(one).resolve() == Path(other).resolve():
+        return True
+    try:
+        return Path(one).samefile(other)
+    except OSError:  # either does not exist (yet)
+        return False
 
 
 def load_points(path: str, progress: Progress) -> PointCloud:

@@ -229,6 +229,10 @@ def test_the_input_is_never_overwritten(ply: Path, capsys: pytest.CaptureFixture
         )
     assert ply.read_bytes() == before
     assert [path.name for path in ply.parent.iterdir()] == ["ball.ply"]
+    link = ply.with_name("link.ply")
+    link.hardlink_to(ply)
+    assert run(["points", str(ply), "-o", str(link)], capsys)[0] == 2
+    assert ply.read_bytes() == before
 
 
 def test_an_output_is_replaced_whole(ply: Path, tmp_path: Path) -> None:
