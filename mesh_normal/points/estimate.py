@@ -20,7 +20,7 @@ Non-finite points get ``not_finite`` and are no one's neighbours. Then the norma
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from enum import IntEnum
 
@@ -133,6 +133,7 @@ def point_normals(
     direction: ArrayLike | None = None,
     stored: ArrayLike | None = None,
     max_angle: float = ORIENT_MAX_ANGLE,
+    progress: Callable[[int, int], None] | None = None,
 ) -> PointNormals:
     """Return the normal, curvature and status of every point of a cloud.
 
@@ -158,6 +159,9 @@ def point_normals(
     max_angle : float
         ``"mst"`` and ``"riemannian"``: the largest angle, in degrees, between neighbours'
         normal lines that a sign is carried across.
+    progress : callable, optional
+        Called as ``progress(done, total)`` after each chunk of the estimation (``total``: the
+        finite points); the orientation follows the last call.
 
     Returns
     -------
@@ -175,7 +179,7 @@ def point_normals(
     m = len(frame.points)
     if m == 0:
         return PointNormals(normals, curvature, neighbours, status == 0, status, orient, ())
-    local_normals, local_curvature, used, codes, graph = _estimate(frame, k, radius)
+    local_normals, local_curvature, used, codes, graph = _estimate(frame, k, radius, progress)
     signs = _signs(frame, local_normals, codes == 0, graph, orient, references, max_angle)
     local_normals[signs.flip] *= -1.0
     codes[signs.unoriented] = PointStatus.unoriented
@@ -313,7 +317,10 @@ def _spread(bits: NDArray[np.uint64]) -> NDArray[np.uint64]:
 
 
 def _estimate(
-    frame: _Frame, k: int | None, radius: float | None
+    frame: _Frame,
+    k: int | None,
+    radius: float | None,
+    progress: Callable[[int, int], None] | None = None,
 ) -> tuple[FloatArray, FloatArray, IndexArray, NDArray[np.uint8], NDArray[np.int32]]:
     """Normals, curvature, counts, codes and the orientation graph, in the frame's order."""
     m = len(frame.points)
@@ -338,6 +345,8 @@ def _estimate(
                 codes[start:stop],
             )
         graph[start:stop] = np.where(nearest < m, nearest, -1)
+        if progress is not None:
+            progress(stop, m)
     return normals, curvature, used, codes.astype(np.uint8), graph
 
 
