@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from mesh_normal.corners import corner_normals
+from mesh_normal.corners import corner_normals, corner_weights
 from mesh_normal.faces import face_geometry, face_normals
 from mesh_normal.files.polygons import triangulate
 from mesh_normal.orientation import orient
 from mesh_normal.points import point_normals
+from mesh_normal.points.pcd import lzf_decompress
 from mesh_normal.vertices import vertex_normals
 
 
@@ -27,6 +28,7 @@ def compile_kernels() -> None:
     face_normals(geometry)
     vertex_normals(geometry)  # one kernel for every weighting
     corner_normals(geometry, crease_angle=30.0)
+    corner_weights(geometry, "angle")  # corner_normals needs them only at creased vertices
     orient(geometry)
     triangulate(
         np.array([4]), np.arange(4), np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]])
@@ -34,3 +36,4 @@ def compile_kernels() -> None:
     # Point clouds: the neighbourhood kernel (k nearest and within a radius take the same
     # types) and the signs down the spanning tree.
     point_normals(np.random.default_rng(0).normal(size=(40, 3)), k=10)
+    lzf_decompress(b"\x00a", 1)  # binary_compressed PCD: one literal byte
