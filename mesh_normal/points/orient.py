@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -149,7 +149,15 @@ def along_tree(
     tree = minimum_spanning_tree(graph_matrix, overwrite=True)
     del graph_matrix
     count, labels = connected_components(tree, directed=False)
-    seeds, seed_flip, decided = _seeds(points, normals, valid, labels, count)
+    # Seeds come from each part's largest piece between sharp edges of its tree, and from the
+    # whole part only where that piece has no point to decide: an outlier above a scan is its
+    # highest point, but seeded there the sign would reach the scan only across a sharp edge.
+    main = _main_pieces(tree, normals, valid, labels, sharp_cosine)
+    seeds, seed_flip, decided = _seeds(points, normals, main, labels, count)
+    if not decided.all():
+        more = _seeds(points, normals, valid, labels, count)
+        fill = ~decided & more[2]
+        seeds[fill], seed_flip[fill], decided[fill] = more[0][fill], more[1][fill], True
     # One breadth-first walk from a virtual root joined to every decided seed.
     tree = tree.tocoo()
     root = np.full(len(seeds[decided]), n)
@@ -195,10 +203,35 @@ def _edges(
     return rows[:count], cols[:count], weights[:count]
 
 
+def _main_pieces(
+    tree: Any, normals: FloatArray, valid: BoolArray, labels: IndexArray, sharp_cosine: float
+) -> BoolArray:
+    """(n,) bool: the valid points of each part's largest piece once its tree's sharp edges
+    are cut (the first such piece where two are as large)."""
+    n = len(normals)
+    edges = tree.tocoo()
+    dots = np.einsum("ij,ij->i", normals[edges.row], normals[edges.col])
+    gentle = np.abs(dots) >= sharp_cosine
+    pieces = coo_matrix(
+        (np.ones(int(gentle.sum())), (edges.row[gentle], edges.col[gentle])), shape=(n, n)
+    )
+    count, piece = connected_components(pieces, directed=False)
+    sizes = np.bincount(piece, weights=valid, minlength=count)
+    part_of = np.empty(count, dtype=np.intp)
+    part_of[piece] = labels
+    order = np.lexsort((-sizes, part_of))
+    largest = order[np.r_[True, part_of[order][1:] != part_of[order][:-1]]]
+    main = np.zeros(count, dtype=bool)
+    main[largest] = True
+    chosen: BoolArray = valid & main[piece]
+    return chosen
+
+
 def _seeds(
     points: FloatArray, normals: FloatArray, valid: BoolArray, labels: IndexArray, count: int
 ) -> tuple[IndexArray, BoolArray, BoolArray]:
-    """Each part's seed, whether the seed must be flipped, and whether it decides at all."""
+    """Each part's seed among the ``valid`` points, whether the seed must be flipped, and
+    whether it decides at all."""
     seeds = np.full(count, -1)
     seed_flip = np.zeros(count, dtype=bool)
     decided = np.zeros(count, dtype=bool)
