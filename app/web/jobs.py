@@ -134,6 +134,7 @@ class Jobs:
         self.settings = settings
         self._trim: asyncio.TimerHandle | None = None
         self._trim_loop: asyncio.AbstractEventLoop | None = None
+        self._trim_step = 0  # of TRIM_DELAYS_SECONDS, the one the pending trim is
         self.admission = Admission(
             settings.workers,
             settings.memory_budget,
@@ -200,15 +201,20 @@ class Jobs:
         would otherwise keep resident."""
         loop = asyncio.get_running_loop()
         if self._trim is not None and self._trim_loop is loop:
+            if self._trim_step == 1:  # one is coming soon: under load, one a second at most
+                return
             self._trim.cancel()
         self._trim_loop = loop
-        self._trim = loop.call_later(TRIM_DELAYS_SECONDS[0], self._trimmed, loop, 1)
+        self._trim_step = 1
+        self._trim = loop.call_later(TRIM_DELAYS_SECONDS[0], self._trimmed, loop)
 
-    def _trimmed(self, loop: asyncio.AbstractEventLoop, step: int) -> None:
+    def _trimmed(self, loop: asyncio.AbstractEventLoop) -> None:
         loop.run_in_executor(None, give_back)
         self._trim = None
-        if step < len(TRIM_DELAYS_SECONDS):
-            self._trim = loop.call_later(TRIM_DELAYS_SECONDS[step], self._trimmed, loop, step + 1)
+        if self._trim_step < len(TRIM_DELAYS_SECONDS):
+            delay = TRIM_DELAYS_SECONDS[self._trim_step]
+            self._trim_step += 1
+            self._trim = loop.call_later(delay, self._trimmed, loop)
 
     async def _in_worker(
         self,
