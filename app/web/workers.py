@@ -45,8 +45,9 @@ OK, REFUSED, NO_MEMORY, CRASHED = "ok", "refused", "memory", "crashed"
 logger = logging.getLogger(__name__)
 
 #: How long the first jobs wait for the first worker to be ready: compiling the kernels into
-#: an empty cache takes about 10 s on two cores (see mesh_normal.kernels.COMPILE_SECONDS).
-STARTUP_SECONDS = 60
+#: an empty cache (every kernel for read-only and writable arrays, mesh_normal.precompile) took
+#: 114 s on two cores shared with other work, 2.5 times the 46 s of the writable ones alone.
+STARTUP_SECONDS = 120
 
 
 class WorkerDied(Exception):
