@@ -14,6 +14,7 @@ from app.calculator import api as calculator_api
 from app.calculator import pages
 from app.mesh import api as mesh_api
 from app.mesh import page as mesh_page
+from app.mesh import warmup
 from app.web import handlers
 from app.web.jobs import Jobs
 from app.web.jsonio import FastJSONResponse
@@ -39,9 +40,10 @@ consistent, outward winding. The server keeps no file after its response.
 
 @asynccontextmanager
 async def lifespan(app: FastAPI) -> AsyncIterator[None]:
-    """Start the worker processes for the heavy mesh work (they load the compiled kernels
-    from numba's cache as they start); with ``MESH_IN_PROCESS``, load the kernels here, in the
-    background, so that the first mesh upload does not wait for them."""
+    """Start the worker processes for the heavy mesh work, in the background (each loads
+    everything a job can need as it starts: :func:`app.mesh.warmup.warm`); with
+    ``MESH_IN_PROCESS``, load the kernels here, in the background, so that the first mesh
+    upload does not wait for them."""
     jobs: Jobs = app.state.jobs
     if jobs.pool is None:
         threading.Thread(target=compile_kernels, name="compile-kernels", daemon=True).start()
@@ -77,7 +79,7 @@ def create_app(upload_limit: int | None = None, settings: config.Settings | None
     app.add_middleware(PageCompression)
     app.state.upload_limit = settings.upload_limit if upload_limit is None else upload_limit
     # The heavy mesh work: worker processes, started by the lifespan (or at the first job).
-    app.state.jobs = Jobs(settings, warm=compile_kernels, preload=("app.mesh.work",))
+    app.state.jobs = Jobs(settings, warm=warmup.warm, preload=warmup.PRELOAD)
     app.add_middleware(BodyLimit, upload_limit=app.state.upload_limit)
     app.add_middleware(SecurityHeaders)
     app.add_middleware(HeadAsGet)

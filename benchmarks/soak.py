@@ -14,7 +14,8 @@ capped at ``--limit-gb``). For ``--seconds``, eight client threads send, at rand
 
 A separate probe thread times ``GET /`` every 50 ms. Reported: every status code with its count,
 whether any 5xx other than a planned 503 came back, whether the worker process lived to the end,
-its resident memory before and after (after an idle second), and the probe's p50 / p99 / max.
+its resident memory before and after (each once steady for 3 s: the workers warm up as they
+start), and the probe's p50 / p99 / max.
 The targets of issue 10: no unplanned 5xx, no process death, resident memory back within 20 %
 of its start, ``GET /`` p99 under 0.5 s.
 """
@@ -84,6 +85,22 @@ def family_mb(pid: int) -> dict[int, float]:
         except OSError:
             continue
     return sizes
+
+
+def settled(pid: int, seconds: float = 3, within: float = 0.01) -> float:
+    """The resident memory of the process and its descendants once it has stayed within
+    ``within`` (a fraction) for ``seconds`` (at most two minutes)."""
+    deadline = time.monotonic() + 120
+    last = resident_mb(pid)
+    steady_since = time.monotonic()
+    while time.monotonic() < deadline:
+        time.sleep(0.5)
+        now = resident_mb(pid)
+        if abs(now - last) > within * last:
+            last, steady_since = now, time.monotonic()
+        elif time.monotonic() - steady_since >= seconds:
+            return now
+    return last
 
 
 def torus(triangles: int) -> tuple[np.ndarray, np.ndarray]:
@@ -252,11 +269,11 @@ def main() -> None:
                 break
             except httpx.HTTPError:
                 time.sleep(0.1)
-        # Warm up: one upload of each kind, so that the kernels are loaded.
+        # One upload, answered once the first worker is ready; then until the other workers
+        # have warmed up too (each loads everything a job can need as it starts).
         with httpx.Client(timeout=120) as http:
             http.post(base + "/api/mesh", files=[("file", p) for p in small["stl"]])
-        time.sleep(1)
-        before = resident_mb(server.pid)
+        before = settled(server.pid)
         parts_before = family_mb(server.pid)
         soak = Soak(base, args.seconds, files)
         threads = [threading.Thread(target=soak.client, args=(i,)) for i in range(args.clients)]
@@ -265,9 +282,8 @@ def main() -> None:
             thread.start()
         for thread in threads:
             thread.join()
-        time.sleep(2)
         alive = server.poll() is None
-        after = resident_mb(server.pid) if alive else float("nan")
+        after = settled(server.pid) if alive else float("nan")  # replaced workers warm up
         parts_after = family_mb(server.pid) if alive else {}
     finally:
         server.terminate()

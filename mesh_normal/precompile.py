@@ -1,8 +1,22 @@
-"""Compile every mesh kernel ahead of use: for an image build or a server's start-up."""
+"""Compile every mesh kernel ahead of use: for an image build or a server's start-up.
+
+numba compiles a kernel once for each signature it is called with, and an array's signature
+includes whether it is read-only. The file readers give both kinds: an array made with
+``np.frombuffer`` over the uploaded bytes is read-only, one parsed from text is not, and the
+checks keep the caller's array when it already has the right type and layout. So every
+kernel that takes the mesh's vertices or faces (or a polygon file's corners) is compiled here
+for each combination, and a job never compiles one at run time (in a read-only container it
+would compile in memory, for seconds, in every worker; ``tests/app/mesh/test_warmup.py`` checks
+that the jobs on every test file need nothing else).
+"""
 
 from __future__ import annotations
 
+import itertools
+from typing import TypeVar
+
 import numpy as np
+from numpy.typing import NDArray
 
 from mesh_normal.corners import corner_normals, corner_weights
 from mesh_normal.faces import face_geometry, face_normals
@@ -10,30 +24,57 @@ from mesh_normal.files.polygons import triangulate
 from mesh_normal.orientation import orient
 from mesh_normal.points import point_normals
 from mesh_normal.points.pcd import lzf_decompress
+from mesh_normal.types import FloatArray, IndexArray
 from mesh_normal.vertices import vertex_normals
+
+Scalar = TypeVar("Scalar", bound=np.generic)
+
+#: Two tetrahedra, one inside the other (the winding-number kernel for nested shells), and an
+#: open fan of three triangles (visibility decides an open patch).
+_TETRAHEDRON = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
+_SIDES = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+_NESTED = (
+    np.concatenate([_TETRAHEDRON, 0.1 + 0.2 * _TETRAHEDRON]),
+    np.concatenate([_SIDES, _SIDES + 4]),
+)
+_OPEN = (_TETRAHEDRON, _SIDES[:3])
+#: A square and a triangle as polygons (the polygon kernels run for four corners or more).
+_POLYGONS = (
+    np.array([4, 3]),
+    np.array([0, 1, 2, 3, 0, 1, 4]),
+    np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0.5, -1, 0]]),
+)
 
 
 def compile_kernels() -> None:
-    """Compile every mesh kernel now (into numba's cache), e.g. while building an image."""
+    """Compile every mesh kernel now (into numba's cache), e.g. while building an image; where
+    the cache holds them already, load them (a server's workers, as they start)."""
+    for vertices_read_only, faces_read_only in itertools.product((False, True), repeat=2):
+        for vertices, faces in (_NESTED, _OPEN):
+            _mesh_kernels(_kept(vertices, vertices_read_only), _kept(faces, faces_read_only))
+    counts, corners, points = _POLYGONS
+    for read_only in itertools.product((False, True), repeat=3):
+        triangulate(
+            _kept(counts, read_only[0]), _kept(corners, read_only[1]), _kept(points, read_only[2])
+        )
+    # Point clouds: the neighbourhood kernel (k nearest and within a radius take the same
+    # types) and the signs down the spanning tree; binary_compressed PCD's LZF (one literal).
+    point_normals(np.random.default_rng(0).normal(size=(40, 3)), k=10)
+    lzf_decompress(b"\x00a", 1)
 
-    # Two tetrahedra, one inside the other: the winding-number kernel for nested shells.
-    tetrahedron = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
-    sides = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
-    orient(
-        np.concatenate([tetrahedron, 0.1 + 0.2 * tetrahedron]), np.concatenate([sides, sides + 4])
-    )
-    vertices = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
-    faces = np.array([[0, 1, 2]])
+
+def _mesh_kernels(vertices: FloatArray, faces: IndexArray) -> None:
     geometry = face_geometry(vertices, faces)
     face_normals(geometry)
     vertex_normals(geometry)  # one kernel for every weighting
     corner_normals(geometry, crease_angle=30.0)
     corner_weights(geometry, "angle")  # corner_normals needs them only at creased vertices
     orient(geometry)
-    triangulate(
-        np.array([4]), np.arange(4), np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]])
-    )
-    # Point clouds: the neighbourhood kernel (k nearest and within a radius take the same
-    # types) and the signs down the spanning tree.
-    point_normals(np.random.default_rng(0).normal(size=(40, 3)), k=10)
-    lzf_decompress(b"\x00a", 1)  # binary_compressed PCD: one literal byte
+    orient(geometry, weld=1e-6)
+
+
+def _kept(array: NDArray[Scalar], read_only: bool) -> NDArray[Scalar]:
+    """A copy of ``array``, read-only if asked (as ``np.frombuffer`` gives one)."""
+    copy = np.array(array)
+    copy.flags.writeable = not read_only
+    return copy

@@ -26,7 +26,7 @@ from starlette.requests import Request
 from app.config import RETRY_AFTER_SECONDS, Settings
 from app.web.errors import ApiError
 from app.web.handlers import temp_dir_problem
-from app.web.workers import WorkerCrashed, WorkerDied, WorkerOutOfMemory, WorkerPool
+from app.web.workers import WorkerCrashed, WorkerDied, WorkerOutOfMemory, WorkerPool, give_back
 
 logger = logging.getLogger(__name__)
 
@@ -36,6 +36,10 @@ BUSY = (
     "The server is busy with other files right now; try again in a few seconds "
     "(Retry-After says when)."
 )
+#: When, after the last heavy job ended, the server gives the memory it freed back to the
+#: system: soon (the job's answer has usually been sent by then), and once more later.
+TRIM_DELAYS_SECONDS = (1.0, 10.0)
+
 NO_MEMORY = (
     "The server ran out of memory while working on this file; try again later, "
     "or send a smaller file."
@@ -128,6 +132,9 @@ class Jobs:
         preload: tuple[str, ...] = (),
     ) -> None:
         self.settings = settings
+        self._trim: asyncio.TimerHandle | None = None
+        self._trim_loop: asyncio.AbstractEventLoop | None = None
+        self._trim_step = 0  # of TRIM_DELAYS_SECONDS, the one the pending trim is
         self.admission = Admission(
             settings.workers,
             settings.memory_budget,
@@ -160,6 +167,9 @@ class Jobs:
             self.pool.start()
 
     def close(self) -> None:
+        if self._trim is not None:
+            self._trim.cancel()
+            self._trim = None
         if self.pool is not None:
             self.pool.close()
 
@@ -171,13 +181,40 @@ class Jobs:
         *args: Any,
     ) -> Value:
         """``function(*args)`` as a heavy job of about ``estimate`` bytes, for ``request``."""
-        async with self.admission.admit(estimate):
-            if self.pool is None:
-                try:
-                    return await run_in_threadpool(function, *args)
-                except MemoryError:
-                    raise out_of_memory() from None
-            return await self._in_worker(self.pool, request, function, args)
+        try:
+            async with self.admission.admit(estimate):
+                if self.pool is None:
+                    try:
+                        return await run_in_threadpool(function, *args)
+                    except MemoryError:
+                        raise out_of_memory() from None
+                return await self._in_worker(self.pool, request, function, args)
+        finally:
+            self._trim_soon()
+
+    def _trim_soon(self) -> None:
+        """Give freed memory back to the system (``malloc_trim``, in a thread) a moment after
+        a job, when its upload, its result and the answer written from it are let go of, and
+        once more a while later (an answer streamed to a slow client ends late). Blocks of
+        1 MB or more go back as they are freed (``tune_allocator``); this returns the smaller
+        ones an answer is written in (JSON and CSV blocks, h11's buffers), which the allocator
+        would otherwise keep resident."""
+        loop = asyncio.get_running_loop()
+        if self._trim is not None and self._trim_loop is loop:
+            if self._trim_step == 1:  # one is coming soon: under load, one a second at most
+                return
+            self._trim.cancel()
+        self._trim_loop = loop
+        self._trim_step = 1
+        self._trim = loop.call_later(TRIM_DELAYS_SECONDS[0], self._trimmed, loop)
+
+    def _trimmed(self, loop: asyncio.AbstractEventLoop) -> None:
+        loop.run_in_executor(None, give_back)
+        self._trim = None
+        if self._trim_step < len(TRIM_DELAYS_SECONDS):
+            delay = TRIM_DELAYS_SECONDS[self._trim_step]
+            self._trim_step += 1
+            self._trim = loop.call_later(delay, self._trimmed, loop)
 
     async def _in_worker(
         self,

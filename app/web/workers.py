@@ -10,6 +10,9 @@ The workers come from the ``forkserver`` context (a clean process, never a fork 
 server's threads) with ``preload`` imported once in the fork server, and each runs ``warm``
 once as it starts (the numba kernels, loaded from their cache). The first worker warms alone,
 before the others start, so that a cold cache is compiled once, not by every worker at once.
+Starting a process blocks (the first start waits for the fork server to import ``preload``,
+seconds), so it happens in a thread: the event loop serves pages meanwhile, at start-up and
+while a worker is replaced.
 
 Jobs travel as pickles of protocol 5: large buffers (``pickle.PickleBuffer``, NumPy arrays)
 go out of band as raw bytes, so a 200 MB upload is not copied into a pickle on its way.
@@ -24,6 +27,7 @@ import logging
 import multiprocessing
 import pickle
 import resource
+import threading
 import traceback
 from collections import deque
 from collections.abc import Callable, Sequence
@@ -41,8 +45,9 @@ OK, REFUSED, NO_MEMORY, CRASHED = "ok", "refused", "memory", "crashed"
 logger = logging.getLogger(__name__)
 
 #: How long the first jobs wait for the first worker to be ready: compiling the kernels into
-#: an empty cache takes about 10 s on two cores (see mesh_normal.kernels.COMPILE_SECONDS).
-STARTUP_SECONDS = 60
+#: an empty cache (every kernel for read-only and writable arrays, mesh_normal.precompile) took
+#: 114 s on two cores shared with other work, 2.5 times the 46 s of the writable ones alone.
+STARTUP_SECONDS = 120
 
 
 class WorkerDied(Exception):
@@ -186,8 +191,13 @@ class Worker:
                 raise WorkerDied(self.process.exitcode)
 
     async def ready(self) -> None:
+        """Wait for the worker's word that it has warmed up; WorkerDied if it ended instead."""
         await self.waited()
-        self.connection.recv()
+        try:
+            self.connection.recv()
+        except (EOFError, OSError):
+            self.process.join()
+            raise WorkerDied(self.process.exitcode) from None
 
     async def call(self, function: Callable[..., Any], args: Sequence[Any]) -> Any:
         """Run one job in this worker; cancelling the call is the caller's to follow with
@@ -239,9 +249,15 @@ class WorkerPool:
         self._started = False
         self._loop: asyncio.AbstractEventLoop | None = None
         self._warmed: asyncio.Event | None = None
+        # Workers started but not yet ready, and the pool's generation (one more at each
+        # close): a worker whose start finishes in its thread after a close is stopped there.
+        self._lock = threading.Lock()
+        self._starting: set[Worker] = set()
+        self._generation = 0
 
     def start(self) -> None:
-        """Start the workers in the background (from the event loop): the first warms alone."""
+        """Start the workers in the background (from the event loop, which this does not
+        block: each process starts in a thread); the first warms alone."""
         loop = asyncio.get_running_loop()
         if self._started and self._loop is loop:
             return
@@ -261,19 +277,44 @@ class WorkerPool:
 
     async def _bring_up(self, first: bool) -> None:
         assert self._warmed is not None
+        generation = self._generation
         if not first:
             await self._warmed.wait()
         while True:
             try:
-                worker = Worker(self.context, self.warm, self.memory_limit)
-                await worker.ready()
+                worker = await asyncio.to_thread(self._launch, generation)
+                if worker is None:  # the pool was closed meanwhile
+                    return
+                try:
+                    await worker.ready()
+                except WorkerDied:
+                    self._drop(worker)
+                    raise
                 break
             except (WorkerDied, OSError, RuntimeError) as error:  # e.g. a memory limit too low
                 logger.error("a worker process could not start (%s); trying again", error)
                 await asyncio.sleep(1)
+        with self._lock:
+            self._starting.discard(worker)
         self._warmed.set()
         self.idle.append(worker)
         self._notify()
+
+    def _launch(self, generation: int) -> Worker | None:
+        """A new worker process (in a thread: starting one blocks), or None, that process
+        stopped again, if the pool was closed (a new generation) while it started."""
+        worker = Worker(self.context, self.warm, self.memory_limit)
+        with self._lock:
+            if generation == self._generation:
+                self._starting.add(worker)
+                return worker
+        worker.stop()
+        return None
+
+    def _drop(self, worker: Worker) -> None:
+        with self._lock:
+            self._starting.discard(worker)
+        worker.stop()
 
     def _notify(self) -> None:
         assert self._changed is not None
@@ -313,9 +354,13 @@ class WorkerPool:
         self._spawn()
 
     def close(self) -> None:
+        """Stop every worker, the ones still starting too."""
         for task in self._tasks:
             task.cancel()
-        for worker in [*self.idle, *self.busy]:
+        with self._lock:
+            self._generation += 1
+            starting, self._starting = self._starting, set()
+        for worker in [*self.idle, *self.busy, *starting]:
             worker.stop()
         self.idle.clear()
         self.busy.clear()

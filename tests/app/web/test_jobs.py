@@ -4,6 +4,7 @@ every step is driven by the test)."""
 from __future__ import annotations
 
 import asyncio
+import threading
 
 import pytest
 
@@ -94,3 +95,55 @@ def test_without_a_writable_temporary_folder_the_jobs_run_in_the_server(
     monkeypatch.setattr(jobs, "temp_dir_problem", lambda: None)
     pool = jobs.Jobs(load_settings(in_process=False)).pool
     assert pool is not None  # made, not started: no process runs until start()
+
+
+def test_after_a_job_the_server_gives_freed_memory_back_twice(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """malloc_trim soon after the job (in a thread), and once more later; the waits are the
+    test's, not the clock's (the delays are set to nothing)."""
+    from app.config import load_settings
+    from app.web import jobs
+
+    trims: list[str] = []
+    monkeypatch.setattr(jobs, "TRIM_DELAYS_SECONDS", (0.0, 0.0))
+
+    async def scenario() -> None:
+        loop = asyncio.get_running_loop()
+        trimmed = asyncio.Event()
+
+        def give_back() -> None:
+            trims.append(threading.current_thread().name)
+            if len(trims) == 2:
+                loop.call_soon_threadsafe(trimmed.set)
+
+        monkeypatch.setattr(jobs, "give_back", give_back)
+        heavy = jobs.Jobs(load_settings(in_process=True))
+        assert await heavy.run(None, MB, sum, [1, 2]) == 3  # type: ignore[arg-type]
+        assert trims == []  # not while the answer is being written
+        await asyncio.wait_for(trimmed.wait(), 60)
+        heavy.close()
+
+    run(scenario())
+    assert len(trims) == 2
+    assert threading.main_thread().name not in trims  # never in the event loop's thread
+
+
+def test_jobs_one_after_another_do_not_put_the_trim_off(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Under steady load the trim still comes a second after the first job of a run of them."""
+    from app.config import load_settings
+    from app.web import jobs
+
+    monkeypatch.setattr(jobs, "TRIM_DELAYS_SECONDS", (600.0, 600.0))
+
+    async def scenario() -> None:
+        heavy = jobs.Jobs(load_settings(in_process=True))
+        await heavy.run(None, MB, sum, [1])  # type: ignore[arg-type]
+        pending = heavy._trim
+        assert pending is not None
+        await heavy.run(None, MB, sum, [2])  # type: ignore[arg-type]
+        assert heavy._trim is pending and not pending.cancelled()
+        heavy.close()
+        assert pending.cancelled()
+
+    run(scenario())

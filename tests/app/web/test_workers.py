@@ -5,14 +5,19 @@ from __future__ import annotations
 import asyncio
 import os
 import signal
+import threading
 from collections.abc import Awaitable, Callable
 from typing import Any
 
 import pytest
 
+from app.web import workers
 from app.web.errors import ApiError
-from app.web.workers import WorkerDied, WorkerOutOfMemory, WorkerPool
+from app.web.workers import Worker, WorkerDied, WorkerOutOfMemory, WorkerPool
 from tests.app import jobhooks
+
+#: How long a test waits for something that should happen at once (only a failure waits).
+PATIENCE_S = 30
 
 
 def with_pool(scenario: Callable[[WorkerPool], Awaitable[Any]], count: int = 1) -> Any:
@@ -97,3 +102,60 @@ def test_a_cancelled_call_stops_its_worker() -> None:
         await call(pool, jobhooks.value, b"")  # the replacement works
 
     with_pool(scenario)
+
+
+def test_a_worker_starts_while_the_event_loop_goes_on(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Each worker's start (the first, and a replacement) waits, in the thread that starts
+    the process, until a coroutine has run: the wait ends at once if the start leaves the
+    event loop free, and only after PATIENCE_S, as False, if it blocks the loop."""
+    loop_ran = threading.Event()
+    waits: list[bool] = []
+
+    class Waiting(Worker):
+        def __init__(self, *args: Any) -> None:
+            waits.append(loop_ran.wait(PATIENCE_S))
+            super().__init__(*args)
+
+    monkeypatch.setattr(workers, "Worker", Waiting)
+
+    async def scenario(pool: WorkerPool) -> list[bool]:
+        assert not pool.idle  # start() returned before the worker was ready
+        await asyncio.sleep(0)  # the worker's start begins
+        loop_ran.set()
+        first, _ = await call(pool, jobhooks.value, b"")
+        loop_ran.clear()
+        with pytest.raises(WorkerDied):  # its replacement starts as the first did
+            await call(pool, jobhooks.abort, None)
+        await asyncio.sleep(0)
+        loop_ran.set()
+        second, _ = await call(pool, jobhooks.value, b"")
+        assert second != first
+        return waits
+
+    assert with_pool(scenario) == [True, True]
+
+
+def test_a_worker_whose_start_ends_after_the_pool_closed_is_stopped(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    closed = threading.Event()
+    started: list[Worker] = []
+
+    class Late(Worker):
+        def __init__(self, *args: Any) -> None:
+            assert closed.wait(PATIENCE_S)
+            super().__init__(*args)
+            started.append(self)
+
+    monkeypatch.setattr(workers, "Worker", Late)
+
+    async def main() -> None:
+        pool = WorkerPool(1)
+        pool.start()
+        await asyncio.sleep(0)  # the worker's start begins, in its thread
+        pool.close()
+        closed.set()
+
+    asyncio.run(main())  # which waits for the thread, as the loop's executor shuts down
+    assert len(started) == 1
+    assert not started[0].process.is_alive()
