@@ -22,7 +22,7 @@ import json
 import math
 import sys
 import time
-from collections.abc import Collection, Iterator
+from collections.abc import Callable, Collection, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TextIO
 
@@ -595,23 +595,22 @@ def neighbour_count(text: str) -> int | None:
 
 def positive_number(text: str) -> float:
     """``--radius``: a positive finite number."""
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"must be a positive number, not {text!r}")
-    return value
+    return _number(text, lambda value: math.isfinite(value) and value > 0, "a positive number")
 
 
 def max_angle(text: str) -> float:
     """``--max-angle``: degrees, over 0 and at most 90."""
+    return _number(text, lambda value: 0 < value <= 90, "in degrees, over 0 and at most 90")
+
+
+def _number(text: str, accepted: Callable[[float], bool], what: str) -> float:
+    """``text`` as a float that ``accepted`` takes (NaN never is), or argparse's error."""
     try:
         value = float(text)
     except ValueError:
         value = math.nan
-    if not 0 < value <= 90:
-        raise argparse.ArgumentTypeError(f"must be in degrees, over 0 and at most 90, not {text!r}")
+    if not accepted(value):
+        raise argparse.ArgumentTypeError(f"must be {what}, not {text!r}")
     return value
 
 

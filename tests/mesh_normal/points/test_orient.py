@@ -127,3 +127,15 @@ def test_points_without_normals_are_left_out_of_the_tree() -> None:
     assert wrong(result.normals[:3_000], truth) == 0
     assert [part.points for part in result.components] == [3_000]
     assert not result.normals[3_000:].any()
+
+
+def test_an_outlier_above_a_closed_cloud_does_not_seed_it() -> None:
+    """The outlier is the highest point, but the sign would reach the sphere from it only
+    across a sharp edge: the sphere's own largest piece seeds it, outward, every point."""
+    rng = np.random.default_rng(1)
+    sphere = rng.normal(size=(3000, 3))
+    sphere /= np.linalg.norm(sphere, axis=1, keepdims=True)
+    result = point_normals(np.vstack([sphere, [[5.0, 5.0, 5.0]]]))
+    outward = np.einsum("ij,ij->i", result.normals[:-1], sphere)
+    assert np.count_nonzero(outward <= 0) == 0
+    assert result.unoriented <= 1  # the outlier at most
