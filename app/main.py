@@ -14,6 +14,7 @@ from app.calculator import api as calculator_api
 from app.calculator import pages
 from app.mesh import api as mesh_api
 from app.mesh import page as mesh_page
+from app.points import api as points_api
 from app.web import handlers
 from app.web.jobs import Jobs
 from app.web.jsonio import FastJSONResponse
@@ -71,6 +72,7 @@ def create_app(upload_limit: int | None = None, settings: config.Settings | None
     handlers.install(app)
     app.include_router(calculator_api.router)
     app.include_router(mesh_api.router)
+    app.include_router(points_api.router)
     app.include_router(pages.router)
     app.include_router(mesh_page.router)
     app.mount("/static", CompressedStaticFiles(directory=STATIC_DIR), name="static")
