@@ -160,3 +160,21 @@ def test_the_report_is_documented(client: TestClient) -> None:
     schema = client.get("/openapi.json").json()
     assert "PointReport" in json.dumps(schema["paths"]["/api/points"]["post"])
     assert "/api/points/normals" in schema["paths"]
+
+
+def test_a_cloud_larger_than_the_small_body_limit_is_read(client: TestClient) -> None:
+    # 20,000 points of a plane as text: over 64 KB, the limit of bodies that are not files.
+    x, y = np.meshgrid(np.arange(200.0), np.arange(100.0))
+    text = "".join(f"{a:g} {b:g} 0\n" for a, b in zip(x.ravel(), y.ravel(), strict=True))
+    assert len(text) > 64 * 1024
+    response = post(client, "/api/points", text, k="8")
+    assert response.status_code == 200, response.text
+    assert response.json()["counts"]["ok"] == 20_000
+
+
+def test_beyond_the_upload_limit_is_a_413() -> None:
+    from app.main import create_app
+
+    with TestClient(create_app(upload_limit=1000), raise_server_exceptions=False) as small:
+        response = post(small, "/api/points", GRID_XYZ * 10)
+    assert_error(response, 413, None, "larger than")
