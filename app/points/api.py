@@ -11,9 +11,10 @@ import re
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Query, Request
-from fastapi.responses import Response
+from fastapi.responses import Response, StreamingResponse
 
 from app.points import work
+from app.points.downloads import normals_blocks
 from app.points.estimates import estimate
 from app.web.errors import ERROR_RESPONSES, ApiError, clip
 from app.web.jobs import Jobs
@@ -217,9 +218,14 @@ async def post_points_normals(
     checked = options(k, radius, orient, viewpoint, direction)
     data, filename = await read_point_file(request)
     jobs: Jobs = request.app.state.jobs
-    body, missing = await jobs.run(
+    body, normals, missing = await jobs.run(
         request, estimate(data, filename), work.normals, data, filename, checked, file_format
     )
     headers = download_name(filename, f"normals.{file_format}")
-    headers["x-points-without-normal"] = str(missing)
-    return Response(body, media_type=MEDIA_TYPES[file_format], headers=headers)
+    headers["x-points-without-normal"] = str(int(missing.sum()))
+    media_type = MEDIA_TYPES[file_format]
+    if body is not None:
+        return Response(body, media_type=media_type, headers=headers)
+    # Written in blocks as the client reads: the text of millions of normals is never whole.
+    blocks = normals_blocks(normals, missing, orient, file_format)
+    return StreamingResponse(blocks, media_type=media_type, headers=headers)

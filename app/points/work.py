@@ -6,23 +6,15 @@ plain values (a model, bytes), so that it can run in a worker process (:mod:`app
 
 from __future__ import annotations
 
-import io
 from dataclasses import dataclass
 
-import numpy as np
-
 from app.web.errors import ApiError
-from app.web.jsonio import json_bytes
-from mesh_normal.exports import npy_bytes
 from mesh_normal.files.errors import MeshFileError
 from mesh_normal.points.orient import OrientMode
 from mesh_normal.points.read import PointCloud, read_points
 from mesh_normal.points.report import PointAnalysis, PointReport, analyse_points
 from mesh_normal.points.write import write_points
-from mesh_normal.types import FloatArray
-
-#: Rows of CSV text written at once.
-CSV_BLOCK = 2**16
+from mesh_normal.types import BoolArray, FloatArray
 
 
 @dataclass(frozen=True, slots=True)
@@ -74,33 +66,12 @@ def report(data: bytes, filename: str | None, options: Options) -> PointReport:
 
 def normals(
     data: bytes, filename: str | None, options: Options, file_format: str
-) -> tuple[bytes, int]:
-    """The normals in file order as ``file_format``, and how many points have none (their
-    rows are zeros)."""
+) -> tuple[bytes | None, FloatArray, BoolArray]:
+    """The file of points and normals for ``ply`` and ``xyz`` (else None), the normals in file
+    order (zero rows where there is none) and the mask of those rows; the server writes the
+    other formats from the arrays, in blocks."""
     result = analyse(data, filename, options)
-    vectors, valid = result.normals.normals, result.normals.valid
-    missing = np.flatnonzero(~valid)
+    vectors, missing = result.normals.normals, ~result.normals.valid
     if file_format in ("ply", "xyz"):
-        return write_points(result.cloud.points, vectors, file_format), len(missing)
-    if file_format == "npy":
-        return npy_bytes(vectors), len(missing)
-    if file_format == "csv":
-        return _csv(vectors), len(missing)
-    head = {
-        "orient": options.orient,
-        "shape": list(vectors.shape),
-        "missing": len(missing),
-        "missing_indices": missing.tolist(),
-    }
-    return json_bytes({**head, "normals": vectors.tolist()}), len(missing)
-
-
-def _csv(vectors: FloatArray) -> bytes:
-    """``point,nx,ny,nz`` rows; 17 significant digits, so every value round-trips."""
-    out = io.BytesIO()
-    out.write(b"point,nx,ny,nz\n")
-    for start in range(0, len(vectors), CSV_BLOCK):
-        block = vectors[start : start + CSV_BLOCK]
-        index = np.arange(start, start + len(block), dtype=np.float64)[:, None]
-        np.savetxt(out, np.hstack([index, block]), fmt="%d,%.17g,%.17g,%.17g")
-    return out.getvalue()
+        return write_points(result.cloud.points, vectors, file_format), vectors[:0], missing
+    return None, vectors, missing
