@@ -6,6 +6,8 @@ import json
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from mesh_normal.points import read_points
 from mesh_normal.points.read import make_cloud
@@ -159,3 +161,26 @@ def test_first_hundred_parts_listed_and_all_counted() -> None:
     report = analyse_points(make_cloud("xyz", np.vstack(blobs)), k=6).report
     assert report.orientation.part_count == 120
     assert len(report.orientation.parts) == 100
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    n=st.integers(2, 60),
+    doubled=st.integers(0, 10),
+    k=st.integers(3, 12),
+)
+def test_the_counts_add_up(seed: int, n: int, doubled: int, k: int) -> None:
+    rng = np.random.default_rng(seed)
+    points = rng.normal(size=(n, 3)) * [1.0, 1.0, rng.uniform(0, 1)]
+    points = np.vstack([points, points[:doubled]])
+    report = analyse_points(make_cloud("xyz", points), k=k).report
+    counts = report.counts.model_dump()
+    assert sum(counts.values()) == report.points == len(points)
+    assert report.with_normal == counts["ok"] + counts["unoriented"]
+    parts = report.orientation.parts
+    assert sum(part.points for part in parts) == report.with_normal
+    assert sum(part.unoriented for part in parts) == counts["unoriented"]
+    assert report.spacing is not None
+    assert report.spacing.coincident >= 2 * min(doubled, n)  # each copy and its original
+    assert report.diagnosis and all(line.endswith(".") for line in report.diagnosis)
