@@ -20,13 +20,13 @@ from app.web.errors import ERROR_RESPONSES, ApiError, clip
 from app.web.jobs import Jobs
 from app.web.jsonio import FastJSONResponse
 from app.web.uploads import read_files
-from mesh_normal.files.formats import ACCEPTED_SUFFIXES
+from mesh_normal.files.formats import SUFFIXES as MESH_SUFFIXES
 from mesh_normal.points.orient import OrientMode
 from mesh_normal.points.read import POINT_SUFFIXES
 from mesh_normal.points.report import PointReport
 
 #: Every file suffix the routes take: the point formats' and the mesh formats' (as vertices).
-POINT_FILE_SUFFIXES: tuple[str, ...] = tuple(sorted({*POINT_SUFFIXES, *ACCEPTED_SUFFIXES}))
+POINT_FILE_SUFFIXES: tuple[str, ...] = tuple(sorted({*POINT_SUFFIXES, *MESH_SUFFIXES}))
 #: The largest k: the neighbour lists of a chunk of queries grow with it.
 K_LIMIT = 1000
 

@@ -140,6 +140,7 @@ def test_unknown_format_is_refused(client: TestClient) -> None:
 def test_broken_files_name_the_file(client: TestClient) -> None:
     assert_error(post(client, "/api/points", "ply\nformat nonsense\n", "a.ply"), 400, "file")
     assert_error(post(client, "/api/points", "0 0 0\n", "a.docx"), 415, "file", ".docx")
+    assert_error(post(client, "/api/points", "0 0 0\n", "a.zip"), 415, "file", ".zip")
     assert_error(post(client, "/api/points", b"", "a.xyz"), 422, "file", "empty")
     assert_error(
         client.post("/api/points", content=b"", headers={"content-type": "text/plain"}),
@@ -154,6 +155,7 @@ def test_broken_files_name_the_file(client: TestClient) -> None:
 def test_accepted_suffixes() -> None:
     for suffix in (".ply", ".xyz", ".pts", ".txt", ".csv", ".pcd", ".las", ".laz", ".stl", ".obj"):
         assert suffix in POINT_FILE_SUFFIXES
+    assert ".zip" not in POINT_FILE_SUFFIXES  # the point reader opens no archive
 
 
 def test_the_report_is_documented(client: TestClient) -> None:
