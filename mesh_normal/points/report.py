@@ -21,7 +21,7 @@ from scipy.spatial import cKDTree  # type: ignore[import-untyped]
 from mesh_normal.points.estimate import PointNormals, PointStatus, point_normals
 from mesh_normal.points.orient import OrientMode
 from mesh_normal.points.read import PointCloud, SourceKind
-from mesh_normal.report import INDEX_LIST_LIMIT, Bounds, Finite, Measure
+from mesh_normal.report import INDEX_LIST_LIMIT, Finite, Measure
 from mesh_normal.types import BoolArray, FloatArray
 
 #: Stored normals within this angle of ours, as lines (either side), count as agreeing.
@@ -49,6 +49,13 @@ class PointFileInfo(_Model):
         description="A PCD VIEWPOINT's origin (x, y, z); null for other formats."
     )
     notes: list[str] = Field(description="What the reader did not use or left out, in words.")
+
+
+class PointBounds(_Model):
+    """The axis-aligned box around the finite points."""
+
+    min: list[Finite] = Field(min_length=3, max_length=3, description="Smallest x, y and z.")
+    max: list[Finite] = Field(min_length=3, max_length=3, description="Largest x, y and z.")
 
 
 class Spacing(_Model):
@@ -132,7 +139,7 @@ class PointReport(_Model):
 
     file: PointFileInfo = Field(description="The file: name, format, size and what it holds.")
     points: int = Field(ge=0, description="Points kept, in file order.")
-    bounds: Bounds | None = Field(description="The box around the finite points, or null.")
+    bounds: PointBounds | None = Field(description="The box around the finite points, or null.")
     spacing: Spacing | None = Field(description="Nearest-neighbour distances; null under 2.")
     neighbourhood: Neighbourhood = Field(description="The neighbourhood used: k and radius.")
     counts: StatusCounts = Field(description="How many points got each status.")
@@ -226,10 +233,10 @@ def _file_info(cloud: PointCloud, name: str | None, size: int) -> PointFileInfo:
     )
 
 
-def _bounds(points: FloatArray) -> Bounds | None:
+def _bounds(points: FloatArray) -> PointBounds | None:
     if not len(points):
         return None
-    return Bounds(min=points.min(axis=0).tolist(), max=points.max(axis=0).tolist())
+    return PointBounds(min=points.min(axis=0).tolist(), max=points.max(axis=0).tolist())
 
 
 def _spacing(points: FloatArray) -> Spacing | None:
