@@ -21,9 +21,18 @@ BATCH_LIMIT = 100_000
 BODY_LIMITS = {"/api/normals": 48 * 1024 * 1024}
 DEFAULT_BODY_LIMIT = 64 * 1024
 
-#: Paths that take a mesh file. Their bodies are streamed (never buffered whole by the
-#: middleware) and counted against the upload limit as they arrive.
-MESH_PATHS = frozenset({"/api/mesh", "/api/mesh/normals", "/api/mesh/fix", "/mesh"})
+#: Paths that take a mesh or point-cloud file. Their bodies are streamed (never buffered
+#: whole by the middleware) and counted against the upload limit as they arrive.
+MESH_PATHS = frozenset(
+    {
+        "/api/mesh",
+        "/api/mesh/normals",
+        "/api/mesh/fix",
+        "/mesh",
+        "/api/points",
+        "/api/points/normals",
+    }
+)
 
 #: Most files one mesh request may carry as repeated multipart fields ``file`` (a .gltf, its
 #: buffers and textures); each is spooled on its own, so the count is kept small: more go in

@@ -15,6 +15,8 @@ from app.calculator import pages
 from app.mesh import api as mesh_api
 from app.mesh import page as mesh_page
 from app.mesh import warmup
+from app.points import api as points_api
+from app.points import work as points_work
 from app.web import handlers
 from app.web.jobs import Jobs
 from app.web.jsonio import FastJSONResponse
@@ -34,7 +36,10 @@ a value outside the double range is `null` with a `message`. Errors are
 Whole meshes (STL, OBJ, PLY, OFF, GLB/glTF) are sent as the multipart field `file` (or as the
 raw body, named with `?filename=`): `/api/mesh` reports on them, `/api/mesh/normals` returns
 face, vertex or corner normals in the file's order, and `/api/mesh/fix` returns the file with
-consistent, outward winding. The server keeps no file after its response.
+consistent, outward winding. Point clouds (PLY, XYZ/PTS/TXT/CSV, PCD, LAS/LAZ, or any mesh
+file's vertices) go the same way to `/api/points` (a report: spacing, neighbourhoods, the
+orientation of each part, agreement with stored normals) and `/api/points/normals` (estimated,
+oriented normals in the file's order). The server keeps no file after its response.
 """
 
 
@@ -52,6 +57,12 @@ async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         yield
     finally:
         jobs.close()
+
+
+def warm_workers() -> None:
+    """What a worker runs as it starts: every mesh job, then every point job, on small files."""
+    warmup.warm()
+    points_work.warm()
 
 
 def create_app(upload_limit: int | None = None, settings: config.Settings | None = None) -> FastAPI:
@@ -73,13 +84,14 @@ def create_app(upload_limit: int | None = None, settings: config.Settings | None
     handlers.install(app)
     app.include_router(calculator_api.router)
     app.include_router(mesh_api.router)
+    app.include_router(points_api.router)
     app.include_router(pages.router)
     app.include_router(mesh_page.router)
     app.mount("/static", CompressedStaticFiles(directory=STATIC_DIR), name="static")
     app.add_middleware(PageCompression)
     app.state.upload_limit = settings.upload_limit if upload_limit is None else upload_limit
     # The heavy mesh work: worker processes, started by the lifespan (or at the first job).
-    app.state.jobs = Jobs(settings, warm=warmup.warm, preload=warmup.PRELOAD)
+    app.state.jobs = Jobs(settings, warm=warm_workers, preload=(*warmup.PRELOAD, "app.points.work"))
     app.add_middleware(BodyLimit, upload_limit=app.state.upload_limit)
     app.add_middleware(SecurityHeaders)
     app.add_middleware(HeadAsGet)

@@ -1,12 +1,9 @@
-"""Reading an uploaded mesh from a request: a multipart field ``file`` or a raw body.
+"""Reading an uploaded mesh from a request: a multipart field ``file`` or a raw body
+(:mod:`app.web.uploads`), with the optional field ``weld``.
 
 The field ``file`` may come several times (a ``.gltf`` and its ``.bin``, an OBJ and its
 ``.mtl``): the files are then read as the members of one ``.zip`` would be
 (:func:`mesh_normal.files.read_mesh_files`), up to :data:`app.config.UPLOAD_FILES` of them.
-
-The middleware counts the bytes as they arrive (see :class:`app.web.middleware.BodyLimit`);
-Starlette spools a large multipart file to an anonymous temporary file, which is gone when
-it is closed. We close it as soon as its bytes are read, so no upload outlives its request.
 """
 
 from __future__ import annotations
@@ -18,11 +15,10 @@ from pickle import PickleBuffer
 from typing import Any, SupportsIndex
 
 from fastapi import Request
-from starlette.datastructures import UploadFile
-from starlette.exceptions import HTTPException
 
 from app.config import UPLOAD_FILES
 from app.web.errors import ApiError, clip
+from app.web.uploads import read_files
 from mesh_normal.files.archive import mesh_name
 from mesh_normal.files.errors import MeshFileError
 from mesh_normal.files.formats import ACCEPTED_SUFFIXES
@@ -166,53 +162,11 @@ def upload_weld(upload: Upload, query: float | None) -> float | None:
 
 
 async def read_upload(request: Request) -> Upload:
-    """The file of a multipart request's ``file`` field, or else the raw body."""
-    media_type = request.headers.get("content-type", "").split(";", 1)[0].strip().lower()
-    if media_type == "multipart/form-data":
-        return await _multipart(request)
-    if media_type == "application/x-www-form-urlencoded":
-        raise ApiError(
-            422,
-            "file is missing: send the mesh as the multipart/form-data field "
-            "file, or as the raw request body.",
-            "file",
-        )
-    data = await request.body()
-    if not data:
-        raise ApiError(422, "The request body is empty: send a mesh file.", "file")
-    return Upload(data, request.query_params.get("filename"))
-
-
-async def _multipart(request: Request) -> Upload:
-    try:
-        form = await request.form(max_files=UPLOAD_FILES, max_fields=16)
-    except HTTPException as error:  # Starlette's words for a malformed multipart body
-        if str(error.detail).startswith("Too many files"):
-            raise ApiError(
-                400,
-                f"At most {UPLOAD_FILES} files may be sent at once; send more as a .zip.",
-                "file",
-            ) from None
-        detail = str(error.detail).strip().rstrip(".").replace(". ", "; ")
-        raise ApiError(400, f"The multipart body cannot be read: {detail}.", "file") from None
-    try:
-        items = form.getlist("file")
-        if not items or not all(isinstance(item, UploadFile) for item in items):
-            given = "is missing" if not items else "must be a file, not a text field"
-            raise ApiError(422, f"file {given}: send the mesh as the multipart field file.", "file")
-        files = [item for item in items if isinstance(item, UploadFile)]
-        weld = form.get("weld")
-        if weld is not None and not isinstance(weld, str):
-            raise ApiError(422, "weld must be a text field holding a number, not a file.", "weld")
-        parts = tuple([(item.filename, await item.read()) for item in files])
-    finally:
-        await form.close()  # the spooled temporary files go now, not at garbage collection
+    """The mesh file of a multipart request's ``file`` field (and ``weld``), or the raw body."""
+    received = await read_files(request, "mesh", ("weld",))
+    weld = received.fields.get("weld")
     tolerance = None if weld is None else weld_field(weld)
-    if len(parts) > 1:
-        return Upload.several(parts, tolerance)
-    filename, data = parts[0]
-    if not data:
-        raise ApiError(
-            422, f"The uploaded file {filename or ''} is empty.".replace("  ", " "), "file"
-        )
+    if len(received.parts) > 1:
+        return Upload.several(received.parts, tolerance)
+    filename, data = received.parts[0]
     return Upload(data, filename, weld=tolerance)

@@ -19,6 +19,7 @@ if TYPE_CHECKING:
     from mesh_normal.points.estimate import PointNormals, PointStatus, point_normals
     from mesh_normal.points.orient import ORIENT_MODES, ComponentOrientation, OrientMode
     from mesh_normal.points.read import POINT_SUFFIXES, PointCloud, read_points
+    from mesh_normal.points.report import PointAnalysis, PointReport, analyse_points
     from mesh_normal.points.write import POINT_WRITE_FORMATS, write_points
 
 #: Public name to the module under ``mesh_normal.points`` that defines it.
@@ -33,6 +34,9 @@ _HOMES = {
     "PointCloud": "read",
     "read_points": "read",
     "POINT_WRITE_FORMATS": "write",
+    "PointAnalysis": "report",
+    "PointReport": "report",
+    "analyse_points": "report",
     "write_points": "write",
 }
 
@@ -42,9 +46,12 @@ __all__ = [
     "POINT_WRITE_FORMATS",
     "ComponentOrientation",
     "OrientMode",
+    "PointAnalysis",
     "PointCloud",
     "PointNormals",
+    "PointReport",
     "PointStatus",
+    "analyse_points",
     "point_normals",
     "read_points",
     "write_points",

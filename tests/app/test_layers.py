@@ -19,7 +19,7 @@ from pathlib import Path
 from tests.paths import ROOT
 
 PACKAGES = ("app", "mesh_normal")
-FEATURES = ("app.calculator", "app.mesh")
+FEATURES = ("app.calculator", "app.mesh", "app.points")
 Graph = Mapping[str, set[str]]
 
 

@@ -32,13 +32,22 @@ OPERATIONS = {
     "POST /api/mesh",
     "POST /api/mesh/normals",
     "POST /api/mesh/fix",
+    "POST /api/points",
+    "POST /api/points/normals",
 }
 
 #: The query-string operations, whose coordinates are decimal *text*.
 QUERY_OPERATIONS = {"GET /api/normal", "GET /api/normal.csv", "GET /api/chart"}
 
-#: The operations that take a mesh file: any bytes fit their schema ("format: binary").
-MESH_OPERATIONS = {"POST /api/mesh", "POST /api/mesh/normals", "POST /api/mesh/fix"}
+#: The operations that take a mesh or point-cloud file: any bytes fit their schema ("format:
+#: binary").
+MESH_OPERATIONS = {
+    "POST /api/mesh",
+    "POST /api/mesh/normals",
+    "POST /api/mesh/fix",
+    "POST /api/points",
+    "POST /api/points/normals",
+}
 
 #: The smallest number of requests an operation must see for the run to count.
 MIN_CALLS = 25

@@ -1,0 +1,92 @@
+"""The heavy point-cloud work, everything after the upload is read: what a worker runs.
+
+Each function takes the file's bytes, its name and the checked :class:`Options`, and returns
+plain values (a model, bytes), so that it can run in a worker process (:mod:`app.web.jobs`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from app.web.errors import ApiError
+from mesh_normal.files.errors import MeshFileError
+from mesh_normal.points.orient import OrientMode
+from mesh_normal.points.read import PointCloud, read_points
+from mesh_normal.points.report import PointAnalysis, PointReport, analyse_points
+from mesh_normal.points.write import write_points
+from mesh_normal.types import BoolArray, FloatArray
+
+
+@dataclass(frozen=True, slots=True)
+class Options:
+    """The neighbourhood and orientation asked for, checked at the edge."""
+
+    k: int
+    radius: float | None
+    orient: OrientMode
+    viewpoint: tuple[float, float, float] | None
+    direction: tuple[float, float, float] | None
+
+
+def load(data: bytes, filename: str | None) -> PointCloud:
+    """Read the uploaded file; a broken or unknown file becomes a 4xx naming the problem."""
+    try:
+        return read_points(data, filename)
+    except MeshFileError as error:
+        raise ApiError(error.status_code, str(error), "file") from None
+
+
+def analyse(data: bytes, filename: str | None, options: Options) -> PointAnalysis:
+    cloud = load(data, filename)
+    if options.orient == "viewpoint" and options.viewpoint is None and cloud.viewpoint is None:
+        raise ApiError(
+            422, "viewpoint is needed with orient=viewpoint: the file has none to use.", "viewpoint"
+        )
+    if options.orient == "file" and cloud.normals is None:
+        raise ApiError(422, "orient=file needs normals stored in the file; it has none.", "orient")
+    try:
+        return analyse_points(
+            cloud,
+            k=options.k,
+            radius=options.radius,
+            orient=options.orient,
+            viewpoint=options.viewpoint,
+            direction=options.direction,
+            name=filename,
+            size=len(data),
+        )
+    except ValueError as error:  # checked at the edge; a sentence if one slips through
+        raise ApiError(422, str(error).rstrip(".") + ".") from None
+
+
+def report(data: bytes, filename: str | None, options: Options) -> PointReport:
+    """The report of ``POST /api/points``."""
+    return analyse(data, filename, options).report
+
+
+def normals(
+    data: bytes, filename: str | None, options: Options, file_format: str
+) -> tuple[bytes | None, FloatArray, BoolArray]:
+    """The file of points and normals for ``ply`` and ``xyz`` (else None), the normals in file
+    order (zero rows where there is none) and the mask of those rows; the server writes the
+    other formats from the arrays, in blocks."""
+    result = analyse(data, filename, options)
+    vectors, missing = result.normals.normals, ~result.normals.valid
+    if file_format in ("ply", "xyz"):
+        return write_points(result.cloud.points, vectors, file_format), vectors[:0], missing
+    return None, vectors, missing
+
+
+def warm() -> None:
+    """Run each point job once on a small cloud (a worker as it starts): scipy's k-d tree and
+    spanning tree, the point kernels and the readers are loaded before the first upload."""
+    import numpy as np
+
+    angles = np.linspace(0.0, 2 * np.pi, 64, endpoint=False)
+    ring = np.stack([np.cos(angles), np.sin(angles), np.zeros_like(angles)], axis=1)
+    points = np.concatenate([ring * radius + [0, 0, radius] for radius in (1.0, 1.5, 2.0)])
+    options = Options(k=12, radius=None, orient="mst", viewpoint=None, direction=None)
+    for name, fmt in (("warm.ply", "ply"), ("warm.xyz", "xyz")):
+        data = write_points(points, None, fmt)
+        report(data, name, options)
+        normals(data, name, options, fmt)

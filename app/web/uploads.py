@@ -1,0 +1,84 @@
+"""Reading uploaded files from a request: a multipart field ``file`` (repeatable) or a raw body.
+
+The middleware counts the bytes as they arrive (see :class:`app.web.middleware.BodyLimit`);
+Starlette spools a large multipart file to an anonymous temporary file, which is gone when
+it is closed. We close it as soon as its bytes are read, so no upload outlives its request.
+The features (:mod:`app.mesh.uploads`, :mod:`app.points.api`) say what the files are.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from fastapi import Request
+from starlette.datastructures import UploadFile
+from starlette.exceptions import HTTPException
+
+from app.config import UPLOAD_FILES
+from app.web.errors import ApiError
+
+
+@dataclass(frozen=True, slots=True)
+class Received:
+    """The files sent (name and bytes, in their order; one for a raw body) and the text
+    fields asked for that came with them."""
+
+    parts: tuple[tuple[str | None, bytes], ...]
+    fields: dict[str, str]
+
+
+async def read_files(request: Request, what: str, text_fields: tuple[str, ...] = ()) -> Received:
+    """The files of a multipart request's ``file`` field, or else the raw body (named by
+    ``?filename=``); ``what`` names the file in the error sentences ("mesh")."""
+    media_type = request.headers.get("content-type", "").split(";", 1)[0].strip().lower()
+    if media_type == "multipart/form-data":
+        return await _multipart(request, what, text_fields)
+    if media_type == "application/x-www-form-urlencoded":
+        raise ApiError(
+            422,
+            f"file is missing: send the {what} as the multipart/form-data field "
+            "file, or as the raw request body.",
+            "file",
+        )
+    data = await request.body()
+    if not data:
+        raise ApiError(422, f"The request body is empty: send a {what} file.", "file")
+    return Received(((request.query_params.get("filename"), data),), {})
+
+
+async def _multipart(request: Request, what: str, text_fields: tuple[str, ...]) -> Received:
+    try:
+        form = await request.form(max_files=UPLOAD_FILES, max_fields=16)
+    except HTTPException as error:  # Starlette's words for a malformed multipart body
+        if str(error.detail).startswith("Too many files"):
+            raise ApiError(
+                400,
+                f"At most {UPLOAD_FILES} files may be sent at once; send more as a .zip.",
+                "file",
+            ) from None
+        detail = str(error.detail).strip().rstrip(".").replace(". ", "; ")
+        raise ApiError(400, f"The multipart body cannot be read: {detail}.", "file") from None
+    try:
+        items = form.getlist("file")
+        if not items or not all(isinstance(item, UploadFile) for item in items):
+            given = "is missing" if not items else "must be a file, not a text field"
+            raise ApiError(
+                422, f"file {given}: send the {what} as the multipart field file.", "file"
+            )
+        files = [item for item in items if isinstance(item, UploadFile)]
+        fields: dict[str, str] = {}
+        for name in text_fields:
+            value = form.get(name)
+            if value is not None and not isinstance(value, str):
+                raise ApiError(
+                    422, f"{name} must be a text field holding a number, not a file.", name
+                )
+            if value is not None:
+                fields[name] = value
+        parts = tuple([(item.filename, await item.read()) for item in files])
+    finally:
+        await form.close()  # the spooled temporary files go now, not at garbage collection
+    if len(parts) == 1 and not parts[0][1]:
+        empty = parts[0][0] or ""
+        raise ApiError(422, f"The uploaded file {empty} is empty.".replace("  ", " "), "file")
+    return Received(parts, fields)

@@ -1,0 +1,395 @@
+"""The report on a point cloud as typed models: what ``POST /api/points`` answers.
+
+:func:`analyse_points` estimates the normals (:func:`~mesh_normal.points.point_normals`) and
+sums them up in a :class:`PointReport`: the file, the bounds, how far apart the points are, the
+neighbourhood used, how many points got each :class:`~mesh_normal.points.PointStatus`, how
+each part was oriented, how the normals the file stores agree with ours, and a diagnosis in
+plain sentences. ``report.model_dump_json()`` is the JSON of ``POST /api/points``; like the
+mesh report's, it never holds ``NaN`` or ``Infinity``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+from pydantic import BaseModel, ConfigDict, Field
+from scipy.spatial import cKDTree  # type: ignore[import-untyped]
+
+from mesh_normal.points.estimate import PointNormals, PointStatus, point_normals
+from mesh_normal.points.orient import OrientMode
+from mesh_normal.points.read import PointCloud, SourceKind
+from mesh_normal.report import INDEX_LIST_LIMIT, Finite, Measure
+from mesh_normal.types import BoolArray, FloatArray
+
+#: Stored normals within this angle of ours, as lines (either side), count as agreeing.
+POINT_AGREEMENT_DEGREES = 10.0
+#: Under this fraction of compared points on our side, the stored normals read as flipped.
+FLIPPED_FRACTION = 0.5
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid", ser_json_inf_nan="null")
+
+
+class PointFileInfo(_Model):
+    """The file the cloud was read from."""
+
+    name: str | None = Field(description="The file's name as uploaded, or null without one.")
+    format: str = Field(description="The format read: ply, xyz, pts, pcd, las, laz or a mesh's.")
+    source_kind: SourceKind = Field(description='"points", or "mesh vertices" for a mesh file.')
+    bytes: int = Field(ge=0, description="The file's size in bytes (0 for a cloud handed over).")
+    file_points: int = Field(ge=0, description="Points the file holds, those left out included.")
+    left_out: int = Field(ge=0, description="Points left out (PCD points marked NaN).")
+    has_normals: bool = Field(description="Whether the file stores normals.")
+    has_colors: bool = Field(description="Whether the file stores colours.")
+    viewpoint: list[Finite] | None = Field(
+        description="A PCD VIEWPOINT's origin (x, y, z); null for other formats."
+    )
+    notes: list[str] = Field(description="What the reader did not use or left out, in words.")
+
+
+class PointBounds(_Model):
+    """The axis-aligned box around the finite points."""
+
+    min: list[Finite] = Field(min_length=3, max_length=3, description="Smallest x, y and z.")
+    max: list[Finite] = Field(min_length=3, max_length=3, description="Largest x, y and z.")
+
+
+class Spacing(_Model):
+    """The distance from each point to its nearest other point (finite points only)."""
+
+    min: Measure = Field(description="The smallest; 0 when two points coincide.")
+    median: Measure = Field(description="The median: the cloud's typical spacing.")
+    max: Measure = Field(description="The largest: the most isolated point's.")
+    coincident: int = Field(ge=0, description="Points that have another at exactly their place.")
+
+
+class Neighbourhood(_Model):
+    """The neighbourhood each normal was fitted to."""
+
+    k: int | None = Field(description="At most this many points, the point itself included.")
+    radius: Measure = Field(description="Only points within this distance; null: any distance.")
+
+
+class StatusCounts(_Model):
+    """How many points got each status (see PointStatus)."""
+
+    ok: int = Field(ge=0, description="A unit normal, oriented as asked.")
+    not_finite: int = Field(ge=0, description="A coordinate is NaN or infinite.")
+    too_few_neighbours: int = Field(ge=0, description="Under 3 points in the neighbourhood.")
+    duplicates: int = Field(ge=0, description="The neighbourhood's points coincide.")
+    collinear: int = Field(ge=0, description="The neighbourhood's points lie on a line.")
+    ambiguous: int = Field(ge=0, description="Two directions are equally flat.")
+    unoriented: int = Field(ge=0, description="A unit normal whose side was not decided.")
+
+
+class PartOrientation(_Model):
+    """One connected part of the neighbour graph (or the whole cloud for per-point modes)."""
+
+    points: int = Field(ge=0, description="Its points that have a normal.")
+    flipped: int = Field(ge=0, description="Those whose normal the orientation turned.")
+    unoriented: int = Field(ge=0, description="Those whose side could not be decided.")
+    reason: str = Field(description="Why some were left unoriented; empty when none were.")
+    seed: int = Field(ge=-1, description="The point (0-based) that decided its side, or -1.")
+
+
+class Orientation(_Model):
+    """How the normals' sides were chosen."""
+
+    mode: OrientMode = Field(description="mst, riemannian, viewpoint, direction, file or none.")
+    viewpoint: list[Finite] | None = Field(description="The sensor position used, or null.")
+    viewpoint_from_file: bool = Field(description="Whether it is the PCD file's VIEWPOINT.")
+    direction: list[Finite] | None = Field(description="The direction used, or null.")
+    flipped: int = Field(ge=0, description="Normals turned, in all parts.")
+    unoriented: int = Field(ge=0, description="Normals whose side could not be decided.")
+    part_count: int = Field(ge=0, description="How many parts were oriented on their own.")
+    parts: list[PartOrientation] = Field(
+        description=f"The first {INDEX_LIST_LIMIT} parts, largest first."
+    )
+
+
+class StoredNormals(_Model):
+    """How the normals stored in the file agree with the estimated ones."""
+
+    stored: int = Field(ge=0, description="Points with a stored normal row.")
+    unusable: int = Field(ge=0, description="Stored rows that are zero or not finite.")
+    compared: int = Field(ge=0, description="Points with a usable stored normal and ours.")
+    agreement_degrees: Finite = Field(description="The angle within which lines agree.")
+    agreeing: int = Field(
+        ge=0, description="Compared points whose lines agree within agreement_degrees."
+    )
+    median_angle_degrees: Measure = Field(
+        description="The median angle between the lines (either side); null if none compared."
+    )
+    max_angle_degrees: Measure = Field(
+        description="The largest angle between the lines; null when none was compared."
+    )
+    same_side_fraction: Measure = Field(
+        description="Of the compared points we oriented, the fraction whose stored normal is "
+        "on our side (dot product positive); null when none."
+    )
+
+
+class PointReport(_Model):
+    """The report on one point cloud: the file, spacing, normals by status, orientation and
+    the diagnosis in plain sentences."""
+
+    file: PointFileInfo = Field(description="The file: name, format, size and what it holds.")
+    points: int = Field(ge=0, description="Points kept, in file order.")
+    bounds: PointBounds | None = Field(description="The box around the finite points, or null.")
+    spacing: Spacing | None = Field(description="Nearest-neighbour distances; null under 2.")
+    neighbourhood: Neighbourhood = Field(description="The neighbourhood used: k and radius.")
+    counts: StatusCounts = Field(description="How many points got each status.")
+    with_normal: int = Field(ge=0, description="Points with a normal: ok or unoriented.")
+    orientation: Orientation = Field(description="How the sides were chosen, part by part.")
+    stored_normals: StoredNormals | None = Field(
+        description="How the file's normals agree with ours; null when it stores none."
+    )
+    diagnosis: list[str] = Field(description="What was found, in plain sentences.")
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class PointAnalysis:
+    """The cloud, its normals, and the report on them."""
+
+    cloud: PointCloud
+    normals: PointNormals
+    report: PointReport
+
+
+def analyse_points(
+    cloud: PointCloud,
+    *,
+    k: int | None = 30,
+    radius: float | None = None,
+    orient: OrientMode = "mst",
+    viewpoint: ArrayLike | None = None,
+    direction: ArrayLike | None = None,
+    name: str | None = None,
+    size: int = 0,
+) -> PointAnalysis:
+    """Estimate the normals of ``cloud`` and report on them.
+
+    With ``orient="viewpoint"`` and no ``viewpoint``, a PCD file's VIEWPOINT origin is used;
+    ``orient="file"`` orients along the file's normals. ``name`` and ``size`` describe the
+    file the cloud came from. Raises ValueError (one sentence) for bad arguments.
+    """
+    from_file = False
+    if orient == "viewpoint" and viewpoint is None:
+        if cloud.viewpoint is None:
+            raise ValueError('orient="viewpoint" needs a viewpoint: the file gives none.')
+        viewpoint, from_file = cloud.viewpoint[0], True
+    if orient == "file" and cloud.normals is None:
+        raise ValueError('orient="file" needs normals stored in the file, and it has none.')
+    stored = cloud.normals if orient == "file" else None
+    normals = point_normals(
+        cloud.points,
+        k=k,
+        radius=radius,
+        orient=orient,
+        viewpoint=viewpoint,
+        direction=direction,
+        stored=stored,
+    )
+    orientation = _orientation(normals, viewpoint, from_file, direction)
+    finite = np.isfinite(cloud.points).all(axis=1)
+    spacing = _spacing(cloud.points[finite])
+    agreement = None if cloud.normals is None else _stored(cloud.normals, normals)
+    counts = StatusCounts(**normals.counts())
+    report = PointReport(
+        file=_file_info(cloud, name, size),
+        points=len(cloud.points),
+        bounds=_bounds(cloud.points[finite]),
+        spacing=spacing,
+        neighbourhood=Neighbourhood(k=k, radius=radius),
+        counts=counts,
+        with_normal=int(normals.valid.sum()),
+        orientation=orientation,
+        stored_normals=agreement,
+        diagnosis=diagnose(counts, orientation, spacing, agreement, k, radius),
+    )
+    return PointAnalysis(cloud, normals, report)
+
+
+def _vector(value: ArrayLike | None) -> list[float] | None:
+    return None if value is None else [float(x) for x in np.asarray(value, dtype=np.float64)]
+
+
+def _file_info(cloud: PointCloud, name: str | None, size: int) -> PointFileInfo:
+    return PointFileInfo(
+        name=name,
+        format=cloud.format,
+        source_kind=cloud.source_kind,
+        bytes=size,
+        file_points=cloud.file_points,
+        left_out=cloud.file_points - len(cloud.points),
+        has_normals=cloud.normals is not None,
+        has_colors=cloud.colors is not None,
+        viewpoint=None if cloud.viewpoint is None else _vector(cloud.viewpoint[0]),
+        notes=list(cloud.notes),
+    )
+
+
+def _bounds(points: FloatArray) -> PointBounds | None:
+    if not len(points):
+        return None
+    return PointBounds(min=points.min(axis=0).tolist(), max=points.max(axis=0).tolist())
+
+
+def _spacing(points: FloatArray) -> Spacing | None:
+    """Nearest other point's distance, from one k = 2 query (the first hit is the point)."""
+    if len(points) < 2:
+        return None
+    distances, _ = cKDTree(points).query(points, k=2, workers=-1)
+    nearest = distances[:, 1]
+    return Spacing(
+        min=float(nearest.min()),
+        median=float(np.median(nearest)),
+        max=float(nearest.max()),
+        coincident=int(np.count_nonzero(nearest == 0)),
+    )
+
+
+def _orientation(
+    normals: PointNormals, viewpoint: ArrayLike | None, from_file: bool, direction: ArrayLike | None
+) -> Orientation:
+    parts = [
+        PartOrientation(
+            points=part.points,
+            flipped=part.flipped,
+            unoriented=part.unoriented,
+            reason=part.reason,
+            seed=part.seed,
+        )
+        for part in normals.components[:INDEX_LIST_LIMIT]
+    ]
+    mode = normals.orient
+    return Orientation(
+        mode=mode,
+        viewpoint=_vector(viewpoint) if mode == "viewpoint" else None,
+        viewpoint_from_file=from_file,
+        direction=_vector(direction) if mode == "direction" else None,
+        flipped=normals.flipped,
+        unoriented=normals.unoriented,
+        part_count=len(normals.components),
+        parts=parts,
+    )
+
+
+def _stored(stored: FloatArray, normals: PointNormals) -> StoredNormals:
+    """The angles between the stored and the estimated normal lines, where both exist."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        lengths = np.sqrt(np.einsum("ij,ij->i", stored, stored))
+    usable: BoolArray = np.isfinite(lengths) & (lengths > 0) & np.isfinite(stored).all(axis=1)
+    compared = usable & normals.valid
+    cosines = np.einsum("ij,ij->i", stored[compared], normals.normals[compared])
+    cosines /= lengths[compared]
+    angles = np.degrees(np.arccos(np.clip(np.abs(cosines), 0.0, 1.0)))
+    oriented = normals.status[compared] == PointStatus.ok
+    return StoredNormals(
+        stored=len(stored),
+        unusable=int(np.count_nonzero(~usable)),
+        compared=int(compared.sum()),
+        agreement_degrees=POINT_AGREEMENT_DEGREES,
+        agreeing=int(np.count_nonzero(angles <= POINT_AGREEMENT_DEGREES)),
+        median_angle_degrees=float(np.median(angles)) if len(angles) else None,
+        max_angle_degrees=float(angles.max()) if len(angles) else None,
+        same_side_fraction=float(np.mean(cosines[oriented] > 0)) if oriented.any() else None,
+    )
+
+
+def diagnose(
+    counts: StatusCounts,
+    orientation: Orientation,
+    spacing: Spacing | None,
+    stored: StoredNormals | None,
+    k: int | None,
+    radius: float | None,
+) -> list[str]:
+    """The report's findings as plain sentences, the ones that cost normals first."""
+    found = [*_missing(counts, spacing, k, radius), *_unoriented(orientation)]
+    if stored is not None:
+        found.extend(_stored_findings(stored))
+    if not found:
+        found.append("Every point has a normal, oriented as asked.")
+    return found
+
+
+def _points(count: int) -> str:
+    return f"{count:,} point" + ("" if count == 1 else "s")
+
+
+def _missing(
+    counts: StatusCounts, spacing: Spacing | None, k: int | None, radius: float | None
+) -> list[str]:
+    found = []
+    if counts.not_finite:
+        found.append(
+            f"{_points(counts.not_finite)} have a coordinate that is not a finite number: "
+            "they have no normal and are nobody's neighbour."
+        )
+    if spacing is not None and spacing.coincident:
+        found.append(
+            f"{_points(spacing.coincident)} sit exactly where another point is (duplicates); "
+            "they count twice in their neighbours' fits."
+        )
+    if counts.duplicates:
+        found.append(
+            f"{_points(counts.duplicates)} have neighbourhoods whose points all coincide "
+            "(duplicated points), so no plane and no normal: remove the duplicates or use a "
+            "larger k."
+        )
+    if counts.too_few_neighbours:
+        within = f"within the radius {radius:g}" if radius is not None else "near them"
+        found.append(
+            f"{_points(counts.too_few_neighbours)} have fewer than 3 points {within} "
+            "(isolated points), so no normal: use a larger radius, or k alone."
+        )
+    if counts.collinear:
+        size = f"k = {k}" if k is not None else "the radius"
+        found.append(
+            f"{_points(counts.collinear)} have neighbourhoods that lie on a line (a scan line "
+            f"or a thin edge), so no plane and no normal: a larger neighbourhood than {size} "
+            "reaches points off the line."
+        )
+    if counts.ambiguous:
+        found.append(
+            f"{_points(counts.ambiguous)} have neighbourhoods with two equally flat directions "
+            "(a symmetric corner), so no single normal."
+        )
+    return found
+
+
+def _unoriented(orientation: Orientation) -> list[str]:
+    if not orientation.unoriented:
+        return []
+    reasons = list(dict.fromkeys(part.reason for part in orientation.parts if part.reason))
+    why = "; ".join(reasons[:3]) if reasons else "no reference decided their side"
+    return [
+        f"{_points(orientation.unoriented)} have a normal whose side could not be decided "
+        f"({why}): their sign is arbitrary."
+    ]
+
+
+def _stored_findings(stored: StoredNormals) -> list[str]:
+    found = []
+    if stored.unusable:
+        found.append(f"{_points(stored.unusable)} have a stored normal that is zero or not finite.")
+    median = stored.median_angle_degrees
+    if median is not None and median > POINT_AGREEMENT_DEGREES:
+        found.append(
+            f"The file's normals disagree with the estimated ones: a median angle of "
+            f"{median:.1f} degrees between their lines (within {POINT_AGREEMENT_DEGREES:g} "
+            f"degrees for {stored.agreeing:,} of {stored.compared:,})."
+        )
+    side = stored.same_side_fraction
+    if side is not None and side < FLIPPED_FRACTION:
+        found.append(
+            f"The file's normals point to the other side from ours for "
+            f"{math.floor(100 * (1 - side))}% of the points: they are flipped, or oriented "
+            'another way (try orient="file" to keep their sides).'
+        )
+    return found
