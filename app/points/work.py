@@ -71,9 +71,17 @@ def normals(
     order (zero rows where there is none) and the mask of those rows; the server writes the
     other formats from the arrays, in blocks."""
     result = analyse(data, filename, options)
-    vectors, missing = result.normals.normals, ~result.normals.valid
+    cloud, vectors, missing = result.cloud, result.normals.normals, ~result.normals.valid
     if file_format in ("ply", "xyz"):
-        return write_points(result.cloud.points, vectors, file_format), vectors[:0], missing
+        return write_points(cloud.points, vectors, file_format), vectors[:0], missing
+    if cloud.file_points != len(cloud.points):
+        # A row for each of the file's rows, as the command line writes them: those the reader
+        # left out (a PCD's NaN points) are zero rows without a normal, so row i is point i.
+        import numpy as np
+
+        rows, gone = np.zeros((cloud.file_points, 3)), np.ones(cloud.file_points, dtype=bool)
+        rows[cloud.kept], gone[cloud.kept] = vectors, missing
+        vectors, missing = rows, gone
     return None, vectors, missing
 
 

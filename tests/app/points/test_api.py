@@ -65,6 +65,21 @@ def test_pcd_viewpoint_is_used(client: TestClient) -> None:
     assert response.json()["normals"] == [[0.0, 0.0, -1.0]] * 36
 
 
+def test_a_pcds_nan_rows_are_zero_rows_in_the_files_order(client: TestClient) -> None:
+    """PCL marks missing points with NaN: the reader leaves them out, the normals keep a row
+    for each of the file's rows (as the command line writes them), zero and counted."""
+    rows = [f"{x!r} {y!r} {z!r}" for x, y, z in GRID.tolist()]
+    rows.insert(7, "nan nan nan")
+    pcd = pcd_header("x y z", "4 4 4", "F F F", 37) + ("\n".join(rows) + "\n").encode()
+    response = post(client, "/api/points/normals", pcd, "scan.pcd", format="npy")
+    assert response.status_code == 200, response.text
+    normals = np.load(io.BytesIO(response.content))
+    assert normals.shape == (37, 3)
+    assert normals[7].tolist() == [0.0, 0.0, 0.0]
+    np.testing.assert_allclose(np.abs(np.delete(normals, 7, axis=0)[:, 2]), 1.0)
+    assert response.headers["x-points-without-normal"] == "1"
+
+
 @pytest.mark.parametrize("file_format", ["json", "csv", "npy", "ply", "xyz"])
 def test_normals_in_each_format(client: TestClient, file_format: str) -> None:
     # Two far points: isolated within the radius, so no normal; zeros and a header say so.
