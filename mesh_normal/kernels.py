@@ -147,26 +147,38 @@ def kernel(
     return compiled
 
 
-def announce_compiling() -> None:
+def announce_compiling(*kernels: Any) -> None:
     """Say once on stderr that the kernels are being compiled, if one is not in the cache.
 
     Called before the kernels run. Each kernel defined since the last call is looked up in
     numba's cache index, as numba itself will: the entry must be for this numba version,
-    this source file (its stamp), this CPU and this bytecode.
+    this source file (its stamp), this CPU and this bytecode. Given ``kernels``, only those
+    are looked up: a caller that runs only its own (the point-cloud estimate) does not say
+    so for the mesh kernels its imports defined but it never runs.
     """
     global _looked_at, _announced
+    if kernels:
+        with _announce:
+            if not _announced and not all(map(is_cached, kernels)):
+                _announced = True
+                _say_compiling()
+        return
     if _announced or _looked_at == len(_KERNELS):
         return
     with _announce:
         fresh, _looked_at = _KERNELS[_looked_at:], len(_KERNELS)
         if not _announced and not all(map(is_cached, fresh)):
             _announced = True
-            print(
-                "mesh-normal: compiling the mesh kernels (each once, about "
-                f"{COMPILE_SECONDS} s for all of them; later runs load them from the cache)",
-                file=sys.stderr,
-                flush=True,
-            )
+            _say_compiling()
+
+
+def _say_compiling() -> None:
+    print(
+        "mesh-normal: compiling the mesh kernels (each once, about "
+        f"{COMPILE_SECONDS} s for all of them; later runs load them from the cache)",
+        file=sys.stderr,
+        flush=True,
+    )
 
 
 def is_cached(dispatcher: Any) -> bool:

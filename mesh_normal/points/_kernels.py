@@ -261,3 +261,17 @@ def graph_edges(
             rows[count], cols[count], weights[count] = i, j, weight
             count += 1
     return count
+
+
+#: Every kernel of this module, for :func:`mesh_normal.kernels.announce_compiling`: a point
+#: cloud's estimate and orientation run these and no mesh kernel.
+KERNELS = (
+    _rotate,
+    symmetric_eigen,
+    _covariance,
+    _classify,
+    neighbourhood_normals,
+    propagate_signs,
+    _listed,
+    graph_edges,
+)

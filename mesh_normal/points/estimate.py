@@ -29,6 +29,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree  # type: ignore[import-untyped]
 
 from mesh_normal.kernels import PARALLEL_KERNELS, announce_compiling
+from mesh_normal.points._kernels import KERNELS as POINT_KERNELS
 from mesh_normal.points._kernels import neighbourhood_normals
 from mesh_normal.points.orient import (
     ORIENT_MODES,
@@ -330,7 +331,7 @@ def _estimate(
     g = min(ORIENT_NEIGHBOURS, m if k is None else min(k, m))
     graph = np.full((m, g), -1, dtype=np.int32)
     bound = math.inf if radius is None else np.nextafter(radius / frame.scale, math.inf)
-    announce_compiling()
+    announce_compiling(*POINT_KERNELS)  # these alone: the mesh kernels imported do not run
     for start, indptr, indices, nearest in _neighbourhoods(tree, k, bound, g):
         stop = start + len(indptr) - 1
         with PARALLEL_KERNELS:

@@ -123,3 +123,21 @@ def test_without_a_usable_cache_the_kernels_are_compiled_in_memory(tmp_path: Pat
     assert result.stdout.strip() == "[[0.0, 0.0, 1.0]]"
     assert MESSAGE in result.stderr
     assert not empty.exists() or not any(empty.rglob("*.nbi")), "nothing was saved"
+
+
+def test_a_point_cloud_run_is_not_told_of_mesh_kernels_it_never_runs(tmp_path: Path) -> None:
+    # Reading the cloud imports mesh kernels (the readers'); the estimate runs its own alone.
+    script = (
+        "import numpy as np\n"
+        "import mesh_normal as mn\n"
+        "import mesh_normal.faces, mesh_normal.topology\n"
+        "points = np.random.default_rng(0).normal(size=(50, 3))\n"
+        "print(mn.point_normals(points, k=8).counts()['ok'])\n"
+    )
+    first = run(script, tmp_path)
+    assert first.returncode == 0, first.stderr[-2000:]
+    assert first.stderr.count(MESSAGE) == 1
+    second = run(script, tmp_path)
+    assert second.returncode == 0, second.stderr[-2000:]
+    assert MESSAGE not in second.stderr
+    assert second.stdout == first.stdout
