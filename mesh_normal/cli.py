@@ -24,7 +24,7 @@ import sys
 import time
 from collections.abc import Callable, Collection, Iterator
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, TextIO
+from typing import TYPE_CHECKING, Any, TextIO, TypeVar
 
 from mesh_normal import __version__
 from mesh_normal.files.formats import SUFFIXES, WRITABLE
@@ -34,6 +34,8 @@ if TYPE_CHECKING:
     from mesh_normal.files import LoadedMesh
     from mesh_normal.points import OrientMode, PointCloud, PointNormals
     from mesh_normal.report import MeshReport, Weld
+
+Parsed = TypeVar("Parsed")
 
 EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE, EXIT_INPUT, EXIT_OUTPUT = 0, 1, 2, 3, 4
 NORMAL_SUFFIXES = (".npy", ".csv", ".json", ".ply")
@@ -81,15 +83,27 @@ class Progress:
 
 
 def load(path: str, progress: Progress) -> tuple[LoadedMesh, int]:
-    from mesh_normal.files import MeshFileError, read_mesh
+    from mesh_normal.files import read_mesh
 
+    data = read_input(path, progress)
+    return _parsed(path, lambda: read_mesh(data, Path(path).name)), len(data)
+
+
+def read_input(path: str, progress: Progress) -> bytes:
+    """The bytes of the file ``path``; one that cannot be read is a failure that says why."""
     progress.step(f"reading {path}")
     try:
-        data = Path(path).read_bytes()
+        return Path(path).read_bytes()
     except OSError as error:
         raise Failure(f"cannot read {path}: {error.strerror or error}", EXIT_INPUT) from None
+
+
+def _parsed(path: str, parse: Callable[[], Parsed]) -> Parsed:
+    """``parse()``, its file's problem (a MeshFileError) a failure that names the file."""
+    from mesh_normal.files import MeshFileError
+
     try:
-        return read_mesh(data, Path(path).name), len(data)
+        return parse()
     except MeshFileError as error:
         raise Failure(f"{path}: {error}", EXIT_INPUT) from None
 
@@ -311,18 +325,10 @@ def same_file(one: str, other: str) -> bool:
 
 
 def load_points(path: str, progress: Progress) -> PointCloud:
-    from mesh_normal.files import MeshFileError
     from mesh_normal.points import read_points
 
-    progress.step(f"reading {path}")
-    try:
-        data = Path(path).read_bytes()
-    except OSError as error:
-        raise Failure(f"cannot read {path}: {error.strerror or error}", EXIT_INPUT) from None
-    try:
-        return read_points(data, Path(path).name)
-    except MeshFileError as error:
-        raise Failure(f"{path}: {error}", EXIT_INPUT) from None
+    data = read_input(path, progress)
+    return _parsed(path, lambda: read_points(data, Path(path).name))
 
 
 def point_references(
