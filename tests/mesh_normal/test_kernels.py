@@ -33,15 +33,22 @@ def test_the_first_compile_says_so_once_and_a_cached_run_does_not(tmp_path: Path
         "import mesh_normal as mn\n"
         "print(mn.orient([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]]).orientation)\n"
     )
-    first = run(script, tmp_path)
-    assert first.returncode == 0, first.stderr[-2000:]
-    assert first.stderr.count(MESSAGE) == 1
+    first = said_once_then_not(script, tmp_path)
     assert "about 20 s for all of them; later runs load them from the cache)" in first.stderr
     assert any(tmp_path.rglob("*.nbi"))  # the cache is where NUMBA_CACHE_DIR says
-    second = run(script, tmp_path)
+
+
+def said_once_then_not(script: str, cache: Path) -> subprocess.CompletedProcess[str]:
+    """Run ``script`` twice on one cache: the first run says it compiles, once; the second,
+    loading the cache, says nothing and prints the same. Returns the first run."""
+    first = run(script, cache)
+    assert first.returncode == 0, first.stderr[-2000:]
+    assert first.stderr.count(MESSAGE) == 1
+    second = run(script, cache)
     assert second.returncode == 0, second.stderr[-2000:]
     assert MESSAGE not in second.stderr
     assert second.stdout == first.stdout
+    return first
 
 
 def test_one_kernel_alone_is_announced_when_not_cached(tmp_path: Path) -> None:
@@ -134,10 +141,4 @@ def test_a_point_cloud_run_is_not_told_of_mesh_kernels_it_never_runs(tmp_path: P
         "points = np.random.default_rng(0).normal(size=(50, 3))\n"
         "print(mn.point_normals(points, k=8).counts()['ok'])\n"
     )
-    first = run(script, tmp_path)
-    assert first.returncode == 0, first.stderr[-2000:]
-    assert first.stderr.count(MESSAGE) == 1
-    second = run(script, tmp_path)
-    assert second.returncode == 0, second.stderr[-2000:]
-    assert MESSAGE not in second.stderr
-    assert second.stdout == first.stdout
+    said_once_then_not(script, tmp_path)
