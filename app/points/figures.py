@@ -44,7 +44,7 @@ def voxel_sample(points: FloatArray, limit: int = VIEW_POINTS) -> IndexArray:
     low, high = chosen.min(axis=0), chosen.max(axis=0)
     extent = float(np.max(high - low)) or 1.0
     # Start near limit cells over the longest side's cube, then coarsen until they fit.
-    cells = max(1, int(math.ceil(limit ** (1 / 3))) * 2)
+    cells = max(1, math.ceil(limit ** (1 / 3)) * 2)
     while True:
         size = extent / cells
         keys = np.floor((chosen - low) / size).astype(np.int64)
@@ -58,7 +58,7 @@ def voxel_sample(points: FloatArray, limit: int = VIEW_POINTS) -> IndexArray:
 
 def _rounded(values: FloatArray, scale: float) -> list[Any]:
     """Six significant digits of the cloud's size: the JSON stays small, the view exact."""
-    digits = max(0, 6 - int(math.floor(math.log10(scale)))) if scale > 0 else 6
+    digits = max(0, 6 - math.floor(math.log10(scale))) if scale > 0 else 6
     return np.round(values, min(digits, 15)).tolist()  # type: ignore[no-any-return]
 
 
@@ -120,9 +120,7 @@ def view_figure(analysis: PointAnalysis) -> dict[str, Any]:
         line = {
             axis: [
                 None if math.isnan(v) else v
-                for v in _rounded(
-                    np.stack([starts[:, i], ends[:, i], gaps], axis=1).ravel(), scale
-                )
+                for v in _rounded(np.stack([starts[:, i], ends[:, i], gaps], axis=1).ravel(), scale)
             ]
             for i, axis in enumerate("xyz")
         }
@@ -207,4 +205,4 @@ def histogram_figure(analysis: PointAnalysis) -> dict[str, Any]:
             "yaxis": {"title": {"text": "points"}, "gridcolor": GRID, "rangemode": "tozero"},
         },
     }
-    return {"figure": figure, "what": what, "count": int(len(values))}
+    return {"figure": figure, "what": what, "count": len(values)}

@@ -67,7 +67,9 @@ def _number(text: str, name: str, whole: bool) -> float:
     except ValueError:
         value = math.nan
     if whole and not 3 <= value <= K_LIMIT:
-        raise ApiError(422, f"k must be a whole number from 3 to {K_LIMIT}, not {clip(text)!r}.", name)
+        raise ApiError(
+            422, f"k must be a whole number from 3 to {K_LIMIT}, not {clip(text)!r}.", name
+        )
     if not whole and not (math.isfinite(value) and value > 0):
         raise ApiError(422, f"radius must be a positive number or empty, not {clip(text)!r}.", name)
     return value
@@ -121,9 +123,7 @@ async def points_upload(request: Request) -> HTMLResponse:
         checked = form_options(values)
         jobs: Jobs = request.app.state.jobs
         context.update(
-            await jobs.run(
-                request, estimate(data, filename), work.page, data, filename, checked
-            )
+            await jobs.run(request, estimate(data, filename), work.page, data, filename, checked)
         )
     except ApiError as error:
         context["error"] = error

@@ -253,7 +253,7 @@
         return response.blob().then(function (blob) {
           save(blob, name);
           downloadStatus("Saved " + name + (missing ? "; " + missing.toLocaleString() +
-            " points have no normal (zeros)." : "."), missing ? "warn" : "ok");
+            (missing === 1 ? " point has" : " points have") + " no normal (zeros)." : "."), missing ? "warn" : "ok");
         });
       })
       .catch(function () { downloadStatus("The download failed; check the connection.", "error"); })

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from typing import Any
 
 import numpy as np
 import pytest
@@ -15,9 +16,7 @@ from tests.conftest import Page
 def cylinder_xyz(rings: int = 8, around: int = 36) -> bytes:
     """Points of a cylinder of radius 1 and height 1.4 as XYZ text."""
     angles = np.linspace(0, 2 * np.pi, around, endpoint=False)
-    rows = [
-        (np.cos(a), np.sin(a), z) for z in np.linspace(0, 1.4, rings) for a in angles.tolist()
-    ]
+    rows = [(np.cos(a), np.sin(a), z) for z in np.linspace(0, 1.4, rings) for a in angles.tolist()]
     return "".join(f"{x:.9f} {y:.9f} {z:.9f}\n" for x, y, z in rows).encode()
 
 
@@ -28,7 +27,7 @@ def post(
     status: int = 200,
     part: str | None = None,
     **fields: str,
-):  # type: ignore[no-untyped-def]
+) -> tuple[Any, Page]:
     response = client.post(
         "/points",
         params={"part": part} if part else None,
@@ -49,8 +48,8 @@ def json_block(html: Page, element_id: str):  # type: ignore[no-untyped-def]
 def test_form_posts_the_file_and_options_without_javascript(client: TestClient) -> None:
     response = client.get("/points")
     assert response.status_code == 200
-    assert response.template.name == "points.html"  # type: ignore[attr-defined]
-    assert response.context["report"] is None  # type: ignore[attr-defined]
+    assert response.template.name == "points.html"
+    assert response.context["report"] is None
     html = Page(response.text)
     form = html.one("form", id="points-form")
     assert (form["method"], form["action"], form["enctype"]) == (
@@ -77,7 +76,7 @@ def test_form_posts_the_file_and_options_without_javascript(client: TestClient) 
 def test_a_small_cloud_renders_the_report_and_its_json_twin(client: TestClient) -> None:
     data = cylinder_xyz()
     response, html = post(client, data, k="12")
-    context = response.context  # type: ignore[attr-defined]
+    context = response.context
     report = context["report"]
     assert report.points == 8 * 36
     assert report.neighbourhood.k == 12
@@ -88,7 +87,9 @@ def test_a_small_cloud_renders_the_report_and_its_json_twin(client: TestClient) 
     twin = json_block(html, "points-report")
     api = client.post("/api/points", params={"k": 12}, files={"file": ("cylinder.xyz", data)})
     assert twin == api.json()
-    assert response.headers["link"] == '</api/points?k=12>; rel="alternate"; type="application/json"'
+    assert (
+        response.headers["link"] == '</api/points?k=12>; rel="alternate"; type="application/json"'
+    )
     assert html.one("link", rel="alternate")["href"] == "/api/points?k=12"
     assert html.one("a", id="points-json-link")["href"] == "/api/points?k=12"
     # The 3D view has every point (a small cloud) and a stroke per point with a normal.
@@ -113,15 +114,18 @@ def test_options_reach_the_report_and_the_twin_query(client: TestClient) -> None
     response, html = post(
         client, cylinder_xyz(), orient="direction", direction="0,0,1", viewpoint="1,2,3"
     )
-    report = response.context["report"]  # type: ignore[attr-defined]
+    report = response.context["report"]
     assert report.orientation.mode == "direction"
     assert report.orientation.direction == [0.0, 0.0, 1.0]
-    assert html.one("div", id="points-report-view")["data-query"] == "orient=direction&direction=0%2C0%2C1"
+    assert (
+        html.one("div", id="points-report-view")["data-query"]
+        == "orient=direction&direction=0%2C0%2C1"
+    )
 
 
 def test_a_broken_file_shows_the_sentence_with_a_4xx(client: TestClient) -> None:
     response, html = post(client, b"ply\nformat nonsense\n", name="broken.ply", status=400)
-    assert response.context["error"] is not None  # type: ignore[attr-defined]
+    assert response.context["error"] is not None
     assert html.one("section", id="points-error")
     assert "could not be analysed" in response.text
     assert not html.find("script", type="application/json", id="points-report")
@@ -138,12 +142,10 @@ def test_a_broken_file_shows_the_sentence_with_a_4xx(client: TestClient) -> None
         ({"orient": "viewpoint", "viewpoint": "1,2"}, "viewpoint must be three finite numbers"),
     ],
 )
-def test_bad_options_are_a_422_page(
-    client: TestClient, fields: dict[str, str], words: str
-) -> None:
-    response, html = post(client, cylinder_xyz(), status=422, **fields)
+def test_bad_options_are_a_422_page(client: TestClient, fields: dict[str, str], words: str) -> None:
+    response, _ = post(client, cylinder_xyz(), status=422, **fields)
     assert words in response.text
-    assert response.context["error"].status_code == 422  # type: ignore[attr-defined]
+    assert response.context["error"].status_code == 422
 
 
 def test_a_post_without_a_file_is_a_422_page(client: TestClient) -> None:
