@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from playwright.sync_api import Page, expect
+from playwright.sync_api import FilePayload, Page, expect
 
 from tests.browser.conftest import NewPage
 from tests.paths import ROOT
@@ -20,7 +20,7 @@ SCREENSHOT_LIMIT = 400 * 1024
 
 def cloud_file(
     name: str = "cylinder.xyz", rings: int = 8, around: int = 36, outlier: bool = True
-) -> dict[str, object]:
+) -> FilePayload:
     """A cylinder of ``rings`` rings of ``around`` points, with one isolated point far away."""
     angles = np.linspace(0, 2 * np.pi, around, endpoint=False)
     heights = np.linspace(0, 1.4, rings)
@@ -31,7 +31,7 @@ def cloud_file(
     return {"name": name, "mimeType": "text/plain", "buffer": text.encode()}
 
 
-def upload(page: Page, radius: str = "", cloud: dict[str, object] | None = None) -> None:
+def upload(page: Page, radius: str = "", cloud: FilePayload | None = None) -> None:
     response = page.goto("/points")
     assert response is not None and response.status == 200
     page.wait_for_load_state("load")
@@ -97,3 +97,18 @@ def test_phone_layout_and_desktop_screenshot(new_page: NewPage) -> None:
     path = DOCS / "points-page.png"
     page.screenshot(path=path, animations="disabled", caret="hide", scale="css")
     assert path.stat().st_size < SCREENSHOT_LIMIT, path.stat().st_size
+
+
+def test_without_javascript_the_form_posts_and_the_server_renders_the_report(
+    new_page: NewPage,
+) -> None:
+    page = new_page(java_script_enabled=False)
+    page.goto("/points")
+    page.locator("details.mesh-options summary").click()
+    page.fill("#points-k", "12")
+    page.set_input_files("#points-file", files=[cloud_file()])
+    with page.expect_navigation():
+        page.locator("#points-submit").click()
+    expect(page.locator("#points-diagnosis")).to_contain_text("Every point has a normal")
+    expect(page.locator("#points-k")).to_have_value("12")
+    assert page.locator("link[rel=alternate]").get_attribute("href") == "/api/points?k=12"
