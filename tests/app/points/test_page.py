@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 from fastapi.testclient import TestClient
 
-from app.points.figures import normal_colors, voxel_sample
+from app.points.figures import VIEW_NORMALS, VIEW_POINTS, normal_colors, voxel_sample
+from mesh_normal.points.write import write_points
 from tests.conftest import Page
 
 
@@ -179,3 +180,32 @@ def test_normal_colors_map_each_axis_to_a_channel() -> None:
         "rgb(128,0,128)",
         "rgb(150,150,150)",
     ]
+
+
+def test_stored_normals_get_the_angle_histogram_and_a_sentence(client: TestClient) -> None:
+    angles = np.linspace(0, 2 * np.pi, 36, endpoint=False)
+    points = np.array(
+        [(np.cos(a), np.sin(a), z) for z in np.linspace(0, 1.4, 8) for a in angles.tolist()]
+    )
+    stored = points * [1.0, 1.0, 0.0]  # the cylinder's outward normals
+    data = write_points(points, stored, "ply")
+    response, html = post(client, data, name="cylinder.ply")
+    context = response.context
+    assert context["histogram"]["what"] == "angle to the stored normals (degrees)"
+    assert context["histogram"]["count"] == len(points)
+    stored_text = html.text("points-stored")
+    assert f"{len(points)} of {len(points)} agree with ours" in stored_text
+
+
+def test_a_large_cloud_is_drawn_as_a_capped_even_sample(client: TestClient) -> None:
+    rng = np.random.default_rng(3)
+    points = rng.uniform(0, 1, (24_000, 3)) * [1.0, 1.0, 0.01]  # a thin slab
+    data = "".join(f"{x:.7f} {y:.7f} {z:.7f}\n" for x, y, z in points.tolist()).encode()
+    response, html = post(client, data, name="slab.xyz", k="10")
+    view = response.context["view"]
+    assert view["total"] == 24_000
+    assert view["shown"] <= VIEW_POINTS and view["strokes"] <= VIEW_NORMALS
+    assert "an even sample" in html.text("points-view-caption")
+    figure = json_block(html, "points-view-data")["figure"]
+    assert len(figure["data"][0]["x"]) == view["shown"]
+    assert len(figure["data"][1]["x"]) == 3 * view["strokes"]
