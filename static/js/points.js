@@ -322,9 +322,16 @@
     const downloadButton = event.target.closest("button[data-points-download]");
     if (downloadButton) download(downloadButton);
   });
-  // New options analyse the file the page holds again.
+  // New options analyse the file the page holds again; the direction mode waits for its
+  // direction rather than answer with an error at once.
   form.addEventListener("change", function (event) {
-    if (event.target !== input && file && event.target.validity && event.target.validity.valid) upload(file);
+    if (event.target === input || !file || !(event.target.validity && event.target.validity.valid)) return;
+    const values = fields();
+    if (values.orient === "direction" && !values.direction) {
+      say("Give the direction x,y,z, e.g. 0,0,1, to orient along it.", "");
+      return;
+    }
+    upload(file);
   });
 
   // A report the server rendered (the form posted without this script) is drawn too.

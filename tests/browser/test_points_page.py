@@ -112,3 +112,16 @@ def test_without_javascript_the_form_posts_and_the_server_renders_the_report(
     expect(page.locator("#points-diagnosis")).to_contain_text("Every point has a normal")
     expect(page.locator("#points-k")).to_have_value("12")
     assert page.locator("link[rel=alternate]").get_attribute("href") == "/api/points?k=12"
+
+
+def test_new_options_analyse_the_held_file_again(page: Page) -> None:
+    upload(page)
+    page.locator("details.mesh-options summary").click()
+    page.select_option("#points-orient", "direction")
+    expect(page.locator("#points-status")).to_contain_text("Give the direction x,y,z")
+    page.fill("#points-direction", "0,0,1")
+    page.locator("#points-direction").dispatch_event("change")
+    expect(page.locator("#points-summary")).to_contain_text("Direction 0.0, 0.0, 1.0.")
+    expect(page.locator("#points-report-view")).to_have_attribute(
+        "data-query", "orient=direction&direction=0%2C0%2C1"
+    )
