@@ -31,6 +31,7 @@ MESH_PATHS = frozenset(
         "/mesh",
         "/api/points",
         "/api/points/normals",
+        "/points",
     }
 )
 

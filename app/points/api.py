@@ -148,7 +148,16 @@ def options(
 
 async def read_point_file(request: Request) -> tuple[bytes, str | None]:
     """The one file of the request, with its name; a name of another kind is a 415."""
-    received = await read_files(request, "point cloud")
+    data, filename, _ = await read_point_upload(request)
+    return data, filename
+
+
+async def read_point_upload(
+    request: Request, text_fields: tuple[str, ...] = ()
+) -> tuple[bytes, str | None, dict[str, str]]:
+    """The one file of the request, its name and the ``text_fields`` sent with it (the page's
+    form sends its options as fields); a file name of another kind is a 415."""
+    received = await read_files(request, "point cloud", text_fields)
     if len(received.parts) > 1:
         raise ApiError(422, "file is given more than once: send one point cloud.", "file")
     filename, data = received.parts[0]
@@ -160,7 +169,7 @@ async def read_point_file(request: Request) -> tuple[bytes, str | None]:
             f"{', '.join(POINT_FILE_SUFFIXES)}.",
             "file",
         )
-    return data, filename
+    return data, filename, received.fields
 
 
 def download_name(filename: str | None, suffix: str) -> dict[str, str]:

@@ -6,8 +6,11 @@ plain values (a model, bytes), so that it can run in a worker process (:mod:`app
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
+from typing import Any
 
+from app.points.figures import histogram_figure, view_figure
 from app.web.errors import ApiError
 from mesh_normal.files.errors import MeshFileError
 from mesh_normal.points.orient import OrientMode
@@ -98,3 +101,16 @@ def warm() -> None:
         data = write_points(points, None, fmt)
         report(data, name, options)
         normals(data, name, options, fmt)
+
+
+def page(data: bytes, filename: str | None, options: Options) -> dict[str, Any]:
+    """The point-cloud page's context for an upload: the report, its JSON twin and figures."""
+    result = analyse(data, filename, options)
+    return {
+        "report": result.report,
+        # The API's own JSON (non-finite floats already null), parsed back so that the
+        # template's json_script escapes it for a <script> block.
+        "report_json": json.loads(result.report.model_dump_json()),
+        "view": view_figure(result),
+        "histogram": histogram_figure(result),
+    }

@@ -329,6 +329,7 @@ PAGES = [
     ("GET", "/embed", 200),
     ("GET", "/embed?ax=abc", 422),
     ("GET", "/docs", 200),
+    ("GET", "/points", 200),
     ("GET", "/nope", 404),
     ("POST", "/", 405),
     ("GET", "/static/nope.js", 404),
