@@ -101,6 +101,7 @@ def warm() -> None:
         data = write_points(points, None, fmt)
         report(data, name, options)
         normals(data, name, options, fmt)
+        page(data, name, options)  # the figures (plotly) too
 
 
 def page(data: bytes, filename: str | None, options: Options) -> dict[str, Any]:
