@@ -22,6 +22,7 @@ from mesh_normal.points.estimate import PointNormals, PointStatus, point_normals
 from mesh_normal.points.orient import OrientMode
 from mesh_normal.points.read import PointCloud, SourceKind
 from mesh_normal.report import INDEX_LIST_LIMIT, Finite, Measure
+from mesh_normal.tolerances import POINT_FAR_FROM_FLAT
 from mesh_normal.types import BoolArray, FloatArray
 
 #: Stored normals within this angle of ours, as lines (either side), count as agreeing.
@@ -144,6 +145,12 @@ class PointReport(_Model):
     neighbourhood: Neighbourhood = Field(description="The neighbourhood used: k and radius.")
     counts: StatusCounts = Field(description="How many points got each status.")
     with_normal: int = Field(ge=0, description="Points with a normal: ok or unoriented.")
+    far_from_flat: int = Field(
+        ge=0,
+        description=f"Points with a normal whose neighbourhood is far from flat (surface "
+        f"variation over {POINT_FAR_FROM_FLAT:g}): a thin wall or two sheets within its reach, "
+        "a sharp edge or heavy noise, where the normal and its side are unsure.",
+    )
     orientation: Orientation = Field(description="How the sides were chosen, part by part.")
     stored_normals: StoredNormals | None = Field(
         description="How the file's normals agree with ours; null when it stores none."
@@ -199,6 +206,7 @@ def analyse_points(
     spacing = _spacing(cloud.points[finite])
     agreement = None if cloud.normals is None else _stored(cloud.normals, normals)
     counts = StatusCounts(**normals.counts())
+    far_from_flat = int(np.count_nonzero(normals.valid & (normals.curvature > POINT_FAR_FROM_FLAT)))
     report = PointReport(
         file=_file_info(cloud, name, size),
         points=len(cloud.points),
@@ -207,9 +215,10 @@ def analyse_points(
         neighbourhood=Neighbourhood(k=k, radius=radius),
         counts=counts,
         with_normal=int(normals.valid.sum()),
+        far_from_flat=far_from_flat,
         orientation=orientation,
         stored_normals=agreement,
-        diagnosis=diagnose(counts, orientation, spacing, agreement, k, radius),
+        diagnosis=diagnose(counts, orientation, spacing, agreement, k, radius, far_from_flat),
     )
     return PointAnalysis(cloud, normals, report)
 
@@ -308,9 +317,19 @@ def diagnose(
     stored: StoredNormals | None,
     k: int | None,
     radius: float | None,
+    far_from_flat: int = 0,
 ) -> list[str]:
     """The report's findings as plain sentences, the ones that cost normals first."""
     found = [*_missing(counts, spacing, k, radius), *_unoriented(orientation)]
+    if far_from_flat:
+        size = f"k = {k}" if radius is None else "the neighbourhood"
+        found.append(
+            f"{_points(far_from_flat)} have neighbourhoods far from flat (surface variation "
+            f"over {POINT_FAR_FROM_FLAT:g}): a thin wall or two sheets closer than {size} "
+            "reaches, a sharp edge, or heavy noise. Their normals blend what the neighbourhood "
+            "holds and their sides are unsure: use a smaller k or a radius, and "
+            'orient="riemannian" for thin walls.'
+        )
     if stored is not None:
         found.extend(_stored_findings(stored))
     if not found:

@@ -184,3 +184,14 @@ def test_the_counts_add_up(seed: int, n: int, doubled: int, k: int) -> None:
     assert report.spacing is not None
     assert report.spacing.coincident >= 2 * min(doubled, n)  # each copy and its original
     assert report.diagnosis and all(line.endswith(".") for line in report.diagnosis)
+
+
+def test_a_slab_thinner_than_its_neighbourhoods_is_said_to_be_far_from_flat() -> None:
+    """1 x 1 x 0.02, 30,000 points: k = 30 reaches across the wall; a sphere does not."""
+    slab = np.random.default_rng(0).uniform(size=(30_000, 3)) * [1.0, 1.0, 0.02]
+    report = analyse_points(make_cloud("xyz", slab)).report
+    assert report.far_from_flat > report.points // 2
+    assert any("far from flat" in line and "riemannian" in line for line in report.diagnosis)
+    smooth = analyse_points(make_cloud("xyz", sphere(5000)[0])).report
+    assert smooth.far_from_flat == 0
+    assert not any("far from flat" in line for line in smooth.diagnosis)
