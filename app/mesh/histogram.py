@@ -8,7 +8,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from app.mesh.classes import COLORS, DEGENERATE
-from app.web.plotly import ACCENT, FONT, TRANSPARENT, Trace
+from app.web.plotly import ACCENT, Trace, histogram_layout
 
 #: Bins of the area histogram, and the span (max / min) beyond which they are log-spaced.
 HISTOGRAM_BINS = 30
@@ -110,17 +110,7 @@ def histogram_figure(histogram: dict[str, Any]) -> dict[str, Any]:
             xaxis["ticktext"] += [f"{t:.3g}" for t in ticks]
     return {
         "data": traces,
-        "layout": {
-            "margin": {"l": 56, "r": 16, "t": 12, "b": 48},
-            "height": 300,
-            "bargap": 0,
-            "paper_bgcolor": TRANSPARENT,
-            "plot_bgcolor": TRANSPARENT,
-            "font": FONT,
-            "showlegend": False,
-            "xaxis": xaxis,
-            "yaxis": {"title": {"text": "faces"}, "gridcolor": GRID, "rangemode": "tozero"},
-        },
+        "layout": histogram_layout(xaxis, "faces", GRID),
     }
 
 

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from app.web.plotly import ACCENT, DEEP_ACCENT, FONT, MUTED, TRANSPARENT, Trace
+from app.web.plotly import ACCENT, DEEP_ACCENT, FONT, MUTED, TRANSPARENT, Trace, histogram_layout
 from mesh_normal.points.report import PointAnalysis
 from mesh_normal.types import BoolArray, FloatArray, IndexArray
 
@@ -193,16 +193,8 @@ def histogram_figure(analysis: PointAnalysis) -> dict[str, Any]:
     }
     figure = {
         "data": [trace],
-        "layout": {
-            "margin": {"l": 56, "r": 16, "t": 12, "b": 48},
-            "height": 300,
-            "bargap": 0,
-            "paper_bgcolor": TRANSPARENT,
-            "plot_bgcolor": TRANSPARENT,
-            "font": FONT,
-            "showlegend": False,
-            "xaxis": {"title": {"text": what}, "gridcolor": GRID, "zerolinecolor": MUTED},
-            "yaxis": {"title": {"text": "points"}, "gridcolor": GRID, "rangemode": "tozero"},
-        },
+        "layout": histogram_layout(
+            {"title": {"text": what}, "gridcolor": GRID, "zerolinecolor": MUTED}, "points", GRID
+        ),
     }
     return {"figure": figure, "what": what, "count": len(values)}

@@ -68,3 +68,18 @@ def cone_trace(
         "showscale": False,
         "lighting": CONE_LIGHTING,
     }
+
+
+def histogram_layout(xaxis: dict[str, Any], counted: str, grid: str) -> dict[str, Any]:
+    """The layout of a page's histogram: bars edge to edge, ``counted`` up the side."""
+    return {
+        "margin": {"l": 56, "r": 16, "t": 12, "b": 48},
+        "height": 300,
+        "bargap": 0,
+        "paper_bgcolor": TRANSPARENT,
+        "plot_bgcolor": TRANSPARENT,
+        "font": FONT,
+        "showlegend": False,
+        "xaxis": xaxis,
+        "yaxis": {"title": {"text": counted}, "gridcolor": grid, "rangemode": "tozero"},
+    }
