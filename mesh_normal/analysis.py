@@ -11,14 +11,14 @@ from __future__ import annotations
 import math
 import numbers
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
 from mesh_normal.diagnosis import problems
-from mesh_normal.faces import FaceGeometry, FaceNormals, face_geometry, face_normals
+from mesh_normal.faces import FaceGeometry, FaceNormals, face_geometry, geometry_areas
 from mesh_normal.files import LoadedMesh, read_mesh
 from mesh_normal.files.read import MeshSource, source_bytes
 from mesh_normal.objects import object_reports
@@ -36,7 +36,7 @@ from mesh_normal.report import (
 )
 from mesh_normal.stored_normals import stored_normal_agreement
 from mesh_normal.tolerances import WELD_LIMIT
-from mesh_normal.topology import MeshTopology, by_position, same_points, weld_distance
+from mesh_normal.topology import MeshTopology, by_position, same_points, structure, weld_distance
 from mesh_normal.types import FloatArray, IndexArray
 
 
@@ -48,12 +48,25 @@ class MeshAnalysis:
     name: str | None
     size: int
     geometry: FaceGeometry
-    faces: FaceNormals
     topology: MeshTopology
     orientation: Orientation
     unused_vertices: int
     weld: Weld | None
     points: IndexArray  # (m, 3): the faces as the topology saw them, each vertex by its point
+    _areas: list[FloatArray] = field(default_factory=list, repr=False)
+
+    @property
+    def areas(self) -> FloatArray:
+        """(m,) float64 face areas, taken on first use."""
+        if not self._areas:
+            self._areas.append(geometry_areas(self.geometry))
+        return self._areas[0]
+
+    @property
+    def faces(self) -> FaceNormals:
+        """The unit normals (taken on first use: a report needs them only to compare a file's
+        own face normals, and does not hold 24 bytes a face otherwise), areas and flags."""
+        return FaceNormals(self.geometry.normals, self.areas, self.geometry.degenerate)
 
 
 def checked_weld(weld: object) -> float | None:
@@ -109,13 +122,17 @@ def analyse_mesh(
     weld = checked_weld(weld)
     # One pass: the reader checked the arrays, and the cross products are taken once here for
     # the face normals, the orientation's volumes and the file-normal comparison alike.
-    geometry = face_geometry(mesh.checked())
+    checked = mesh.checked()
     if weld is None:
-        summary, points = None, by_position(geometry.mesh)
+        summary, points = None, by_position(checked)
     else:
         summary, point = _welded(mesh.vertices, weld)
-        points = geometry.mesh.faces if point is None else point[geometry.mesh.faces]
-    orientation = oriented(geometry, points)  # the vertices matched once, for both
+        points = checked.faces if point is None else point[checked.faces]
+    # The edges first: their sort is the largest working set, and the products are not
+    # held yet while it runs (peak memory a face, not the sum of the two).
+    found = structure(points, len(checked.vertices))
+    geometry = face_geometry(checked)
+    orientation = oriented(geometry, points, found)  # the vertices matched once, for both
     used = np.zeros(len(mesh.vertices), dtype=bool)
     used[mesh.faces.ravel()] = True
     return MeshAnalysis(
@@ -123,7 +140,6 @@ def analyse_mesh(
         name=name,
         size=size,
         geometry=geometry,
-        faces=face_normals(geometry),
         topology=orientation.topology,
         orientation=orientation,
         unused_vertices=int(len(used) - np.count_nonzero(used)),
@@ -180,14 +196,14 @@ def analyse(
 def build_report(analysis: MeshAnalysis) -> MeshReport:
     """The report: counts, checks, the fix that orient() would make, and the diagnosis."""
     mesh, topology, orientation = analysis.mesh, analysis.topology, analysis.orientation
-    degenerate = analysis.faces.degenerate
+    degenerate = analysis.geometry.degenerate
     report = MeshReport(
         file=FileInfo(name=analysis.name, format=mesh.format, bytes=analysis.size),
         vertices=len(mesh.vertices),
         faces=len(mesh.faces),
         source_faces=mesh.source_faces,
         unused_vertices=analysis.unused_vertices,
-        area=float(np.sum(analysis.faces.areas)),
+        area=float(np.sum(analysis.areas)),
         volume=orientation.volume,
         watertight=topology.watertight,
         winding_consistent=topology.winding_consistent,
@@ -218,7 +234,8 @@ def _objects(analysis: MeshAnalysis) -> list[ObjectReport]:
         return []
     # The faces by position again (one hash sort): the topology keeps only its sums.
     points = analysis.points
-    return object_reports(groups, names, analysis.faces, analysis.orientation, points)
+    areas, degenerate = analysis.areas, analysis.geometry.degenerate
+    return object_reports(groups, names, areas, degenerate, analysis.orientation, points)
 
 
 def first_indices(mask: NDArray[np.bool_]) -> list[int]:
@@ -264,4 +281,4 @@ def file_normal_agreement(analysis: MeshAnalysis) -> FileNormals | None:
 
     Like with like: see :mod:`mesh_normal.stored_normals`.
     """
-    return stored_normal_agreement(analysis.mesh, analysis.geometry, analysis.faces)
+    return stored_normal_agreement(analysis.mesh, analysis.geometry)

@@ -285,12 +285,11 @@ def geometry_kernel(
     factor: float,
     faces: IndexArray,
     crosses: FloatArray,
-    normals: FloatArray,
     lengths: FloatArray,
     degenerate: BoolArray,
     recomputed: BoolArray,
 ) -> None:
-    """Each face's cross product, unit normal, |cross| and flags (see ``FaceGeometry``)."""
+    """Each face's cross product, |cross| and flags (see ``FaceGeometry``)."""
     blocks = (len(faces) + BLOCK - 1) // BLOCK
     for block in prange(blocks):  # blocks write disjoint rows: they run on every core
         corners = np.empty((BLOCK, 9))
@@ -298,13 +297,7 @@ def geometry_kernel(
         for row in range(gather(points, factor, faces, start, corners)):
             face = start + row
             (x, y, z), square, found = face_cross(face_edges(corners, row))
-            length = math.sqrt(square)
-            flat = found == DEGENERATE
-            divisor = 1.0 if flat else length
             crosses[face, 0], crosses[face, 1], crosses[face, 2] = x, y, z
-            normals[face, 0] = x / divisor + 0.0  # -0.0 becomes 0.0
-            normals[face, 1] = y / divisor + 0.0
-            normals[face, 2] = z / divisor + 0.0
-            lengths[face] = length
-            degenerate[face] = flat
+            lengths[face] = math.sqrt(square)
+            degenerate[face] = found == DEGENERATE
             recomputed[face] = found != AT_FIRST_CORNER

@@ -10,10 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from mesh_normal.faces import FaceNormals
 from mesh_normal.orientation import METHODS, VERDICTS, Orientation, Verdict
 from mesh_normal.report import INDEX_LIST_LIMIT, ObjectReport
-from mesh_normal.types import BoolArray, IndexArray
+from mesh_normal.types import BoolArray, FloatArray, IndexArray
 
 _NONE = METHODS.index("none")
 _UNDETERMINED = VERDICTS.index("undetermined")
@@ -22,7 +21,8 @@ _UNDETERMINED = VERDICTS.index("undetermined")
 def object_reports(
     groups: IndexArray,
     names: tuple[str, ...],
-    faces: FaceNormals,
+    areas: FloatArray,
+    degenerate: BoolArray,
     orientation: Orientation,
     points: IndexArray,
 ) -> list[ObjectReport]:
@@ -34,8 +34,10 @@ def object_reports(
         The group of each face, an index into ``names``.
     names : tuple of str
         The groups' names.
-    faces : FaceNormals
-        The areas and degenerate mask of the ``m`` faces.
+    areas : (m,) float64
+        The faces' areas.
+    degenerate : (m,) bool
+        The faces without a usable normal.
     orientation : Orientation
         What :func:`~mesh_normal.orientation.orient` found and did, per face and component.
     points : (m, 3) intp
@@ -48,6 +50,9 @@ def object_reports(
     flipped = orientation.flipped
 
     def per_object(weights: BoolArray | None = None) -> IndexArray:
+        if count == 1:  # one object (its groups a view of one zero): no array a face
+            total = len(groups) if weights is None else np.count_nonzero(weights)
+            return np.array([total], dtype=np.intp)
         return np.bincount(groups, weights, count).astype(np.intp)
 
     # Faces with a repeated point are in no component (-1): they have no edges, no verdict.
@@ -57,8 +62,8 @@ def object_reports(
     with_verdict = in_part & (table.orientation[part] != _UNDETERMINED)
     total, flips = per_object(), per_object(flipped)
     decided, decided_flips = per_object(decidable), per_object(decidable & flipped)
-    areas = np.bincount(groups, faces.areas, count)
-    degenerate = per_object(faces.degenerate)
+    area = np.array([np.sum(areas)]) if count == 1 else np.bincount(groups, areas, count)
+    degenerates = per_object(degenerate)
     if count == 1:  # the one object is the mesh: its topology has counted what it holds
         topology = orientation.topology
         parts = np.array([topology.components], dtype=np.intp)
@@ -72,8 +77,8 @@ def object_reports(
         ObjectReport(
             name=names[index],
             faces=int(total[index]),
-            area=float(areas[index]),
-            degenerate_faces=int(degenerate[index]),
+            area=float(area[index]),
+            degenerate_faces=int(degenerates[index]),
             components=int(parts[index]),
             closed=bool(closed[index]),
             orientation=verdicts[index],

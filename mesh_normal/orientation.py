@@ -202,7 +202,8 @@ class Orientation:
     Attributes
     ----------
     faces : (m, 3) intp
-        The input faces, rows ``[a, b, c]`` that were flipped as ``[a, c, b]``.
+        The input faces, rows ``[a, b, c]`` that were flipped as ``[a, c, b]``; when none
+        was, a read-only view of the input's faces (no copy of 24 bytes a face).
     flipped : (m,) bool
         Which faces were reversed.
     orientation : {"outward", "inward", "mixed", "undetermined"}
@@ -296,16 +297,24 @@ def orient(
     >>> r.orientation, r.flipped.tolist(), r.components[0].volume
     ('inward', [True, True, True, True], 0.16666666666666666)
     """
-    geometry = face_geometry(vertices, faces)
-    return oriented(geometry, by_position(geometry.mesh, weld))
+    mesh = checked_input(vertices, faces)
+    if isinstance(mesh, FaceGeometry):
+        return oriented(mesh, by_position(mesh.mesh, weld))
+    points = by_position(mesh, weld)
+    found = structure(points, len(mesh.vertices))  # before the products: see analyse_mesh
+    return oriented(face_geometry(mesh), points, found)
 
 
-def oriented(geometry: FaceGeometry, points: IndexArray) -> Orientation:
+def oriented(
+    geometry: FaceGeometry, points: IndexArray, found: Structure | None = None
+) -> Orientation:
     """:func:`orient` on a geometry whose faces by position (each vertex replaced by the first
     at its point, as :func:`~mesh_normal.topology.by_position` gives them) are known already:
-    for a caller that needs them too, so that the vertices are matched once."""
+    for a caller that needs them too, so that the vertices are matched once. ``found`` is
+    their :func:`~mesh_normal.topology.structure` if the caller took it already."""
     indices = geometry.mesh.faces
-    found = structure(points, len(geometry.mesh.vertices))
+    if found is None:
+        found = structure(points, len(geometry.mesh.vertices))
     topology, group, parity = found.topology, found.group, found.parity
     bins = found.patches + 1  # the last for faces with a repeated point
 
@@ -314,24 +323,27 @@ def oriented(geometry: FaceGeometry, points: IndexArray) -> Orientation:
 
     cone = _cone_terms(geometry, group, bins)
     terms, scale = cone.terms, cone.scale
-    # The volume of each patch with its winding made consistent, its first face unchanged.
-    volume = per_patch(np.where(parity, -terms, terms)) / 6
+    terms_sum = float(np.sum(terms))  # the input's volume, if it is closed and consistent
+    # The volume of each patch with its winding made consistent, its first face unchanged:
+    # the terms turned in place (the copies np.where makes are 16 bytes a face).
+    np.negative(terms, out=terms, where=parity.astype(bool))
+    volume = per_patch(terms) / 6
     size, against = per_patch(), per_patch(parity)
     orientable = found.orientable
     closed = found.closed[found.patch_component]
     shells = orientable & closed & _evident(volume, cone, per_patch, len(indices))
     # A shell inside another may be a cavity (wound inward on purpose) or a part inside a
     # housing (outward): its volume's sign is no evidence, so it is left as it is.
+    del cone, terms  # 24 bytes a face, not needed from here on
     shells &= ~_nested(geometry, found, shells)
     # Open patches: the side from which the rest of the mesh and the world beyond are seen.
     area = per_patch(geometry.lengths)
     # A patch made only of faces back to back with another face (a double-sided surface, on
     # purpose or not) is left as it is: turning it would only make two faces one.
-    single = per_patch((~_twinned(points)).astype(np.intp)) > 0
-    score = visible_sides(
-        geometry.mesh.vertices, indices, group, parity, orientable & ~closed & single & (area > 0),
-        area,
-    )  # fmt: skip
+    open_patches = orientable & ~closed & (area > 0)
+    if open_patches.any():  # a closed mesh has none: no key a face to sort
+        open_patches &= per_patch((~_twinned(points)).astype(np.intp)) > 0
+    score = visible_sides(geometry.mesh.vertices, indices, group, parity, open_patches, area)
     seen = np.abs(np.nan_to_num(score)) >= VISIBILITY_MARGIN
     inward = score < 0
     decided = shells | seen
@@ -346,11 +358,15 @@ def oriented(geometry: FaceGeometry, points: IndexArray) -> Orientation:
     vote[~orientable] = _UNDETERMINED
     after = _unscaled_array(np.where(turn, -volume, volume), scale)
     components = _component_table(found, decided, vote, flips, size, after)
-    oriented = indices.copy()
-    oriented[flipped, 1:] = indices[flipped, :0:-1]
+    if flipped.any():
+        oriented = indices.copy()
+        oriented[flipped, 1:] = indices[flipped, :0:-1]
+    else:
+        oriented = indices.view()
+        oriented.flags.writeable = False
     input_volume = None
     if topology.watertight and topology.winding_consistent:
-        input_volume = _unscaled(float(np.sum(terms)) / 6, scale)
+        input_volume = _unscaled(terms_sum / 6, scale)
     return Orientation(
         oriented, flipped, VERDICTS[_combined(vote)], components, input_volume, topology
     )
@@ -639,16 +655,41 @@ def _twinned(faces: IndexArray) -> BoolArray:
     """(m,) bool: which faces have the same three points as another face wound the other way."""
     if len(faces) == 0:
         return np.zeros(0, dtype=bool)
-    # Wound as its sorted points (a rotation of them): two of the three steps a -> b -> c -> a
-    # go up, or a point repeats (then some rotation is the sorted order). No rolled copies.
-    a, b, c = faces.T
-    ascents = (a < b).view(np.int8) + (b < c).view(np.int8) + (c < a).view(np.int8)
-    even = (ascents == 2) | (a == b) | (b == c) | (c == a)
-    del ascents
     width = int(faces.max()) + 1
     if width**3 * 2 >= KEY_LIMIT:
-        return _twinned_lexsorted(faces, even)
-    # One int64 key a face: its sorted points, then whether it is wound as they are sorted.
+        return _twinned_lexsorted(faces, _even(faces))
+    key = _twin_keys(faces, width)
+    key.sort()  # in place: whether any triangle repeats needs no order
+    if not np.any((key[1:] ^ key[:-1]) < 2):  # no triangle twice (the common case)
+        return np.zeros(len(faces), dtype=bool)
+    key = _twin_keys(faces, width)
+    order = np.argsort(key)
+    key = key[order]
+    new = np.ones(len(key), dtype=bool)
+    np.not_equal(key[1:] >> 1, key[:-1] >> 1, out=new[1:])
+    # A run of keys of one triangle holds both windings when its first and last bits differ.
+    starts = np.flatnonzero(new)
+    del new
+    ends = np.r_[starts[1:], len(key)] - 1
+    both = ((key[starts] & 1) == 0) & ((key[ends] & 1) == 1)
+    twinned = np.empty(len(faces), dtype=bool)
+    twinned[order] = np.repeat(both, ends - starts + 1)
+    return twinned
+
+
+def _even(faces: IndexArray) -> BoolArray:
+    """(m,) bool: the face is wound as its sorted points (a rotation of them)."""
+    # Two of the three steps a -> b -> c -> a go up, or a point repeats (then some rotation is
+    # the sorted order). No rolled copies.
+    a, b, c = faces.T
+    ascents = (a < b).view(np.int8) + (b < c).view(np.int8) + (c < a).view(np.int8)
+    even: BoolArray = (ascents == 2) | (a == b) | (b == c) | (c == a)
+    return even
+
+
+def _twin_keys(faces: IndexArray, width: int) -> IndexArray:
+    """(m,) int64, one key a face: its sorted points, then whether it is wound as they are."""
+    a, b, c = faces.T
     low = np.minimum(np.minimum(a, b), c)
     high = np.maximum(np.maximum(a, b), c)
     key = a + b
@@ -661,22 +702,9 @@ def _twinned(faces: IndexArray) -> BoolArray:
     key += high
     del high
     key <<= 1
-    key |= even
-    del even
-    order = np.argsort(key)
-    key = key[order]
-    new = np.ones(len(key), dtype=bool)
-    np.not_equal(key[1:] >> 1, key[:-1] >> 1, out=new[1:])
-    if new.all():  # no triangle twice: nothing to find (the common case)
-        return np.zeros(len(faces), dtype=bool)
-    # A run of keys of one triangle holds both windings when its first and last bits differ.
-    starts = np.flatnonzero(new)
-    del new
-    ends = np.r_[starts[1:], len(key)] - 1
-    both = ((key[starts] & 1) == 0) & ((key[ends] & 1) == 1)
-    twinned = np.empty(len(faces), dtype=bool)
-    twinned[order] = np.repeat(both, ends - starts + 1)
-    return twinned
+    key |= _even(faces)
+    keys: IndexArray = key
+    return keys
 
 
 def _twinned_lexsorted(faces: IndexArray, even: BoolArray) -> BoolArray:

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mesh_normal.corners import corner_normals
-from mesh_normal.faces import FaceGeometry, FaceNormals
+from mesh_normal.faces import FaceGeometry
 from mesh_normal.files import LoadedMesh
 from mesh_normal.report import AGREEMENT_DEGREES, COMPARISON_CREASE, FileNormals, StoredKind
 from mesh_normal.types import BoolArray, FloatArray
@@ -221,11 +221,11 @@ def describe(kind: StoredKind, candidate: Candidate) -> str:
 
 
 def _match(
-    mesh: LoadedMesh, geometry: FaceGeometry, faces: FaceNormals
+    mesh: LoadedMesh, geometry: FaceGeometry
 ) -> tuple[StoredKind, FloatArray, Callable[[FloatArray, BoolArray], Angles | None]] | None:
     """The kind of the file's normals, the normals, and how to find our best match."""
     if mesh.file_face_normals is not None:
-        flat = Candidate(faces.normals, faces.degenerate)
+        flat = Candidate(geometry.normals, geometry.degenerate)
         return "face", mesh.file_face_normals, lambda u, ok: best_match(u, ok, iter([flat]))
     # Per-vertex first: an OBJ whose vn follow its v gives both kinds, and normals that are
     # the same at every corner of a vertex are vertex normals (compared as corners, they
@@ -239,15 +239,12 @@ def _match(
     return None
 
 
-def stored_normal_agreement(
-    mesh: LoadedMesh, geometry: FaceGeometry, faces: FaceNormals
-) -> FileNormals | None:
+def stored_normal_agreement(mesh: LoadedMesh, geometry: FaceGeometry) -> FileNormals | None:
     """How well the normals stored in ``mesh``'s file agree with ours, or ``None`` without any.
 
-    ``geometry`` and ``faces`` are the mesh's, as :func:`~mesh_normal.analysis.analyse_mesh`
-    made them.
+    ``geometry`` is the mesh's, as :func:`~mesh_normal.analysis.analyse_mesh` made it.
     """
-    found = _match(mesh, geometry, faces)
+    found = _match(mesh, geometry)
     if found is None:
         return None
     kind, stored, match = found

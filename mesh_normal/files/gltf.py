@@ -143,7 +143,11 @@ def _flatten(scene: dict[str, Any], file_format: str) -> LoadedMesh:
     if not parts:
         raise MeshFileError("The glTF file holds no triangle meshes.")
     vertices, faces, normals = _joined(parts)
-    groups = np.repeat(np.arange(len(parts)), [len(part[1]) for part in parts])
+    groups = (
+        np.broadcast_to(np.intp(0), (len(faces),))  # one group: never 8 bytes a face
+        if len(parts) == 1
+        else np.repeat(np.arange(len(parts)), [len(part[1]) for part in parts])
+    )
     vertex_colors = _joined_colors(colors, [len(part[0]) for part in parts], notes)
     return build(
         file_format,

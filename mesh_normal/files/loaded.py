@@ -219,6 +219,10 @@ def _groups(
         if groups is not None or names is not None:
             raise AssertionError("face_groups and group_names come together")
         return None
+    if len(names) == 1 and np.shape(groups) == (count,) and not np.any(groups):
+        # One object (a single glTF primitive, STL solid or OBJ group): every face is in group
+        # 0, a read-only view of one zero rather than 8 bytes a face.
+        return np.broadcast_to(np.intp(0), (count,))
     result = np.ascontiguousarray(groups, dtype=np.intp)
     if result.shape != (count,) or (count and not 0 <= result.min() <= result.max() < len(names)):
         raise AssertionError(f"face groups of shape {result.shape} for {len(names)} names")
