@@ -87,10 +87,16 @@ class FaceGeometry:
         """
         found = self._cache.get("normals")
         if found is None:
-            divisor = np.where(self.degenerate, 1.0, self.lengths)
-            found = np.divide(self.crosses, divisor[:, None])
-            found += 0.0  # -0.0 becomes 0.0
+            found = self.unit_normals()
             self._cache["normals"] = found
+        return found
+
+    def unit_normals(self, rows: slice = slice(None)) -> FloatArray:
+        """(k, 3) float64: the unit normals of a slice of the faces, not kept (a writer
+        taking them a block at a time)."""
+        divisor = np.where(self.degenerate[rows], 1.0, self.lengths[rows])
+        found = np.divide(self.crosses[rows], divisor[:, None])
+        found += 0.0  # -0.0 becomes 0.0
         return found
 
 

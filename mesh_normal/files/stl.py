@@ -294,7 +294,7 @@ def write_stl(points: NDArray[np.float64], triangles: NDArray[np.intp]) -> bytes
     triangles : (m, 3) intp
     """
     # Imported here: reading STL needs no compiled kernel, only writing its normals does.
-    from mesh_normal.faces import face_normals
+    from mesh_normal.faces import face_geometry
 
     largest = float(np.abs(points).max(initial=0.0))
     if largest > float(np.finfo(np.float32).max):
@@ -303,8 +303,20 @@ def write_stl(points: NDArray[np.float64], triangles: NDArray[np.intp]) -> bytes
             "32-bit floats (up to about 3.4e38); choose PLY or OBJ.",
             422,
         )
-    records = np.zeros(len(triangles), dtype=RECORD)
-    records["normal"] = face_normals(points, triangles).normals
-    records["corners"] = points[triangles]
-    header = f"binary STL written by {MAKER}".encode().ljust(HEADER - 4, b" ")
-    return header + len(triangles).to_bytes(4, "little") + records.tobytes()
+    geometry = face_geometry(points, triangles)
+    # The records written in place, a block at a time: the file's bytes once and a block of
+    # normals and corners, not the whole mesh's of each and two copies of the bytes.
+    out = bytearray(HEADER + RECORD.itemsize * len(triangles))
+    out[: HEADER - 4] = f"binary STL written by {MAKER}".encode().ljust(HEADER - 4, b" ")
+    out[HEADER - 4 : HEADER] = len(triangles).to_bytes(4, "little")
+    records = np.frombuffer(out, RECORD, len(triangles), HEADER)
+    for start in range(0, len(triangles), _WRITE_BLOCK):
+        rows = slice(start, start + _WRITE_BLOCK)
+        records["normal"][rows] = geometry.unit_normals(rows)
+        records["corners"][rows] = points[triangles[rows]]
+    del records  # the view: bytes() copies the buffer once
+    return bytes(out)
+
+
+#: Faces written at a time.
+_WRITE_BLOCK = 1 << 16
