@@ -9,11 +9,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from mesh_normal.types import FloatArray, IndexArray
+
+ArrayType = TypeVar("ArrayType", bound=np.ndarray)
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -44,6 +47,25 @@ class CheckedMesh:
     points: FloatArray
     factor: float
     scale: int
+
+    def __post_init__(self) -> None:
+        # Read-only views (the caller's arrays stay as they were): numba compiles a kernel
+        # once for each signature, and whether an array is read-only is part of it. Readers
+        # give both kinds; the kernels see one, so each is compiled once, not four times.
+        vertices = read_only(self.vertices)
+        points = vertices if self.points is self.vertices else read_only(self.points)
+        object.__setattr__(self, "vertices", vertices)
+        object.__setattr__(self, "points", points)
+        object.__setattr__(self, "faces", read_only(self.faces))
+
+
+def read_only(array: ArrayType) -> ArrayType:
+    """``array`` if it is read-only, else a read-only view of it."""
+    if not array.flags.writeable:
+        return array
+    view = array.view()
+    view.flags.writeable = False
+    return view
 
 
 def checked_mesh(vertices: ArrayLike, faces: ArrayLike) -> CheckedMesh:
@@ -139,7 +161,7 @@ def check_faces(faces: ArrayLike, vertex_count: int) -> IndexArray:
         raise ValueError(f"faces must hold integer vertex indices, not {array.dtype}.")
     if array.ndim != 2 or array.shape[1] != 3:
         raise ValueError(f"faces must have shape (m, 3), not {array.shape}.")
-    low, high = _index_range(array)
+    low, high = _index_range(read_only(array))  # one signature (see CheckedMesh)
     if low < 0:
         row, column = np.argwhere(array < 0)[0]
         raise ValueError(f"faces[{row}] has a negative vertex index, {array[row, column]}.")

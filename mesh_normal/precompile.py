@@ -3,11 +3,12 @@
 numba compiles a kernel once for each signature it is called with, and an array's signature
 includes whether it is read-only. The file readers give both kinds: an array made with
 ``np.frombuffer`` over the uploaded bytes is read-only, one parsed from text is not, and the
-checks keep the caller's array when it already has the right type and layout. So every
-kernel that takes the mesh's vertices or faces (or a polygon file's corners) is compiled here
-for each combination, and a job never compiles one at run time (in a read-only container it
-would compile in memory, for seconds, in every worker; ``tests/app/mesh/test_warmup.py`` checks
-that the jobs on every test file need nothing else).
+checks keep the caller's array when it already has the right type and layout. The mesh
+kernels see only read-only views (:class:`~mesh_normal.checks.CheckedMesh` makes them), so
+each is compiled once; the polygon kernels, which take a file's corners as the reader found
+them, are compiled here for each combination. A job never compiles one at run time (in a
+read-only container it would compile in memory, for seconds, in every worker;
+``tests/app/mesh/test_warmup.py`` checks that the jobs on every test file need nothing else).
 """
 
 from __future__ import annotations
@@ -49,9 +50,8 @@ _POLYGONS = (
 def compile_kernels() -> None:
     """Compile every mesh kernel now (into numba's cache), e.g. while building an image; where
     the cache holds them already, load them (a server's workers, as they start)."""
-    for vertices_read_only, faces_read_only in itertools.product((False, True), repeat=2):
-        for vertices, faces in (_NESTED, _OPEN):
-            _mesh_kernels(_kept(vertices, vertices_read_only), _kept(faces, faces_read_only))
+    for vertices, faces in (_NESTED, _OPEN):  # the checks give the kernels read-only views
+        _mesh_kernels(vertices, faces)
     counts, corners, points = _POLYGONS
     for read_only in itertools.product((False, True), repeat=3):
         triangulate(

@@ -45,7 +45,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from mesh_normal.checks import CheckedMesh, check_faces
+from mesh_normal.checks import CheckedMesh, check_faces, read_only
 from mesh_normal.faces import FaceGeometry
 from mesh_normal.kernels import announce_compiling, kernel
 from mesh_normal.types import BoolArray, FloatArray, IndexArray
@@ -162,6 +162,7 @@ def by_position(mesh: CheckedMesh, weld: float | None = None) -> IndexArray:
 
 
 def structure(faces: IndexArray, vertex_count: int) -> Structure:
+    faces = read_only(faces)  # one signature for the kernels (see CheckedMesh)
     valid = (faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2])
     valid &= faces[:, 2] != faces[:, 0]
     key, face, forward = _sorted_half_edges(faces, valid, vertex_count)
