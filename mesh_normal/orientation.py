@@ -65,7 +65,7 @@ at another corner is it taken at A once more, so that the volume keeps its bits)
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from typing import Literal, overload
 
@@ -331,7 +331,7 @@ def oriented(
     size, against = per_patch(), per_patch(parity)
     orientable = found.orientable
     closed = found.closed[found.patch_component]
-    shells = orientable & closed & _evident(volume, cone, per_patch, len(indices))
+    shells = orientable & closed & _evident(volume, cone, len(indices))
     # A shell inside another may be a cavity (wound inward on purpose) or a part inside a
     # housing (outward): its volume's sign is no evidence, so it is left as it is.
     del cone, terms  # 24 bytes a face, not needed from here on
@@ -380,8 +380,9 @@ class _Cone:
     """What :func:`_cone_terms` returns, in the vertices scaled by ``2**-scale``."""
 
     terms: FloatArray  # (m,) det(A - c, B - c, C - c)
-    bounds: FloatArray  # (m,) |n| |A - c|: the term if the face faced straight away from c
-    sensitivity: FloatArray  # (m,) how much the term moves per unit move of A, B, C or c
+    # Summed by group (k,), not kept a face (16 bytes a face fewer while orient() runs):
+    bounds: FloatArray  # sum of |n| |A - c|: the term if the face faced straight away from c
+    sensitivity: FloatArray  # sum of how much the term moves per unit move of A, B, C or c
     largest: FloatArray  # (groups,) the largest |coordinate| of each group's faces
     data_unit: float  # the relative precision of the coordinates (float32 or float64)
     scale: int
@@ -422,13 +423,15 @@ def _cone_terms(geometry: FaceGeometry, group: IndexArray, groups: int) -> _Cone
     with np.errstate(over="ignore"):  # beyond the float32 range is not float32 data
         single = bool(np.array_equal(points.astype(np.float32), points))
     unit = FLOAT32_UNIT if single else EPSILON
-    return _Cone(terms, bounds, sensitivity, sums[:, 4], unit, mesh.scale)
+    bound_sums, sensitivity_sums = (
+        np.bincount(group, values, groups).astype(np.float64) for values in (bounds, sensitivity)
+    )
+    return _Cone(terms, bound_sums, sensitivity_sums, sums[:, 4], unit, mesh.scale)
 
 
 def _evident(
     volume: FloatArray,
     cone: _Cone,
-    per_patch: Callable[[FloatArray], FloatArray],
     count: int,
 ) -> BoolArray:
     """Which patches' volume V has a sign that does not hinge on rounding (see the docstring).
@@ -441,9 +444,9 @@ def _evident(
     the origin just as the rounding does), plus the float error of computing V (about
     (8 + log2 m) eps sum |n||A-c|, see :func:`signed_volume`).
     """
-    bounds = per_patch(cone.bounds)
+    bounds = cone.bounds[: len(volume)]
     move = (cone.data_unit + 4 * EPSILON) * cone.largest[: len(volume)]
-    error = move * per_patch(cone.sensitivity) + (8 + math.log2(count + 1)) * EPSILON * bounds
+    error = move * cone.sensitivity[: len(volume)] + (8 + math.log2(count + 1)) * EPSILON * bounds
     magnitude = 6 * np.abs(volume)
     flat = MESH_FLAT_SINE * bounds
     return (magnitude > flat) & (magnitude > ORIENT_EVIDENCE * error)

@@ -209,7 +209,8 @@ def structure(faces: IndexArray, vertex_count: int) -> Structure:
         boundary_edge_list=boundary_edge_list,
         nonmanifold_edge_list=nonmanifold_edge_list,
     )
-    group = np.where(valid, patch, patches)
+    # Every face valid (the common case): the groups are the patches, not a copy of them.
+    group = read_only(patch) if valid.all() else np.where(valid, patch, patches)
     return Structure(topology, group, patches, parity, orientable, face_component[firsts], closed)
 
 
@@ -387,7 +388,10 @@ def _numbered(root: IndexArray, valid: BoolArray) -> tuple[IndexArray, IndexArra
     """Number the roots 0, 1, ... in order; -1 for invalid nodes. Also returns the roots."""
     is_root = valid & (root == np.arange(len(root)))
     number = np.cumsum(is_root) - 1
-    return np.where(valid, number[root], -1), np.flatnonzero(is_root)
+    numbered = number[root]
+    if not valid.all():
+        numbered[~valid] = -1
+    return numbered, np.flatnonzero(is_root)
 
 
 # --- corners around vertices ------------------------------------------------------------------
