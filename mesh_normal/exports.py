@@ -11,7 +11,7 @@ from numpy.typing import NDArray
 from pydantic_core import to_json
 
 from mesh_normal.corners import corner_normals
-from mesh_normal.faces import face_normals
+from mesh_normal.faces import face_geometry
 from mesh_normal.files import LoadedMesh
 from mesh_normal.files.ply import ply_bytes
 from mesh_normal.vertices import Weighting, vertex_normals
@@ -39,8 +39,10 @@ def compute_normals(
     """
     checked = mesh.checked()  # the reader checked the arrays
     if kind == "face":
-        faces = face_normals(checked)
-        return faces.normals, faces.degenerate
+        # The unit normals made in place of the cross products, which are not needed after
+        # them (bit for bit FaceGeometry.normals).
+        geometry = face_geometry(checked)
+        return geometry.unit_normals(out=geometry.crosses), geometry.degenerate
     if kind == "vertex":
         smooth = vertex_normals(checked, weighting=weighting)
         return smooth.normals, smooth.missing
