@@ -263,9 +263,14 @@ def _welded(
     )
 
 
-def write_stl(points: NDArray[np.float64], triangles: NDArray[np.intp]) -> bytes:
+def write_stl(
+    points: NDArray[np.float64],
+    triangles: NDArray[np.intp],
+    normals: NDArray[np.float64] | None = None,
+    normals_kind: str | None = None,
+) -> bytes:
     """Binary STL: float32 corners and our face normals as facet normals (zero for a
-    degenerate face).
+    degenerate face), or the face normals given (``normals_kind`` ``"face"``).
 
     Parameters
     ----------
@@ -284,7 +289,8 @@ def write_stl(points: NDArray[np.float64], triangles: NDArray[np.intp]) -> bytes
             422,
         )
     records = np.zeros(len(triangles), dtype=RECORD)
-    records["normal"] = face_normals(points, triangles).normals
+    given = normals if normals_kind == "face" else None
+    records["normal"] = face_normals(points, triangles).normals if given is None else given
     records["corners"] = points[triangles]
     header = f"binary STL written by {MAKER}".encode().ljust(HEADER - 4, b" ")
     return header + len(triangles).to_bytes(4, "little") + records.tobytes()
