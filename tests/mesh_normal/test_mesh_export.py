@@ -121,7 +121,14 @@ def test_obj_groups_are_kept_and_texture_coordinates_named() -> None:
 def test_off_round_trips_colours_and_normals() -> None:
     colors = np.array([[255, 0, 0], [0, 255, 0], [0, 0, 255], [9, 9, 9]], dtype=np.uint8)
     normals = vertex_normals(TETRA_VERTICES, TETRA_FACES).normals
-    data = write_mesh(TETRA_VERTICES, TETRA_FACES, "off", vertex_colors=colors, normals=normals)
+    data = write_mesh(
+        TETRA_VERTICES,
+        TETRA_FACES,
+        "off",
+        vertex_colors=colors,
+        normals=normals,
+        normals_kind="vertex",
+    )
     again = read_mesh(data, "t.off")
     assert again.vertex_colors is not None
     assert again.vertex_colors.tolist() == colors.tolist()
