@@ -38,7 +38,7 @@ if TYPE_CHECKING:
 Parsed = TypeVar("Parsed")
 
 EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE, EXIT_INPUT, EXIT_OUTPUT = 0, 1, 2, 3, 4
-NORMAL_SUFFIXES = (".npy", ".csv", ".json", ".ply")
+NORMAL_SUFFIXES = (".npy", ".csv", ".json")
 FIX_FORMATS = WRITABLE
 #: ``mesh-normal points -o``: the suffix and what it writes (``write_points``' format or npy).
 POINT_OUTPUTS = {".ply": "ply", ".xyz": "xyz", ".csv": "csv", ".npy": "npy"}
@@ -138,9 +138,10 @@ def summary(report: MeshReport) -> str:
     """The report as a few lines of text: counts, then each problem and what to do."""
     volume, file = report.volume, report.file
     lines = [
-        f"{file.name}: {report.vertices:,} vertices, {report.faces:,} faces "
-        f"({file.format.upper()}), {report.components:,} component(s)",
-        f"area {report.area!r}, volume {'-' if volume is None else repr(volume)}, "
+        f"{file.name}: {count(report.vertices, 'vertex', 'vertices')}, "
+        f"{count(report.faces, 'face')} ({file.format.upper()}), "
+        f"{count(report.components, 'component')}",
+        f"area {report.area:.6g}, volume {'-' if volume is None else f'{volume:.6g}'}, "
         f"orientation {report.orientation}, "
         f"{'watertight' if report.watertight else 'open'}, "
         f"winding {'consistent' if report.winding_consistent else 'inconsistent'}",
@@ -148,9 +149,9 @@ def summary(report: MeshReport) -> str:
     if report.weld is not None:
         lines.append(weld_line(report.weld))
     if report.object_count > 1:  # one object is the mesh itself: the lines above say it all
-        lines.append(f"{report.object_count:,} objects:")
+        lines.append(f"{report.object_count:,} objects:")  # more than one
         lines.extend(
-            f"  {item.name}: {item.faces:,} faces, {item.orientation}, "
+            f"  {item.name}: {count(item.faces, 'face')}, {item.orientation}, "
             f"{'closed' if item.closed else 'open'}, {item.faces_flipped:,} flipped by the fix"
             for item in report.objects
         )
@@ -158,13 +159,29 @@ def summary(report: MeshReport) -> str:
             lines.append(f"  and {report.object_count - len(report.objects):,} more")
     if not report.problems:
         lines.append("No problems found.")
-    lines.extend(f"{item.severity}: {item.title}. {item.action}" for item in report.problems)
+    lines.extend(
+        f"{item.severity}: {item.title}. {terminal_words(item.action)}" for item in report.problems
+    )
     if report.fix.faces_flipped:
         weld = "" if report.weld is None else f" --weld {report.weld.tolerance!r}"
+        others = ", ".join(f".{name}" for name in FIX_FORMATS if name != "ply")
         lines.append(
-            f"To fix the winding: mesh-normal fix{weld} {file.name} FIXED.ply (or .stl, .obj)"
+            f"To fix the winding: mesh-normal fix{weld} {file.name} FIXED.ply (or {others})"
         )
     return "\n".join(lines)
+
+
+#: The report's words for the page, as a terminal reads them.
+TERMINAL_WORDS = {
+    "Download the fixed mesh": "Write the fixed mesh (the command below)",
+}
+
+
+def terminal_words(text: str) -> str:
+    """A report sentence written for the page, in the terminal's words."""
+    for page, terminal in TERMINAL_WORDS.items():
+        text = text.replace(page, terminal)
+    return text
 
 
 def weld_line(weld: Weld) -> str:
@@ -193,74 +210,134 @@ def weld_fraction(text: str) -> float:
 
 def normals(args: argparse.Namespace, progress: Progress) -> int:
     suffix = Path(args.output).suffix.lower()
-    if suffix not in NORMAL_SUFFIXES:
+    mesh_suffixes = tuple(f".{name}" for name in FIX_FORMATS)
+    if suffix not in (*NORMAL_SUFFIXES, *mesh_suffixes):
         raise Failure(
-            f"the output must end in {', '.join(NORMAL_SUFFIXES)}, not {suffix or 'no suffix'}",
+            f"the output must end in {', '.join((*NORMAL_SUFFIXES, *mesh_suffixes))}, not "
+            f"{suffix or 'no suffix'}",
             EXIT_USAGE,
         )
-    if suffix == ".ply" and args.kind == "corner":
-        raise Failure(
-            "corner normals do not fit in a PLY file; use .npy, .csv or .json", EXIT_USAGE
-        )
-    from mesh_normal.exports import NormalsFormat, compute_normals, normals_file, normals_ply
+    if suffix in mesh_suffixes:  # the mesh itself, with the normals in it
+        from mesh_normal.files.formats import FORMATS, HOLDS_NORMALS
 
+        name = suffix.lstrip(".")
+        held = HOLDS_NORMALS.get(name, ())
+        if args.kind not in held:
+            holds = f"only {' and '.join(held)} normals" if held else "no normals"
+            raise Failure(
+                f"{args.kind} normals do not fit in a {FORMATS[name].title} file, which holds "
+                f"{holds}; use .obj or .glb (any kind), or .npy, .csv, .json",
+                EXIT_USAGE,
+            )
+        args.input, args.format, args.normals, args.winding = args.file, name, args.kind, "keep"
+        return export(args, progress)
+    from mesh_normal.exports import NormalsFormat, compute_normals, normals_file
+
+    if same_file(args.output, args.file):
+        raise Failure(f"{args.output} is the input file; write the normals to another file", 2)
     mesh, _ = load(args.file, progress)
     progress.step(f"computing {args.kind} normals")
     values, missing = compute_normals(mesh, args.kind, args.weighting, args.crease_angle)
     progress.step(f"writing {args.output}")
-    if suffix == ".ply":
-        data = normals_ply(mesh, values, args.kind)
-    else:  # the same files as POST /api/mesh/normals
-        formats: dict[str, NormalsFormat] = {".npy": "npy", ".csv": "csv", ".json": "json"}
-        data = normals_file(
-            values, missing, args.kind, args.weighting, args.crease_angle, formats[suffix]
-        )
+    formats: dict[str, NormalsFormat] = {".npy": "npy", ".csv": "csv", ".json": "json"}
+    # the same files as POST /api/mesh/normals
+    data = normals_file(
+        values, missing, args.kind, args.weighting, args.crease_angle, formats[suffix]
+    )
     write(args.output, data)
     progress.done()
     if int(missing.sum()):
+        zero = count(int(missing.sum()), f"{args.kind} normal")
         print(
-            f"{int(missing.sum()):,} {args.kind} normal(s) are zero rows (degenerate or "
-            "unused); see `mesh-normal analyze`.",
+            f"{zero} {'is a zero row' if int(missing.sum()) == 1 else 'are zero rows'} "
+            "(degenerate or unused); see `mesh-normal analyze`.",
             file=sys.stderr,
         )
     return EXIT_OK
 
 
 def fix(args: argparse.Namespace, progress: Progress) -> int:
-    chosen = args.format or Path(args.output).suffix.lower().lstrip(".")
+    """Write the mesh with consistent, outward winding; nothing when nothing needs fixing."""
+    args.winding = "fix"
+    return export(args, progress)
+
+
+def export(args: argparse.Namespace, progress: Progress) -> int:
+    """Write the mesh again: winding kept, fixed or flipped, normals as asked, the rest kept
+    where the output's format holds it and named where it does not."""
+    chosen = output_format(args.output, args.format)
+    if same_file(args.output, args.input) and not args.force:
+        raise Failure(
+            f"{args.output} is the input file; write to another file, or give --force to "
+            "replace the input",
+            EXIT_USAGE,
+        )
+    from mesh_normal.analysis import flips_by_component, weld_summary
+    from mesh_normal.files import MeshFileError
+    from mesh_normal.mesh_export import export_mesh
+
+    mesh, _ = load(args.input, progress)
+    progress.step(f"writing the mesh ({args.winding} the winding)")
+    try:
+        result = export_mesh(
+            mesh,
+            chosen,
+            normals=args.normals,
+            winding=args.winding,
+            weighting=args.weighting,
+            crease_angle=args.crease_angle,
+            weld=args.weld,
+        )
+    except MeshFileError as error:
+        raise Failure(f"cannot write {args.output}: {error}", EXIT_OUTPUT) from None
+    faces = len(mesh.faces)
+    unchanged = args.command == "fix" and not result.faces_flipped
+    if unchanged and not (args.write_unchanged or args.force):
+        progress.done()
+        verdict = result.orientation.orientation if result.orientation else "unknown"
+        print(
+            f"nothing to fix: none of the {count(faces, 'face')} of {args.input} needs "
+            f"flipping (orientation {verdict}); wrote nothing (--write-unchanged writes "
+            f"{args.output} anyway)"
+        )
+        return EXIT_OK
+    progress.step(f"writing {args.output}")
+    write(args.output, result.data)
+    progress.done()
+    if result.dropped:  # do no harm: never leave data out without saying so
+        print(f"mesh-normal: {args.output} leaves out {'; '.join(result.dropped)}", file=sys.stderr)
+    kept = f"; kept {', '.join(result.kept)}" if result.kept else ""
+    if result.orientation is not None:
+        parts = flips_by_component(result.orientation)
+        where = f" (component:faces {parts})" if parts else ""
+        print(
+            f"wrote {args.output}: flipped {result.faces_flipped:,} of {count(faces, 'face')}"
+            f"{where}; orientation before: {result.orientation.orientation}{kept}"
+        )
+    else:
+        done = "every face flipped" if args.winding == "flip" else "winding as it was"
+        print(f"wrote {args.output}: {count(faces, 'face')}, {done}{kept}")
+    weld = weld_summary(mesh.vertices, args.weld)
+    if weld is not None:
+        print(weld_line(weld))
+    return EXIT_OK
+
+
+def output_format(output: str, given: str | None) -> str:
+    """The mesh format ``--format`` or the output's suffix names; a usage failure otherwise."""
+    chosen = given or Path(output).suffix.lower().lstrip(".")
     if chosen not in FIX_FORMATS:
         raise Failure(
             f"the output format must be one of {', '.join(FIX_FORMATS)} (from the "
             f"suffix or --format), not {chosen or 'none'}",
             EXIT_USAGE,
         )
-    from mesh_normal.analysis import flips_by_component, weld_summary
-    from mesh_normal.files import MeshFileError
-    from mesh_normal.files.write import write_fixed
-    from mesh_normal.orientation import orient
+    return chosen
 
-    mesh, _ = load(args.input, progress)
-    progress.step("making the winding consistent and outward")
-    fixed = orient(mesh.checked(), weld=args.weld)
-    weld = weld_summary(mesh.vertices, args.weld)
-    progress.step(f"writing {args.output}")
-    try:
-        data, dropped = write_fixed(mesh, fixed.faces, chosen)
-    except MeshFileError as error:
-        raise Failure(f"cannot write {args.output}: {error}", EXIT_OUTPUT) from None
-    write(args.output, data)
-    progress.done()
-    if dropped:  # do no harm: never leave data out without saying so
-        print(f"mesh-normal: {args.output} leaves out {'; '.join(dropped)}", file=sys.stderr)
-    flipped = int(fixed.flipped.sum())
-    parts = flips_by_component(fixed) or "none"
-    print(
-        f"flipped {flipped:,} of {len(mesh.faces):,} faces (component:faces {parts}); "
-        f"orientation before: {fixed.orientation}"
-    )
-    if weld is not None:
-        print(weld_line(weld))
-    return EXIT_OK
+
+def count(number: int, noun: str, plural: str | None = None) -> str:
+    """``1 face``, ``2 faces``, ``1,000 vertices``: a count with its noun, in the right number."""
+    return f"{number:,} {noun if number == 1 else plural or noun + 's'}"
 
 
 def points(args: argparse.Namespace, progress: Progress) -> int:
@@ -698,21 +775,52 @@ def parser() -> argparse.ArgumentParser:
         metavar="WEIGHTING",
         help="of vertex normals: %(choices)s (default: %(default)s)",
     )
-    normals_parser.add_argument("--crease-angle", type=float, default=30.0, metavar="DEGREES")
+    add_crease_angle(normals_parser)
     normals_parser.add_argument(
         "-o",
         "--output",
         required=True,
-        help="OUT.npy (float64), OUT.csv, OUT.json or OUT.ply (face/vertex)",
+        help="OUT.npy (float64), OUT.csv, OUT.json: the normals; OUT.obj, OUT.glb (any kind), "
+        "OUT.ply (face, vertex), OUT.off (vertex), OUT.stl (face): the mesh with them",
     )
-    normals_parser.set_defaults(run=normals)
+    normals_parser.add_argument(
+        "--force", action="store_true", help="allow OUT to be the input file"
+    )
+    normals_parser.set_defaults(run=normals, weld=None, write_unchanged=True)
 
-    fix_parser = commands.add_parser("fix", help="write the mesh with consistent, outward winding")
-    fix_parser.add_argument("input")
-    fix_parser.add_argument("output", help=f"OUT.{', OUT.'.join(FIX_FORMATS)}")
-    fix_parser.add_argument("--format", choices=FIX_FORMATS)
-    add_weld(fix_parser)
-    fix_parser.set_defaults(run=fix)
+    fix_parser = commands.add_parser(
+        "fix",
+        help="write the mesh with consistent, outward winding",
+        description="Write the mesh with consistent, outward winding, keeping what the "
+        "output's format holds (colours, groups, normals recomputed) and naming what it "
+        "cannot. Writes nothing when no face needs flipping (see --write-unchanged), and "
+        "never over the input without --force; another existing OUT is replaced, as cp does.",
+    )
+    add_output(fix_parser)
+    fix_parser.add_argument(
+        "--write-unchanged",
+        action="store_true",
+        help="write OUT even when no face needs flipping",
+    )
+    fix_parser.set_defaults(run=fix, winding="fix")
+
+    export_parser = commands.add_parser(
+        "export",
+        help="write the mesh again, with normals, its winding kept, fixed or flipped",
+        description="Write the mesh in another format or with its normals (OBJ vn, PLY and "
+        "OFF vertex nx ny nz, GLB NORMAL, STL facet normals), keeping what the format "
+        "holds and naming what it cannot. Never over the input without --force.",
+    )
+    add_output(export_parser)
+    export_parser.add_argument(
+        "--winding",
+        choices=Choices("mesh_normal.mesh_export", "WINDINGS"),
+        default="keep",
+        metavar="WINDING",
+        help="%(choices)s: keep the faces, fix them (consistent and outward) or flip every "
+        "one (default: %(default)s)",
+    )
+    export_parser.set_defaults(run=export, write_unchanged=True)
 
     points_parser = commands.add_parser(
         "points",
@@ -776,6 +884,43 @@ def parser() -> argparse.ArgumentParser:
     serve_parser.add_argument("--upload-limit-mb", help=argparse.SUPPRESS)
     serve_parser.set_defaults(run=serve)
     return main_parser
+
+
+def add_output(command: argparse.ArgumentParser) -> None:
+    """The arguments ``fix`` and ``export`` share."""
+    command.add_argument("input")
+    command.add_argument("output", help=f"OUT.{', OUT.'.join(FIX_FORMATS)}")
+    command.add_argument("--format", choices=FIX_FORMATS)
+    command.add_argument(
+        "--normals",
+        choices=Choices("mesh_normal.mesh_export", "NORMALS_CHOICES"),
+        default="auto",
+        metavar="KIND",
+        help="%(choices)s: the normals to write, computed on the faces written (default: "
+        "%(default)s, the kind the input stored, none for STL)",
+    )
+    command.add_argument(
+        "--weighting",
+        choices=Choices("mesh_normal.vertices", "WEIGHTINGS"),
+        default="angle",
+        metavar="WEIGHTING",
+        help="of vertex and corner normals: %(choices)s (default: %(default)s)",
+    )
+    add_crease_angle(command)
+    command.add_argument(
+        "--force", action="store_true", help="allow OUT to be the input file (replacing it)"
+    )
+    add_weld(command)
+
+
+def add_crease_angle(command: argparse.ArgumentParser) -> None:
+    command.add_argument(
+        "--crease-angle",
+        type=float,
+        default=30.0,
+        metavar="DEGREES",
+        help="corner normals: edges sharper than this stay sharp (default: %(default)s)",
+    )
 
 
 def add_weld(command: argparse.ArgumentParser) -> None:

@@ -29,6 +29,7 @@ from app.web.jobs import Jobs
 from app.web.jsonio import FastJSONResponse
 from mesh_normal.exports import NormalsKind, normals_blocks
 from mesh_normal.files.formats import FORMATS, WRITABLE
+from mesh_normal.mesh_export import NormalsChoice, Winding
 from mesh_normal.report import MeshReport
 from mesh_normal.tolerances import WELD_LIMIT
 from mesh_normal.vertices import Weighting
@@ -55,7 +56,7 @@ WeldQuery = Annotated[
 ]
 
 #: The library's WRITABLE, spelled out because FastAPI and mypy need a Literal (a test pins it).
-FixFormat = Literal["ply", "stl", "obj"]
+FixFormat = Literal["ply", "stl", "obj", "off", "glb"]
 #: The download's media type: the normals' formats, then the mesh formats from the library's table.
 MEDIA_TYPES = {
     "json": "application/json",
@@ -142,8 +143,11 @@ async def post_mesh_normals(
             "for the first 100 components changed) and X-Orientation-Before say "
             "what changed; X-Weld (the tolerance, present only when a weld was asked for) "
             "says how the parts were judged, as in the report. Vertex colours are kept "
-            "where the format holds them (PLY in their own type, OBJ as v x y z r g b), face "
-            "colours in PLY; X-Dropped, present only when something was left out, names what "
+            "where the format holds them (PLY in their own type, OBJ as v x y z r g b, GLB "
+            "COLOR_0, OFF), face colours in PLY and OFF, groups in OBJ, and the normals the "
+            "file had, recomputed on the fixed faces (X-Normals names the kind, or none); "
+            "X-Kept lists what was kept. X-Dropped, present only when something was left out, "
+            "names what "
             'the chosen format could not hold, e.g. "vertex colours (STL holds none)" or "the '
             'division into 2 objects (the STL written is one mesh)" (several joined by "; ").',
             "content": {FORMATS[name].media_type: {} for name in WRITABLE},
@@ -168,4 +172,76 @@ async def post_mesh_fix(
     tolerance = upload_weld(upload, weld)
     body, chosen, headers = await run_job(request, "fix", upload, work.fix, file_format, tolerance)
     headers.update(attachment(f"{stem(upload.filename)}-fixed.{chosen}"))
+    return Response(body.data, media_type=MEDIA_TYPES[chosen], headers=headers)
+
+
+@router.post(
+    "/export",
+    openapi_extra=UPLOAD_WELD_BODY,
+    response_class=Response,
+    responses={
+        200: {
+            "description": "The mesh file written again, with its normals: OBJ vn, PLY "
+            "nx ny nz (vertex or face), GLB NORMAL (vertices split for face and corner "
+            "normals), OFF vertex normals, STL facet normals. X-Normals names the kind "
+            "written (or none), X-Faces-Flipped counts the faces reversed (and, for "
+            "winding=fix, X-Component-Faces-Flipped and X-Orientation-Before as in the fix), "
+            "X-Kept lists what besides vertices and faces the file holds, X-Dropped (present "
+            'only when something was left out) what the format could not hold, e.g. "corner '
+            'normals (STL holds face normals only)" (several joined by "; ").',
+            "content": {FORMATS[name].media_type: {} for name in WRITABLE},
+        }
+    },
+)
+async def post_mesh_export(
+    request: Request,
+    file_format: Annotated[
+        FixFormat | None,
+        Query(
+            alias="format",
+            description=f"{', '.join(WRITABLE)}; default: the upload's format where it is "
+            f"one of these, else {WRITABLE[0]}",
+        ),
+    ] = None,
+    normals: Annotated[
+        NormalsChoice,
+        Query(
+            description="none, face, vertex or corner normals, computed on the faces written; "
+            "auto (the default): the kind the file stored (vertex normals for per-vertex ones, "
+            "corner for per-corner), none when it stored none (or is STL)"
+        ),
+    ] = "auto",
+    weighting: Annotated[
+        Weighting, Query(description="how faces count at a vertex (vertex and corner normals)")
+    ] = "angle",
+    crease_angle: Annotated[
+        float,
+        Query(
+            ge=0,
+            le=180,
+            description="corner normals: edges with a larger dihedral angle stay sharp, degrees",
+        ),
+    ] = 30.0,
+    winding: Annotated[
+        Winding,
+        Query(description="keep the faces, fix them (consistent and outward) or flip every one"),
+    ] = "keep",
+    weld: WeldQuery = None,
+) -> Response:
+    """The mesh file in any writable format, with face, vertex or corner normals."""
+    upload = await read_upload(request)
+    tolerance = upload_weld(upload, weld)
+    body, chosen, headers = await run_job(
+        request,
+        "fix",
+        upload,
+        work.export,
+        file_format,
+        normals,
+        weighting,
+        crease_angle,
+        winding,
+        tolerance,
+    )
+    headers.update(attachment(f"{stem(upload.filename)}-export.{chosen}"))
     return Response(body.data, media_type=MEDIA_TYPES[chosen], headers=headers)

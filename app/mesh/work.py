@@ -24,8 +24,8 @@ from mesh_normal.exports import FORMATS, KINDS, NormalsKind, compute_normals
 from mesh_normal.files import LoadedMesh, MeshFileError, read_mesh, read_mesh_files
 from mesh_normal.files.formats import FORMATS as MESH_FORMATS
 from mesh_normal.files.formats import WRITABLE
-from mesh_normal.files.write import unkept, write_fixed
-from mesh_normal.orientation import orient
+from mesh_normal.files.write import unkept
+from mesh_normal.mesh_export import NormalsChoice, Winding, export_mesh, file_normals
 from mesh_normal.report import MeshReport
 from mesh_normal.vertices import Weighting
 
@@ -63,25 +63,50 @@ def fix(
     upload: Upload, file_format: str | None, weld: float | None
 ) -> tuple[NDArray[np.uint8], str, dict[str, str]]:
     """The fixed file's bytes (as an array, so that they travel without a copy), its format
-    and the headers saying what changed."""
+    and the headers saying what changed: :func:`export` with ``winding="fix"``, the normals
+    the file had."""
+    return export(upload, file_format, "auto", "angle", 30.0, "fix", weld)
+
+
+def export(
+    upload: Upload,
+    file_format: str | None,
+    normals: NormalsChoice,
+    weighting: Weighting,
+    crease_angle: float,
+    winding: Winding,
+    weld: float | None,
+) -> tuple[NDArray[np.uint8], str, dict[str, str]]:
+    """The file written again (:func:`~mesh_normal.mesh_export.export_mesh`), its format and
+    the headers saying what changed and what the format could not hold."""
     mesh = load(upload)
-    chosen = file_format or (mesh.format if mesh.format in WRITABLE else WRITABLE[0])
-    # The same weld as the report's, so that the file is the fix the report described.
-    fixed = orient(mesh.checked(), weld=weld)
-    headers = {
-        "x-faces-flipped": str(int(np.count_nonzero(fixed.flipped))),
-        "x-component-faces-flipped": flips_by_component(fixed),
-        "x-orientation-before": fixed.orientation,
-    }
-    if weld is not None:
-        headers["x-weld"] = repr(weld)
     try:
-        data, dropped = write_fixed(mesh, fixed.faces, chosen)
+        # The same weld as the report's, so that the file is the fix the report described.
+        result = export_mesh(
+            mesh,
+            file_format,
+            normals=normals,
+            winding=winding,
+            weighting=weighting,
+            crease_angle=crease_angle,
+            weld=weld,
+        )
     except MeshFileError as error:  # e.g. coordinates beyond what STL's floats hold
         raise ApiError(error.status_code, str(error), "format") from None
-    if dropped:  # do no harm: never leave data out without saying so
-        headers["x-dropped"] = "; ".join(dropped)
-    return np.frombuffer(data, dtype=np.uint8), chosen, headers
+    headers = {
+        "x-faces-flipped": str(result.faces_flipped),
+        "x-normals": result.normals_kind or "none",
+    }
+    if result.orientation is not None:
+        headers["x-component-faces-flipped"] = flips_by_component(result.orientation)
+        headers["x-orientation-before"] = result.orientation.orientation
+    if weld is not None:
+        headers["x-weld"] = repr(weld)
+    if result.kept:
+        headers["x-kept"] = "; ".join(result.kept)
+    if result.dropped:  # do no harm: never leave data out without saying so
+        headers["x-dropped"] = "; ".join(result.dropped)
+    return np.frombuffer(result.data, dtype=np.uint8), result.file_format, headers
 
 
 def page(upload: Upload, stem: str, base_url: str) -> dict[str, Any]:
@@ -118,12 +143,19 @@ def fix_dropped(mesh: LoadedMesh) -> dict[str, str]:
     """For each format of the fixed mesh, the sentence saying what of this mesh it leaves out,
     in the words of the fix's ``X-Dropped`` header; empty when it keeps everything."""
     objects = len(mesh.group_names or ())
+    had = file_normals(mesh)
     dropped = {
-        name: unkept(name, mesh.vertex_colors, mesh.face_colors, objects=objects)
+        name: [
+            *unkept(name, mesh.vertex_colors, mesh.face_colors, objects=objects, normals_kind=had),
+            *mesh.unkept,
+        ]
         for name in FIX_FORMATS
     }
     keeping = [MESH_FORMATS[name].title for name, left_out in dropped.items() if not left_out]
-    keeps = " and ".join(keeping) + (" keeps" if len(keeping) == 1 else " keep")
+    listed = (
+        ", ".join(keeping[:-1]) + " and " + keeping[-1] if len(keeping) > 1 else "".join(keeping)
+    )
+    keeps = listed + (" keeps" if len(keeping) == 1 else " keep")
     return {
         name: f"{MESH_FORMATS[name].title} leaves out {'; '.join(left_out)}"
         + (f"; {keeps} everything." if keeping else ".")

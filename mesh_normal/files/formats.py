@@ -21,8 +21,10 @@ if TYPE_CHECKING:
     from mesh_normal.files.loaded import LoadedMesh
 
     Reader = Callable[[bytes], LoadedMesh]
-    #: ``(points, triangles, *, vertex_colors=..., face_colors=...) -> bytes``, the first two
-    #: already checked by ``check_mesh``; only formats that hold a kind of colour take it.
+    #: ``(points, triangles, *, vertex_colors=..., face_colors=..., normals=...,
+    #: normals_kind=..., face_groups=..., group_names=...) -> bytes``, the first two already
+    #: checked by ``check_mesh``; only formats that hold a kind of colour, normal or group
+    #: take it.
     Writer = Callable[..., bytes]
 
 #: What the writers put in the comment of a file's header.
@@ -56,19 +58,29 @@ class MeshFormat:
         triangles: NDArray[np.intp],
         vertex_colors: NDArray[np.generic] | None = None,
         face_colors: NDArray[np.generic] | None = None,
+        *,
+        normals: NDArray[np.float64] | None = None,
+        normals_kind: str | None = None,
+        face_groups: NDArray[np.intp] | None = None,
+        group_names: tuple[str, ...] | None = None,
     ) -> bytes:
         """The bytes of the file; ``points`` and ``triangles`` must be checked already.
-        Colours are written where the format holds them (:data:`HOLDS_COLORS`,
-        :data:`HOLDS_FACE_COLORS`) and left out elsewhere."""
+        Colours, normals and groups are written where the format holds them
+        (:data:`HOLDS_COLORS`, :data:`HOLDS_FACE_COLORS`, :data:`HOLDS_NORMALS`,
+        :data:`HOLDS_GROUPS`) and left out elsewhere."""
         if not self.writable:
             raise ValueError(f"{self.title} files cannot be written.")
         writer = cast("Writer", self._function("write"))
-        colors = {}
+        extra: dict[str, object] = {}
         if vertex_colors is not None and self.name in HOLDS_COLORS:
-            colors["vertex_colors"] = vertex_colors
+            extra["vertex_colors"] = vertex_colors
         if face_colors is not None and self.name in HOLDS_FACE_COLORS:
-            colors["face_colors"] = face_colors
-        return writer(points, triangles, **colors)
+            extra["face_colors"] = face_colors
+        if normals is not None and normals_kind in HOLDS_NORMALS.get(self.name, ()):
+            extra["normals"], extra["normals_kind"] = normals, normals_kind
+        if face_groups is not None and group_names is not None and self.name in HOLDS_GROUPS:
+            extra["face_groups"], extra["group_names"] = face_groups, group_names
+        return writer(points, triangles, **extra)
 
     def _function(self, verb: str) -> object:
         module = importlib.import_module(f"mesh_normal.files.{self.module}")
@@ -83,17 +95,29 @@ FORMATS: dict[str, MeshFormat] = {
         MeshFormat("ply", "PLY", (".ply",), "application/octet-stream", "ply", writable=True),
         MeshFormat("stl", "STL", (".stl",), "model/stl", "stl", writable=True),
         MeshFormat("obj", "OBJ", (".obj",), "model/obj", "obj", writable=True),
-        MeshFormat("off", "OFF", (".off",), "application/octet-stream", "off"),
-        MeshFormat("glb", "GLB", (".glb",), "model/gltf-binary", "gltf"),
+        MeshFormat("off", "OFF", (".off",), "application/octet-stream", "off", writable=True),
+        MeshFormat("glb", "GLB", (".glb",), "model/gltf-binary", "gltf", writable=True),
         MeshFormat("gltf", "glTF", (".gltf",), "model/gltf+json", "gltf"),
         MeshFormat("3mf", "3MF", (".3mf",), "model/3mf", "threemf"),
     )
 }
 
 #: Writable formats whose writer takes vertex colours, and what of them each keeps.
-HOLDS_COLORS: dict[str, str] = {"ply": "rgba", "obj": "rgb"}
+HOLDS_COLORS: dict[str, str] = {"ply": "rgba", "obj": "rgb", "glb": "rgba", "off": "rgba"}
 #: Writable formats whose writer takes face colours (one per triangle), and what it keeps.
-HOLDS_FACE_COLORS: dict[str, str] = {"ply": "rgba"}
+HOLDS_FACE_COLORS: dict[str, str] = {"ply": "rgba", "off": "rgba"}
+#: Writable formats whose writer takes normals, and the kinds it holds: PLY ``nx ny nz`` of
+#: vertices or faces, OBJ ``vn`` of any kind, OFF ``NOFF`` vertex normals, GLB ``NORMAL``
+#: (vertices split where a face's or corner's normal differs), STL facet normals.
+HOLDS_NORMALS: dict[str, tuple[str, ...]] = {
+    "ply": ("vertex", "face"),
+    "obj": ("face", "vertex", "corner"),
+    "glb": ("face", "vertex", "corner"),
+    "stl": ("face",),
+    "off": ("vertex",),
+}
+#: Writable formats that hold the division into groups (OBJ ``g``).
+HOLDS_GROUPS: frozenset[str] = frozenset({"obj"})
 
 #: File extension (lower case, with the dot) to format name.
 SUFFIXES: dict[str, str] = {

@@ -229,3 +229,17 @@ def _unit(vectors: NDArray[np.float64]) -> NDArray[np.float64]:
     lengths = np.linalg.norm(vectors, axis=1, keepdims=True)
     with np.errstate(invalid="ignore", divide="ignore"):
         return np.where(lengths > 0, vectors / lengths, 0.0)
+
+
+def write_glb(
+    points: NDArray[np.float64],
+    triangles: NDArray[np.intp],
+    vertex_colors: NDArray[np.generic] | None = None,
+    normals: NDArray[np.float64] | None = None,
+    normals_kind: str | None = None,
+) -> bytes:
+    """Binary glTF: see :func:`mesh_normal.files.glb_write.write_glb` (the writer lives in
+    its own module; the format table looks for it here, beside the reader)."""
+    from mesh_normal.files.glb_write import write_glb as glb
+
+    return glb(points, triangles, vertex_colors, normals, normals_kind)

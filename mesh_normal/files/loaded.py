@@ -70,6 +70,10 @@ class LoadedMesh:
         file has none.
     notes : tuple of str
         Plain sentences about what reading did (welding, triangulation, skipped elements).
+    unkept : tuple of str
+        What the file holds that these arrays do not carry, so that no file written from them
+        can keep it, in words: OBJ texture coordinates, materials and smoothing groups. Every
+        writer of the mesh names them as left out.
     files : tuple of str
         For a ``.zip`` or several files: the names of those read, the mesh file first, then
         the files it named (a ``.gltf``'s buffers). Empty for one file read alone.
@@ -90,6 +94,7 @@ class LoadedMesh:
     vertex_colors: NDArray[np.generic] | None = None
     face_colors: NDArray[np.generic] | None = None
     notes: tuple[str, ...] = ()
+    unkept: tuple[str, ...] = ()
     files: tuple[str, ...] = ()
     from_reader: bool = field(default=False, repr=False, compare=False)
 
@@ -121,6 +126,7 @@ def build(
     vertex_colors: NDArray[np.generic] | None = None,
     face_colors: NDArray[np.generic] | None = None,
     notes: Sequence[str] = (),
+    unkept: Sequence[str] = (),
     vertex: Describe | None = None,
     face: Describe | None = None,
 ) -> LoadedMesh:
@@ -155,6 +161,7 @@ def build(
         vertex_colors=_colors(vertex_colors, len(points), "vertices"),
         face_colors=_colors(face_colors, len(triangles), "triangles"),
         notes=tuple(notes),
+        unkept=tuple(unkept),
         from_reader=True,
     )
 

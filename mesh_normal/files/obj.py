@@ -53,6 +53,14 @@ _IGNORED = {
 }
 
 
+#: Statements the mesh does not carry, which every file written from it leaves out.
+_UNKEPT = {
+    "vt": "texture coordinates",
+    "mtllib": "material libraries",
+    "usemtl": "materials",
+    "s": "smoothing groups",
+}
+
 _KINDS = {"v ": 1, "vn": 2, "vt": 3, "f ": 4, "o ": 5, "g ": 6, "": 0}
 _KEYS = {"v": 1, "vn": 2, "vt": 3, "f": 4, "o": 5, "g": 6, "l": 7, "p": 8}
 IGNORE, VERTEX, NORMAL, TEXTURE, FACE, OBJECT, GROUP, LINE, POINT, OTHER = range(10)
@@ -83,6 +91,8 @@ class _Statements:
         Each face's group, an index into ``labels``; ``None`` without ``o`` and ``g``.
     labels : list of str
     notes : list of str
+    unkept : list of str
+        What the mesh will not carry (texture coordinates, materials, smoothing groups).
     """
 
     vertices: NDArray[np.float64]
@@ -98,6 +108,7 @@ class _Statements:
     face_labels: NDArray[np.intp] | None
     labels: list[str]
     notes: list[str]
+    unkept: list[str]
 
 
 def read_obj(data: bytes) -> LoadedMesh:
@@ -124,6 +135,7 @@ def read_obj(data: bytes) -> LoadedMesh:
         group_names=group_names,
         vertex_colors=found.colors,
         notes=[*notes, *found.notes],
+        unkept=found.unkept,
         vertex=lambda i: f"vertex {i + 1:,} (line {found.vertex_lines[i]:,})",
         face=lambda i: f"the face on line {face_line[i]:,}",
     )
@@ -164,6 +176,7 @@ def _scan(text: str) -> _Statements:
     # and only the rest (comments, groups, indented or tab-separated lines) by splitting.
     kinds = np.fromiter((_KINDS.get(line[:2], -1) for line in lines), np.int8, len(lines))
     other: Counter[str] = Counter()
+    ignored: Counter[str] = Counter()
     for row in np.flatnonzero(kinds < 0):
         parts = lines[row].split(None, 1)
         key = parts[0] if parts else ""
@@ -172,6 +185,9 @@ def _scan(text: str) -> _Statements:
         )
         if kinds[row] >= LINE:
             other[key] += 1
+        elif key in _UNKEPT:
+            ignored[key] += 1
+    ignored["vt"] = int(np.count_nonzero(kinds == TEXTURE))
     rows = {kind: np.flatnonzero(kinds == kind) for kind in (VERTEX, NORMAL, FACE)}
     face_labels, labels = _face_labels(
         lines, np.flatnonzero(np.isin(kinds, (OBJECT, GROUP))), rows[FACE]
@@ -196,6 +212,11 @@ def _scan(text: str) -> _Statements:
         face_labels=face_labels,
         labels=labels,
         notes=_skipped(other),
+        unkept=[
+            f"{words} ({count:,} {key})"
+            for key, words in _UNKEPT.items()
+            if (count := ignored[key])
+        ],
     )
 
 
@@ -524,33 +545,99 @@ def write_obj(
     points: NDArray[np.float64],
     triangles: NDArray[np.intp],
     vertex_colors: NDArray[np.generic] | None = None,
+    normals: NDArray[np.float64] | None = None,
+    normals_kind: str | None = None,
+    face_groups: NDArray[np.intp] | None = None,
+    group_names: tuple[str, ...] | None = None,
 ) -> bytes:
     """OBJ text: ``v`` lines in the shortest text that reads back as the same float64
-    (Python's ``repr``), then 1-based ``f`` lines. Vertex colours follow the coordinates as
-    ``v x y z r g b`` (floats 0-1, as MeshLab writes them); integer colours are scaled from
-    their type's range, and alpha is not written (OBJ holds none: see
-    :func:`~mesh_normal.files.write.unkept`).
+    (Python's ``repr``), ``vn`` lines, then 1-based ``f`` lines, each group's run of faces
+    after its ``g`` line. Vertex colours follow the coordinates as ``v x y z r g b`` (floats
+    0-1, as MeshLab writes them); integer colours are scaled from their type's range, and
+    alpha is not written (OBJ holds none: see :func:`~mesh_normal.files.write.unkept`).
 
     Parameters
     ----------
     points : (n, 3) float64
     triangles : (m, 3) intp
     vertex_colors : (n, 3) or (n, 4), optional
+    normals : (n, 3), (m, 3) or (m, 3, 3) float64, optional
+        Vertex, face or corner normals, as ``normals_kind`` says: one ``vn`` per vertex
+        (``f a//a``), per face (``f a//k b//k c//k``), or per distinct corner normal.
+    face_groups : (m,) intp, optional
+        Each face's group, an index into ``group_names``: a run of faces in one group comes
+        after ``o name`` (``o a`` then ``g b`` for ``"a/b"``), so the reader gives the same
+        names back.
     """
     rows = (
         points
         if vertex_colors is None
         else np.concatenate([points, unit_colors(vertex_colors)[:, :3]], axis=1)
     )
+    vn, corner_vn = _obj_normals(normals, normals_kind, triangles)
     # A chunk of lines at a time: the text of every line at once is several times the file.
     parts = [f"# written by {MAKER}\n".encode()]
-    for start in range(0, len(rows), _CHUNK):
-        numbers = rows[start : start + _CHUNK].tolist()
-        parts.append("".join(f"v {' '.join(map(repr, row))}\n" for row in numbers).encode())
-    for start in range(0, len(triangles), _CHUNK):
-        corners = (triangles[start : start + _CHUNK] + 1).tolist()
-        parts.append("".join(f"f {a} {b} {c}\n" for a, b, c in corners).encode())
+    for keyword, values in (("v", rows), ("vn", vn)):
+        for start in range(0, len(values), _CHUNK):
+            numbers = values[start : start + _CHUNK].tolist()
+            parts.append(
+                "".join(f"{keyword} {' '.join(map(repr, row))}\n" for row in numbers).encode()
+            )
+    for start, stop, label in _group_runs(face_groups, group_names, len(triangles)):
+        if label is not None:
+            parts.append(_group_line(label).encode())
+        for chunk in range(start, stop, _CHUNK):
+            end = min(chunk + _CHUNK, stop)
+            corners = (triangles[chunk:end] + 1).tolist()
+            if corner_vn is None:
+                parts.append("".join(f"f {a} {b} {c}\n" for a, b, c in corners).encode())
+                continue
+            ids = (corner_vn[chunk:end] + 1).tolist()
+            parts.append(
+                "".join(
+                    f"f {a}//{p} {b}//{q} {c}//{r}\n"
+                    for (a, b, c), (p, q, r) in zip(corners, ids, strict=True)
+                ).encode()
+            )
     return b"".join(parts)
+
+
+def _obj_normals(
+    normals: NDArray[np.float64] | None, kind: str | None, triangles: NDArray[np.intp]
+) -> tuple[NDArray[np.float64], NDArray[np.intp] | None]:
+    """The ``vn`` rows and each corner's index into them (``None`` without normals).
+
+    Corner normals are written once per distinct vector: a smooth vertex's corners share one.
+    """
+    if normals is None:
+        return np.zeros((0, 3)), None
+    if kind == "vertex":
+        return normals, triangles
+    if kind == "face":
+        return normals, np.repeat(np.arange(len(triangles), dtype=np.intp)[:, None], 3, axis=1)
+    distinct, inverse = np.unique(normals.reshape(-1, 3), axis=0, return_inverse=True)
+    return distinct, inverse.reshape(-1, 3).astype(np.intp)
+
+
+def _group_runs(
+    face_groups: NDArray[np.intp] | None, names: tuple[str, ...] | None, count: int
+) -> list[tuple[int, int, str | None]]:
+    """Runs of consecutive faces in one group: ``(start, stop, name)``; one run without
+    groups. Faces keep their order: a group met again gets its ``g`` line again."""
+    if face_groups is None or names is None or not count:
+        return [(0, count, None)]
+    starts = np.flatnonzero(np.r_[True, face_groups[1:] != face_groups[:-1]])
+    stops = np.r_[starts[1:], count]
+    return [
+        (int(a), int(b), names[int(face_groups[a])]) for a, b in zip(starts, stops, strict=True)
+    ]
+
+
+def _group_line(label: str) -> str:
+    """The statements that make the reader's ``label`` again: ``o`` starts afresh (it ends
+    the group before it), so a plain name is an object, ``"o/g"`` an object and a group."""
+    thing, slash, group = label.partition("/")
+    return f"o {thing}\ng {group}\n" if slash else f"o {label}\n"
 
 
 def unit_colors(colors: NDArray[np.generic]) -> NDArray[np.float64]:

@@ -19,6 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mesh_normal.files.errors import MeshFileError, unsupported
+from mesh_normal.files.formats import MAKER
 from mesh_normal.files.loaded import LoadedMesh, build
 from mesh_normal.files.polygons import triangulate
 
@@ -273,3 +274,57 @@ def _number(word: str, line: int, kind: type[int] | type[float]) -> int:
     except ValueError:
         what = "a whole number" if kind is int else "a number"
         raise MeshFileError(f"Line {line}: {word[:40]!r} is not {what}.") from None
+
+
+def write_off(
+    points: NDArray[np.float64],
+    triangles: NDArray[np.intp],
+    vertex_colors: NDArray[np.generic] | None = None,
+    face_colors: NDArray[np.generic] | None = None,
+    normals: NDArray[np.float64] | None = None,
+    normals_kind: str | None = None,
+) -> bytes:
+    """ASCII OFF: coordinates in the shortest text that reads back as the same float64,
+    ``NOFF`` vertex normals after them, ``COFF`` colours after those (uint8 as integers
+    0-255, anything else as floats 0-1), and face colours after each face's corners.
+
+    Parameters
+    ----------
+    points : (n, 3) float64
+    triangles : (m, 3) intp
+    vertex_colors : (n, 3) or (n, 4), optional
+    face_colors : (m, 3) or (m, 4), optional
+    normals : (n, 3) float64, optional
+        Vertex normals (``normals_kind`` ``"vertex"``, the only kind OFF holds).
+    """
+    columns = [points]
+    if normals is not None and normals_kind == "vertex":
+        columns.append(normals)
+    keyword = ("C" if vertex_colors is not None else "") + ("N" if len(columns) > 1 else "")
+    vertex_rows = [_rows(np.concatenate(columns, axis=1))]
+    if vertex_colors is not None:
+        vertex_rows.append(_color_rows(vertex_colors))
+    face_rows = [[f"3 {a} {b} {c}" for a, b, c in triangles.tolist()]]
+    if face_colors is not None:
+        face_rows.append(_color_rows(face_colors))
+    lines = [
+        f"{keyword}OFF",
+        f"# written by {MAKER}",
+        f"{len(points)} {len(triangles)} 0",
+        *(" ".join(parts) for parts in zip(*vertex_rows, strict=True)),
+        *(" ".join(parts) for parts in zip(*face_rows, strict=True)),
+    ]
+    return ("\n".join(lines) + "\n").encode()
+
+
+def _rows(values: NDArray[np.float64]) -> list[str]:
+    return [" ".join(map(repr, row)) for row in values.tolist()]
+
+
+def _color_rows(colors: NDArray[np.generic]) -> list[str]:
+    """Colours as OFF text: uint8 as integers, the rest as floats 0-1."""
+    if colors.dtype == np.uint8:
+        return [" ".join(map(str, row)) for row in colors.tolist()]
+    from mesh_normal.files.obj import unit_colors
+
+    return _rows(unit_colors(colors))

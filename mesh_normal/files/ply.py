@@ -731,9 +731,11 @@ def write_ply(
     triangles: NDArray[np.intp],
     vertex_colors: NDArray[np.generic] | None = None,
     face_colors: NDArray[np.generic] | None = None,
+    normals: NDArray[np.float64] | None = None,
+    normals_kind: str | None = None,
 ) -> bytes:
     """Binary little-endian PLY with float64 coordinates: it reads back bit for bit, and so do
-    vertex and face colours (written in their own type, see :func:`ply_bytes`).
+    vertex and face colours (written in their own type, see :func:`ply_bytes`) and normals.
 
     Parameters
     ----------
@@ -741,8 +743,17 @@ def write_ply(
     triangles : (m, 3) intp
     vertex_colors : (n, 3) or (n, 4), optional
     face_colors : (m, 3) or (m, 4), optional
+    normals : (n, 3) or (m, 3) float64, optional
+        ``nx ny nz`` of the vertices or of the faces, as ``normals_kind`` says.
     """
-    return ply_bytes(points, triangles, vertex_colors=vertex_colors, face_colors=face_colors)
+    return ply_bytes(
+        points,
+        triangles,
+        vertex_normals=normals if normals_kind == "vertex" else None,
+        face_normals=normals if normals_kind == "face" else None,
+        vertex_colors=vertex_colors,
+        face_colors=face_colors,
+    )
 
 
 def ply_bytes(

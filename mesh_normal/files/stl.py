@@ -283,9 +283,14 @@ def _welded(
     )
 
 
-def write_stl(points: NDArray[np.float64], triangles: NDArray[np.intp]) -> bytes:
+def write_stl(
+    points: NDArray[np.float64],
+    triangles: NDArray[np.intp],
+    normals: NDArray[np.float64] | None = None,
+    normals_kind: str | None = None,
+) -> bytes:
     """Binary STL: float32 corners and our face normals as facet normals (zero for a
-    degenerate face).
+    degenerate face), or the face normals given (``normals_kind`` ``"face"``).
 
     Parameters
     ----------
@@ -303,7 +308,8 @@ def write_stl(points: NDArray[np.float64], triangles: NDArray[np.intp]) -> bytes
             "32-bit floats (up to about 3.4e38); choose PLY or OBJ.",
             422,
         )
-    geometry = face_geometry(points, triangles)
+    given = normals if normals_kind == "face" else None
+    geometry = face_geometry(points, triangles) if given is None else None
     # The records written in place, a block at a time: the file's bytes once and a block of
     # normals and corners, not the whole mesh's of each and two copies of the bytes.
     out = bytearray(HEADER + RECORD.itemsize * len(triangles))
@@ -312,7 +318,8 @@ def write_stl(points: NDArray[np.float64], triangles: NDArray[np.intp]) -> bytes
     records = np.frombuffer(out, RECORD, len(triangles), HEADER)
     for start in range(0, len(triangles), _WRITE_BLOCK):
         rows = slice(start, start + _WRITE_BLOCK)
-        records["normal"][rows] = geometry.unit_normals(rows)
+        block = geometry.unit_normals(rows) if geometry is not None else given[rows]  # type: ignore[index]
+        records["normal"][rows] = block
         records["corners"][rows] = points[triangles[rows]]
     del records  # the view: bytes() copies the buffer once
     return bytes(out)

@@ -15,8 +15,9 @@ leaves out, for callers that must say so.
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from pathlib import Path
-from typing import overload
+from typing import Literal, overload
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -27,6 +28,8 @@ from mesh_normal.files.formats import (
     FORMATS,
     HOLDS_COLORS,
     HOLDS_FACE_COLORS,
+    HOLDS_GROUPS,
+    HOLDS_NORMALS,
     WRITABLE,
     MeshFormat,
     suffix_format,
@@ -34,6 +37,7 @@ from mesh_normal.files.formats import (
 from mesh_normal.files.loaded import LoadedMesh
 
 StrPath = str | os.PathLike[str]
+NormalsKind = Literal["face", "vertex", "corner"]
 
 
 @overload
@@ -44,6 +48,10 @@ def write_mesh(
     *,
     vertex_colors: ArrayLike | None = None,
     face_colors: ArrayLike | None = None,
+    normals: ArrayLike | None = None,
+    normals_kind: NormalsKind | None = None,
+    face_groups: ArrayLike | None = None,
+    group_names: Sequence[str] | None = None,
 ) -> bytes: ...
 
 
@@ -56,6 +64,10 @@ def write_mesh(
     path: StrPath,
     vertex_colors: ArrayLike | None = None,
     face_colors: ArrayLike | None = None,
+    normals: ArrayLike | None = None,
+    normals_kind: NormalsKind | None = None,
+    face_groups: ArrayLike | None = None,
+    group_names: Sequence[str] | None = None,
 ) -> None: ...
 
 
@@ -67,11 +79,16 @@ def write_mesh(
     path: StrPath | None = None,
     vertex_colors: ArrayLike | None = None,
     face_colors: ArrayLike | None = None,
+    normals: ArrayLike | None = None,
+    normals_kind: NormalsKind | None = None,
+    face_groups: ArrayLike | None = None,
+    group_names: Sequence[str] | None = None,
 ) -> bytes | None:
     """The bytes of a mesh file, or, given ``path``, that file written.
 
     >>> data = write_mesh(vertices, faces, "ply")         # bytes
     >>> write_mesh(vertices, faces, path="fixed.obj")      # the format from the suffix
+    >>> write_mesh(vertices, faces, "glb", normals=corners, normals_kind="corner")
 
     Parameters
     ----------
@@ -80,9 +97,10 @@ def write_mesh(
     faces : (m, 3) int
         Indices into ``vertices``.
     file_format : str, optional
-        ``"ply"`` (binary little endian, float64), ``"stl"`` (binary, with our facet normals)
-        or ``"obj"`` (1-based indices, exact float64 text). Without it, the suffix of
-        ``path`` names the format.
+        ``"ply"`` (binary little endian, float64), ``"stl"`` (binary, with our facet normals),
+        ``"obj"`` (1-based indices, exact float64 text), ``"glb"`` (binary glTF, float32) or
+        ``"off"`` (ASCII, exact float64 text). Without it, the suffix of ``path`` names the
+        format.
     path : str or os.PathLike, optional
         Where to write the file (replaced if it exists, through a temporary file and a rename,
         so a failed write leaves the old file whole); the function then returns ``None``.
@@ -94,7 +112,21 @@ def write_mesh(
     face_colors : (m, 3) or (m, 4), optional
         The colour of each triangle (as :attr:`LoadedMesh.face_colors
         <mesh_normal.files.LoadedMesh.face_colors>` holds them): PLY writes them on its faces
-        in their own type; STL and OBJ hold none.
+        in their own type, OFF after each face; STL, OBJ and GLB hold none.
+    normals : (n, 3), (m, 3) or (m, 3, 3) float, optional
+        Vertex, face or corner normals (from :func:`mesh_normal.vertex_normals` and the
+        like), written as the format holds them (:data:`~mesh_normal.files.formats.
+        HOLDS_NORMALS`): OBJ ``vn`` of any kind; PLY ``nx ny nz`` of vertices or faces; GLB
+        ``NORMAL``, its vertices split where face or corner normals differ; OFF vertex
+        normals (``NOFF``); STL the face normals as its facet normals. A kind the format
+        cannot hold is left out: :func:`unkept` names it.
+    normals_kind : {"face", "vertex", "corner"}, optional
+        Which ``normals`` are; without it, told from their shape (``(m, 3, 3)`` corner,
+        ``(n, 3)`` vertex, ``(m, 3)`` face), a ``ValueError`` when ``n == m`` leaves it open.
+    face_groups : (m,) int, optional
+        Each face's group, an index into ``group_names`` (as :attr:`LoadedMesh.face_groups
+        <mesh_normal.files.LoadedMesh.face_groups>`); OBJ writes them as ``o``/``g`` runs,
+        the other formats hold none.
 
     Raises
     ------
@@ -110,11 +142,17 @@ def write_mesh(
         raise TypeError("write_mesh needs a file_format or a path to take the format from.")
     entry = _writable(file_format, path)
     points, triangles = check_mesh(vertices, faces)
+    kind, values = checked_normals(normals, normals_kind, len(points), len(triangles))
+    groups = _checked_groups(face_groups, group_names, len(triangles))
     data = entry.write(
         points,
         triangles,
         _checked_colors(vertex_colors, len(points), "vertex_colors"),
         _checked_colors(face_colors, len(triangles), "face_colors"),
+        normals=values,
+        normals_kind=kind,
+        face_groups=groups,
+        group_names=None if groups is None or group_names is None else tuple(group_names),
     )
     if path is None:
         return data
@@ -128,6 +166,7 @@ def unkept(
     face_colors: ArrayLike | None = None,
     *,
     objects: int = 0,
+    normals_kind: str | None = None,
 ) -> list[str]:
     """What of the given colours and objects a format's file cannot hold, in words; empty
     when it holds all of them (or there are none).
@@ -140,6 +179,8 @@ def unkept(
     ['vertex colours (STL holds none)']
     >>> unkept("stl", None, objects=2)
     ['the division into 2 objects (the STL written is one mesh)']
+    >>> unkept("stl", None, normals_kind="corner")
+    ['corner normals (STL holds face normals only)']
     """
     title = FORMATS[file_format].title if file_format in FORMATS else file_format
     dropped = []
@@ -153,7 +194,11 @@ def unkept(
             dropped.append(f"{kind} colours ({title} holds none)")
         elif np.shape(colors)[-1] > len(held):
             dropped.append(f"{kind} colour alpha ({title} holds red, green and blue only)")
-    if objects > 1:
+    held_kinds = HOLDS_NORMALS.get(file_format, ())
+    if normals_kind is not None and normals_kind not in held_kinds:
+        holds = " and ".join(held_kinds) + " normals only" if held_kinds else "no normals"
+        dropped.append(f"{normals_kind} normals ({title} holds {holds})")
+    if objects > 1 and file_format not in HOLDS_GROUPS:
         dropped.append(f"the division into {objects:,} objects (the {title} written is one mesh)")
     return dropped
 
@@ -171,6 +216,49 @@ def write_fixed(mesh: LoadedMesh, faces: ArrayLike, file_format: str) -> tuple[b
     )
     objects = len(mesh.group_names or ())
     return data, unkept(file_format, mesh.vertex_colors, mesh.face_colors, objects=objects)
+
+
+def checked_normals(
+    normals: ArrayLike | None, kind: NormalsKind | None, vertices: int, faces: int
+) -> tuple[NormalsKind | None, NDArray[np.float64] | None]:
+    """The normals' kind (given, or told from their shape) and the normals as float64;
+    ``ValueError`` for a shape that fits no kind, or fits two without ``kind`` to choose."""
+    if normals is None:
+        return None, None
+    values = np.asarray(normals, dtype=np.float64)
+    shapes: dict[NormalsKind, tuple[int, ...]] = {
+        "face": (faces, 3),
+        "vertex": (vertices, 3),
+        "corner": (faces, 3, 3),
+    }
+    if kind is None:
+        fits = [name for name, shape in shapes.items() if values.shape == shape]
+        if len(fits) != 1:
+            raise ValueError(
+                f"normals of shape {values.shape} need normals_kind (face, vertex or corner)"
+                if fits
+                else f"normals must have shape ({vertices}, 3), ({faces}, 3) or "
+                f"({faces}, 3, 3), not {values.shape}."
+            )
+        kind = fits[0]
+    elif kind not in shapes:
+        raise ValueError(f"normals_kind must be face, vertex or corner, not {kind!r}.")
+    if values.shape != shapes[kind]:
+        raise ValueError(f"{kind} normals must have shape {shapes[kind]}, not {values.shape}.")
+    if not np.isfinite(values).all():
+        raise ValueError("normals must be finite (zero rows for the missing ones).")
+    return kind, values
+
+
+def _checked_groups(
+    groups: ArrayLike | None, names: Sequence[str] | None, count: int
+) -> NDArray[np.intp] | None:
+    if groups is None or names is None:
+        return None
+    result = np.asarray(groups, dtype=np.intp)
+    if result.shape != (count,) or (count and not 0 <= result.min() <= result.max() < len(names)):
+        raise ValueError(f"face_groups must be {count} indices into the {len(names)} group_names.")
+    return result
 
 
 def _checked_colors(colors: ArrayLike | None, count: int, name: str) -> NDArray[np.generic] | None:

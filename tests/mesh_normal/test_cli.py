@@ -88,7 +88,7 @@ def test_fix_of_stl_solids_says_the_objects_are_left_out(
 
     source, out = tmp_path / "two.stl", tmp_path / "fixed.stl"
     source.write_bytes(obj_as_solids(two_cubes()))
-    assert main(["fix", str(source), str(out)]) == 0
+    assert main(["fix", "--write-unchanged", str(source), str(out)]) == 0
     lines = [line for line in capsys.readouterr().err.splitlines() if "leaves out" in line]
     assert lines == [
         f"mesh-normal: {out} leaves out the division into 2 objects (the STL written is one mesh)"
@@ -164,8 +164,8 @@ def test_fix_writes_the_fixed_mesh(
         (["normals", "{cube}", "-o", "out.txt"], 2, "must end in"),
         (["normals", "{cube}", "--kind", "corner", "-o", "out.ply"], 2, "corner normals"),
         (["normals", "{cube}", "--crease-angle", "200", "-o", "o.npy"], 2, "between 0 and 180"),
-        (["fix", "{cube}", "out.off"], 2, "output format"),
-        (["fix", "{cube}", "/nonexistent-dir/out.ply"], 4, "cannot write"),
+        (["fix", "{cube}", "out.fbx"], 2, "output format"),
+        (["fix", "--force", "{cube}", "/nonexistent-dir/out.ply"], 4, "cannot write"),
     ],
 )
 def test_failures_have_exit_codes_and_messages(
@@ -210,7 +210,7 @@ def test_installed_entry_point(cube: Path) -> None:
 
 
 def test_fix_in_place_writes_through_a_temporary_file(flipped: Path) -> None:
-    assert main(["fix", str(flipped), str(flipped.with_suffix(".obj"))]) == 0
+    assert main(["fix", "--force", str(flipped), str(flipped.with_suffix(".obj"))]) == 0
     assert main(["analyze", str(flipped)]) == 0  # the same path, now fixed
     assert sorted(path.name for path in flipped.parent.iterdir()) == ["flipped.obj"]
 
@@ -253,12 +253,12 @@ def test_analyze_with_a_weld_says_so(stepped: Path, capsys: pytest.CaptureFixtur
     # Six open sides, each seen from outside to face inward: a problem even without the weld.
     assert main(["analyze", str(stepped)]) == 1
     plain = capsys.readouterr().out
-    assert "6 component(s)" in plain and "open" in plain
+    assert "6 components" in plain and "open" in plain
     assert not any(line.startswith("weld ") for line in plain.splitlines())
     assert "--weld 1e-6 on the command line" in plain  # the open mesh suggests it
     assert main(["analyze", "--weld", "1e-6", str(stepped)]) == 1  # one closed shell, inward
     out = capsys.readouterr().out.splitlines()
-    assert "1 component(s)" in out[0] and "orientation inward, watertight" in out[1]
+    assert "1 component\n" in out[0] + "\n" and "orientation inward, watertight" in out[1]
     assert out[2].startswith("weld 1e-06 of the diagonal (") and out[2].endswith(
         "): 40 vertices joined beyond exact equality"
     )
@@ -273,7 +273,9 @@ def test_fix_with_the_weld_writes_what_the_report_described(
     out = tmp_path / "fixed.ply"
     assert main(["fix", "--weld", "1e-6", str(stepped), str(out)]) == 0
     lines = capsys.readouterr().out.splitlines()
-    assert lines[0].startswith("flipped 108 of 108 faces") and "weld 1e-06" in lines[1]
+    assert (
+        lines[0].startswith(f"wrote {out}: flipped 108 of 108 faces") and "weld 1e-06" in lines[1]
+    )
     before, after = read_mesh(stepped.read_bytes(), "s.ply"), read_mesh(out.read_bytes(), "f.ply")
     np.testing.assert_array_equal(after.vertices, before.vertices)  # kept, in their order
     np.testing.assert_array_equal(after.faces, before.faces[:, [0, 2, 1]])
@@ -281,7 +283,7 @@ def test_fix_with_the_weld_writes_what_the_report_described(
     assert "No problems found." in capsys.readouterr().out
     # Without it: six open sides, decided one by one by visibility, turned all the same.
     assert main(["fix", str(stepped), str(out)]) == 0
-    assert capsys.readouterr().out.startswith("flipped 108 of 108 faces")
+    assert capsys.readouterr().out.startswith(f"wrote {out}: flipped 108 of 108 faces")
 
 
 @pytest.mark.parametrize("command", ["analyze", "fix"])

@@ -42,7 +42,7 @@ def modules_after(argv: list[str]) -> tuple[set[str], int]:
         (["--version"], 0),
         (["serve", "--port", "9000"], 2),
         (["analyze"], 2),  # a missing argument
-        (["fix", "a.obj", "b.obj", "--format", "off"], 2),
+        (["fix", "a.obj", "b.obj", "--format", "xyz"], 2),  # not a format it writes
     ],
 )
 def test_no_heavy_import_before_a_command_runs(argv: list[str], code: int) -> None:

@@ -169,7 +169,7 @@ def test_no_web_or_test_package_is_installed(installed: Installed) -> None:
 def test_mesh_normal_analyze(installed: Installed) -> None:
     completed = installed.run("mesh-normal", "analyze", "cow.obj")
     assert completed.returncode == 0, completed.stderr
-    assert completed.stdout.startswith("cow.obj: 2,904 vertices, 5,804 faces (OBJ), 1 component(s)")
+    assert completed.stdout.startswith("cow.obj: 2,904 vertices, 5,804 faces (OBJ), 1 component\n")
     assert "No problems found." in completed.stdout
     missing = installed.run("mesh-normal", "analyze", "missing.obj")
     assert missing.returncode == 3

@@ -92,23 +92,28 @@ def test_a_meshlab_files_colours_survive_the_fix(client: TestClient) -> None:
 @pytest.mark.parametrize(
     ("colors", "expected"),
     [
-        (None, {"ply": "", "stl": "", "obj": ""}),
+        (None, {"ply": "", "stl": "", "obj": "", "off": "", "glb": ""}),
         (
             UCHAR,
             {
                 "ply": "",
-                "stl": "STL leaves out vertex colours (STL holds none); PLY and OBJ keep "
-                "everything.",
+                "stl": "STL leaves out vertex colours (STL holds none); PLY, OBJ, OFF and GLB "
+                "keep everything.",
                 "obj": "",
+                "off": "",
+                "glb": "",
             },
         ),
         (
             FLOAT,
             {
                 "ply": "",
-                "stl": "STL leaves out vertex colours (STL holds none); PLY keeps everything.",
+                "stl": "STL leaves out vertex colours (STL holds none); PLY, OFF and GLB keep "
+                "everything.",
                 "obj": "OBJ leaves out vertex colour alpha (OBJ holds red, green and blue only); "
-                "PLY keeps everything.",
+                "PLY, OFF and GLB keep everything.",
+                "off": "",
+                "glb": "",
             },
         ),
     ],

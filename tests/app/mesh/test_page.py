@@ -183,10 +183,12 @@ def test_the_page_says_before_the_download_that_the_objects_are_left_out(
     from tests.mesh_normal.test_objects import two_cubes
 
     response, html = post(client, obj_as_solids(two_cubes()), "two.stl", part="report")
-    expected = {
-        name: f"{title} leaves out the division into 2 objects (the {title} written is one mesh)."
-        for name, title in (("ply", "PLY"), ("stl", "STL"), ("obj", "OBJ"))
+    expected = {  # OBJ keeps them, as o statements
+        name: f"{title} leaves out the division into 2 objects (the {title} written is one "
+        "mesh); OBJ keeps everything."
+        for name, title in (("ply", "PLY"), ("stl", "STL"), ("off", "OFF"), ("glb", "GLB"))
     }
+    expected["obj"] = ""
     assert response.context["fix_dropped"] == expected  # type: ignore[attr-defined]
     assert html.text("fix-dropped") == expected["stl"]  # the upload's format is chosen
     for text in (CUBE_OBJ, "o only\n" + CUBE_OBJ):  # one object is the mesh itself

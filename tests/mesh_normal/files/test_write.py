@@ -68,7 +68,7 @@ def test_write_replaces_an_existing_file(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("name", "message"),
     [
-        ("tetra.off", "Cannot write 'off' files; the formats are ply, stl, obj."),
+        ("tetra.3mf", "Cannot write '3mf' files; the formats are ply, stl, obj, off, glb."),
         ("tetra.dat", "The format cannot be told from the name 'tetra.dat'"),
         ("tetra", "The format cannot be told from the name 'tetra'"),
     ],
