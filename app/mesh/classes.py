@@ -28,7 +28,12 @@ class FaceClass:
 #: What each colour means, worst first; the page's HTML legend is built from this.
 CLASSES = (
     FaceClass(DEGENERATE, "degenerate", "#e03131", "No area (degenerate), drawn as dots"),
-    FaceClass(FLIPPED, "flipped", "#f76707", "Wound against its neighbours: the fix flips it"),
+    FaceClass(
+        FLIPPED,
+        "flipped",
+        "#f76707",
+        "Flipped by the fix: wound against its neighbours, or on a part wound inward",
+    ),
     FaceClass(NONMANIFOLD, "nonmanifold", "#9c36b5", "On an edge shared by 3 or more faces"),
     FaceClass(BOUNDARY, "boundary", "#f2c94c", "On a boundary edge (a hole or border)"),
     FaceClass(OK, "ok", "#aab4cc", "No problem"),

@@ -6,7 +6,7 @@ from typing import TYPE_CHECKING, Any
 
 from app.mesh.classes import face_classes
 from app.mesh.histogram import area_histogram, histogram_figure
-from app.mesh.view import build_view
+from app.mesh.view import build_view, up_axis
 
 if TYPE_CHECKING:
     from mesh_normal.analysis import MeshAnalysis
@@ -33,6 +33,7 @@ def mesh_figures(analysis: MeshAnalysis) -> dict[str, Any]:
         classes,
         topology.boundary_edge_list,
         topology.nonmanifold_edge_list,
+        up=up_axis(mesh.format),
     )
     histogram = area_histogram(analysis.faces.areas, analysis.faces.degenerate)
     return {

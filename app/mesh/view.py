@@ -43,6 +43,19 @@ FAR_AWAY = 1e3
 MIN_ROUNDED = 1e-290
 SEED = 20240607  # the sample is random but fixed: the same file draws the same faces
 
+#: The up axis each format implies: glTF is Y-up by its specification and most OBJ exporters
+#: write Y-up too; STL, PLY, OFF and 3MF come mostly from CAD and printing, which are Z-up.
+FORMAT_UP = {"gltf": "y", "glb": "y", "obj": "y"}
+DEFAULT_UP = "z"
+#: Where the camera looks from for each up axis: a three-quarter view from the front, far
+#: enough (about 2 scene units from the centre of the ``aspectmode: data`` box) that the
+#: whole mesh fits in the view whatever its proportions.
+CAMERAS: dict[str, dict[str, dict[str, float]]] = {
+    "x": {"up": {"x": 1, "y": 0, "z": 0}, "eye": {"x": 0.9, "y": 1.25, "z": 1.25}},
+    "y": {"up": {"x": 0, "y": 1, "z": 0}, "eye": {"x": 1.25, "y": 0.9, "z": 1.25}},
+    "z": {"up": {"x": 0, "y": 0, "z": 1}, "eye": {"x": 1.25, "y": -1.25, "z": 0.9}},
+}
+
 ARROW_COLOR = DEEP_ACCENT
 BOUNDARY_LINE = "#c99a06"
 NONMANIFOLD_LINE = "#862e9c"
@@ -206,10 +219,13 @@ def build_view(
     classes: NDArray[np.int8],
     boundary_edges: NDArray[np.integer[Any]],
     nonmanifold_edges: NDArray[np.integer[Any]],
+    up: str = DEFAULT_UP,
 ) -> dict[str, Any]:
-    """The 3D view: ``{"figure", "shown_faces", "total_faces", "arrows", "counts", "note"}``.
+    """The 3D view: ``{"figure", "shown_faces", "total_faces", "arrows", "counts", "note",
+    "up", "cameras"}``.
 
-    ``counts`` holds the number of faces of each class in the whole mesh.
+    ``counts`` holds the number of faces of each class in the whole mesh; ``up`` is the axis
+    drawn upward ("x", "y" or "z") and ``cameras`` the camera for each, for the page's switch.
     """
     shown = select_faces(classes)
     used, local = np.unique(faces[shown], return_inverse=True)
@@ -285,12 +301,14 @@ def build_view(
             )
         )
     return {
-        "figure": {"data": traces, "layout": _layout()},
+        "figure": {"data": traces, "layout": _layout(up)},
         "shown_faces": len(shown),
         "total_faces": len(faces),
         "arrows": len(arrow_faces),
         "counts": {item.key: int(np.count_nonzero(classes == item.code)) for item in CLASSES},
         "note": _note(space),
+        "up": up,
+        "cameras": CAMERAS,
     }
 
 
@@ -321,7 +339,12 @@ def _axis(title: str) -> dict[str, Any]:
     return {"visible": False, "title": {"text": title}}
 
 
-def _layout() -> dict[str, Any]:
+def up_axis(file_format: str) -> str:
+    """The axis a file of this format is drawn with upward: "y" for glTF and OBJ, else "z"."""
+    return FORMAT_UP.get(file_format, DEFAULT_UP)
+
+
+def _layout(up: str) -> dict[str, Any]:
     return {
         "margin": {"l": 0, "r": 0, "t": 0, "b": 0},
         "height": 460,
@@ -333,7 +356,7 @@ def _layout() -> dict[str, Any]:
             "xaxis": _axis("x"),
             "yaxis": _axis("y"),
             "zaxis": _axis("z"),
-            "camera": {"eye": {"x": 1.05, "y": -1.05, "z": 0.7}},
+            "camera": CAMERAS[up],
         },
     }
 

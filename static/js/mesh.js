@@ -154,11 +154,34 @@
       .then(function () { element.dataset.drawn = String(Date.now()); });
   }
 
+  // Controls that only work with this script are in the page hidden: without it, they would
+  // be buttons that do nothing.
+  function showScripted() {
+    document.querySelectorAll("[data-needs-js]").forEach(function (element) { element.hidden = false; });
+  }
+
+  // The camera for the chosen up axis (the report's figure carries the format's own).
+  function viewFigure() {
+    const figure = data("mesh-view-data");
+    const cameras = data("mesh-view-cameras");
+    const select = document.getElementById("mesh-up");
+    if (figure && cameras && select && cameras[select.value]) {
+      figure.layout.scene.camera = cameras[select.value];
+    }
+    return figure;
+  }
+
   // The 3D bundle (557 KB gzipped) loads only when the view scrolls into sight.
   function drawView() {
     const element = document.getElementById("mesh-view");
-    const figure = data("mesh-view-data");
+    const figure = viewFigure();
     if (!element || !figure || !window.NormalView3D) return;
+    if (!element.dataset.drawn && !element.firstChild) {
+      const placeholder = document.createElement("p");
+      placeholder.className = "chart-placeholder muted";
+      placeholder.textContent = "The 3D view loads when it scrolls into sight.";
+      element.appendChild(placeholder);
+    }
     const observer = new IntersectionObserver(function (entries) {
       if (!entries.some(function (entry) { return entry.isIntersecting; })) return;
       observer.disconnect();
@@ -168,6 +191,7 @@
   }
 
   function drawFigures() {
+    showScripted();
     drawView();
     return drawHistogram();
   }
@@ -373,6 +397,10 @@
   document.addEventListener("change", function (event) {
     if (event.target.id === "normals-kind") syncFields();
     if (event.target.id === "fix-format") syncDropped();
+    if (event.target.id === "mesh-up") {
+      const element = document.getElementById("mesh-view");
+      if (element && window.NormalView3D) window.NormalView3D.update(element, viewFigure());
+    }
   });
   // A new weld tolerance analyses the file the page holds again.
   if (weldInput) weldInput.addEventListener("change", function () { if (files.length) upload(files); });

@@ -212,3 +212,36 @@ def test_phone_layout_and_desktop_screenshot(new_page: NewPage) -> None:
     path = DOCS / "mesh-page.png"
     page.screenshot(path=path, animations="disabled", caret="hide", scale="css")
     assert path.stat().st_size < SCREENSHOT_LIMIT, path.stat().st_size
+
+
+CAMERA_UP = """() => {
+    const up = document.getElementById('mesh-view')._fullLayout.scene.camera.up;
+    return [up.x, up.y, up.z];
+}"""
+
+
+def test_a_y_up_gltf_stands_up_and_the_up_axis_switches(page: Page) -> None:
+    import trimesh
+
+    from tests.meshes import CUBE_FACES, CUBE_VERTICES
+
+    glb = trimesh.Trimesh(CUBE_VERTICES, CUBE_FACES, process=False).export(file_type="glb")
+    open_mesh_page(page)
+    page.set_input_files(
+        "#mesh-file", files=[{"name": "cube.glb", "mimeType": "model/gltf-binary", "buffer": glb}]
+    )
+    page.locator("#mesh-report-title").wait_for(timeout=40_000)  # the first glTF imports trimesh
+    wait_for_report(page)
+    expect(page.locator("#mesh-up")).to_be_visible()  # shown by the script
+    expect(page.locator("#mesh-up")).to_have_value("y")
+    expect(page.locator("#mesh-up-help")).to_contain_text("glTF is Y-up by its specification")
+    expect(page.locator("#download-fix")).to_be_visible()
+    page.locator("#mesh-view").scroll_into_view_if_needed()
+    page.locator("#mesh-view[data-drawn]").wait_for(timeout=20_000)
+    assert page.evaluate(CAMERA_UP) == [0, 1, 0]
+    drawn = page.get_attribute("#mesh-view", "data-drawn")
+    page.select_option("#mesh-up", "z")
+    page.wait_for_function(
+        "d => document.getElementById('mesh-view').dataset.drawn !== d", arg=drawn
+    )
+    assert page.evaluate(CAMERA_UP) == [0, 0, 1]

@@ -37,3 +37,10 @@ def test_an_edge_finds_its_faces_whichever_way_it_is_written() -> None:
 def test_every_class_has_its_own_colour_worst_first() -> None:
     assert [item.code for item in CLASSES] == [DEGENERATE, FLIPPED, NONMANIFOLD, BOUNDARY, OK]
     assert len(set(COLORS.values())) == len(CLASSES)
+
+
+def test_legend_of_flipped_faces_uses_the_diagnosis_words() -> None:
+    """The fix flips faces against their neighbours and whole parts wound inward alike."""
+    (flipped,) = [item for item in CLASSES if item.code == FLIPPED]
+    assert "wound against its neighbours" in flipped.label
+    assert "wound inward" in flipped.label  # the diagnosis: "The winding ... is wound inward"

@@ -290,3 +290,26 @@ def test_extreme_coordinates_draw_a_page_like_the_api(client: TestClient, text: 
     view = json_block(html, "mesh-view-data")
     json.dumps(view, allow_nan=False)
     assert view["data"], "something is drawn"
+
+
+def test_view_of_an_obj_is_y_up_with_a_switch(client: TestClient) -> None:
+    _, html = post(client, CUBE_OBJ, part="report")
+    camera = json_block(html, "mesh-view-data")["layout"]["scene"]["camera"]
+    assert camera["up"] == {"x": 0, "y": 1, "z": 0}
+    assert set(json_block(html, "mesh-view-cameras")) == {"x", "y", "z"}
+    selected = [o.get("value") for o in html.find("option") if "selected" in o]
+    assert "y" in selected
+    assert "OBJ files are drawn Y-up" in html.text("mesh-up-help")
+
+
+def test_without_javascript_only_what_works_is_shown(client: TestClient) -> None:
+    """Controls the script drives are hidden in the HTML; the script unhides them."""
+    _, html = post(client, CUBE_ONE_FLIPPED_OBJ)
+    for element_id in ("normals-form", "fix-form", "mesh-report-download"):
+        (element,) = [
+            e for e in html.find("form") + html.find("button") if e.get("id") == element_id
+        ]
+        assert "hidden" in element and "data-needs-js" in element
+    for button in html.find("button", class_="small copy"):
+        assert "hidden" in button
+    assert "loads when it scrolls into sight" not in html.text("mesh-view")

@@ -143,3 +143,27 @@ def test_rounding_leaves_tiny_extents_alone() -> None:
     points = np.array([[0.0, 5e-324, 1e-300]])
     assert np.array_equal(mesh_view._rounded(points), points)
     assert np.array_equal(mesh_view._rounded(np.zeros((2, 3))), np.zeros((2, 3)))
+
+
+def test_up_axis_comes_from_the_format() -> None:
+    assert mesh_view.up_axis("glb") == mesh_view.up_axis("gltf") == "y"  # glTF: Y-up by its spec
+    assert mesh_view.up_axis("obj") == "y"
+    assert mesh_view.up_axis("stl") == mesh_view.up_axis("3mf") == "z"
+
+
+def test_camera_looks_along_the_up_axis_from_far_enough() -> None:
+    vertices, faces = grid(2)
+    for up in "xyz":
+        view = build_view(
+            vertices, faces, np.tile([0.0, 0.0, 1.0], (len(faces), 1)),
+            np.full(len(faces), OK, dtype=np.int8), np.zeros((0, 2), dtype=np.intp),
+            np.zeros((0, 2), dtype=np.intp), up=up,
+        )  # fmt: skip
+        camera = view["figure"]["layout"]["scene"]["camera"]
+        assert camera["up"][up] == 1 and sum(camera["up"].values()) == 1
+        eye = np.array([camera["eye"][axis] for axis in "xyz"])
+        # Plotly's default eye is 1.25 on each axis (2.17 away); nearer than 1.8 cuts off the
+        # long side of an elongated mesh.
+        assert np.linalg.norm(eye) > 1.8
+        assert eye["xyz".index(up)] < eye.max()  # looked at from the side, a little above
+        assert view["up"] == up and set(view["cameras"]) == {"x", "y", "z"}
