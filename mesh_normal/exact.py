@@ -102,3 +102,26 @@ def ratio_sqrt(part: int, whole: int) -> float:
         # A unit-vector component below the smallest double: zero is its nearest double,
         # and an absolute error under 2**-1074 on a length-1 vector is no loss.
         return 0.0
+
+
+def root_over(square: int, denominator: int) -> float:
+    """Correctly rounded ``sqrt(square) / denominator`` (``square >= 0``, ``denominator > 0``).
+
+    The general form of :func:`sqrt_scaled`, for exact rationals whose common denominator is
+    not a power of two (a typed ``1/3`` or ``0.1``).
+
+    Raises
+    ------
+    OutOfRange
+        As :func:`round_scaled`.
+    """
+    if square == 0:
+        return 0.0
+    if denominator & (denominator - 1) == 0:
+        return sqrt_scaled(square, denominator.bit_length() - 1)
+    whole = denominator * denominator
+    # Enough bits that the root of square / whole keeps 53 + guard significant bits.
+    deficit = whole.bit_length() - square.bit_length()
+    shift = max(0, 53 + _GUARD_BITS + deficit // 2 + 1)
+    root = _sqrt_with_sticky(square, whole, shift)
+    return round_scaled(root, shift + 1)

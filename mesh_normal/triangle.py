@@ -16,10 +16,11 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 from decimal import Decimal, localcontext
-from math import isfinite
+from fractions import Fraction
+from math import isfinite, lcm
 from numbers import Real
 
-from mesh_normal.exact import OutOfRange, ratio_sqrt, round_scaled, sqrt_scaled, to_fixed
+from mesh_normal.exact import OutOfRange, ratio_sqrt, root_over, to_fixed
 from mesh_normal.tolerances import LARGEST_DOUBLE_TEXT
 
 Vector = tuple[float, float, float]  # not mesh_normal.types: this module needs no NumPy
@@ -159,32 +160,32 @@ class _Rounder:
         self.overflow: list[tuple[str, str]] = []
         self.underflow: list[tuple[str, str]] = []
 
-    def value(self, name: str, value: int, exponent: int, *, root: bool = False) -> float | None:
+    def value(self, name: str, value: int, denominator: int, *, root: bool = False) -> float | None:
+        """``value / denominator`` (``sqrt(value) / denominator`` with ``root``), rounded once."""
         try:
             if root:
-                return sqrt_scaled(value, exponent)
-            return round_scaled(value, exponent)
+                return root_over(value, denominator)
+            return _divided(value, denominator)
         except OutOfRange as error:
             with localcontext() as context:
                 context.prec = 3
                 exact = Decimal(value).sqrt() if root else Decimal(value)
-                approx = _approx(exact / Decimal(2) ** exponent)
+                approx = _approx(exact / Decimal(denominator))
             target = self.overflow if error.kind == "overflow" else self.underflow
             target.append((name, approx))
             return None
 
-    def vector(self, name: str, values: Sequence[int], exponent: int) -> MaybeVector:
+    def vector(self, name: str, values: Sequence[int], denominator: int) -> MaybeVector:
         # The common case inline (this runs for every API request): one correctly rounded
         # division each; anything out of range goes through value() for its message.
-        scale = 1 << exponent
         out: list[float | None] = []
         for axis, value in zip(AXES, values, strict=True):
             try:
-                rounded = value / scale
+                rounded = value / denominator
             except OverflowError:
                 rounded = 0.0
             if rounded == 0.0 and value != 0:
-                out.append(self.value(f"{name}_{axis}", value, exponent))
+                out.append(self.value(f"{name}_{axis}", value, denominator))
             else:
                 out.append(rounded)
         return (out[0], out[1], out[2])
@@ -207,6 +208,19 @@ class _Rounder:
         return " ".join(sentences) or None
 
 
+def _divided(value: int, denominator: int) -> float:
+    """``value / denominator`` rounded once (int / int is correctly rounded in Python)."""
+    if value == 0:
+        return 0.0
+    try:
+        result = value / denominator
+    except OverflowError:
+        raise OutOfRange("overflow") from None
+    if result == 0.0:
+        raise OutOfRange("underflow")
+    return result
+
+
 def _listing(items: list[tuple[str, str]]) -> str:
     parts = [f"{name} (about {approx})" for name, approx in items]
     if len(parts) == 1:
@@ -222,7 +236,9 @@ def _pronoun(items: list[tuple[str, str]]) -> str:
     return "it is" if len(items) == 1 else "they are"
 
 
-def _degenerate_message(p: Vector, q: Vector, r: Vector, order: str) -> str:
+def _degenerate_message(
+    p: Sequence[object], q: Sequence[object], r: Sequence[object], order: str
+) -> str:
     first, second, third = order[0], order[1], order[2]
     if p == q == r:
         return "All three points are the same, so the triangle has no area and no normal."
@@ -270,14 +286,23 @@ def triangle_normal(
     """
     pa, pb, pc = _as_point("A", a), _as_point("B", b), _as_point("C", c)
     exact = _exact(pa, pb, pc, swap_winding)
-    order, k, n, square = exact.order, exact.scale, exact.n, exact.square
-    p, q, r = exact.points
+    return _rounded((pa, pb, pc), exact.points, exact, 1 << exact.scale)
 
+
+def _rounded(
+    given: tuple[Vector, Vector, Vector],
+    ordered: tuple[Sequence[object], Sequence[object], Sequence[object]],
+    exact: ExactTriangle,
+    denominator: int,
+) -> TriangleNormal:
+    """Round an exact triangle once; its u and v are integers over ``denominator``."""
+    pa, pb, pc = given
+    order, n, square = exact.order, exact.n, exact.square
+    p, q, r = ordered
     rounder = _Rounder()
-    u = rounder.vector("u", exact.u, k)
-    v = rounder.vector("v", exact.v, k)
-    degenerate = square == 0
-    if degenerate:
+    u = rounder.vector("u", exact.u, denominator)
+    v = rounder.vector("v", exact.v, denominator)
+    if square == 0:
         return TriangleNormal(
             pa,
             pb,
@@ -292,14 +317,61 @@ def triangle_normal(
             True,
             rounder.message(_degenerate_message(p, q, r, order)),
         )
-
-    normal = rounder.vector("n", n, 2 * k)
-    magnitude = rounder.value("magnitude", square, 2 * k, root=True)
-    area = rounder.value("area", square, 2 * k + 1, root=True)
+    den2 = denominator * denominator
+    normal = rounder.vector("n", n, den2)
+    magnitude = rounder.value("magnitude", square, den2, root=True)
+    area = rounder.value("area", square, 2 * den2, root=True)
     ex, ey, ez = (_signed(ratio_sqrt(ni * ni, square), ni) for ni in n)
     return TriangleNormal(
         pa, pb, pc, order, u, v, normal, magnitude, (ex, ey, ez), area, False, rounder.message()
     )
+
+
+RationalPoint = tuple[Fraction, Fraction, Fraction]
+
+
+def rational_exact(
+    a: RationalPoint, b: RationalPoint, c: RationalPoint, *, swap_winding: bool = False
+) -> tuple[ExactTriangle, int]:
+    """The exact u, v and n of a triangle with rational corners, over one common denominator.
+
+    Returns the triangle (its ``scale`` is 0 and unused) and the denominator ``D``: the exact
+    ``u`` is ``exact.u / D`` and the exact ``n`` is ``exact.n / D**2``.
+    """
+    p, q, r = (a, c, b) if swap_winding else (a, b, c)
+    values = [*p, *q, *r]
+    denominator = lcm(*(x.denominator for x in values))
+    fixed = [x.numerator * (denominator // x.denominator) for x in values]
+    ux, uy, uz = (fixed[3 + i] - fixed[i] for i in range(3))
+    vx, vy, vz = (fixed[6 + i] - fixed[i] for i in range(3))
+    n = (uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx)
+    points = tuple((float(x), float(y), float(z)) for x, y, z in (p, q, r))
+    order = "ACB" if swap_winding else "ABC"
+    exact = ExactTriangle(
+        (points[0], points[1], points[2]), order, 0, (ux, uy, uz), (vx, vy, vz), n
+    )
+    return exact, denominator
+
+
+def rational_triangle_normal(
+    a: RationalPoint, b: RationalPoint, c: RationalPoint, *, swap_winding: bool = False
+) -> TriangleNormal:
+    """:func:`triangle_normal` for exact rational corners (a typed ``1/3`` or ``0.1``).
+
+    Every output is the exact result for the rationals, rounded once; the corners come back
+    as their nearest doubles, which must be finite.
+
+    Examples
+    --------
+    >>> o, t, w = Fraction(0), Fraction(1, 3), Fraction(1)
+    >>> rational_triangle_normal((o, o, o), (t, w, o), (w, 3 * w, o)).degenerate
+    True
+    """
+    exact, denominator = rational_exact(a, b, c, swap_winding=swap_winding)
+    pa, pb, pc = (tuple(float(x) for x in point) for point in (a, b, c))
+    given = ((pa[0], pa[1], pa[2]), (pb[0], pb[1], pb[2]), (pc[0], pc[1], pc[2]))
+    p, q, r = (a, c, b) if swap_winding else (a, b, c)
+    return _rounded(given, (p, q, r), exact, denominator)
 
 
 def _signed(value: float, sign_of: int) -> float:
