@@ -32,6 +32,7 @@ OPERATIONS = {
     "POST /api/mesh",
     "POST /api/mesh/normals",
     "POST /api/mesh/fix",
+    "POST /api/mesh/export",
     "POST /api/points",
     "POST /api/points/normals",
 }
@@ -45,6 +46,7 @@ MESH_OPERATIONS = {
     "POST /api/mesh",
     "POST /api/mesh/normals",
     "POST /api/mesh/fix",
+    "POST /api/mesh/export",
     "POST /api/points",
     "POST /api/points/normals",
 }

@@ -306,6 +306,7 @@ def test_openapi_lists_the_api_and_not_the_pages(client) -> None:  # type: ignor
         "/api/mesh",
         "/api/mesh/normals",
         "/api/mesh/fix",
+        "/api/mesh/export",
         "/api/points",
         "/api/points/normals",
     }
