@@ -1,10 +1,11 @@
 """How the worked steps write numbers and chains of equalities.
 
-A number is shown as JavaScript's ``String(x)`` writes it, "out of range" beyond the double
-range; a chain ``first = second = third`` turns "=" into "≈" from the first segment that holds
-a rounded number. For example::
+A number is shown as JavaScript's ``String(x)`` writes it, with the real minus sign, and
+"out of range" beyond the double range; a chain ``first = second = third`` turns "=" into "≈"
+from the first segment that holds a rounded number. Each piece is a
+:class:`~app.calculator.mathml.Formula` (MathML and plain text). For example::
 
-    chain(seg("n_x"), seg("(2)(3) − (0)(0)"), seg("6", given(6.0)))  # n_x = (2)(3) − (0)(0) = 6
+    chain(seg(indexed("n", "x")), seg(product(two, three)), seg(num(six), six))  # n_x = 2·3 = 6
 """
 
 from __future__ import annotations
@@ -14,7 +15,20 @@ from dataclasses import dataclass
 from fractions import Fraction
 from math import isfinite, isnan
 
-from app.web.formatting import js_number
+from app.calculator.mathml import (
+    APPROX,
+    DOT,
+    EQUALS,
+    Formula,
+    column,
+    fenced,
+    joined,
+    number,
+    plain_number,
+    row,
+    word,
+)
+from app.web.formatting import for_people, js_number, number_text
 from mesh_normal.tolerances import LARGEST_DOUBLE_TEXT
 
 
@@ -51,28 +65,33 @@ def given(value: float) -> Shown:
     return Shown(value, True)
 
 
-def num(s: Shown) -> str:
-    return "out of range" if s.value is None else js_number(s.value)
+def num(s: Shown) -> Formula:
+    return word("out of range") if s.value is None else number(s.value)
 
 
-def term(s: Shown) -> str:
+def _negative_or_exponent(s: Shown, exponents: bool) -> bool:
+    if s.value is None:
+        return False
+    return s.value < 0 or (exponents and "e" in js_number(s.value))
+
+
+def term(s: Shown) -> Formula:
     """A number in a sum or difference: negatives in parentheses."""
-    text = num(s)
-    return f"({text})" if text.startswith("-") else text
+    return fenced(num(s)) if _negative_or_exponent(s, exponents=False) else num(s)
 
 
-def factor(s: Shown) -> str:
-    return f"({num(s)})"
+def base(s: Shown) -> Formula:
+    """A number to be squared or multiplied: ``(−6)²`` and ``(1e−7)²``, but ``6²``."""
+    return fenced(num(s)) if _negative_or_exponent(s, exponents=True) else num(s)
 
 
-def base(s: Shown) -> str:
-    """A number to be squared: ``(-6)²`` and ``(1e-7)²``, but ``6²``."""
-    text = num(s)
-    return f"({text})" if text.startswith("-") or "e" in text else text
+def product(*factors: Shown) -> Formula:
+    """``2·(−1)``: factors joined by a centred dot."""
+    return joined((base(s) for s in factors), DOT)
 
 
-def vector(values: Iterable[Shown]) -> str:
-    return "(" + ", ".join(num(s) for s in values) + ")"
+def vector(values: Iterable[Shown]) -> Formula:
+    return column([num(s) for s in values])
 
 
 def float_text(x: float) -> str:
@@ -80,39 +99,44 @@ def float_text(x: float) -> str:
     if isnan(x):
         return "NaN"
     if not isfinite(x):
-        return "Infinity" if x > 0 else "-Infinity"
-    return js_number(x)
+        return "Infinity" if x > 0 else "−Infinity"
+    return number_text(x)
 
 
-def float_term(x: float) -> str:
-    text = float_text(x)
-    return f"({text})" if text.startswith("-") else text
+def float_number(x: float) -> Formula:
+    return number(x) if isfinite(x) else plain_number(float_text(x))
+
+
+def float_term(x: float) -> Formula:
+    return fenced(float_number(x)) if x < 0 else float_number(x)
 
 
 # --- Chains of equalities ---------------------------------------------------------------------
 
-Segment = tuple[str, tuple[Shown, ...]]
+Segment = tuple[Formula, tuple[Shown, ...]]
 
 
-def seg(text: str, *values: Shown) -> Segment:
-    return text, values
+def seg(formula: Formula, *values: Shown) -> Segment:
+    return formula, values
 
 
-def sub(text: str, *operands: Shown) -> Segment | None:
+def sub(formula: Formula, *operands: Shown) -> Segment | None:
     """A substitution, left out when one of its numbers is out of range."""
-    return None if any(s.value is None for s in operands) else (text, operands)
+    return None if any(s.value is None for s in operands) else (formula, operands)
 
 
-def chain(*segments: Segment | None) -> str:
+def chain(*segments: Segment | None) -> Formula:
     """``first = second = third``, with "≈" from the first segment holding a rounded number."""
-    exact, parts = True, list[str]()
+    exact, parts = True, list[Formula]()
     for segment in segments:
         if segment is None:
             continue
-        text, values = segment
+        formula, values = segment
         exact = exact and all(s.exact or s.value is None for s in values)
-        parts.append(f"{'=' if exact else '≈'} {text}" if parts else text)
-    return " ".join(parts)
+        if parts:
+            parts.append(EQUALS if exact else APPROX)
+        parts.append(formula)
+    return row(*parts)
 
 
 def listing(names: Sequence[str]) -> str:
@@ -123,9 +147,9 @@ def range_notes(named: Iterable[tuple[str, Shown]]) -> tuple[str, ...]:
     names = [name for name, s in named if s.value is None]
     if not names:
         return ()
-    one = len(names) == 1
+    one, smallest = len(names) == 1, for_people("4.9e-324")
     return (
         f"Beyond the range of doubles (above {LARGEST_DOUBLE_TEXT}, or nonzero but below "
-        f"4.9e-324): {listing(names)}. {'It shows' if one else 'They show'} as “out of "
+        f"{smallest}): {listing(names)}. {'It shows' if one else 'They show'} as “out of "
         f"range”; the calculation keeps the exact {'value' if one else 'values'}.",
     )

@@ -5,9 +5,11 @@ notation is :mod:`app.calculator.notation`). The exact u, v and n come from the 
 (:func:`mesh_normal.triangle.exact_triangle`, the integers that :func:`triangle_normal`
 rounds); values in between (products, squares, u · v, d) are computed exactly from them and
 rounded once, like the results; from the first number that rounding changed, a chain reads
-"≈" instead of "=". For example, with A = (1, 0, 0), B = (0, 2, 0) and C = (0, 0, 3)::
+"≈" instead of "=". Each line is a :class:`~app.calculator.mathml.Formula`: MathML for the
+page (vectors as columns, determinants as matrices) and plain text beside it. For example, with
+A = (1, 0, 0), B = (0, 2, 0) and C = (0, 0, 3)::
 
-    n_x = u_y·v_z − u_z·v_y = (2)(3) − (0)(0) = 6 − 0 = 6
+    n_x = |u_y u_z; v_y v_z| = |2 0; 0 3| = 2·3 − 0·0 = 6 − 0 = 6
 """
 
 from __future__ import annotations
@@ -17,16 +19,43 @@ from dataclasses import dataclass, replace
 from fractions import Fraction
 from math import atan2, degrees, isfinite
 
+from markupsafe import Markup
+
+from app.calculator.mathml import (
+    ARROW,
+    COMMA,
+    EQUALS,
+    MINUS,
+    PLUS,
+    TIMES,
+    Formula,
+    determinant,
+    fenced,
+    fraction,
+    hat,
+    ident,
+    indexed,
+    joined,
+    math,
+    norm,
+    number,
+    op,
+    row,
+    sqrt,
+    square,
+    word,
+)
 from app.calculator.notation import (
     Shown,
     base,
     chain,
-    factor,
+    float_number,
     float_term,
     float_text,
     given,
     matching,
     num,
+    product,
     range_notes,
     seg,
     shown,
@@ -49,10 +78,12 @@ Exact3 = tuple[Fraction, Fraction, Fraction]
 #: n_i = u_j v_k − u_k v_j, as (j, k) for i = x, y, z.
 _CROSS = ((1, 2), (2, 0), (0, 1))
 
+N, U, V, A = ident("n"), ident("u"), ident("v"), ident("A")
+
 
 @dataclass(frozen=True, slots=True)
 class Step:
-    """One worked step: what it does in words, its math one line each, and special cases.
+    """One worked step: what it does in words, its math one formula a line, and special cases.
 
     ``key`` names the step for templates and tests: ``edges``, ``cross``, ``exact`` (only
     when naive floats disagree), ``magnitude``, ``area``, ``unit``, ``plane``, ``angle``,
@@ -62,9 +93,19 @@ class Step:
     key: str
     title: str
     text: str
-    lines: tuple[str, ...]
+    formulas: tuple[Formula, ...]
     notes: tuple[str, ...] = ()
     warn: bool = False
+
+    @property
+    def lines(self) -> tuple[str, ...]:
+        """The formulas as plain text (the MathML's ``alttext``)."""
+        return tuple(f.text for f in self.formulas)
+
+    @property
+    def math(self) -> tuple[Markup, ...]:
+        """The formulas as ``<math>`` elements for the page."""
+        return tuple(math(f) for f in self.formulas)
 
 
 @dataclass(frozen=True, slots=True)
@@ -125,18 +166,18 @@ def _magnitude(result: TriangleNormal, x: _Exact) -> Shown:
 
 def _edge_lines(
     name: str, end: str, end_point: Vector, start: Vector, values: tuple[Shown, ...]
-) -> list[str]:
-    lines = [f"{name} = {end} − A"]
+) -> list[Formula]:
+    lines = [row(ident(name), EQUALS, ident(end), MINUS, A)]
     for axis, e, s, value in zip(AXES, end_point, start, values, strict=True):
         lines.append(
             chain(
-                seg(f"{name}_{axis}"),
-                seg(f"{end.lower()}_{axis} − a_{axis}"),
-                seg(f"{term(given(e))} − {term(given(s))}"),
+                seg(indexed(name, axis)),
+                seg(row(indexed(end.lower(), axis), MINUS, indexed("a", axis))),
+                seg(row(term(given(e)), MINUS, term(given(s)))),
                 seg(num(value), value),
             )
         )
-    return [*lines, f"{name} = {vector(values)}"]
+    return [*lines, row(ident(name), EQUALS, vector(values))]
 
 
 def _edges_step(result: TriangleNormal, x: _Exact) -> Step:
@@ -162,35 +203,52 @@ def _edges_step(result: TriangleNormal, x: _Exact) -> Step:
 # --- 2. Cross product -------------------------------------------------------------------------
 
 
-def _cross_line(i: int, u: tuple[Shown, ...], v: tuple[Shown, ...], x: _Exact, value: Shown) -> str:
+def _cross_line(
+    i: int, u: tuple[Shown, ...], v: tuple[Shown, ...], x: _Exact, value: Shown
+) -> Formula:
+    """``n_x = |u_y u_z; v_y v_z| = |2 0; 0 3| = 2·3 − 0·0 = 6 − 0 = 6``."""
     j, k = _CROSS[i]
     a, b, c = AXES[i], AXES[j], AXES[k]
     first, second = shown(x.u[j] * x.v[k]), shown(x.u[k] * x.v[j])
+    symbols = [[indexed("u", b), indexed("u", c)], [indexed("v", b), indexed("v", c)]]
+    numbers = [[num(u[j]), num(u[k])], [num(v[j]), num(v[k])]]
     return chain(
-        seg(f"n_{a}"),
-        seg(f"u_{b}·v_{c} − u_{c}·v_{b}"),
-        sub(
-            f"{factor(u[j])}{factor(v[k])} − {factor(u[k])}{factor(v[j])}",
-            u[j],
-            v[k],
-            u[k],
-            v[j],
-        ),
-        sub(f"{term(first)} − {term(second)}", first, second),
+        seg(indexed("n", a)),
+        seg(determinant(symbols)),
+        sub(determinant(numbers), u[j], v[k], u[k], v[j]),
+        sub(row(product(u[j], v[k]), MINUS, product(u[k], v[j])), u[j], v[k], u[k], v[j]),
+        sub(row(term(first), MINUS, term(second)), first, second),
         seg(num(value), value),
+    )
+
+
+def _cross_head(u: tuple[Shown, ...], v: tuple[Shown, ...]) -> Formula:
+    """``n = u × v`` as the 3×3 determinant with the unit vectors on top."""
+    units = [indexed("e", axis) for axis in AXES]
+    symbols = [units, [indexed("u", a) for a in AXES], [indexed("v", a) for a in AXES]]
+    numbers = [units, [num(s) for s in u], [num(s) for s in v]]
+    return chain(
+        seg(N),
+        seg(row(U, TIMES, V)),
+        seg(determinant(symbols)),
+        sub(determinant(numbers), *u, *v),
     )
 
 
 def _cross_step(result: TriangleNormal, x: _Exact) -> Step:
     u, v = _shown_vector(result.u, x.u), _shown_vector(result.v, x.v)
     n = _shown_vector(result.normal, x.n)
-    lines = ["n = u × v", *(_cross_line(i, u, v, x, n[i]) for i in range(3)), f"n = {vector(n)}"]
+    lines = [
+        _cross_head(u, v),
+        *(_cross_line(i, u, v, x, n[i]) for i in range(3)),
+        row(N, EQUALS, vector(n)),
+    ]
     notes = range_notes(zip((f"n_{a}" for a in AXES), n, strict=True))
     if result.degenerate and result.message:
         notes = (result.message, *notes)
     text = (
-        "Each component of n = u × v is a 2×2 determinant made of the other two "
-        "components of u and v."
+        "n = u × v is the determinant with the unit vectors e_x, e_y, e_z on top; each "
+        "component of n is the 2×2 determinant of the other two components of u and v."
     )
     return Step("cross", "The cross product n = u × v", text, tuple(lines), notes, warn=bool(notes))
 
@@ -206,13 +264,30 @@ def _naive_products(x: _Exact) -> list[tuple[float, float, float, float]]:
     return [(u[j], v[k], u[k], v[j]) for j, k in _CROSS]
 
 
-def _naive_line(axis: str, factors: tuple[float, float, float, float]) -> str:
+def _float_factor(x: float) -> Formula:
+    return fenced(float_number(x)) if x < 0 or "e" in float_text(x) else float_number(x)
+
+
+def _naive_line(axis: str, factors: tuple[float, float, float, float]) -> Formula:
     uj, vk, uk, vj = factors
     first, second = uj * vk, uk * vj
-    fs = [f"({float_text(f)})" for f in factors]
-    return (
-        f"n_{axis} in floats: {fs[0]}{fs[1]} − {fs[2]}{fs[3]} → {float_term(first)} − "
-        f"{float_term(second)} → {float_text(first - second)}"
+    dot = op("·")
+    return row(
+        indexed("n", axis),
+        word(" in floats: "),
+        _float_factor(uj),
+        dot,
+        _float_factor(vk),
+        MINUS,
+        _float_factor(uk),
+        dot,
+        _float_factor(vj),
+        ARROW,
+        float_term(first),
+        MINUS,
+        float_term(second),
+        ARROW,
+        float_number(first - second),
     )
 
 
@@ -226,10 +301,11 @@ def _exact_step(result: TriangleNormal, x: _Exact) -> Step | None:
         return None
     naive_text = "(" + ", ".join(float_text(value) for value in naive) + ")"
     exact = vector(_shown_vector(result.normal, x.n))
+    naive_vector = fenced(joined((float_number(value) for value in naive), COMMA))
     lines = [
         *(_naive_line(AXES[i], factors[i]) for i in differ),
-        f"naive n = {naive_text}",
-        f"exact n, rounded once = {exact}",
+        row(word("naive "), N, EQUALS, naive_vector),
+        row(word("exact "), N, word(", rounded once"), EQUALS, exact),
     ]
     note = (
         f"A naive float computation gives n = {naive_text} because the products round before "
@@ -257,11 +333,11 @@ def _magnitude_step(result: TriangleNormal, x: _Exact) -> Step:
     squares = tuple(shown(ni * ni) for ni in x.n)
     total, magnitude = shown(x.square), _magnitude(result, x)
     line = chain(
-        seg("|n|"),
-        seg("sqrt(n_x² + n_y² + n_z²)"),
-        sub(f"sqrt({base(n[0])}² + {base(n[1])}² + {base(n[2])}²)", *n),
-        sub(f"sqrt({' + '.join(num(s) for s in squares)})", *squares),
-        sub(f"sqrt({num(total)})", total),
+        seg(norm(N)),
+        seg(sqrt(joined((square(indexed("n", a)) for a in AXES), PLUS))),
+        sub(sqrt(joined((square(base(s)) for s in n), PLUS)), *n),
+        sub(sqrt(joined((num(s) for s in squares), PLUS)), *squares),
+        sub(sqrt(num(total)), total),
         seg(num(magnitude), magnitude),
     )
     named = [
@@ -284,10 +360,11 @@ def _area_step(result: TriangleNormal, x: _Exact) -> Step:
     magnitude = _magnitude(result, x)
     area = result.area
     half = Shown(area, area is not None and 4 * Fraction(area) ** 2 == x.square)
+    two = number(2.0)
     line = chain(
-        seg("area"),
-        seg("|n| / 2"),
-        sub(f"{num(magnitude)} / 2", magnitude),
+        seg(ident("area")),
+        seg(fraction(norm(N), two)),
+        sub(fraction(num(magnitude), two), magnitude),
         seg(num(half), half),
     )
     notes = range_notes([("the area", half)])
@@ -310,9 +387,8 @@ def _unit_step(result: TriangleNormal, x: _Exact) -> Step:
             "There is no unit normal: n = (0, 0, 0) has no direction, and dividing by "
             "|n| = 0 is undefined."
         )
-        return Step(
-            "unit", title, "n divided by its length.", ("n̂ = n / |n| = n / 0",), (note,), warn=True
-        )
+        line = row(hat(), EQUALS, fraction(N, norm(N)), EQUALS, fraction(N, number(0.0)))
+        return Step("unit", title, "n divided by its length.", (line,), (note,), warn=True)
     n, magnitude = _shown_vector(result.normal, x.n), _magnitude(result, x)
     unit = tuple(
         Shown(e, Fraction(e) ** 2 * x.square == ni * ni)
@@ -320,9 +396,9 @@ def _unit_step(result: TriangleNormal, x: _Exact) -> Step:
     )
     lines = [
         chain(
-            seg(f"n̂_{a}"),
-            seg(f"n_{a} / |n|"),
-            sub(f"{term(ni)} / {num(magnitude)}", ni, magnitude),
+            seg(hat(a)),
+            seg(fraction(indexed("n", a), norm(N))),
+            sub(fraction(num(ni), num(magnitude)), ni, magnitude),
             seg(num(e), e),
         )
         for a, ni, e in zip(AXES, n, unit, strict=True)
@@ -334,32 +410,41 @@ def _unit_step(result: TriangleNormal, x: _Exact) -> Step:
             "normal comes from the exact values, rounded once, and is shown all the same.",
         )
     text = "n divided by its length: the same direction, length 1."
-    return Step("unit", title, text, (*lines, f"n̂ = {vector(unit)}"), notes, warn=bool(notes))
+    last = row(hat(), EQUALS, vector(unit))
+    return Step("unit", title, text, (*lines, last), notes, warn=bool(notes))
 
 
 # --- 6. Plane ---------------------------------------------------------------------------------
 
 
-def _plane_equation(coefficients: Sequence[float], d: Shown) -> str:
-    text = ""
+def _plane_equation(coefficients: Sequence[float], d: Shown) -> Formula:
+    parts: list[Formula] = []
     for value, axis in zip(coefficients, AXES, strict=True):
         if value == 0:
             continue
-        size = base(given(abs(value))) if abs(value) != 1 else ""
-        sign = ("-" if value < 0 else "") if not text else (" − " if value < 0 else " + ")
-        text += f"{sign}{size}{axis}"
-    return f"{text} = {num(d)}"
+        if parts:
+            parts.append(MINUS if value < 0 else PLUS)
+        elif value < 0:
+            parts.append(op("−", "−"))
+        if abs(value) != 1:
+            parts.append(base(given(abs(value))))
+        parts.append(ident(axis))
+    return row(*parts, EQUALS, num(d))
 
 
-def _plane_lines(name: str, normal: Sequence[Shown], a: Vector, d: Shown) -> list[str]:
+def _plane_lines(unit: bool, normal: Sequence[Shown], a: Vector, d: Shown) -> list[Formula]:
     point = [given(value) for value in a]
-    products = " + ".join(f"{factor(ni)}{factor(ai)}" for ni, ai in zip(normal, point, strict=True))
-    symbols = " + ".join(f"{name}_{axis}·a_{axis}" for axis in AXES)
-    head = "d" if name == "n" else "d′"
+    name = hat() if unit else N
+    products = joined((product(ni, ai) for ni, ai in zip(normal, point, strict=True)), PLUS)
+    dot = op("·")
+    symbols = joined(
+        (row(hat(axis) if unit else indexed("n", axis), dot, indexed("a", axis)) for axis in AXES),
+        PLUS,
+    )
     return [
         chain(
-            seg(head),
-            seg(f"{name} · A"),
+            seg(ident("d′" if unit else "d")),
+            seg(row(name, op("·", " · "), A)),
             seg(symbols),
             sub(products, *normal, *point),
             seg(num(d), d),
@@ -383,7 +468,7 @@ def _plane_step(result: TriangleNormal, x: _Exact) -> Step:
             "A point (x, y, z) lies on the plane when n · (x, y, z) = d; A is on it, so d = n · A."
         )
         coefficients = [s.value for s in n if s.value is not None]
-        lines = _plane_lines("n", n, a, d)
+        lines = _plane_lines(False, n, a, d)
         return Step("plane", title, text, (*lines, _plane_equation(coefficients, d)))
     unit = result.unit_normal
     d_unit = shown(_dot(_fractions(unit), _fractions(a)))
@@ -393,7 +478,7 @@ def _plane_step(result: TriangleNormal, x: _Exact) -> Step:
         "normal instead; d′ = n̂ · A is computed exactly from the doubles shown and "
         "rounded once."
     )
-    lines = _plane_lines("n̂", [given(e) for e in unit], a, d_unit)
+    lines = _plane_lines(True, [given(e) for e in unit], a, d_unit)
     return Step("plane", title, text, (*lines, _plane_equation(unit, d_unit)), (note,), warn=True)
 
 
@@ -436,31 +521,37 @@ def _angle_step(result: TriangleNormal, x: _Exact) -> Step:
     u, v = _shown_vector(result.u, x.u), _shown_vector(result.v, x.v)
     products = tuple(shown(a * b) for a, b in zip(x.u, x.v, strict=True))
     dot, magnitude = shown(x.dot), _magnitude(result, x)
-    factors = " + ".join(f"{factor(a)}{factor(b)}" for a, b in zip(u, v, strict=True))
+    dot_op, cdot = op("·", " · "), op("·")
+    u_dot_v = row(U, dot_op, V)
+    u_cross_v = norm(row(U, TIMES, V))
+    factors = joined((product(a, b) for a, b in zip(u, v, strict=True)), PLUS)
+    symbols = joined((row(indexed("u", a), cdot, indexed("v", a)) for a in AXES), PLUS)
     lines = [
         chain(
-            seg("u · v"),
-            seg("u_x·v_x + u_y·v_y + u_z·v_z"),
+            seg(u_dot_v),
+            seg(symbols),
             sub(factors, *u, *v),
-            sub(" + ".join(term(p) for p in products), *products),
+            sub(joined((term(p) for p in products), PLUS), *products),
             seg(num(dot), dot),
         ),
-        chain(seg("|u × v|"), seg("|n|"), seg(num(magnitude), magnitude)),
+        chain(seg(u_cross_v), seg(norm(N)), seg(num(magnitude), magnitude)),
     ]
+    theta, atan2_name, degree = ident("θ"), ident("atan2"), op("°", "°")
     notes = _angle_notes(result, x)
     if x.square or x.dot:
         angle = given(_angle_degrees(x.square, x.dot))
         exact = Shown(angle.value, not x.square or not x.dot)
         lines.append(
             chain(
-                seg("θ"),
-                seg("atan2(|u × v|, u · v)"),
-                sub(f"atan2({num(magnitude)}, {num(dot)})", magnitude, dot),
-                seg(f"{num(exact)}°", exact),
+                seg(theta),
+                seg(row(atan2_name, fenced(row(u_cross_v, COMMA, u_dot_v)))),
+                sub(row(atan2_name, fenced(row(num(magnitude), COMMA, num(dot)))), magnitude, dot),
+                seg(row(num(exact), degree), exact),
             )
         )
     else:
-        lines.append("θ = atan2(0, 0): undefined")
+        zeros = fenced(row(number(0.0), COMMA, number(0.0)))
+        lines.append(row(theta, EQUALS, atan2_name, zeros, word(": undefined")))
     notes += range_notes([("u · v", dot)])
     text = (
         "|u × v| = |u||v| sin θ and u · v = |u||v| cos θ; atan2 uses both, so it stays "
@@ -488,10 +579,20 @@ def _swap_step(result: TriangleNormal, x: _Exact) -> Step:
     )
     magnitude = _magnitude(result, x)
     area = Shown(result.area, True)
+    negated = op("−", "−")
     lines = (
-        "v × u = −(u × v)",
-        f"{other}: n = −{vector(n)} = {vector(flipped)}",
-        f"|n| = {num(magnitude)} and area = {num(area)} either way",
+        row(V, TIMES, U, EQUALS, negated, fenced(row(U, TIMES, V))),
+        row(word(f"{other}: "), N, EQUALS, negated, vector(n), EQUALS, vector(flipped)),
+        row(
+            norm(N),
+            EQUALS,
+            num(magnitude),
+            word(" and "),
+            ident("area"),
+            EQUALS,
+            num(area),
+            word(" either way"),
+        ),
     )
     notes = (
         ("n = (0, 0, 0) either way: a zero vector has no sign to flip.",)

@@ -12,7 +12,7 @@ from typing import Any
 from fastapi.templating import Jinja2Templates
 from markupsafe import Markup
 
-from app.web.formatting import js_number
+from app.web.formatting import number_text as people_number
 from app.web.jsonio import json_bytes
 from app.web.links import public_url
 from app.web.static import static_url
@@ -27,8 +27,11 @@ def json_script(value: Any) -> Markup:
 
 
 def number_text(value: float | None) -> str:
-    """A number as JavaScript's ``String(x)`` writes it; None is out of the double range."""
-    return "out of range" if value is None else js_number(value)
+    """A number for people, in JavaScript's ``String(x)`` layout with the real minus sign.
+
+    None is out of the double range. The page's script reads either minus back.
+    """
+    return "out of range" if value is None else people_number(value)
 
 
 templates = Jinja2Templates(directory=TEMPLATES_DIR)

@@ -98,12 +98,7 @@
   // Display precision: the server writes every number in full (data-num); this rewrites the
   // text only, so copying, JSON and downloads keep every digit.
   function formatNumber(text, decimals) {
-    const x = Number(text);
-    if (decimals === "full" || x === 0) return text;
-    const digits = Number(decimals);
-    const size = Math.abs(x);
-    if (size >= 1e-4 && size < 1e15) return x.toFixed(digits);
-    return x.toExponential(digits);
+    return window.NumberText.format(text, decimals);  // static/js/numbers.js
   }
 
   function applyPrecision() {

@@ -27,8 +27,23 @@ window.NormalChart = (function () {
     if (!dark) return layout;
     const copy = JSON.parse(JSON.stringify(layout));
     copy.font = Object.assign({}, copy.font, { color: "#c3cade" });
+    copy.xaxis = Object.assign({}, copy.xaxis, { gridcolor: "#2f3850", zerolinecolor: "#69728a" });
     copy.yaxis = Object.assign({}, copy.yaxis, { gridcolor: "#2f3850", zerolinecolor: "#69728a" });
     return copy;
+  }
+
+  // Bar labels follow the calculator's precision setting (/embed has none and keeps the
+  // server's text): each bar carries its number in full as customdata.
+  function labelled(data) {
+    const precision = document.getElementById("precision");
+    if (!precision || !window.NumberText) return data;
+    return data.map(function (trace) {
+      if (!trace.customdata) return trace;
+      const text = trace.customdata.map(function (number, i) {
+        return number === null ? trace.text[i] : window.NumberText.format(number, precision.value);
+      });
+      return Object.assign({}, trace, { text: text });
+    });
   }
 
   function whenIdle(callback) {
@@ -42,7 +57,8 @@ window.NormalChart = (function () {
     if (placeholder) placeholder.remove();
     const first = !element.dataset.drawn;
     const config = first && TOOLBAR ? FIRST : CONFIG;
-    return window.Plotly.react(element, figure.data, themed(figure.layout), config).then(function () {
+    element.figure = figure;  // kept to redraw the labels when the precision changes
+    return window.Plotly.react(element, labelled(figure.data), themed(figure.layout), config).then(function () {
       element.dataset.drawn = String(Date.now());
       if (!window.__chartDrawnAt) {
         window.__chartDrawnAt = performance.now();
@@ -62,6 +78,12 @@ window.NormalChart = (function () {
     if (!element || !data) return Promise.resolve();
     return draw(element, JSON.parse(data.textContent));
   }
+
+  document.addEventListener("change", function (event) {
+    const element = document.getElementById("chart");
+    if (event.target.id !== "precision" || !element || !element.figure) return;
+    window.Plotly.react(element, labelled(element.figure.data), element.layout, CONFIG);
+  });
 
   return { draw: draw, drawFromPage: drawFromPage };
 })();

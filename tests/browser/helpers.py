@@ -44,20 +44,21 @@ def cell(page: Page, key: str) -> Locator:
     return page.locator(f'#result [data-key="{key}"]')
 
 
-def chart_y(page: Page) -> object:
+def chart_values(page: Page) -> object:
+    """The bars' values as Plotly holds them (the bars are horizontal: values along x)."""
     return page.evaluate(
         "() => { const c = document.getElementById('chart');"
-        " return c && c.data ? c.data[0].y : null; }"
+        " return c && c.data ? c.data[0].x : null; }"
     )
 
 
-def wait_for_chart_y(page: Page, values: list[float], timeout: float = 10_000) -> None:
+def wait_for_chart_values(page: Page, values: list[float], timeout: float = 10_000) -> None:
     """Wait until Plotly has drawn exactly ``values`` into #chart (read from the element)."""
     try:
         page.wait_for_function(
             """(want) => {
                 const c = document.getElementById('chart');
-                const y = c && c.dataset.drawn && c.data && c.data[0] && c.data[0].y;
+                const y = c && c.dataset.drawn && c.data && c.data[0] && c.data[0].x;
                 return Boolean(y && c.querySelector('.main-svg') && y.length === want.length
                                && want.every((value, i) => y[i] === value));
             }""",
@@ -65,7 +66,9 @@ def wait_for_chart_y(page: Page, values: list[float], timeout: float = 10_000) -
             timeout=timeout,
         )
     except Error as error:
-        raise AssertionError(f"chart y is {chart_y(page)!r}, expected {values!r}") from error
+        raise AssertionError(
+            f"chart values are {chart_values(page)!r}, expected {values!r}"
+        ) from error
 
 
 #: An init script that lets a test hold the page's fetch answers back and then release them,

@@ -19,7 +19,7 @@ from tests.browser.helpers import (
     open_calculator,
     query_pattern,
     triangle_query,
-    wait_for_chart_y,
+    wait_for_chart_values,
 )
 
 pytestmark = pytest.mark.browser
@@ -40,7 +40,7 @@ def test_typing_a_triangle_updates_result_chart_and_address(page: Page) -> None:
     open_calculator(page)
     fill_triangle(page, *RIGHT)
 
-    wait_for_chart_y(page, [0, 0, 1, 1, 0.5])  # the page fills the table before the chart
+    wait_for_chart_values(page, [0, 0, 1, 1, 0.5])  # the page fills the table before the chart
     expect(cell(page, "normal")).to_have_text("(0, 0, 1)")
     expect(cell(page, "unit_normal")).to_have_text("(0, 0, 1)")
     expect(cell(page, "area")).to_have_text("0.5")
@@ -65,7 +65,7 @@ def test_typing_a_triangle_updates_result_chart_and_address(page: Page) -> None:
     expect(cell(page, "normal")).to_have_text("(0, 0, 1)")
     for name, value in zip(FIELDS, [*RIGHT[0], *RIGHT[1], *RIGHT[2]], strict=True):
         expect(page.locator(f"#{name}")).to_have_value(value)
-    wait_for_chart_y(page, [0, 0, 1, 1, 0.5])
+    wait_for_chart_values(page, [0, 0, 1, 1, 0.5])
 
 
 def test_swap_winding_flips_the_normal_and_back(page: Page) -> None:
@@ -75,9 +75,9 @@ def test_swap_winding_flips_the_normal_and_back(page: Page) -> None:
 
     page.locator("label.switch").click()  # the checkbox itself is visually hidden
     expect(swap).to_be_checked()
-    wait_for_chart_y(page, [0, 0, -1, 1, 0.5])
-    expect(cell(page, "normal")).to_have_text("(0, 0, -1)")
-    expect(cell(page, "unit_normal")).to_have_text("(0, 0, -1)")
+    wait_for_chart_values(page, [0, 0, -1, 1, 0.5])
+    expect(cell(page, "normal")).to_have_text("(0, 0, −1)")
+    expect(cell(page, "unit_normal")).to_have_text("(0, 0, −1)")
     expect(cell(page, "order")).to_have_text("order A, C, B")
     expect(cell(page, "u-from")).to_have_text("C")
     expect(cell(page, "v-from")).to_have_text("B")
@@ -87,9 +87,9 @@ def test_swap_winding_flips_the_normal_and_back(page: Page) -> None:
     # The permalink keeps the swap: the server renders it checked and flipped.
     response = page.reload()
     assert response is not None and response.status == 200
-    assert server_cells(response.text())["normal"] == "(0, 0, -1)"
+    assert server_cells(response.text())["normal"] == "(0, 0, −1)"
     expect(swap).to_be_checked()
-    wait_for_chart_y(page, [0, 0, -1, 1, 0.5])
+    wait_for_chart_values(page, [0, 0, -1, 1, 0.5])
 
     # And back, from the keyboard this time: Tab from the last field, then Space.
     page.locator("#cz").focus()
@@ -97,7 +97,7 @@ def test_swap_winding_flips_the_normal_and_back(page: Page) -> None:
     expect(swap).to_be_focused()
     page.keyboard.press("Space")
     expect(page.get_by_role("switch", name=re.compile("Swap winding"))).not_to_be_checked()
-    wait_for_chart_y(page, [0, 0, 1, 1, 0.5])
+    wait_for_chart_values(page, [0, 0, 1, 1, 0.5])
     expect(cell(page, "normal")).to_have_text("(0, 0, 1)")
     expect(cell(page, "order")).to_have_text("order A, B, C")
     expect(page).not_to_have_url(re.compile("swap="))
@@ -136,7 +136,7 @@ def test_typing_mistake_is_named_beside_the_field_and_clears_when_fixed(page: Pa
 
     page.locator("#cz").fill("0")
     bx.fill("2")
-    wait_for_chart_y(page, [0, 0, 2, 2, 1])
+    wait_for_chart_values(page, [0, 0, 2, 2, 1])
     expect(error).to_be_hidden()
     expect(error).to_have_text("")
     expect(bx).not_to_have_attribute("aria-invalid", "true")
@@ -150,7 +150,7 @@ def test_typing_mistake_is_named_beside_the_field_and_clears_when_fixed(page: Pa
 def test_degenerate_triangle_says_so(page: Page) -> None:
     open_calculator(page)
     fill_triangle(page, *COLLINEAR)
-    wait_for_chart_y(page, [0, 0, 0, 0, 0])
+    wait_for_chart_values(page, [0, 0, 0, 0, 0])
     expect(cell(page, "normal")).to_have_text("(0, 0, 0)")
     expect(cell(page, "unit_normal")).to_have_text("none (degenerate triangle)")
     expect(cell(page, "area")).to_have_text("0")
@@ -161,7 +161,7 @@ def test_degenerate_triangle_says_so(page: Page) -> None:
 
     # Back to a proper triangle: the warning goes away.
     fill_triangle(page, *RIGHT)
-    wait_for_chart_y(page, [0, 0, 1, 1, 0.5])
+    wait_for_chart_values(page, [0, 0, 1, 1, 0.5])
     expect(cell(page, "unit_normal")).to_have_text("(0, 0, 1)")
     expect(message).to_be_hidden()
 
@@ -182,15 +182,15 @@ NUMBER_CASES = {
     # Tiny, huge and negative values: JavaScript's String(x) exponent layout.
     "tiny": (
         (("0", "0", "0"), ("1e-4", "0", "0"), ("0", "1e-4", "0")),
-        {"normal": "(0, 0, 1e-8)", "area": "5e-9", "u": "(0.0001, 0, 0)"},
+        {"normal": "(0, 0, 1e−8)", "area": "5e−9", "u": "(0.0001, 0, 0)"},
     ),
     "huge": (
         (("0", "0", "0"), ("1e11", "0", "0"), ("0", "-1e11", "0")),
-        {"normal": "(0, 0, -1e+22)", "magnitude": "1e+22", "area": "5e+21"},
+        {"normal": "(0, 0, −1e+22)", "magnitude": "1e+22", "area": "5e+21"},
     ),
     "decimals": (
         (("0.1", "0.2", "0.3"), ("1.5", "-2.25", "3"), ("-1", "0.5", "2e3")),
-        {"u": "(1.4, -2.45, 2.7)"},
+        {"u": "(1.4, −2.45, 2.7)"},
     ),
     # Beyond the double range: said in words, never Infinity.
     "out of range": (
@@ -271,7 +271,7 @@ def test_permalink_with_a_typo_renders_the_error_and_recovers_live(
     expect(page.locator("#chart .main-svg")).to_have_count(0)  # no figure to draw yet
 
     page.locator("#bx").fill("1")
-    wait_for_chart_y(page, [0, 0, 1, 1, 0.5])
+    wait_for_chart_values(page, [0, 0, 1, 1, 0.5])
     expect(cell(page, "normal")).to_have_text("(0, 0, 1)")
     expect(cell(page, "order")).to_have_text("order A, B, C")
     expect(cell(page, "invalid")).to_be_hidden()

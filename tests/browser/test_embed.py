@@ -21,7 +21,7 @@ def test_embed_draws_the_chart_and_links_to_the_calculator(page: Page, base_url:
     response = page.goto(f"/embed?{query}")
     assert response is not None and response.status == 200
     page.locator("#chart[data-drawn] .main-svg").first.wait_for()
-    assert page.evaluate("document.getElementById('chart').data[0].y") == [0, 0, 1, 1, 0.5]
+    assert page.evaluate("document.getElementById('chart').data[0].x") == [0, 0, 1, 1, 0.5]
     link = page.get_by_role("link", name=re.compile("Open in Mesh Normal Calculator"))
     # Relative (the Host header never goes into a link): it opens the calculator of the server
     # that the frame came from.
@@ -61,7 +61,7 @@ def test_another_site_can_frame_the_embed(page: Page, framing_host: str, base_ur
     ).to_be_visible()
     frame = page.frame(name="framed")
     assert frame is not None and frame.url == src
-    assert frame.evaluate("document.getElementById('chart').data[0].y") == [0, 0, -1, 1, 0.5]
+    assert frame.evaluate("document.getElementById('chart').data[0].x") == [0, 0, -1, 1, 0.5]
 
 
 def test_the_calculator_page_refuses_to_be_framed(

@@ -47,7 +47,7 @@ def test_submit_renders_the_result_on_the_server(no_js_page: Page) -> None:
         expect(page.locator(f"#{name}")).to_have_value(value)
     # The chart data is in the page for later, and the links follow the query.
     figure = json.loads(page.locator("#figure-data").text_content() or "null")
-    assert figure["data"][0]["y"] == [0, 0, 1, 1, 0.5]
+    assert figure["data"][0]["x"] == [0, 0, 1, 1, 0.5]
     expect(page.locator("#json-link")).to_have_attribute("href", re.compile(r"bx=1&"))
 
     page.locator("label.switch").click()
@@ -55,7 +55,7 @@ def test_submit_renders_the_result_on_the_server(no_js_page: Page) -> None:
     assert submit(page) == 200
     expect(page).to_have_url(re.compile(r"[?&]swap=on(&|$)"))
     expect(page.locator("#swap")).to_be_checked()
-    expect(cell(page, "normal")).to_have_text("(0, 0, -1)")
+    expect(cell(page, "normal")).to_have_text("(0, 0, −1)")
     expect(cell(page, "order")).to_have_text("order A, C, B")
 
 

@@ -12,7 +12,7 @@ from pathlib import Path
 from urllib.parse import urlencode
 
 import pytest
-from playwright.sync_api import Page, expect
+from playwright.sync_api import Locator, Page, expect
 
 from app.calculator.presets import PRESETS
 from app.calculator.snippets import snippets
@@ -26,7 +26,7 @@ from tests.browser.helpers import (
     open_calculator,
     query_pattern,
     triangle_query,
-    wait_for_chart_y,
+    wait_for_chart_values,
 )
 
 pytestmark = pytest.mark.browser
@@ -110,10 +110,10 @@ def test_3d_view_draws_the_normal_and_follows_the_swap(page: Page) -> None:
         "window.Plotly is gl3d"
     )
     fill_triangle(page, *RIGHT)  # swap still on: n = (0, 0, -1)
-    wait_for_chart_y(page, [0, 0, -1, 1, 0.5])
+    wait_for_chart_values(page, [0, 0, -1, 1, 0.5])
     wait_for_arrow(page, [0, 0, -1], "Front: A → C → B counter-clockwise")
     page.locator("label.switch").click()
-    wait_for_chart_y(page, [0, 0, 1, 1, 0.5])
+    wait_for_chart_values(page, [0, 0, 1, 1, 0.5])
     wait_for_arrow(page, [0, 0, 1], "Front: A → B → C counter-clockwise")
     assert page.evaluate("() => window.Plotly === window.__basicPlotly")
 
@@ -125,27 +125,30 @@ def step(page: Page, key: str):
     return page.locator(f'#steps [data-step="{key}"]')
 
 
+def math_line(page: Page, key: str, formula: str) -> Locator:
+    """A step's formula, by its plain text (the alttext of its <math>)."""
+    return step(page, key).locator(f'math[alttext="{formula}"]')
+
+
 def test_worked_steps_show_the_users_numbers_and_follow_live_edits(page: Page) -> None:
     open_calculator(page, triangle_query(("1", "0", "0"), ("0", "2", "0"), ("0", "0", "3")))
     mark_window(page)
-    expect(step(page, "cross")).to_contain_text(
-        "n_x = u_y·v_z − u_z·v_y = (2)(3) − (0)(0) = 6 − 0 = 6"
-    )
-    expect(step(page, "cross")).to_contain_text(
-        "n_y = u_z·v_x − u_x·v_z = (0)(-1) − (-1)(3) = 0 − (-3) = 3"
-    )
-    expect(step(page, "edges")).to_contain_text("u = (-1, 2, 0)")
-    expect(step(page, "magnitude")).to_contain_text("sqrt(49) = 7")
-    expect(step(page, "plane")).to_contain_text("6x + 3y + 2z = 6")
-    expect(step(page, "area")).to_contain_text("area = |n| / 2 = 7 / 2 = 3.5")
+    for key, formula in (
+        ("cross", "n_x = |u_y u_z; v_y v_z| = |2 0; 0 3| = 2·3 − 0·0 = 6 − 0 = 6"),
+        ("cross", "n_y = |u_z u_x; v_z v_x| = |0 −1; 3 −1| = 0·(−1) − (−1)·3 = 0 − (−3) = 3"),
+        ("edges", "u = (−1, 2, 0)"),
+        ("plane", "6x + 3y + 2z = 6"),
+        ("area", "area = |n| / 2 = 7 / 2 = 3.5"),
+    ):
+        expect(math_line(page, key, formula)).to_have_count(1)
+    expect(step(page, "magnitude").locator("math msqrt")).to_have_count(4)
 
     # New points: the steps follow without a reload.
     fill_triangle(page, ("0", "0", "0"), ("2", "0", "0"), ("0", "5", "0"))
-    expect(step(page, "cross")).to_contain_text(
-        "n_z = u_x·v_y − u_y·v_x = (2)(5) − (0)(0) = 10 − 0 = 10"
-    )
-    expect(step(page, "plane")).not_to_contain_text("6x + 3y + 2z = 6")
-    expect(step(page, "area")).to_contain_text("area = |n| / 2 = 10 / 2 = 5")
+    new_z = "n_z = |u_x u_y; v_x v_y| = |2 0; 0 5| = 2·5 − 0·0 = 10 − 0 = 10"
+    expect(math_line(page, "cross", new_z)).to_have_count(1)
+    expect(math_line(page, "plane", "6x + 3y + 2z = 6")).to_have_count(0)
+    expect(math_line(page, "area", "area = |n| / 2 = 10 / 2 = 5")).to_have_count(1)
     assert_not_reloaded(page)
 
     # Degenerate: the steps explain why there is no normal and no plane.
@@ -233,9 +236,9 @@ def test_snippets_copy_exactly_follow_live_edits_and_keep_open_sections(new_page
 
 PRESET_CHECKS = {
     "right": {"unit_normal": "(0, 0, 1)", "order": "order A, B, C", "normal": "(0, 0, 1)"},
-    "swapped": {"unit_normal": "(0, 0, -1)", "order": "order A, C, B"},
+    "swapped": {"unit_normal": "(0, 0, −1)", "order": "order A, C, B"},
     "collinear": {"unit_normal": "none (degenerate triangle)", "normal": "(0, 0, 0)"},
-    "sliver": {"unit_normal": "(0, 0, -1)", "normal": "(0, 0, -1.3552527156068805e-20)"},
+    "sliver": {"unit_normal": "(0, 0, −1)", "normal": "(0, 0, −1.3552527156068805e−20)"},
     "huge": {
         "magnitude": "out of range",
         "normal": "(0, 0, out of range)",
@@ -300,7 +303,11 @@ def test_downloads_carry_the_pages_numbers(new_page: NewPage) -> None:
     assert shown == api
     # The numbers in the table are the same doubles.
     assert (
-        float(cell(page, "magnitude").locator(".num").get_attribute("data-num") or "")
+        float(
+            (cell(page, "magnitude").locator(".num").get_attribute("data-num") or "").replace(
+                "−", "-"
+            )
+        )
         == api["magnitude"]
     )
 
@@ -373,7 +380,7 @@ def test_display_precision_rounds_the_text_only_and_persists(new_page: NewPage) 
 
     # Live updates keep the choice; downloads keep every digit.
     fill_triangle(page, ("0", "0", "0"), ("3", "0", "0"), ("0", "7", "1"))
-    expect(cell(page, "normal")).to_have_text("(0, -3.0000, 21.0000)")  # zero stays "0"
+    expect(cell(page, "normal")).to_have_text("(0.0000, −3.0000, 21.0000)")  # zero too
     with page.expect_download() as info:
         page.locator("#download-json").click()
     saved = json.loads(Path(info.value.path()).read_text())
@@ -381,7 +388,7 @@ def test_display_precision_rounds_the_text_only_and_persists(new_page: NewPage) 
         page, triangle_query(("0", "0", "0"), ("3", "0", "0"), ("0", "7", "1"))
     )
     assert saved["unit_normal"][1] == -3 / math.sqrt(450)
-    expect(unit).to_have_text("(0, -0.1414, 0.9899)")
+    expect(unit).to_have_text("(0.0000, −0.1414, 0.9899)")
 
 
 # --- 7. Phone ---------------------------------------------------------------------------------

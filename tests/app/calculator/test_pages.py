@@ -7,7 +7,7 @@ from urllib.parse import parse_qsl, urlencode, urlsplit
 
 import pytest
 
-from app.web.formatting import js_number
+from app.web.formatting import number_text
 from tests.conftest import EXAMPLE_QUERY, Page
 
 FIELDS = ["ax", "ay", "az", "bx", "by", "bz", "cx", "cy", "cz"]
@@ -21,7 +21,8 @@ def page(client, path: str, params=None, status: int = 200):  # type: ignore[no-
 
 
 def vec(values) -> str:  # type: ignore[no-untyped-def]
-    return "(" + ", ".join("out of range" if x is None else js_number(x) for x in values) + ")"
+    """As the page shows a vector to people: JavaScript's digits, the real minus sign."""
+    return "(" + ", ".join("out of range" if x is None else number_text(x) for x in values) + ")"
 
 
 def figure_data(html: Page):  # type: ignore[no-untyped-def]
@@ -90,10 +91,11 @@ def test_result_is_rendered_on_the_server(client) -> None:  # type: ignore[no-un
     assert texts["u"] == vec(payload["u"])
     assert texts["v"] == vec(payload["v"])
     assert texts["unit_normal"] == vec(payload["unit_normal"])
-    assert texts["magnitude"] == js_number(payload["magnitude"])
-    assert texts["area"] == js_number(payload["area"])
+    assert texts["magnitude"] == number_text(payload["magnitude"])
+    assert texts["area"] == number_text(payload["area"])
     assert texts["order"] == "order A, C, B"
-    assert js_number(payload["unit_normal"][0]) in response.text
+    assert number_text(payload["unit_normal"][0]) in response.text
+    assert "-" not in texts["normal"] and "−" in texts["normal"]  # n = (−…, …): a real minus
     assert figure_data(html) == response.context["figure"]
 
 
@@ -260,7 +262,7 @@ def test_embed_with_a_bad_value_says_why(client) -> None:  # type: ignore[no-unt
 
 def test_embed_without_parameters_shows_the_example(client) -> None:  # type: ignore[no-untyped-def]
     _response, html = page(client, "/embed")
-    assert figure_data(html)["data"][0]["y"] == [6.0, 3.0, 2.0, 7.0, 3.5]
+    assert figure_data(html)["data"][0]["x"] == [6.0, 3.0, 2.0, 7.0, 3.5]
 
 
 # --- /docs ------------------------------------------------------------------------------------
@@ -373,7 +375,7 @@ def test_partials_render_every_live_part_from_the_page_templates(client) -> None
     assert parts["figure"] == client.get("/api/chart", params=query).json()
     assert parts["view3d"]["data"] and parts["view3d"]["layout"]
     assert "order A, C, B" in parts["html"]["result"]
-    assert "(-6, -3, -2)" in parts["html"]["steps"]
+    assert 'alttext="n = (−6, −3, −2)"' in parts["html"]["steps"]
 
 
 def test_partials_report_every_bad_field_with_status_200(client) -> None:  # type: ignore[no-untyped-def]

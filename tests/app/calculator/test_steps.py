@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from jinja2 import Environment, FileSystemLoader
 
 from app.calculator.steps import Step, worked_steps
-from app.web.formatting import js_number
+from app.web.formatting import number_text
 from mesh_normal.triangle import TriangleNormal, triangle_normal
 from tests.conftest import Page
 from tests.paths import TEMPLATES
@@ -41,7 +41,7 @@ def line_starting(step: Step, start: str) -> str:
 def angle_of(step: Step) -> float:
     match = re.fullmatch(r"θ = .* [=≈] (\S+)°", line_starting(step, "θ = "))
     assert match, step.lines
-    return float(match.group(1))
+    return float(match.group(1).replace("−", "-"))
 
 
 # --- The example: A = (1, 0, 0), B = (0, 2, 0), C = (0, 0, 3) ----------------------------------
@@ -59,25 +59,25 @@ def test_example_edges() -> None:
     assert "u = B − A" in edges.text and "v = C − A" in edges.text
     assert edges.lines == (
         "u = B − A",
-        "u_x = b_x − a_x = 0 − 1 = -1",
+        "u_x = b_x − a_x = 0 − 1 = −1",
         "u_y = b_y − a_y = 2 − 0 = 2",
         "u_z = b_z − a_z = 0 − 0 = 0",
-        "u = (-1, 2, 0)",
+        "u = (−1, 2, 0)",
         "v = C − A",
-        "v_x = c_x − a_x = 0 − 1 = -1",
+        "v_x = c_x − a_x = 0 − 1 = −1",
         "v_y = c_y − a_y = 0 − 0 = 0",
         "v_z = c_z − a_z = 3 − 0 = 3",
-        "v = (-1, 0, 3)",
+        "v = (−1, 0, 3)",
     )
 
 
 def test_example_cross_product_shows_determinants_and_products() -> None:
     cross = steps_of(*EXAMPLE)["cross"]
     assert cross.lines == (
-        "n = u × v",
-        "n_x = u_y·v_z − u_z·v_y = (2)(3) − (0)(0) = 6 − 0 = 6",
-        "n_y = u_z·v_x − u_x·v_z = (0)(-1) − (-1)(3) = 0 − (-3) = 3",
-        "n_z = u_x·v_y − u_y·v_x = (-1)(0) − (2)(-1) = 0 − (-2) = 2",
+        "n = u × v = |e_x e_y e_z; u_x u_y u_z; v_x v_y v_z| = |e_x e_y e_z; −1 2 0; −1 0 3|",
+        "n_x = |u_y u_z; v_y v_z| = |2 0; 0 3| = 2·3 − 0·0 = 6 − 0 = 6",
+        "n_y = |u_z u_x; v_z v_x| = |0 −1; 3 −1| = 0·(−1) − (−1)·3 = 0 − (−3) = 3",
+        "n_z = |u_x u_y; v_x v_y| = |−1 2; −1 0| = (−1)·0 − 2·(−1) = 0 − (−2) = 2",
         "n = (6, 3, 2)",
     )
     assert cross.notes == ()
@@ -86,16 +86,16 @@ def test_example_cross_product_shows_determinants_and_products() -> None:
 def test_example_length_area_and_unit_normal() -> None:
     steps = steps_of(*EXAMPLE)
     assert steps["magnitude"].lines == (
-        "|n| = sqrt(n_x² + n_y² + n_z²) = sqrt(6² + 3² + 2²) = sqrt(36 + 9 + 4) = sqrt(49) = 7",
+        "|n| = √(n_x² + n_y² + n_z²) = √(6² + 3² + 2²) = √(36 + 9 + 4) = √(49) = 7",
     )
     assert steps["area"].lines == ("area = |n| / 2 = 7 / 2 = 3.5",)
     unit = steps["unit"]
     # 6/7, 3/7 and 2/7 are not doubles: the step says "≈", and says what "≈" means.
-    assert line_starting(unit, "n̂_x") == f"n̂_x = n_x / |n| = 6 / 7 ≈ {js_number(6 / 7)}"
-    assert line_starting(unit, "n̂_z") == f"n̂_z = n_z / |n| = 2 / 7 ≈ {js_number(2 / 7)}"
+    assert line_starting(unit, "n̂_x") == f"n̂_x = n_x / |n| = 6 / 7 ≈ {number_text(6 / 7)}"
+    assert line_starting(unit, "n̂_z") == f"n̂_z = n_z / |n| = 2 / 7 ≈ {number_text(2 / 7)}"
     assert (
-        line_starting(unit, "n̂ = ") == f"n̂ = ({js_number(6 / 7)}, {js_number(3 / 7)}, "
-        f"{js_number(2 / 7)})"
+        line_starting(unit, "n̂ = ") == f"n̂ = ({number_text(6 / 7)}, {number_text(3 / 7)}, "
+        f"{number_text(2 / 7)})"
     )
     assert any("≈" in note for note in unit.notes)
 
@@ -103,7 +103,7 @@ def test_example_length_area_and_unit_normal() -> None:
 def test_example_plane() -> None:
     plane = steps_of(*EXAMPLE)["plane"]
     assert plane.lines == (
-        "d = n · A = n_x·a_x + n_y·a_y + n_z·a_z = (6)(1) + (3)(0) + (2)(0) = 6",
+        "d = n · A = n_x·a_x + n_y·a_y + n_z·a_z = 6·1 + 3·0 + 2·0 = 6",
         "6x + 3y + 2z = 6",
     )
     # B and C satisfy it as well, checked by hand: 6·0 + 3·2 + 2·0 = 6 and 2·3 = 6.
@@ -113,7 +113,7 @@ def test_example_plane() -> None:
 def test_example_angle_between_u_and_v() -> None:
     angle = steps_of(*EXAMPLE)["angle"]
     assert line_starting(angle, "u · v") == (
-        "u · v = u_x·v_x + u_y·v_y + u_z·v_z = (-1)(-1) + (2)(0) + (0)(3) = 1 + 0 + 0 = 1"
+        "u · v = u_x·v_x + u_y·v_y + u_z·v_z = (−1)·(−1) + 2·0 + 0·3 = 1 + 0 + 0 = 1"
     )
     assert line_starting(angle, "|u × v|") == "|u × v| = |n| = 7"
     assert "atan2(7, 1) ≈" in line_starting(angle, "θ")
@@ -125,7 +125,7 @@ def test_example_angle_between_u_and_v() -> None:
 def test_example_swap_explains_the_sign() -> None:
     swap = steps_of(*EXAMPLE)["swap"]
     assert "v × u = −(u × v)" in swap.lines
-    assert "A, C, B: n = −(6, 3, 2) = (-6, -3, -2)" in swap.lines
+    assert "A, C, B: n = −(6, 3, 2) = (−6, −3, −2)" in swap.lines
     assert "|n| = 7 and area = 3.5 either way" in swap.lines
     assert "changes sign" in swap.text
 
@@ -137,13 +137,13 @@ def test_swapped_winding_uses_c_first_and_negates_n() -> None:
     steps = steps_of(*EXAMPLE, swap=True)
     edges = steps["edges"]
     assert "u = C − A" in edges.text and "v = B − A" in edges.text
-    assert edges.lines[:2] == ("u = C − A", "u_x = c_x − a_x = 0 − 1 = -1")
-    assert "v = B − A" in edges.lines and "v = (-1, 2, 0)" in edges.lines
-    assert steps["cross"].lines[-1] == "n = (-6, -3, -2)"
-    assert "sqrt((-6)² + (-3)² + (-2)²) = sqrt(36 + 9 + 4)" in steps["magnitude"].lines[0]
+    assert edges.lines[:2] == ("u = C − A", "u_x = c_x − a_x = 0 − 1 = −1")
+    assert "v = B − A" in edges.lines and "v = (−1, 2, 0)" in edges.lines
+    assert steps["cross"].lines[-1] == "n = (−6, −3, −2)"
+    assert "√((−6)² + (−3)² + (−2)²) = √(36 + 9 + 4)" in steps["magnitude"].lines[0]
     assert steps["area"].lines == ("area = |n| / 2 = 7 / 2 = 3.5",)
-    assert steps["plane"].lines[-1] == "-6x − 3y − 2z = -6"
-    assert "A, B, C: n = −(-6, -3, -2) = (6, 3, 2)" in steps["swap"].lines
+    assert steps["plane"].lines[-1] == "−6x − 3y − 2z = −6"
+    assert "A, B, C: n = −(−6, −3, −2) = (6, 3, 2)" in steps["swap"].lines
     assert "You listed the corners as A, C, B" in steps["swap"].text
     # The angle between the edges does not depend on which is called u.
     assert angle_of(steps["angle"]) == angle_of(steps_of(*EXAMPLE)["angle"])
@@ -156,7 +156,7 @@ def test_collinear_points_explain_no_normal_no_plane_and_zero_angle() -> None:
     steps = steps_of((1, 1, 1), (2, 2, 2), (3, 3, 3))
     assert steps["cross"].lines[-1] == "n = (0, 0, 0)"
     assert any("lie on one line" in note for note in steps["cross"].notes)
-    assert steps["magnitude"].lines[0].endswith("= sqrt(0) = 0")
+    assert steps["magnitude"].lines[0].endswith("= √(0) = 0")
     assert steps["unit"].warn and "no unit normal" in steps["unit"].notes[0]
     assert steps["plane"].lines == () and "no plane" in steps["plane"].notes[0]
     angle = steps["angle"]
@@ -199,15 +199,12 @@ def test_sliver_explains_why_naive_floats_get_zero() -> None:
         "are subtracted; this calculator works with the exact values and rounds once. Plain "
         "floats would call this triangle flat."
     )
-    assert (
-        "n_z in floats: (1.0000000000000002)(0.9999999999999999) − (1)(1) → 1 − 1 → 0"
-        in exact.lines
-    )
-    assert f"exact n, rounded once = (0, 0, {js_number(exact_z)})" in exact.lines
+    assert "n_z in floats: 1.0000000000000002·0.9999999999999999 − 1·1 → 1 − 1 → 0" in exact.lines
+    assert f"exact n, rounded once = (0, 0, {number_text(exact_z)})" in exact.lines
     # The cross product itself marks the rounded products with "≈".
     assert steps[1].lines[3] == (
-        f"n_z = u_x·v_y − u_y·v_x = (1.0000000000000002)"
-        f"(0.9999999999999999) − (1)(1) ≈ 1 − 1 ≈ {js_number(exact_z)}"
+        "n_z = |u_x u_y; v_x v_y| = |1.0000000000000002 1; 1 0.9999999999999999| = "
+        f"1.0000000000000002·0.9999999999999999 − 1·1 ≈ 1 − 1 ≈ {number_text(exact_z)}"
     )
 
 
@@ -220,7 +217,7 @@ def test_naive_overflow_shows_nan_and_says_why() -> None:
     steps = steps_of((-1e308, 0, 0), (1e308, 1, 0), (-1e308, 0, 1))
     assert "u = (out of range, 1, 0)" in steps["edges"].lines
     exact = steps["exact"]
-    assert "n_z in floats: (Infinity)(0) − (1)(0) → NaN − 0 → NaN" in exact.lines
+    assert "n_z in floats: Infinity·0 − 1·0 → NaN − 0 → NaN" in exact.lines
     assert "NaN" in exact.notes[0] and "Infinity" in exact.notes[0]
     # |n| (about 2e308) is out of range, half of it is not.
     assert steps["area"].lines == ("area = |n| / 2 ≈ 1e+308",)
@@ -235,7 +232,7 @@ def test_huge_values_are_explained_and_the_unit_normal_shown() -> None:
     cross = steps["cross"]
     assert cross.lines[-1] == "n = (0, 0, out of range)"
     assert cross.warn and "n_z" in cross.notes[0] and "out of range" in cross.notes[0]
-    assert steps["magnitude"].lines == ("|n| = sqrt(n_x² + n_y² + n_z²) = out of range",)
+    assert steps["magnitude"].lines == ("|n| = √(n_x² + n_y² + n_z²) = out of range",)
     assert steps["area"].lines == ("area = |n| / 2 = out of range",)
     unit = steps["unit"]
     assert unit.lines[-1] == "n̂ = (0, 0, 1)"
@@ -250,9 +247,7 @@ def test_huge_values_are_explained_and_the_unit_normal_shown() -> None:
 
 def test_sum_of_squares_too_large_but_length_fits() -> None:
     magnitude = steps_of((0, 0, 0), (1e100, 0, 0), (0, 1e100, 0))["magnitude"]
-    assert magnitude.lines == (
-        "|n| = sqrt(n_x² + n_y² + n_z²) ≈ sqrt(0² + 0² + (1e+200)²) ≈ 1e+200",
-    )
+    assert magnitude.lines == ("|n| = √(n_x² + n_y² + n_z²) ≈ √(0² + 0² + (1e+200)²) ≈ 1e+200",)
     assert "the sum of squares" in magnitude.notes[0]
     assert "does not fit a double, but its square root does" in magnitude.notes[1]
 
@@ -277,7 +272,7 @@ points = st.tuples(coordinates, coordinates, coordinates)
 
 
 def vec(values) -> str:  # type: ignore[no-untyped-def]
-    return "(" + ", ".join("out of range" if x is None else js_number(x) for x in values) + ")"
+    return "(" + ", ".join("out of range" if x is None else number_text(x) for x in values) + ")"
 
 
 def check_against_result(result: TriangleNormal, steps: list[Step]) -> None:
@@ -290,9 +285,13 @@ def check_against_result(result: TriangleNormal, steps: list[Step]) -> None:
         assert by_key["unit"].lines[-1] == f"n̂ = {vec(result.unit_normal)}"
     for step in steps:
         for line in step.lines:
-            # A negative number after an operator is always in parentheses.
-            assert not re.search(r"[−+/] -", line), line
+            # A negative number after an operator or a product's dot is always in parentheses,
+            # and every minus is the real one.
+            assert not re.search(r"([−+]|·) −", line), line
+            assert "-" not in line, line
             assert "nan" not in line and "inf" not in line, line
+        for formula in step.math:
+            assert formula.startswith("<math") and formula.count("<math") == 1, formula
 
 
 @settings(max_examples=150, deadline=None)
@@ -308,7 +307,7 @@ def test_steps_agree_with_the_result_for_any_points(a, b, c, swap) -> None:  # t
 @pytest.fixture(scope="module")
 def env() -> Environment:
     environment = Environment(loader=FileSystemLoader(TEMPLATES), autoescape=True)
-    environment.filters["num"] = lambda x: "out of range" if x is None else js_number(x)
+    environment.filters["num"] = lambda x: "out of range" if x is None else number_text(x)
     return environment
 
 
@@ -322,25 +321,37 @@ def plain_text(markup: str) -> str:
 
 
 def test_partial_shows_the_users_numbers(env: Environment) -> None:
-    markup, page = render(env, worked_steps(triangle_normal(*EXAMPLE)))
+    _, page = render(env, worked_steps(triangle_normal(*EXAMPLE)))
     assert len(page.find("ol", class_="steps")) == 1
     assert [attrs["data-step"] for attrs in page.find("li", class_="step")] == KEYS
     assert len(page.find("h3")) == len(KEYS)
-    text = plain_text(markup)
+    # Each line is one <math>, with the formula as plain text in its alttext.
+    alts = [attrs["alttext"] for attrs in page.find("math")]
     for expected in (
-        "u_x = b_x − a_x = 0 − 1 = -1",
-        "(2)(3) − (0)(0) = 6 − 0 = 6",
-        "sqrt(36 + 9 + 4) = sqrt(49) = 7",
+        "u_x = b_x − a_x = 0 − 1 = −1",
+        "n_x = |u_y u_z; v_y v_z| = |2 0; 0 3| = 2·3 − 0·0 = 6 − 0 = 6",
+        "|n| = √(n_x² + n_y² + n_z²) = √(6² + 3² + 2²) = √(36 + 9 + 4) = √(49) = 7",
         "area = |n| / 2 = 7 / 2 = 3.5",
         "6x + 3y + 2z = 6",
-        "A, C, B: n = −(6, 3, 2) = (-6, -3, -2)",
+        "A, C, B: n = −(6, 3, 2) = (−6, −3, −2)",
     ):
-        assert expected in text, expected
-    # One math box a step, each line its own block in <code>.
+        assert expected in alts, expected
+    # One math box a step, each formula its own block.
     assert len(page.find("div", class_="math")) == len(KEYS)
-    assert len(page.find("code")) == sum(
-        len(step.lines) for step in worked_steps(triangle_normal(*EXAMPLE))
-    )
+    assert len(alts) == sum(len(step.lines) for step in worked_steps(triangle_normal(*EXAMPLE)))
+    assert page.find("code") == []
+
+
+def test_partial_typesets_vectors_determinants_roots_and_fractions(env: Environment) -> None:
+    markup, _ = render(env, worked_steps(triangle_normal(*EXAMPLE)))
+    # The 3×3 and the three 2×2 determinants between bars, and u, v, n, n̂ as columns.
+    assert markup.count("<mo>|</mo><mtable>") == 2 * 4
+    assert markup.count("<mo>(</mo><mtable>") >= 4
+    assert "<msqrt>" in markup
+    assert "<mfrac><mrow><mo>|</mo><mi>n</mi><mo>|</mo></mrow><mn" in markup  # |n| / 2
+    # Numbers carry their machine text, so the precision setting can rewrite them.
+    assert '<mn class="num" data-num="-1">−1</mn>' in markup
+    assert "sqrt(" not in markup
 
 
 def test_partial_has_no_scripts_handlers_or_inline_styles(env: Environment) -> None:
@@ -354,8 +365,8 @@ def test_partial_marks_special_cases_as_warnings(env: Environment) -> None:
     markup, page = render(env, worked_steps(triangle_normal((1, 1, 1), (2, 2, 2), (3, 3, 3))))
     assert page.find("p", class_="message small warn")
     assert "There is no plane" in plain_text(markup)
-    markup, _ = render(env, worked_steps(triangle_normal(*HUGE)))
-    assert "n = (0, 0, out of range)" in plain_text(markup)
+    _, page = render(env, worked_steps(triangle_normal(*HUGE)))
+    assert "n = (0, 0, out of range)" in [attrs["alttext"] for attrs in page.find("math")]
 
 
 def test_partial_without_a_result(env: Environment) -> None:
