@@ -3,6 +3,7 @@ precision, out-of-range values marked on the chart, and the print stylesheet."""
 
 from __future__ import annotations
 
+import re
 from urllib.parse import urlencode
 
 import pytest
@@ -87,6 +88,7 @@ def test_print_shows_the_question_the_answer_and_the_steps_only(page: Page) -> N
         ".code-card",
         ".embed-card",
         ".modebar-container",
+        ".chart-card",
     ):
         for index in range(page.locator(hidden).count()):
             expect(page.locator(hidden).nth(index)).to_be_hidden()
@@ -95,5 +97,8 @@ def test_print_shows_the_question_the_answer_and_the_steps_only(page: Page) -> N
     # The inputs read as text: no box around them.
     assert page.locator("#ax").evaluate("e => getComputedStyle(e).borderTopStyle") == "none"
     assert page.locator(".steps").evaluate("e => getComputedStyle(e).columnCount") == "2"
+    # "Save as PDF" gives one A4 page, steps included.
+    pdf = page.pdf(format="A4")
+    assert len(re.findall(rb"/Type\s*/Page[^s]", pdf)) == 1
     page.emulate_media(media="screen")
     expect(page.locator(".presets")).to_be_visible()
