@@ -22,10 +22,15 @@ from app.web.formatting import js_number, number_text
 
 @dataclass(frozen=True, slots=True)
 class Formula:
-    """One piece of a formula: its plain text and its MathML (without the ``<math>`` root)."""
+    """One piece of a formula: its plain text and its MathML (without the ``<math>`` root).
+
+    ``pieces`` splits a chain ``a = b = c`` where a narrow screen may break it: before each
+    "=" or "≈" (MathML Core itself never breaks a line).
+    """
 
     text: str
     markup: str
+    pieces: tuple[Formula, ...] = ()
 
     def __str__(self) -> str:
         return self.text
@@ -146,7 +151,28 @@ def determinant(rows: Sequence[Sequence[Formula]]) -> Formula:
     return Formula(text, _tag("mrow", f"<mo>|</mo>{_table(rows)}<mo>|</mo>"))
 
 
+def _infix(relation: Formula) -> Formula:
+    """A relation that starts a piece keeps the spacing it has between two operands."""
+    return Formula(relation.text, relation.markup.replace("<mo>", '<mo form="infix">', 1))
+
+
+def chained(parts: Sequence[Formula]) -> Formula:
+    """``parts[0] rel parts[1] rel …`` where every other part is a relation (=, ≈)."""
+    pieces = [parts[0], *(row(_infix(parts[i]), parts[i + 1]) for i in range(1, len(parts) - 1, 2))]
+    whole = row(*parts)
+    return Formula(whole.text, whole.markup, tuple(pieces) if len(pieces) > 1 else ())
+
+
+def _math(formula: Formula) -> str:
+    alt = escape(formula.text.strip())
+    return f'<math displaystyle="true" alttext="{alt}">{formula.markup}</math>'
+
+
 def math(formula: Formula) -> Markup:
-    """The whole ``<math>`` element, with the plain text as its ``alttext``."""
-    alt = escape(formula.text)
-    return Markup(f'<math display="block" alttext="{alt}">{formula.markup}</math>')
+    """One line of a step: a ``<div class="formula">`` with the plain text in ``data-formula``.
+
+    A chain is one ``<math>`` a piece, so that the line can wrap between them (``<wbr>``) on a
+    phone, each piece with its own plain text as ``alttext``.
+    """
+    body = "<wbr>".join(_math(piece) for piece in formula.pieces or (formula,))
+    return Markup(f'<div class="formula" data-formula="{escape(formula.text)}">{body}</div>')

@@ -20,12 +20,12 @@ from app.calculator.mathml import (
     DOT,
     EQUALS,
     Formula,
+    chained,
     column,
     fenced,
     joined,
     number,
     plain_number,
-    row,
     word,
 )
 from app.web.formatting import for_people, js_number, number_text
@@ -136,7 +136,7 @@ def chain(*segments: Segment | None) -> Formula:
         if parts:
             parts.append(EQUALS if exact else APPROX)
         parts.append(formula)
-    return row(*parts)
+    return chained(parts)
 
 
 def listing(names: Sequence[str]) -> str:

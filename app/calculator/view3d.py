@@ -132,7 +132,10 @@ def _edges(
         middle = (points[0] + points[end]) / 2
         hover = f"{label} = {names[end]} − A = {_vector_text(payload[label])}"
         edge = points[end] - points[0]
-        away = middle - (middle @ edge) / (edge @ edge) * edge if edge.any() else middle
+        # edge @ edge is 0 for a zero edge and for one of subnormal length (a sliver as long
+        # as the double range, squeezed into view space).
+        length_squared = float(edge @ edge)
+        away = middle - (middle @ edge) / length_squared * edge if length_squared else middle
         if np.linalg.norm(away) <= 1e-9 * np.linalg.norm(edge):
             away = np.zeros(3)  # the edge runs through the centroid: three points on a line
         (side,) = _outward([away], eye, "bottom center")

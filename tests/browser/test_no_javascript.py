@@ -87,3 +87,17 @@ def test_typo_is_named_beside_the_field_and_kept(no_js_page: Page, console: Cons
     expect(bx_error).to_be_hidden()
     expect(page.locator("#bx")).not_to_have_attribute("aria-invalid", "true")
     expect(cell(page, "normal")).to_have_text("(0, 0, 1)")
+
+
+def test_steps_are_typeset_without_javascript(no_js_page: Page) -> None:
+    # MathML is the browser's own: the server's steps need no script to look like maths.
+    page = no_js_page
+    cross = page.locator('#steps [data-step="cross"]')
+    # The 3×3 twice, three 2×2 twice (names, then numbers), and n as a column.
+    expect(cross.locator("mtable")).to_have_count(9)
+    box = cross.locator("mtable").first.bounding_box()
+    assert box is not None and box["width"] > 40 and box["height"] > 40
+    root = page.locator('#steps [data-step="magnitude"] msqrt').first.bounding_box()
+    assert root is not None and root["width"] > 20
+    # The full numbers, with the real minus sign, as the server wrote them.
+    expect(page.locator('#steps [data-formula="u = (−1, 2, 0)"]')).to_be_visible()

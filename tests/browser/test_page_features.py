@@ -126,8 +126,8 @@ def step(page: Page, key: str):
 
 
 def math_line(page: Page, key: str, formula: str) -> Locator:
-    """A step's formula, by its plain text (the alttext of its <math>)."""
-    return step(page, key).locator(f'math[alttext="{formula}"]')
+    """A step's formula, by its plain text."""
+    return step(page, key).locator(f'.formula[data-formula="{formula}"]')
 
 
 def test_worked_steps_show_the_users_numbers_and_follow_live_edits(page: Page) -> None:

@@ -375,7 +375,7 @@ def test_partials_render_every_live_part_from_the_page_templates(client) -> None
     assert parts["figure"] == client.get("/api/chart", params=query).json()
     assert parts["view3d"]["data"] and parts["view3d"]["layout"]
     assert "order A, C, B" in parts["html"]["result"]
-    assert 'alttext="n = (−6, −3, −2)"' in parts["html"]["steps"]
+    assert 'data-formula="n = (−6, −3, −2)"' in parts["html"]["steps"]
 
 
 def test_partials_report_every_bad_field_with_status_200(client) -> None:  # type: ignore[no-untyped-def]
