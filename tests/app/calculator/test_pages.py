@@ -334,6 +334,19 @@ def test_openapi_lists_the_api_and_not_the_pages(client) -> None:  # type: ignor
     assert set(spec["paths"]["/api/normal"]) == {"get", "post"}
 
 
+def test_every_operation_is_named_in_words(client) -> None:  # type: ignore[no-untyped-def]
+    """Swagger UI shows each summary as the operation's name; FastAPI's default is the function's
+    name title-cased ("Post Normal"), which says nothing to a reader."""
+    spec = client.get("/openapi.json").json()
+    operations = [op for ops in spec["paths"].values() for op in ops.values()]
+    summaries = [op.get("summary", "") for op in operations]
+    for op, summary in zip(operations, summaries, strict=True):
+        default = " ".join(op["operationId"].split("_api_")[0].split("_")).title()
+        assert summary and summary != default and summary[0].isupper(), (op["operationId"], summary)
+    assert len(set(summaries)) == len(summaries), summaries
+    assert spec["paths"]["/api/normal"]["post"]["summary"] == "Normal of one triangle"
+
+
 # --- Error pages and inline scripts -----------------------------------------------------------
 
 
