@@ -43,7 +43,12 @@ def query_payload(request: Request) -> dict[str, Any]:
     return normal_payload(triangle_normal(a, b, c, swap_winding=parsed.swap))
 
 
-@router.post("/normal", response_model=NormalResult, openapi_extra=request_body_spec(NormalRequest))
+@router.post(
+    "/normal",
+    summary="Normal of one triangle",
+    response_model=NormalResult,
+    openapi_extra=request_body_spec(NormalRequest),
+)
 async def post_normal(request: Request) -> FastJSONResponse:
     """The normal of one triangle given as JSON."""
     body = await read_body(request, NormalRequest)
@@ -51,7 +56,9 @@ async def post_normal(request: Request) -> FastJSONResponse:
     return FastJSONResponse(normal_payload(result))
 
 
-@router.get("/normal", response_model=NormalResult)
+@router.get(
+    "/normal", summary="Normal of one triangle, from query parameters", response_model=NormalResult
+)
 async def get_normal(
     request: Request,
     params: Annotated[TriangleParams, Query()],  # noqa: ARG001 (declared for the schema and validation; read by read_triangle)
@@ -62,6 +69,7 @@ async def get_normal(
 
 @router.get(
     "/normal.csv",
+    summary="Normal of one triangle as CSV",
     response_class=Response,
     responses={
         200: {
@@ -82,7 +90,12 @@ async def get_normal_csv(
     )
 
 
-@router.post("/normals", response_model=BatchResult, openapi_extra=request_body_spec(BatchRequest))
+@router.post(
+    "/normals",
+    summary="Normals of many triangles",
+    response_model=BatchResult,
+    openapi_extra=request_body_spec(BatchRequest),
+)
 async def post_normals(request: Request) -> FastJSONResponse:
     """Normals of up to 100,000 triangles, in input order."""
     raw = await raw_json_body(request)
@@ -128,7 +141,7 @@ def refuse_oversized_batch(raw: bytes) -> None:
         )
 
 
-@router.get("/chart", response_model=Figure)
+@router.get("/chart", summary="Bar chart of a triangle's normal", response_model=Figure)
 async def get_chart(
     request: Request,
     params: Annotated[TriangleParams, Query()],  # noqa: ARG001 (declared for the schema and validation; read by read_triangle)

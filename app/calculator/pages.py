@@ -15,6 +15,7 @@ from app.calculator.presets import COORDINATE_FIELDS, EXAMPLE, PRESETS
 from app.calculator.snippets import snippets
 from app.calculator.steps import worked_steps
 from app.calculator.view3d import view3d_figure
+from app.web.errors import clip
 from app.web.jsonio import FastJSONResponse
 from app.web.templating import templates
 from mesh_normal.triangle import triangle_normal
@@ -101,9 +102,28 @@ def partials(request: Request) -> FastJSONResponse:
     )
 
 
+#: The embed's colours: "auto" follows the reader's prefers-color-scheme, the others fix them to
+#: match the page around the frame.
+EMBED_THEMES = ("auto", "light", "dark")
+
+
+def _with_theme(context: dict[str, Any], theme: str) -> dict[str, Any]:
+    """Refuse an unknown theme as the API refuses an unknown value: one sentence, no chart."""
+    if theme in EMBED_THEMES:
+        return {**context, "theme": theme}
+    sentence = f"theme must be auto, light or dark, not {clip(theme)!r}."
+    return {
+        **context,
+        "theme": "auto",
+        "figure": None,
+        "errors": {"theme": sentence, **context["errors"]},
+    }
+
+
 @router.get("/embed", response_class=HTMLResponse)
 def embed(request: Request) -> HTMLResponse:
-    context = _calculation(request)
+    theme = request.query_params.get("theme", "auto")
+    context = _with_theme(_calculation(request), theme)
     return templates.TemplateResponse(request, "embed.html", context, status_code=_status(context))
 
 

@@ -381,6 +381,8 @@ def _layout(payload: dict[str, Any], traces: list[Trace], eye: np.ndarray) -> di
     return {
         "title": {"text": title, "x": 0.02, "xanchor": "left", "font": {"size": 14}},
         "margin": {"l": 0, "r": 0, "t": 40, "b": 0},
+        # Upright at the right edge, the toolbar stays clear of the title even on a phone.
+        "modebar": {"orientation": "v"},
         "height": 360,
         "paper_bgcolor": TRANSPARENT,
         "font": FONT,

@@ -84,7 +84,12 @@ def attachment(name: str) -> dict[str, str]:
     return {"content-disposition": f'attachment; filename="{name}"'}
 
 
-@router.post("", openapi_extra=UPLOAD_WELD_BODY, response_model=MeshReport)
+@router.post(
+    "",
+    summary="Report on a mesh file",
+    openapi_extra=UPLOAD_WELD_BODY,
+    response_model=MeshReport,
+)
 async def post_mesh(request: Request, weld: WeldQuery = None) -> FastJSONResponse:
     """Report on a mesh file: counts, area, volume, winding, orientation and problems."""
     upload = await read_upload(request)
@@ -96,6 +101,7 @@ async def post_mesh(request: Request, weld: WeldQuery = None) -> FastJSONRespons
 
 @router.post(
     "/normals",
+    summary="Normals of a mesh file",
     openapi_extra=UPLOAD_BODY,
     response_class=Response,
     responses={
@@ -134,6 +140,7 @@ async def post_mesh_normals(
 
 @router.post(
     "/fix",
+    summary="Mesh file with its winding fixed",
     openapi_extra=UPLOAD_WELD_BODY,
     response_class=Response,
     responses={
@@ -177,6 +184,7 @@ async def post_mesh_fix(
 
 @router.post(
     "/export",
+    summary="Mesh file written again with its normals",
     openapi_extra=UPLOAD_WELD_BODY,
     response_class=Response,
     responses={

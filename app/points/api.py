@@ -179,7 +179,9 @@ def download_name(filename: str | None, suffix: str) -> dict[str, str]:
     return {"content-disposition": f'attachment; filename="{stem}-{suffix}"'}
 
 
-@router.post("", openapi_extra=POINTS_BODY, response_model=PointReport)
+@router.post(
+    "", summary="Report on a point cloud", openapi_extra=POINTS_BODY, response_model=PointReport
+)
 async def post_points(
     request: Request,
     k: KQuery = 30,
@@ -198,6 +200,7 @@ async def post_points(
 
 @router.post(
     "/normals",
+    summary="Normals of a point cloud",
     openapi_extra=POINTS_BODY,
     response_class=Response,
     responses={

@@ -22,9 +22,16 @@ window.NormalChart = (function () {
   // slow machine) and adds it once the page is idle, so the chart shows sooner.
   const FIRST = Object.assign({}, CONFIG, { displayModeBar: false });
 
+  // The embed's ?theme= fixes the colours with a class on the body; otherwise the reader's
+  // colour scheme decides.
+  function isDark() {
+    const body = document.body.classList;
+    if (body.contains("theme-dark") || body.contains("theme-light")) return body.contains("theme-dark");
+    return Boolean(window.matchMedia && window.matchMedia("(prefers-color-scheme: dark)").matches);
+  }
+
   function themed(layout) {
-    const dark = window.matchMedia && window.matchMedia("(prefers-color-scheme: dark)").matches;
-    if (!dark) return layout;
+    if (!isDark()) return layout;
     const copy = JSON.parse(JSON.stringify(layout));
     copy.font = Object.assign({}, copy.font, { color: "#c3cade" });
     copy.xaxis = Object.assign({}, copy.xaxis, { gridcolor: "#2f3850", zerolinecolor: "#69728a" });

@@ -121,5 +121,11 @@ window.NormalView3D = (function () {
     return show(element, figure);
   }
 
+  // The heading's hint names the mouse's gestures; a touch screen zooms with two fingers.
+  const hint = document.getElementById("view3d-hint");
+  if (hint && window.matchMedia && window.matchMedia("(pointer: coarse)").matches) {
+    hint.textContent = "(drag to rotate, pinch to zoom)";
+  }
+
   return { show: show, update: update };
 })();

@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 from playwright.sync_api import Page, expect
 
+from tests.browser.conftest import NewPage
 from tests.browser.helpers import FIELDS
 
 pytestmark = pytest.mark.browser
@@ -57,3 +58,20 @@ def test_docs_show_the_operations_and_try_them(page: Page, base_url: str) -> Non
     # Everything came from the app itself: no CDN, no validator badge, no fonts from elsewhere.
     outside = [url for url in requests if not url.startswith((base_url, "data:"))]
     assert not outside, outside
+
+
+@pytest.mark.parametrize(("scheme", "dark"), [("dark", True), ("light", False)])
+def test_docs_follow_the_colour_scheme_and_name_operations_in_words(
+    new_page: NewPage, scheme: str, dark: bool
+) -> None:
+    page = new_page(color_scheme=scheme)
+    page.goto("/docs")
+    post_normal = page.locator("#operations-normals-post_normal_api_normal_post")
+    expect(post_normal.locator(".opblock-summary-description")).to_have_text(
+        "Normal of one triangle"
+    )
+    expect(page.get_by_text("Post Normal", exact=True)).to_have_count(0)
+    background = page.evaluate(
+        "getComputedStyle(document.querySelector('.swagger-ui')).backgroundColor"
+    )
+    assert (background == "rgb(28, 32, 34)") is dark, background  # Swagger UI's dark mode

@@ -8,7 +8,7 @@ from urllib.parse import quote
 import pytest
 from playwright.sync_api import Page, expect
 
-from tests.browser.conftest import ConsoleWatch
+from tests.browser.conftest import ConsoleWatch, NewPage
 from tests.browser.helpers import COLLINEAR, RIGHT, triangle_query
 
 pytestmark = pytest.mark.browser
@@ -97,3 +97,27 @@ def test_framing_headers(page: Page) -> None:
     calculator = page.request.get(f"/?{triangle_query(*RIGHT)}")
     assert "frame-ancestors 'none'" in calculator.headers["content-security-policy"]
     assert calculator.headers["x-frame-options"] == "DENY"
+
+
+BACKGROUND = "() => getComputedStyle(document.body).backgroundColor"
+
+
+@pytest.mark.parametrize(
+    ("scheme", "theme", "background"),
+    [
+        ("light", "dark", "rgb(23, 28, 44)"),  # the dark card, whatever the reader prefers
+        ("dark", "light", "rgb(255, 255, 255)"),
+        ("dark", "auto", "rgb(23, 28, 44)"),  # auto follows the reader
+    ],
+)
+def test_embed_theme_sets_its_colours(
+    new_page: NewPage, scheme: str, theme: str, background: str
+) -> None:
+    page = new_page(color_scheme=scheme)
+    page.goto(f"/embed?{triangle_query(*RIGHT)}&theme={theme}")
+    page.locator("#chart[data-drawn] .main-svg").first.wait_for()
+    assert page.evaluate(BACKGROUND) == background
+    # The chart's text follows the theme too (light grey on the dark card).
+    dark = background != "rgb(255, 255, 255)"
+    font = page.evaluate("document.getElementById('chart').layout.font.color")
+    assert (font == "#c3cade") is dark, font

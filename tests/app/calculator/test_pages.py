@@ -265,6 +265,27 @@ def test_embed_without_parameters_shows_the_example(client) -> None:  # type: ig
     assert figure_data(html)["data"][0]["x"] == [6.0, 3.0, 2.0, 7.0, 3.5]
 
 
+@pytest.mark.parametrize("theme", ["auto", "light", "dark"])
+def test_embed_takes_a_theme(client, theme: str) -> None:  # type: ignore[no-untyped-def]
+    response, html = page(client, "/embed", {**EXAMPLE_QUERY, "theme": theme})
+    assert response.context["theme"] == theme
+    assert f"theme-{theme}" in str(html.one("body")["class"]).split()
+    assert figure_data(html)["data"][0]["y"] == [6.0, 3.0, 2.0, 7.0, 3.5]
+
+
+def test_embed_without_a_theme_follows_the_reader(client) -> None:  # type: ignore[no-untyped-def]
+    response, _html = page(client, "/embed", EXAMPLE_QUERY)
+    assert response.context["theme"] == "auto"
+
+
+def test_embed_refuses_an_unknown_theme_in_one_sentence(client) -> None:  # type: ignore[no-untyped-def]
+    response, html = page(client, "/embed", {**EXAMPLE_QUERY, "theme": "blue"}, status=422)
+    assert html.one("p", class_="message error")
+    assert "theme must be auto, light or dark, not &#39;blue&#39;." in response.text
+    assert not [attrs for attrs, _ in html.scripts if attrs.get("id") == "figure-data"]
+    assert response.context["errors"] == {"theme": "theme must be auto, light or dark, not 'blue'."}
+
+
 # --- /docs ------------------------------------------------------------------------------------
 
 
@@ -313,6 +334,19 @@ def test_openapi_lists_the_api_and_not_the_pages(client) -> None:  # type: ignor
         "/api/points/normals",
     }
     assert set(spec["paths"]["/api/normal"]) == {"get", "post"}
+
+
+def test_every_operation_is_named_in_words(client) -> None:  # type: ignore[no-untyped-def]
+    """Swagger UI shows each summary as the operation's name; FastAPI's default is the function's
+    name title-cased ("Post Normal"), which says nothing to a reader."""
+    spec = client.get("/openapi.json").json()
+    operations = [op for ops in spec["paths"].values() for op in ops.values()]
+    summaries = [op.get("summary", "") for op in operations]
+    for op, summary in zip(operations, summaries, strict=True):
+        default = " ".join(op["operationId"].split("_api_")[0].split("_")).title()
+        assert summary and summary != default and summary[0].isupper(), (op["operationId"], summary)
+    assert len(set(summaries)) == len(summaries), summaries
+    assert spec["paths"]["/api/normal"]["post"]["summary"] == "Normal of one triangle"
 
 
 # --- Error pages and inline scripts -----------------------------------------------------------
