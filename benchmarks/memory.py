@@ -14,9 +14,9 @@ runs once. The figure is the peak resident memory above that baseline (``VmHWM``
 (1.0 of each figure), as they do on a server.
 
 Paths: ``read`` (``read_mesh``), ``report`` (``analyse_mesh`` + ``build_report`` and its JSON,
-as ``POST /api/mesh`` does), ``face``, ``vertex``, ``corner`` (the normals as ``.npy``, written
-in blocks by ``normals_blocks`` as the server streams them), ``corner-json`` (the same as JSON)
-and ``fix`` (``orient`` +
+as ``POST /api/mesh`` does), ``face``, ``vertex``, ``corner`` (the normals as ``.npy``, made
+and written a block of faces at a time by ``normals_to_write`` and ``normals_blocks``, as the
+server streams them), ``corner-json`` (the same as JSON) and ``fix`` (``orient`` +
 ``write_mesh`` in the upload's format, PLY for those not writable, as ``POST /api/mesh/fix``).
 """
 
@@ -148,7 +148,7 @@ def make_file(kind: str, megabytes: float, folder: Path) -> Path:
 def run_path(path_name: str, data: bytes, filename: str) -> None:
     """One path of the server's work on the upload ``data``."""
     from mesh_normal.analysis import analyse_mesh, build_report
-    from mesh_normal.exports import compute_normals, normals_blocks
+    from mesh_normal.exports import normals_blocks, normals_to_write
     from mesh_normal.files import read_mesh, write_mesh
     from mesh_normal.files.formats import WRITABLE
     from mesh_normal.orientation import orient
@@ -157,9 +157,10 @@ def run_path(path_name: str, data: bytes, filename: str) -> None:
     if path_name == "report":
         build_report(analyse_mesh(mesh, filename, len(data))).model_dump_json()
     elif path_name in ("face", "vertex", "corner", "corner-json"):
-        # As the server answers: the normals computed, then written in blocks as they are sent.
+        # As the server answers: the normals computed (corner normals made a block at a time
+        # as they are written), then written in blocks as they are sent.
         kind = "corner" if path_name == "corner-json" else path_name
-        normals, missing = compute_normals(mesh, kind, "angle", 30.0)  # type: ignore[arg-type]
+        normals, missing = normals_to_write(mesh, kind, "angle", 30.0)  # type: ignore[arg-type]
         chosen = "json" if path_name == "corner-json" else "npy"
         for _block in normals_blocks(normals, missing, kind, "angle", 30.0, chosen):  # type: ignore[arg-type]
             pass

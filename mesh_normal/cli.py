@@ -231,13 +231,13 @@ def normals(args: argparse.Namespace, progress: Progress) -> int:
             )
         args.input, args.format, args.normals, args.winding = args.file, name, args.kind, "keep"
         return export(args, progress)
-    from mesh_normal.exports import NormalsFormat, compute_normals, normals_file
+    from mesh_normal.exports import NormalsFormat, normals_file, normals_to_write
 
     if same_file(args.output, args.file):
         raise Failure(f"{args.output} is the input file; write the normals to another file", 2)
     mesh, _ = load(args.file, progress)
     progress.step(f"computing {args.kind} normals")
-    values, missing = compute_normals(mesh, args.kind, args.weighting, args.crease_angle)
+    values, missing = normals_to_write(mesh, args.kind, args.weighting, args.crease_angle)
     progress.step(f"writing {args.output}")
     formats: dict[str, NormalsFormat] = {".npy": "npy", ".csv": "csv", ".json": "json"}
     # the same files as POST /api/mesh/normals

@@ -16,7 +16,7 @@ from numpy.typing import ArrayLike
 
 from mesh_normal.faces import FaceGeometry, MeshInput, checked_input, face_geometry
 from mesh_normal.kernels import BLOCK, face_edges, gather, kernel
-from mesh_normal.tolerances import MESH_CREASE_SLACK, MESH_PAIR_CHUNK
+from mesh_normal.tolerances import MESH_CORNER_BLOCK, MESH_CREASE_SLACK, MESH_PAIR_CHUNK
 from mesh_normal.topology import VertexCorners, vertex_corners
 from mesh_normal.types import BoolArray, FloatArray, IndexArray
 from mesh_normal.vertices import Weighting, face_weights, normalise_kernel, smooth, weighting_code
@@ -87,35 +87,127 @@ def corner_normals(
     pair: time there grows with the square of a vertex's corner count, and memory is
     bounded by ``MESH_PAIR_CHUNK``.
     """
+    blocks = corner_blocks(vertices, faces, crease_angle, weighting)
+    return CornerNormals(blocks.block(0, len(blocks)), blocks.missing)
+
+
+@dataclass(frozen=True, slots=True)
+class CornerBlocks:
+    """The corner normals of ``m`` faces, made a block of faces at a time.
+
+    Everything they are made of but the (m, 3, 3) result: 72 bytes a face that a writer
+    (:mod:`mesh_normal.exports`) need never hold whole. ``block(0, m)`` is
+    :func:`corner_normals`'s array, and any split into blocks gives the same bits.
+
+    Attributes
+    ----------
+    faces : (m, 3) int
+        The checked faces.
+    smooth : (n, 3) float64
+        The vertex normals, which every corner away from a crease takes.
+    degenerate : (m,) bool
+        Faces whose corners are zero.
+    creased : (c,) intp
+        Ids (3 f + k) of the corners at creased vertices, increasing.
+    creased_normals : (c, 3) float64
+        Their normals, compared pair by pair around their vertex.
+    missing : (m, 3) bool
+        As :attr:`CornerNormals.missing`.
+    """
+
+    faces: IndexArray
+    smooth: FloatArray
+    degenerate: BoolArray
+    creased: IndexArray
+    creased_normals: FloatArray
+    missing: BoolArray
+
+    def __len__(self) -> int:
+        return len(self.missing)
+
+    @property
+    def shape(self) -> tuple[int, int, int]:
+        return (len(self), 3, 3)
+
+    def block(self, start: int, stop: int) -> FloatArray:
+        """(k, 3, 3) float64: the corner normals of faces ``start`` to ``stop``."""
+        normals = take_rows(self.smooth, self.faces[start:stop])
+        low, high = np.searchsorted(self.creased, (3 * start, 3 * stop)).tolist()
+        put_rows(
+            normals.reshape(-1, 3),
+            self.creased[low:high] - 3 * start,
+            self.creased_normals[low:high],
+        )
+        normals[self.degenerate[start:stop]] = 0.0
+        return normals
+
+
+def corner_blocks(
+    vertices: MeshInput,
+    faces: ArrayLike | None = None,
+    crease_angle: float = 30.0,
+    weighting: Weighting = "angle",
+    rows: int = MESH_CORNER_BLOCK,
+) -> CornerBlocks:
+    """What :func:`corner_normals` computes, ready to be taken a block of faces at a time.
+
+    Parameters and the rule are :func:`corner_normals`'s; ``rows`` is how many faces the
+    search for creased vertices takes at a time (any number gives the same result). Peak
+    memory is the face geometry, the vertex normals and the few bytes a face of the masks,
+    plus about 100 bytes for each corner at a creased vertex.
+    """
     threshold = _crease_cosine(crease_angle)
     source = checked_input(vertices, faces)
     weighting_code(weighting)
     geometry = face_geometry(source)
     smooth_normals, cancelled = smooth(geometry, weighting)
     indices, vertex_count = geometry.mesh.faces, len(geometry.mesh.vertices)
-    normals, missing = take_rows(smooth_normals, indices), cancelled[indices]
+    missing = cancelled[indices]
+    creased_ids = np.empty(0, dtype=np.intp)
+    creased_normals = np.empty((0, 3))
     if float(crease_angle) < 180.0:
-        # Faces within half the crease of their vertex normal are all within the crease of
-        # each other (the slack keeps that true after rounding): such a vertex's corners are
-        # its vertex normal. Only the others need their corners compared pair by pair.
-        half = math.cos(math.radians(crease_angle) / 2) + MESH_CREASE_SLACK
-        near = np.empty(indices.shape, dtype=bool)
-        for corner in range(3):  # a column at a time: 8 bytes a face, not 24, at once
-            dots = np.einsum("fa,fa->f", normals[:, corner], geometry.normals)
-            np.greater_equal(dots, half, out=near[:, corner])
-        near[geometry.degenerate] = True  # weighs nothing either way
-        creased = np.zeros(vertex_count, dtype=bool)
-        creased[indices[~near]] = True
+        creased = _creased_vertices(geometry, smooth_normals, crease_angle, rows)
         corners = np.flatnonzero(creased[indices].ravel())
         if len(corners):
             groups = vertex_corners(indices, vertex_count, corners)
             weights = corner_weights(geometry, weighting).T.ravel()  # only where creased
-            found, lost = _creased(geometry.normals, weights, groups, threshold)
-            put_rows(normals.reshape(-1, 3), groups.order, found)
+            unit = geometry.unit_normals(groups.order // 3)  # in sorted corner order
+            found, lost = _creased(unit, weights, groups, threshold)
             missing.reshape(-1)[groups.order] = lost
-    normals[geometry.degenerate] = 0.0
+            # ``corners`` is increasing and ``order`` a permutation of it: put the normals
+            # in corner order, so that a block finds its own by bisection.
+            creased_ids, creased_normals = corners, np.empty_like(found)
+            put_rows(creased_normals, np.searchsorted(corners, groups.order), found)
     missing[geometry.degenerate] = True
-    return CornerNormals(normals, missing)
+    return CornerBlocks(
+        indices, smooth_normals, geometry.degenerate, creased_ids, creased_normals, missing
+    )
+
+
+def _creased_vertices(
+    geometry: FaceGeometry, smooth_normals: FloatArray, crease_angle: float, rows: int
+) -> BoolArray:
+    """(n,) bool: the vertices with a corner not within half the crease of their normal.
+
+    Faces within half the crease of their vertex normal are all within the crease of each
+    other (the slack keeps that true after rounding): such a vertex's corners are its vertex
+    normal. Only the others need their corners compared pair by pair. A block of faces at a
+    time, so that neither their unit normals nor their corners' are whole in memory.
+    """
+    indices = geometry.mesh.faces
+    half = math.cos(math.radians(crease_angle) / 2) + MESH_CREASE_SLACK
+    creased = np.zeros(len(geometry.mesh.vertices), dtype=bool)
+    for start in range(0, len(indices), rows):
+        block = slice(start, start + rows)
+        normals = take_rows(smooth_normals, indices[block])
+        unit = geometry.unit_normals(block)
+        near = np.empty(normals.shape[:2], dtype=bool)
+        for corner in range(3):
+            dots = np.einsum("fa,fa->f", normals[:, corner], unit)
+            np.greater_equal(dots, half, out=near[:, corner])
+        near[geometry.degenerate[block]] = True  # weighs nothing either way
+        creased[indices[block][~near]] = True
+    return creased
 
 
 def _crease_cosine(crease_angle: float) -> float:
@@ -212,14 +304,14 @@ def _creased(
 ) -> tuple[FloatArray, BoolArray]:
     """Corner normals by comparing every pair of corners around each vertex.
 
-    ``unit`` is (m, 3) and ``weights`` (3 m,) by corner id; the results are in the order of
-    ``groups.order``. Vertices with the same number of corners d are done together as
-    (vertices, d, d) blocks of dot products, at most ``MESH_PAIR_CHUNK`` pairs at a time; a
-    vertex with more than that many pairs is done a block of its corners at a time.
+    ``unit`` is (c, 3), the unit normals of the faces of the corners in ``groups.order``, in
+    that order, and ``weights`` (3 m,) by corner id; the results are in that order too.
+    Vertices with the same number of corners d are done together as (vertices, d, d) blocks
+    of dot products, at most ``MESH_PAIR_CHUNK`` pairs at a time; a vertex with more than that
+    many pairs is done a block of its corners at a time.
     """
-    order = groups.order
-    normal = take_rows(unit, order // 3)  # in sorted corner order
-    weight = weights[order]
+    normal = unit
+    weight = weights[groups.order]
     counts = groups.counts
     sums = np.empty_like(normal)
     totals = np.empty_like(weight)

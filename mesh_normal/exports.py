@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import io
 from collections.abc import Iterator
-from typing import Literal
+from typing import Literal, TypeAlias
 
 import numpy as np
 from numpy.typing import NDArray
 from pydantic_core import to_json
 
-from mesh_normal.corners import corner_normals
+from mesh_normal.corners import CornerBlocks, corner_blocks
 from mesh_normal.faces import face_geometry
 from mesh_normal.files import LoadedMesh
 from mesh_normal.files.ply import ply_bytes
@@ -23,6 +23,8 @@ FORMATS: tuple[NormalsFormat, ...] = ("json", "csv", "npy")
 #: Normals a block of a streamed file holds (faces for corner normals): each block is a
 #: short step, a few milliseconds.
 BLOCK_ROWS = 4096
+#: Normals to write: an array, or corner normals made a block at a time as they are written.
+Normals: TypeAlias = NDArray[np.float64] | CornerBlocks
 
 
 def compute_normals(
@@ -46,8 +48,19 @@ def compute_normals(
     if kind == "vertex":
         smooth = vertex_normals(checked, weighting=weighting)
         return smooth.normals, smooth.missing
-    corners = corner_normals(checked, crease_angle=crease_angle, weighting=weighting)
-    return corners.normals, corners.missing
+    corners = corner_blocks(checked, crease_angle=crease_angle, weighting=weighting)
+    return corners.block(0, len(corners)), corners.missing
+
+
+def normals_to_write(
+    mesh: LoadedMesh, kind: NormalsKind, weighting: Weighting = "angle", crease_angle: float = 30.0
+) -> tuple[Normals, NDArray[np.bool_]]:
+    """:func:`compute_normals`, but corner normals as :class:`CornerBlocks`: a file of them
+    written by :func:`normals_blocks` never holds their 72 bytes a face whole."""
+    if kind != "corner":
+        return compute_normals(mesh, kind, weighting, crease_angle)
+    corners = corner_blocks(mesh.checked(), crease_angle=crease_angle, weighting=weighting)
+    return corners, corners.missing
 
 
 def export_normals(
@@ -63,7 +76,7 @@ def export_normals(
 
 
 def normals_file(
-    normals: NDArray[np.float64],
+    normals: Normals,
     missing: NDArray[np.bool_],
     kind: NormalsKind,
     weighting: Weighting,
@@ -75,7 +88,7 @@ def normals_file(
 
 
 def normals_blocks(
-    normals: NDArray[np.float64],
+    normals: Normals,
     missing: NDArray[np.bool_],
     kind: NormalsKind,
     weighting: Weighting,
@@ -94,7 +107,7 @@ def normals_blocks(
 
 
 def _json_blocks(
-    normals: NDArray[np.float64],
+    normals: Normals,
     missing: NDArray[np.bool_],
     kind: NormalsKind,
     weighting: Weighting,
@@ -115,22 +128,30 @@ def _json_blocks(
     )
     yield head[:-1] + b',"normals":['
     for start in range(0, len(normals), rows):
-        block = to_json(normals[start : start + rows].tolist())[1:-1]
+        block = to_json(_rows(normals, start, start + rows).tolist())[1:-1]
         yield (b"," + block) if start else block
     yield b"]}"
+
+
+def _rows(normals: Normals, start: int, stop: int) -> NDArray[np.float64]:
+    if isinstance(normals, CornerBlocks):
+        return normals.block(start, stop)
+    return normals[start:stop]
 
 
 def npy_bytes(array: NDArray[np.float64]) -> bytes:
     return b"".join(_npy_blocks(array, BLOCK_ROWS))
 
 
-def _npy_blocks(array: NDArray[np.float64], rows: int) -> Iterator[bytes]:
-    array = np.ascontiguousarray(array, dtype=np.float64)
+def _npy_blocks(normals: Normals, rows: int) -> Iterator[bytes]:
+    if not isinstance(normals, CornerBlocks):
+        normals = np.ascontiguousarray(normals, dtype=np.float64)
     header = io.BytesIO()
-    np.lib.format.write_array_header_1_0(header, np.lib.format.header_data_from_array_1_0(array))
+    described = {"descr": "<f8", "fortran_order": False, "shape": tuple(normals.shape)}
+    np.lib.format.write_array_header_1_0(header, described)
     yield header.getvalue()
-    for start in range(0, len(array), rows):
-        yield array[start : start + rows].tobytes()
+    for start in range(0, len(normals), rows):
+        yield np.ascontiguousarray(_rows(normals, start, start + rows), dtype="<f8").tobytes()
 
 
 def normals_csv(normals: NDArray[np.float64], kind: NormalsKind) -> bytes:
@@ -138,7 +159,7 @@ def normals_csv(normals: NDArray[np.float64], kind: NormalsKind) -> bytes:
     return b"".join(_csv_blocks(normals, kind, BLOCK_ROWS))
 
 
-def _csv_blocks(normals: NDArray[np.float64], kind: NormalsKind, rows: int) -> Iterator[bytes]:
+def _csv_blocks(normals: Normals, kind: NormalsKind, rows: int) -> Iterator[bytes]:
     if kind == "corner":
         header = "face,corner,nx,ny,nz"
         fmt = "%d,%d,%.17g,%.17g,%.17g"
@@ -147,7 +168,7 @@ def _csv_blocks(normals: NDArray[np.float64], kind: NormalsKind, rows: int) -> I
         fmt = "%d,%.17g,%.17g,%.17g"
     yield header.encode() + b"\n"
     for start in range(0, len(normals), rows):
-        block = normals[start : start + rows]
+        block = _rows(normals, start, start + rows)
         if kind == "corner":
             index = (
                 (np.indices(block.shape[:2]) + np.array([start, 0])[:, None, None]).reshape(2, -1).T

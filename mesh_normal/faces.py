@@ -40,7 +40,7 @@ from numpy.typing import ArrayLike
 
 from mesh_normal.checks import CheckedMesh, as_checked
 from mesh_normal.kernels import PARALLEL_KERNELS, announce_compiling, geometry_kernel
-from mesh_normal.types import BoolArray, FloatArray
+from mesh_normal.types import BoolArray, FloatArray, IndexArray
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -91,10 +91,12 @@ class FaceGeometry:
             self._cache["normals"] = found
         return found
 
-    def unit_normals(self, rows: slice = slice(None), out: FloatArray | None = None) -> FloatArray:
-        """(k, 3) float64: the unit normals of a slice of the faces, not kept (a writer
-        taking them a block at a time); into ``out`` if given (``crosses`` itself, by a caller
-        that needs nothing more of this geometry and not 24 bytes a face more)."""
+    def unit_normals(
+        self, rows: slice | IndexArray = slice(None), out: FloatArray | None = None
+    ) -> FloatArray:
+        """(k, 3) float64: the unit normals of a slice (or a list) of the faces, not kept
+        (a writer taking them a block at a time); into ``out`` if given (``crosses`` itself,
+        by a caller that needs nothing more of this geometry and not 24 bytes a face more)."""
         divisor = np.where(self.degenerate[rows], 1.0, self.lengths[rows])
         found = np.divide(self.crosses[rows], divisor[:, None], out=out)
         found += 0.0  # -0.0 becomes 0.0

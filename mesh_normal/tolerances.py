@@ -59,6 +59,10 @@ MESH_CREASE_SLACK = 16 * EPSILON
 #: (about 20 bytes each) are held in memory at once.
 MESH_PAIR_CHUNK = 2**20
 
+#: The corner normals are made and written this many faces at a time (72 bytes each), so
+#: that the (m, 3, 3) result of a large mesh is never whole in a server's memory.
+MESH_CORNER_BLOCK = 4096
+
 #: A mesh patch is flat when |V| <= MESH_FLAT_SINE * sum |det| / 6 (V: the volume of the cone
 #: from its centroid over its faces, see :mod:`mesh_normal.orientation`): its faces tilt, on
 #: average, by an angle whose sine is at most this towards or away from the centroid. The same

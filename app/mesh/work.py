@@ -20,7 +20,7 @@ from app.mesh.figures import mesh_figures
 from app.mesh.uploads import Upload
 from app.web.errors import ApiError
 from mesh_normal.analysis import analyse_mesh, build_report, flips_by_component
-from mesh_normal.exports import FORMATS, KINDS, NormalsKind, compute_normals
+from mesh_normal.exports import FORMATS, KINDS, Normals, NormalsKind, normals_to_write
 from mesh_normal.files import LoadedMesh, MeshFileError, read_mesh, read_mesh_files
 from mesh_normal.files.formats import FORMATS as MESH_FORMATS
 from mesh_normal.files.formats import WRITABLE
@@ -53,10 +53,12 @@ def report(upload: Upload, weld: float | None) -> MeshReport:
 
 def normals(
     upload: Upload, kind: NormalsKind, weighting: Weighting, crease_angle: float
-) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+) -> tuple[Normals, NDArray[np.bool_]]:
     """The normals and the mask of rows without one (the answer is written from them in
-    blocks, by the server)."""
-    return compute_normals(load(upload), kind, weighting, crease_angle)
+    blocks, by the server): corner normals as what they are made of, a block of faces at a
+    time as they are written, so that their 72 bytes a face are never whole in either
+    process."""
+    return normals_to_write(load(upload), kind, weighting, crease_angle)
 
 
 def fix(

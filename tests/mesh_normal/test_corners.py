@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
 import pytest
 
 from mesh_normal import corners, topology
-from mesh_normal.corners import corner_normals, take_rows
+from mesh_normal.corners import corner_blocks, corner_normals, take_rows
 from mesh_normal.faces import face_normals
 from mesh_normal.topology import vertex_corners
 from mesh_normal.vertices import vertex_normals
@@ -104,6 +105,18 @@ def test_corner_normals_in_small_chunks_are_the_same(
     split = corner_normals(vertices, faces, 5.0)
     assert np.allclose(split.normals, whole.normals, atol=1e-15, rtol=0)
     assert np.array_equal(split.missing, whole.missing)
+
+
+@pytest.mark.parametrize("rows", [1, 7, 4096])
+def test_corner_blocks_give_the_same_bits_however_split(rows: int) -> None:
+    vertices, faces = load("nut.ply")  # creased and smooth vertices both
+    whole = corner_normals(vertices, faces, 20.0)
+    blocks = corner_blocks(vertices, faces, 20.0, rows=rows)
+    assert len(blocks.creased) and len(blocks.creased) < faces.size
+    edges = [0, 1, *range(5, len(faces), rows), len(faces)]
+    joined = np.concatenate([blocks.block(a, b) for a, b in itertools.pairwise(edges)])
+    assert joined.tobytes() == whole.normals.tobytes()
+    assert np.array_equal(blocks.missing, whole.missing)
 
 
 def test_smooth_sample_corners_are_their_vertex_normals() -> None:
