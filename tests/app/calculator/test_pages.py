@@ -270,7 +270,7 @@ def test_embed_takes_a_theme(client, theme: str) -> None:  # type: ignore[no-unt
     response, html = page(client, "/embed", {**EXAMPLE_QUERY, "theme": theme})
     assert response.context["theme"] == theme
     assert f"theme-{theme}" in str(html.one("body")["class"]).split()
-    assert figure_data(html)["data"][0]["y"] == [6.0, 3.0, 2.0, 7.0, 3.5]
+    assert figure_data(html)["data"][0]["x"] == [6.0, 3.0, 2.0, 7.0, 3.5]
 
 
 def test_embed_without_a_theme_follows_the_reader(client) -> None:  # type: ignore[no-untyped-def]
