@@ -1,7 +1,7 @@
 """The calculator's query parameters (``ax`` ... ``cz``, ``swap``), read as decimal text.
 
 The page and its JSON twin read the same parameters in the same way, so a typing mistake
-gets the same sentence in both, naming the field as the form does.
+gets the same sentence in both, naming the field as the form does (``B.y``, not ``by``).
 """
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from math import isfinite
-from typing import Annotated
+from typing import Annotated, Any
 
 from pydantic import BaseModel, Field, JsonValue
 
@@ -40,7 +40,11 @@ Text = Annotated[
 
 
 class TriangleParams(BaseModel):
-    """The page's query parameters, for the OpenAPI description of the GET routes."""
+    """The page's query parameters, for the OpenAPI description of the GET routes.
+
+    Documentation only (see :func:`query_parameters_spec`): FastAPI validating them would
+    report a missing field before a wrong one, in words the page does not use.
+    """
 
     ax: Text
     ay: Text
@@ -56,6 +60,23 @@ class TriangleParams(BaseModel):
         description="`on`, `true` or `1` uses the order A, C, B.",
         json_schema_extra={"enum": list[JsonValue](sorted(SWAP_ON | SWAP_OFF))},
     )
+
+
+def query_parameters_spec() -> dict[str, Any]:
+    """The OpenAPI ``parameters`` of a route that reads the triangle with :func:`read_triangle`."""
+    schema = TriangleParams.model_json_schema()
+    required = set(schema.get("required", ()))
+    parameters = [
+        {
+            "name": name,
+            "in": "query",
+            "required": name in required,
+            "schema": spec,
+            "description": spec.get("description", ""),
+        }
+        for name, spec in schema["properties"].items()
+    ]
+    return {"parameters": parameters}
 
 
 Point = tuple[float, float, float]
@@ -80,27 +101,36 @@ class TriangleInput:
         return ApiError(422, sentence, name)
 
 
+def label(name: str) -> str:
+    """A coordinate as people say it: ``B.y`` for ``by`` (which reads as the English word)."""
+    return f"{name[0].upper()}.{name[1:]}" if name in COORDINATE_FIELDS else name
+
+
 def parse_decimal(name: str, text: str) -> float:
-    """Read one coordinate; raise :class:`ApiError` naming the field when it is not one."""
+    """Read one coordinate; raise :class:`ApiError` naming the field when it is not one.
+
+    The sentence says the field as the form does (``B.y``); the error's field stays ``by``.
+    """
+    said = label(name)
     stripped = text.strip(SPACE)
     if not stripped:
-        raise ApiError(422, f"{name} is empty; enter a decimal number such as 1.5.", name)
+        raise ApiError(422, f"{said} is empty; enter a decimal number such as 1.5.", name)
     if len(text) > MAX_TEXT:
         raise ApiError(
             422,
-            f"{name} is longer than {MAX_TEXT} characters; "
+            f"{said} is longer than {MAX_TEXT} characters; "
             "shorten it or use an exponent, such as 1.5e-30.",
             name,
         )
     if not DECIMAL.fullmatch(stripped):
         raise ApiError(
             422,
-            f"{name} must be a decimal number such as 1.5 or -2e3, not {clip(stripped)!r}.",
+            f"{said} must be a decimal number such as 1.5 or -2e3, not {clip(stripped)!r}.",
             name,
         )
     value = float(stripped)
     if not isfinite(value):
-        raise ApiError(422, f"{name} is beyond the double range (about ±1.8e308).", name)
+        raise ApiError(422, f"{said} is beyond the double range (about ±1.8e308).", name)
     return value
 
 
@@ -118,7 +148,7 @@ def read_triangle(query: Mapping[str, str]) -> TriangleInput:
     result = TriangleInput(typed=typed)
     for name in COORDINATE_FIELDS:
         if name not in query:
-            result.errors[name] = f"{name} is missing."
+            result.errors[name] = f"{label(name)} is missing."
             continue
         try:
             result.numbers[name] = parse_decimal(name, query[name])

@@ -40,19 +40,25 @@
     FIELDS.concat(["swap"]).forEach(function (name) { setError(name, errors[name]); });
   }
 
+  // A field as people say it: "B.y", not "by" (which reads as the English word).
+  function label(name) {
+    return name.charAt(0).toUpperCase() + "." + name.slice(1);
+  }
+
   function localErrors() {
     const errors = {};
     FIELDS.forEach(function (name) {
+      const said = label(name);
       const typed = document.getElementById(name).value;
       const text = typed.replace(SPACES, "");
-      if (!text) errors[name] = name + " is empty; enter a decimal number such as 1.5.";
+      if (!text) errors[name] = said + " is empty; enter a decimal number such as 1.5.";
       else if (typed.length > 64) {
-        errors[name] = name + " is longer than 64 characters; shorten it or use an exponent, such as 1.5e-30.";
+        errors[name] = said + " is longer than 64 characters; shorten it or use an exponent, such as 1.5e-30.";
       } else if (!DECIMAL.test(text)) {
         const shown = text.length <= 20 ? text : text.slice(0, 17) + "...";
-        errors[name] = name + " must be a decimal number such as 1.5 or -2e3, not '" + shown + "'.";
+        errors[name] = said + " must be a decimal number such as 1.5 or -2e3, not '" + shown + "'.";
       } else if (!isFinite(Number(text))) {
-        errors[name] = name + " is beyond the double range (about ±1.8e308).";
+        errors[name] = said + " is beyond the double range (about ±1.8e308).";
       }
     });
     return errors;

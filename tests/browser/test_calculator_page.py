@@ -113,7 +113,7 @@ def test_typing_mistake_is_named_beside_the_field_and_clears_when_fixed(page: Pa
 
     bx.fill("")
     bx.press_sequentially("1..2")
-    expect(error).to_have_text("bx must be a decimal number such as 1.5 or -2e3, not '1..2'.")
+    expect(error).to_have_text("B.x must be a decimal number such as 1.5 or -2e3, not '1..2'.")
     expect(error).to_be_visible()
     expect(bx).to_have_attribute("aria-invalid", "true")
     expect(bx).to_have_value("1..2")
@@ -129,7 +129,7 @@ def test_typing_mistake_is_named_beside_the_field_and_clears_when_fixed(page: Pa
     # A second mistake: an empty field; the notice counts both.
     page.locator("#cz").fill("")
     expect(page.locator('[data-error-for="cz"]')).to_have_text(
-        "cz is empty; enter a decimal number such as 1.5."
+        "C.z is empty; enter a decimal number such as 1.5."
     )
     expect(page.locator("#cz")).to_have_attribute("aria-invalid", "true")
     expect(cell(page, "invalid")).to_have_text("Fix the highlighted fields to see the normal.")

@@ -10,6 +10,7 @@ import json
 
 import pytest
 
+from app.calculator.params import label
 from tests.conftest import EXAMPLE_QUERY, assert_error
 
 VALID = {"a": [0, 0, 0], "b": [1, 0, 0], "c": [0, 1, 0], "swap_winding": False}
@@ -284,7 +285,8 @@ BAD_TEXT = [
 @pytest.mark.parametrize("name", ["ax", "cz"])
 def test_bad_query_value(client, route: str, text: str, word: str, name: str) -> None:  # type: ignore[no-untyped-def]
     response = client.get(route, params={**EXAMPLE_QUERY, name: text})
-    body = assert_error(response, 422, name, name, word)
+    body = assert_error(response, 422, name, label(name), word)
+    assert not body["error"].startswith(name)  # "B.y", never "by", in the sentence
     assert len(body["error"]) < 200  # a long value is not echoed whole
 
 
@@ -298,11 +300,11 @@ def test_non_ascii_digits_are_refused(client, text: str) -> None:  # type: ignor
 @pytest.mark.parametrize("name", ["ax", "by", "cz"])
 def test_missing_query_value(client, route: str, name: str) -> None:  # type: ignore[no-untyped-def]
     params = {key: value for key, value in EXAMPLE_QUERY.items() if key != name}
-    assert_error(client.get(route, params=params), 422, name, "missing")
+    assert_error(client.get(route, params=params), 422, name, label(name), "missing")
 
 
 def test_no_query_at_all(client) -> None:  # type: ignore[no-untyped-def]
-    assert_error(client.get("/api/normal"), 422, "ax", "missing")
+    assert_error(client.get("/api/normal"), 422, "ax", "A.x", "missing")
 
 
 @pytest.mark.parametrize("route", ["/api/normal", "/api/chart"])

@@ -159,7 +159,7 @@ def test_every_bad_field_is_shown(client) -> None:  # type: ignore[no-untyped-de
 def test_missing_coordinates_are_named(client) -> None:  # type: ignore[no-untyped-def]
     response, html = page(client, "/", {"ax": "1"}, status=422)
     assert set(response.context["errors"]) == set(FIELDS) - {"ax"}
-    assert html.text("cz-error") == "cz is missing."
+    assert html.text("cz-error") == "C.z is missing."
 
 
 def test_typed_markup_is_escaped(client) -> None:  # type: ignore[no-untyped-def]
@@ -255,7 +255,7 @@ def test_embed_is_the_chart_and_a_link_back(client) -> None:  # type: ignore[no-
 
 def test_embed_with_a_bad_value_says_why(client) -> None:  # type: ignore[no-untyped-def]
     response, html = page(client, "/embed", {**EXAMPLE_QUERY, "ax": "abc"}, status=422)
-    assert "ax must be a decimal number" in response.text
+    assert "A.x must be a decimal number" in response.text
     assert not [attrs for attrs, _ in html.scripts if attrs.get("id") == "figure-data"]
     assert urlsplit(html.find("a")[0]["href"]).path == "/"
 
