@@ -37,7 +37,7 @@ router = APIRouter(
 def query_payload(request: Request) -> dict[str, Any]:
     """The result for the page's query parameters, or the first error as an ApiError."""
     parsed = read_triangle(request.query_params)
-    if parsed.errors:
+    if not parsed.valid:
         raise parsed.first_error()
     a, b, c = parsed.points()
     return normal_payload(triangle_normal(a, b, c, swap_winding=parsed.swap))

@@ -84,21 +84,50 @@ Point = tuple[float, float, float]
 
 @dataclass
 class TriangleInput:
-    """What the user typed, what it means, and a sentence for every field that is wrong."""
+    """What the user typed, what it means, and what stops it from being a triangle.
+
+    ``errors`` holds a sentence for every value that was given and is wrong (and for the
+    swap flag); ``missing`` lists the coordinates not given yet (absent or blank), which
+    are said together in one calm line rather than as one error each.
+    """
 
     typed: dict[str, str]
     swap: bool = False
     numbers: dict[str, float] = field(default_factory=dict)
     errors: dict[str, str] = field(default_factory=dict)
+    missing: list[str] = field(default_factory=list)
+
+    @property
+    def valid(self) -> bool:
+        return not self.errors and not self.missing
 
     def points(self) -> tuple[Point, Point, Point]:
-        """The three points; call only when there are no errors."""
+        """The three points; call only when the input is valid."""
         x = [self.numbers[name] for name in COORDINATE_FIELDS]
         return (x[0], x[1], x[2]), (x[3], x[4], x[5]), (x[6], x[7], x[8])
 
+    def missing_line(self) -> str:
+        """The missing coordinates in one sentence, ``""`` when none is."""
+        return missing_sentence(self.missing)
+
     def first_error(self) -> ApiError:
-        name, sentence = next(iter(self.errors.items()))
-        return ApiError(422, sentence, name)
+        """The one sentence for the API: a wrong value first, else what is missing."""
+        if self.errors:
+            name, sentence = next(iter(self.errors.items()))
+            return ApiError(422, sentence, name)
+        return ApiError(422, self.missing_line(), self.missing[0])
+
+
+def missing_sentence(names: list[str]) -> str:
+    """``B.x, B.y and C.z are missing.``; every one is said as "All nine ... are missing"."""
+    said = [label(name) for name in names]
+    if not said:
+        return ""
+    if len(said) == len(COORDINATE_FIELDS):
+        return "All nine coordinates, A.x to C.z, are missing."
+    if len(said) == 1:
+        return f"{said[0]} is missing."
+    return f"{', '.join(said[:-1])} and {said[-1]} are missing."
 
 
 def label(name: str) -> str:
@@ -143,15 +172,15 @@ def parse_swap(text: str | None) -> bool:
 
 
 def read_triangle(query: Mapping[str, str]) -> TriangleInput:
-    """Read all nine coordinates and the swap flag, collecting every error."""
+    """Read all nine coordinates and the swap flag: every wrong value, then what is missing."""
     typed = {name: query.get(name, "") for name in COORDINATE_FIELDS}
     result = TriangleInput(typed=typed)
     for name in COORDINATE_FIELDS:
-        if name not in query:
-            result.errors[name] = f"{label(name)} is missing."
+        if not typed[name].strip(SPACE):  # absent, or a field left blank: not yet given
+            result.missing.append(name)
             continue
         try:
-            result.numbers[name] = parse_decimal(name, query[name])
+            result.numbers[name] = parse_decimal(name, typed[name])
         except ApiError as error:
             result.errors[name] = error.error
     try:

@@ -45,13 +45,28 @@
     return name.charAt(0).toUpperCase() + "." + name.slice(1);
   }
 
+  // The fields not filled in yet, said together in one calm line (the server's sentence).
+  function missingLine(missing) {
+    const said = missing.map(label);
+    if (!said.length) return "";
+    if (said.length === FIELDS.length) return "All nine coordinates, A.x to C.z, are missing.";
+    if (said.length === 1) return said[0] + " is missing.";
+    return said.slice(0, -1).join(", ") + " and " + said[said.length - 1] + " are missing.";
+  }
+
+  function showMissing(missing) {
+    document.getElementById("missing-note").textContent = missingLine(missing);
+  }
+
+  // Wrong values by field, and the fields left blank (not wrong: not given yet).
   function localErrors() {
     const errors = {};
+    const missing = [];
     FIELDS.forEach(function (name) {
       const said = label(name);
       const typed = document.getElementById(name).value;
       const text = typed.replace(SPACES, "");
-      if (!text) errors[name] = said + " is empty; enter a decimal number such as 1.5.";
+      if (!text) missing.push(name);
       else if (typed.length > 64) {
         errors[name] = said + " is longer than 64 characters; shorten it or use an exponent, such as 1.5e-30.";
       } else if (!DECIMAL.test(text)) {
@@ -61,7 +76,7 @@
         errors[name] = said + " is beyond the double range (about ±1.8e308).";
       }
     });
-    return errors;
+    return { errors: errors, missing: missing };
   }
 
   function query() {
@@ -96,7 +111,10 @@
 
   function showInvalid(count) {
     const slot = result.querySelector('[data-key="invalid"]');
-    slot.textContent = "Fix the highlighted " + (count === 1 ? "field" : "fields") + " to see the normal.";
+    slot.textContent = count ?
+      "Fix the highlighted " + (count === 1 ? "field" : "fields") + " to see the normal." :
+      "Fill in every coordinate to see the normal.";
+    slot.classList.toggle("error", count > 0);
     slot.classList.remove("hidden");
     setStale(true);
   }
@@ -136,20 +154,22 @@
   function update() {
     const qs = query();
     updateLinks(qs);
-    const errors = localErrors();
-    showErrors(errors);
-    const count = Object.keys(errors).length;
+    const local = localErrors();
+    showErrors(local.errors);
+    showMissing(local.missing);
+    const count = Object.keys(local.errors).length;
     // An answer still on its way is for older input: it must not land after this.
     if (inFlight) inFlight.abort();
     inFlight = null;
-    if (count) { showInvalid(count); return Promise.resolve(); }
+    if (count || local.missing.length) { showInvalid(count); return Promise.resolve(); }
     inFlight = new AbortController();
     return fetch("/partials?" + qs, { signal: inFlight.signal, headers: { Accept: "application/json" } })
       .then(function (response) { return response.json(); })
       .then(function (parts) {
         const serverErrors = Object.keys(parts.errors).length;
         showErrors(parts.errors);
-        if (serverErrors) { showInvalid(serverErrors); return; }
+        showMissing(parts.missing);
+        if (serverErrors || parts.missing.length) { showInvalid(serverErrors); return; }
         return render(parts);
       })
       .catch(function (error) {

@@ -126,13 +126,15 @@ def test_typing_mistake_is_named_beside_the_field_and_clears_when_fixed(page: Pa
     # What was typed stays in the permalink, so a reload shows the same mistake.
     expect(page).to_have_url(re.compile(r"[?&]bx=1\.\.2(&|$)"))
 
-    # A second mistake: an empty field; the notice counts both.
+    # An emptied field is not a mistake, only not given yet: a calm line, nothing red.
     page.locator("#cz").fill("")
-    expect(page.locator('[data-error-for="cz"]')).to_have_text(
-        "C.z is empty; enter a decimal number such as 1.5."
-    )
-    expect(page.locator("#cz")).to_have_attribute("aria-invalid", "true")
+    expect(page.locator("#missing-note")).to_have_text("C.z is missing.")
+    expect(page.locator('[data-error-for="cz"]')).to_have_text("")
+    expect(page.locator("#cz")).not_to_have_attribute("aria-invalid", "true")
+    expect(cell(page, "invalid")).to_have_text("Fix the highlighted field to see the normal.")
+    page.locator("#by").fill("x")  # a second mistake: the notice counts both
     expect(cell(page, "invalid")).to_have_text("Fix the highlighted fields to see the normal.")
+    page.locator("#by").fill("1")
 
     page.locator("#cz").fill("0")
     bx.fill("2")
@@ -142,6 +144,7 @@ def test_typing_mistake_is_named_beside_the_field_and_clears_when_fixed(page: Pa
     expect(bx).not_to_have_attribute("aria-invalid", "true")
     expect(page.locator("#cz")).not_to_have_attribute("aria-invalid", "true")
     expect(cell(page, "invalid")).to_be_hidden()
+    expect(page.locator("#missing-note")).to_be_hidden()
     expect(page.locator("#result")).not_to_have_class(re.compile(r"\bstale\b"))
     expect(cell(page, "normal")).to_have_text("(0, 0, 2)")
     expect(cell(page, "area")).to_have_text("1")
@@ -277,3 +280,33 @@ def test_permalink_with_a_typo_renders_the_error_and_recovers_live(
     expect(cell(page, "invalid")).to_be_hidden()
     expect(page.locator("#bx")).not_to_have_attribute("aria-invalid", "true")
     expect(page).to_have_url(query_pattern(*RIGHT))
+
+
+def test_one_wrong_value_is_one_error_and_the_rest_one_calm_line(
+    page: Page, console: ConsoleWatch
+) -> None:
+    console.allow(r"status of 422 \(Unprocessable Entity\) \(http://[^)]*/\?ax=")
+    response = page.goto("/?ax=1e999")
+    assert response is not None and response.status == 422
+    expect(page.locator('[aria-invalid="true"]')).to_have_count(1)
+    expect(page.locator("#ax")).to_have_attribute("aria-invalid", "true")
+    expect(page.locator(".field-error:not(:empty)")).to_have_count(1)
+    expect(page.locator('[data-error-for="ax"]')).to_have_text(
+        "A.x is beyond the double range (about ±1.8e308)."
+    )
+    note = page.locator("#missing-note")
+    expect(note).to_have_text("A.y, A.z, B.x, B.y, B.z, C.x, C.y and C.z are missing.")
+    expect(note).to_be_visible()
+
+    # Typing keeps it so: the fields still blank are not blamed, the line shrinks.
+    page.locator("#ax").fill("1")
+    page.locator("#ay").fill("0")
+    expect(note).to_have_text("A.z, B.x, B.y, B.z, C.x, C.y and C.z are missing.")
+    expect(page.locator('[aria-invalid="true"]')).to_have_count(0)
+    expect(cell(page, "invalid")).to_have_text("Fill in every coordinate to see the normal.")
+    expect(cell(page, "invalid")).not_to_have_class(re.compile(r"\berror\b"))
+    for name, value in zip(FIELDS[2:], ["0", "0", "2", "0", "0", "0", "3"], strict=True):
+        page.locator(f"#{name}").fill(value)
+    expect(note).to_be_hidden()
+    expect(cell(page, "invalid")).to_be_hidden()
+    expect(cell(page, "normal")).to_have_text("(6, 3, 2)")

@@ -259,8 +259,6 @@ def test_oversized_batch_body(client) -> None:  # type: ignore[no-untyped-def]
 
 BAD_TEXT = [
     ("abc", "decimal number"),
-    ("", "empty"),
-    ("   ", "empty"),
     ("1e999", "double range"),
     ("-1e999", "double range"),
     ("0x10", "decimal number"),
@@ -303,8 +301,34 @@ def test_missing_query_value(client, route: str, name: str) -> None:  # type: ig
     assert_error(client.get(route, params=params), 422, name, label(name), "missing")
 
 
+@pytest.mark.parametrize("blank", ["", "   ", "\t"])
+def test_blank_query_value_is_missing(client, blank: str) -> None:  # type: ignore[no-untyped-def]
+    response = client.get("/api/normal", params={**EXAMPLE_QUERY, "by": blank})
+    body = assert_error(response, 422, "by")
+    assert body["error"] == "B.y is missing."
+
+
 def test_no_query_at_all(client) -> None:  # type: ignore[no-untyped-def]
-    assert_error(client.get("/api/normal"), 422, "ax", "A.x", "missing")
+    body = assert_error(client.get("/api/normal"), 422, "ax")
+    assert body["error"] == "All nine coordinates, A.x to C.z, are missing."
+
+
+def test_a_wrong_value_is_named_before_the_missing_ones(client) -> None:  # type: ignore[no-untyped-def]
+    body = assert_error(client.get("/api/normal?ax=abc"), 422, "ax")
+    assert body["error"] == "A.x must be a decimal number such as 1.5 or -2e3, not 'abc'."
+    # Also when the wrong value comes after the missing ones in the form's order.
+    body = assert_error(client.get("/api/normal?cz=1e999&ax=1"), 422, "cz")
+    assert body["error"] == "C.z is beyond the double range (about ±1.8e308)."
+    body = assert_error(client.get("/api/normal?ax=1&swap=maybe"), 422, "swap", "on, true or 1")
+
+
+def test_missing_fields_are_grouped_in_one_sentence(client) -> None:  # type: ignore[no-untyped-def]
+    params = {k: v for k, v in EXAMPLE_QUERY.items() if k not in ("bx", "by", "cz")}
+    body = assert_error(client.get("/api/normal", params=params), 422, "bx")
+    assert body["error"] == "B.x, B.y and C.z are missing."
+    params = {k: v for k, v in EXAMPLE_QUERY.items() if k not in ("ay", "cx")}
+    body = assert_error(client.get("/api/chart", params=params), 422, "ay")
+    assert body["error"] == "A.y and C.x are missing."
 
 
 @pytest.mark.parametrize("route", ["/api/normal", "/api/chart"])
