@@ -39,8 +39,7 @@ def query_payload(request: Request) -> dict[str, Any]:
     parsed = read_triangle(request.query_params)
     if not parsed.valid:
         raise parsed.first_error()
-    a, b, c = parsed.points()
-    return normal_payload(triangle_normal(a, b, c, swap_winding=parsed.swap))
+    return normal_payload(parsed.normal())
 
 
 @router.post(

@@ -18,7 +18,6 @@ from app.calculator.view3d import view3d_figure
 from app.web.errors import ApiError, clip
 from app.web.jsonio import FastJSONResponse
 from app.web.templating import templates
-from mesh_normal.triangle import triangle_normal
 
 router = APIRouter(include_in_schema=False)
 
@@ -43,8 +42,7 @@ def _calculation(request: Request) -> dict[str, Any]:
     params = {**parsed.typed, **({"swap": swap_text} if swap_text else {})}
     context["query"] = urlencode(params)
     if parsed.valid:
-        a, b, c = parsed.points()
-        result = triangle_normal(a, b, c, swap_winding=parsed.swap)
+        result = parsed.normal()
         context["result"] = result
         context["payload"] = normal_payload(result)
         context["figure"] = bar_figure(context["payload"])

@@ -1,27 +1,24 @@
-"""The calculator's query parameters (``ax`` ... ``cz``, ``swap``), read as decimal text.
+"""The calculator's query parameters (``ax`` ... ``cz``, ``swap``), read as typed text.
 
 The page and its JSON twin read the same parameters in the same way, so a typing mistake
 gets the same sentence in both, naming the field as the form does (``B.y``, not ``by``).
+Each coordinate is read by :mod:`app.calculator.coordinates` (decimals and fractions).
 """
 
 from __future__ import annotations
 
-import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from math import isfinite
+from fractions import Fraction
 from typing import Annotated, Any
 
 from pydantic import BaseModel, Field, JsonValue
 
+from app.calculator.coordinates import MAX_TEXT, PATTERN, SPACE, parse_coordinate
 from app.calculator.presets import COORDINATE_FIELDS
-from app.web.errors import ApiError, clip
+from app.web.errors import ApiError
+from mesh_normal.triangle import TriangleNormal, rational_triangle_normal, triangle_normal
 
-DECIMAL = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
-MAX_TEXT = 64
-#: Spaces a typed coordinate may carry around it (ASCII only, as the schema's pattern says).
-SPACE = " \t\n\r\f\v"
-SPACE_CLASS = r" \t\n\r\f\v"
 SWAP_ON = frozenset({"on", "true", "1"})
 SWAP_OFF = frozenset({"", "off", "false", "0"})
 
@@ -29,12 +26,14 @@ SWAP_OFF = frozenset({"", "off", "false", "0"})
 Text = Annotated[
     str,
     Field(
-        description="A decimal number, such as 1.5 or -2e3.",
-        examples=["1.5"],
-        json_schema_extra={
-            "pattern": rf"^[{SPACE_CLASS}]*{DECIMAL.pattern}[{SPACE_CLASS}]*$",
-            "maxLength": MAX_TEXT,
-        },
+        description=(
+            "A number: a decimal such as 1.5 or -2e3 (a decimal comma works too: 2,5), "
+            "read as the double it denotes, or a fraction such as 1/3, -2/7 or 1.5/2, read "
+            "exactly: with any fraction the triangle is computed on the exact values and "
+            "rounded once. Exponents in a fraction stay within ±30."
+        ),
+        examples=["1.5", "1/3"],
+        json_schema_extra={"pattern": PATTERN, "maxLength": MAX_TEXT},
     ),
 ]
 
@@ -96,6 +95,11 @@ class TriangleInput:
     numbers: dict[str, float] = field(default_factory=dict)
     errors: dict[str, str] = field(default_factory=dict)
     missing: list[str] = field(default_factory=list)
+    #: Each coordinate's exact value as typed (``0.1`` is 1/10, ``1/3`` is 1/3); absent for
+    #: a decimal whose exponent is beyond ±30 (see app.calculator.coordinates).
+    exact: dict[str, Fraction] = field(default_factory=dict)
+    #: The coordinates typed as fractions: with any, the triangle is computed exactly.
+    fractions: list[str] = field(default_factory=list)
 
     @property
     def valid(self) -> bool:
@@ -105,6 +109,22 @@ class TriangleInput:
         """The three points; call only when the input is valid."""
         x = [self.numbers[name] for name in COORDINATE_FIELDS]
         return (x[0], x[1], x[2]), (x[3], x[4], x[5]), (x[6], x[7], x[8])
+
+    def normal(self) -> TriangleNormal:
+        """The triangle's normal; call only when the input is valid.
+
+        With a fraction among the coordinates, on exact rationals: each fraction as typed,
+        each decimal as the double it denotes (so that decimals mean what they always did),
+        and the exact result rounded once. Otherwise on the doubles.
+        """
+        if not self.fractions:
+            return triangle_normal(*self.points(), swap_winding=self.swap)
+        x = [
+            self.exact[name] if name in self.fractions else Fraction(self.numbers[name])
+            for name in COORDINATE_FIELDS
+        ]
+        a, b, c = (x[0], x[1], x[2]), (x[3], x[4], x[5]), (x[6], x[7], x[8])
+        return rational_triangle_normal(a, b, c, swap_winding=self.swap)
 
     def missing_line(self) -> str:
         """The missing coordinates in one sentence, ``""`` when none is."""
@@ -135,34 +155,6 @@ def label(name: str) -> str:
     return f"{name[0].upper()}.{name[1:]}" if name in COORDINATE_FIELDS else name
 
 
-def parse_decimal(name: str, text: str) -> float:
-    """Read one coordinate; raise :class:`ApiError` naming the field when it is not one.
-
-    The sentence says the field as the form does (``B.y``); the error's field stays ``by``.
-    """
-    said = label(name)
-    stripped = text.strip(SPACE)
-    if not stripped:
-        raise ApiError(422, f"{said} is empty; enter a decimal number such as 1.5.", name)
-    if len(text) > MAX_TEXT:
-        raise ApiError(
-            422,
-            f"{said} is longer than {MAX_TEXT} characters; "
-            "shorten it or use an exponent, such as 1.5e-30.",
-            name,
-        )
-    if not DECIMAL.fullmatch(stripped):
-        raise ApiError(
-            422,
-            f"{said} must be a decimal number such as 1.5 or -2e3, not {clip(stripped)!r}.",
-            name,
-        )
-    value = float(stripped)
-    if not isfinite(value):
-        raise ApiError(422, f"{said} is beyond the double range (about ±1.8e308).", name)
-    return value
-
-
 def parse_swap(text: str | None) -> bool:
     if text is None or text in SWAP_OFF:
         return False
@@ -180,9 +172,15 @@ def read_triangle(query: Mapping[str, str]) -> TriangleInput:
             result.missing.append(name)
             continue
         try:
-            result.numbers[name] = parse_decimal(name, typed[name])
+            coordinate = parse_coordinate(label(name), name, typed[name])
         except ApiError as error:
             result.errors[name] = error.error
+            continue
+        result.numbers[name] = coordinate.value
+        if coordinate.exact is not None:
+            result.exact[name] = coordinate.exact
+        if coordinate.fraction:
+            result.fractions.append(name)
     try:
         result.swap = parse_swap(query.get("swap"))
     except ApiError as error:

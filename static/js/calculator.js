@@ -5,8 +5,12 @@
 
 (function () {
   const FIELDS = ["ax", "ay", "az", "bx", "by", "bz", "cx", "cy", "cz"];
-  // The same rule as the server's (app/params.py), so a mistake shows before any request.
-  const DECIMAL = /^[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?$/;
+  // The same rules as the server's (app/calculator/coordinates.py), so a mistake shows
+  // before any request: a decimal (its point may be a comma: 2,5) or a fraction of two.
+  const NUMBER = "[+-]?(?:[0-9]+(?:\\.[0-9]*)?|\\.[0-9]+|[0-9]+,[0-9]+)(?:[eE][+-]?[0-9]+)?";
+  const COORDINATE = new RegExp("^" + NUMBER + "(?:[ \\t\\n\\r\\f\\v]*/[ \\t\\n\\r\\f\\v]*" + NUMBER + ")?$");
+  const THOUSANDS = /^[+-]?[1-9][0-9]{0,2},[0-9]{3}$/;
+  const MAX_EXACT_EXPONENT = 30;
   const SPACES = /^[ \t\n\r\f\v]+|[ \t\n\r\f\v]+$/g;
   const DELAY_MS = 120;
 
@@ -58,6 +62,35 @@
     document.getElementById("missing-note").textContent = missingLine(missing);
   }
 
+  function exponent(part) {
+    const found = /[eE]([+-]?[0-9]+)$/.exec(part);
+    return found ? Math.abs(Number(found[1])) : 0;
+  }
+
+  // The server's sentence for a wrong coordinate, or "" (the server has the last word).
+  function coordinateError(said, text) {
+    if (!COORDINATE.test(text)) {
+      const shown = text.length <= 20 ? text : text.slice(0, 17) + "...";
+      return said + " must be a number such as 1.5, -2e3 or 1/3, not '" + shown + "'.";
+    }
+    const parts = text.split("/").map(function (part) { return part.replace(SPACES, ""); });
+    const ambiguous = parts.find(function (part) { return THOUSANDS.test(part); });
+    if (ambiguous) {
+      return said + " is '" + ambiguous + "', which reads as a thousands separator or a decimal comma; write " +
+        ambiguous.replace(",", "") + " or " + ambiguous.replace(",", ".") + ".";
+    }
+    const values = parts.map(function (part) { return Number(part.replace(",", ".")); });
+    if (parts.length === 1) {
+      return isFinite(values[0]) ? "" : said + " is beyond the double range (about ±1.8e308).";
+    }
+    if (exponent(parts[0]) > MAX_EXACT_EXPONENT || exponent(parts[1]) > MAX_EXACT_EXPONENT) {
+      return said + " is a fraction with an exponent beyond ±" + MAX_EXACT_EXPONENT +
+        ", which is not read exactly; write its value as a decimal, such as 3.3e-40.";
+    }
+    if (values[1] === 0) return said + " divides by zero; a fraction's denominator must not be 0.";
+    return "";
+  }
+
   // Wrong values by field, and the fields left blank (not wrong: not given yet).
   function localErrors() {
     const errors = {};
@@ -69,11 +102,9 @@
       if (!text) missing.push(name);
       else if (typed.length > 64) {
         errors[name] = said + " is longer than 64 characters; shorten it or use an exponent, such as 1.5e-30.";
-      } else if (!DECIMAL.test(text)) {
-        const shown = text.length <= 20 ? text : text.slice(0, 17) + "...";
-        errors[name] = said + " must be a decimal number such as 1.5 or -2e3, not '" + shown + "'.";
-      } else if (!isFinite(Number(text))) {
-        errors[name] = said + " is beyond the double range (about ±1.8e308).";
+      } else {
+        const wrong = coordinateError(said, text);
+        if (wrong) errors[name] = wrong;
       }
     });
     return { errors: errors, missing: missing };
@@ -209,6 +240,35 @@
     clearTimeout(timer);
     return update();
   }
+
+  // Pasted text that holds 3 numbers ("1, 2, 3", "1 2 3", "(1, 2, 3)", tab-separated) or 9,
+  // split as people write them: by spaces, tabs, semicolons or ", "; else by bare commas
+  // ("1,2,3"), so that "1,5 2,5 3,5" keeps its decimal commas. null when it is no such list
+  // of numbers (then the text is pasted as it is, into the one field).
+  function pastedNumbers(text) {
+    const inner = text.replace(/[()[\]{}]/g, " ").trim();
+    const notEmpty = function (part) { return part !== "" && part !== ","; };
+    let parts = inner.split(/[\s;]*;[\s;]*|,\s+|\s+/).filter(notEmpty);
+    const numbers = function (list) {
+      return (list.length === 3 || list.length === 9) && list.every(function (part) { return COORDINATE.test(part); });
+    };
+    if (!numbers(parts)) parts = inner.split(/[\s,;]+/).filter(notEmpty);
+    return numbers(parts) ? parts : null;
+  }
+
+  // Pasting a point into any of its fields fills x, y and z; nine numbers fill every field.
+  form.addEventListener("paste", function (event) {
+    const name = event.target.id;
+    if (FIELDS.indexOf(name) < 0 || !event.clipboardData) return;
+    const parts = pastedNumbers(event.clipboardData.getData("text"));
+    if (!parts) return;
+    event.preventDefault();
+    const first = parts.length === 9 ? 0 : FIELDS.indexOf(name[0] + "x");
+    parts.forEach(function (part, i) { document.getElementById(FIELDS[first + i]).value = part; });
+    document.getElementById(FIELDS[first + parts.length - 1]).focus();
+    clearTimeout(timer);
+    update();
+  });
 
   form.addEventListener("input", schedule);
   swap.addEventListener("change", function () { clearTimeout(timer); update(); });

@@ -113,7 +113,7 @@ def test_typing_mistake_is_named_beside_the_field_and_clears_when_fixed(page: Pa
 
     bx.fill("")
     bx.press_sequentially("1..2")
-    expect(error).to_have_text("B.x must be a decimal number such as 1.5 or -2e3, not '1..2'.")
+    expect(error).to_have_text("B.x must be a number such as 1.5, -2e3 or 1/3, not '1..2'.")
     expect(error).to_be_visible()
     expect(bx).to_have_attribute("aria-invalid", "true")
     expect(bx).to_have_value("1..2")
@@ -310,3 +310,68 @@ def test_one_wrong_value_is_one_error_and_the_rest_one_calm_line(
     expect(note).to_be_hidden()
     expect(cell(page, "invalid")).to_be_hidden()
     expect(cell(page, "normal")).to_have_text("(6, 3, 2)")
+
+
+def paste(page: Page, field: str, text: str) -> bool:
+    """Paste ``text`` into a field as the browser does; whether the page took the paste over."""
+    page.locator(f"#{field}").focus()
+    return page.evaluate(
+        """([field, text]) => {
+            const data = new DataTransfer();
+            data.setData("text/plain", text);
+            const options = {clipboardData: data, bubbles: true, cancelable: true};
+            const event = new ClipboardEvent("paste", options);
+            document.getElementById(field).dispatchEvent(event);
+            return event.defaultPrevented;
+        }""",
+        [field, text],
+    )
+
+
+def values(page: Page) -> list[str]:
+    return [page.locator(f"#{name}").input_value() for name in FIELDS]
+
+
+@pytest.mark.parametrize("text", ["1, 2, 3", "1 2 3", "(1, 2, 3)", "1\t2\t3", "[1,2,3]"])
+def test_pasting_a_point_into_one_field_fills_its_x_y_and_z(page: Page, text: str) -> None:
+    open_calculator(page, triangle_query(*RIGHT))
+    assert paste(page, "by", text)  # into B's middle field: B is (1, 2, 3) now
+    assert values(page) == ["0", "0", "0", "1", "2", "3", "0", "1", "0"]
+    wait_for_chart_values(page, [-3, 0, 1, 10**0.5, 10**0.5 / 2])
+    expect(cell(page, "normal")).to_have_text("(−3, 0, 1)")
+    expect(page).to_have_url(re.compile(r"[?&]bx=1&by=2&bz=3(&|$)"))
+
+
+def test_pasting_nine_numbers_fills_every_field(page: Page) -> None:
+    open_calculator(page, triangle_query(*RIGHT))
+    paste(page, "cz", "1 0 0\n0 2 0\n0 0 3")  # rows of a spreadsheet, say
+    assert values(page) == ["1", "0", "0", "0", "2", "0", "0", "0", "3"]
+    expect(cell(page, "normal")).to_have_text("(6, 3, 2)")
+
+
+def test_pasting_decimal_commas_and_fractions(page: Page) -> None:
+    open_calculator(page, triangle_query(*RIGHT))
+    paste(page, "cx", "0; 1/3; 0")
+    paste(page, "bx", "2,5 0 0")
+    assert values(page) == ["0", "0", "0", "2,5", "0", "0", "0", "1/3", "0"]
+    expect(cell(page, "normal")).to_have_text("(0, 0, 0.8333333333333334)")  # 5/6, rounded once
+    expect(page.locator('[aria-invalid="true"]')).to_have_count(0)
+
+
+def test_pasting_one_number_or_words_is_an_ordinary_paste(page: Page) -> None:
+    open_calculator(page, triangle_query(*RIGHT))
+    assert not paste(page, "ay", "1, 2")  # two numbers are no point: the browser pastes
+    assert not paste(page, "az", "abc def ghi")
+    assert values(page)[3:] == ["1", "0", "0", "0", "1", "0"]  # B and C untouched
+
+
+def test_fraction_typed_live_and_division_by_zero(page: Page) -> None:
+    open_calculator(page, triangle_query(*RIGHT))
+    page.locator("#bx").fill("1/3")
+    page.locator("#cy").fill("1/15")
+    expect(cell(page, "normal")).to_have_text("(0, 0, 0.022222222222222223)")  # 1/45
+    page.locator("#cy").fill("1/0")
+    expect(page.locator('[data-error-for="cy"]')).to_have_text(
+        "C.y divides by zero; a fraction's denominator must not be 0."
+    )
+    expect(page.locator("#cy")).to_have_attribute("aria-invalid", "true")
