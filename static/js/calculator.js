@@ -128,7 +128,11 @@
 
   // Parts that show the last valid points while the form holds a mistake: dimmed, and inert
   // so that nothing (a copy button, say) acts on points that are no longer in the form.
-  const LIVE_PARTS = ["steps", "code"];
+  const LIVE_PARTS = ["steps", "code", "chart", "view3d"];
+  const STALE_NOTE = "The numbers shown are for the last valid input; they update once every field is a number.";
+  const staleNote = document.getElementById("stale-note");
+  // Whether the page shows a result at all (a permalink with a mistake opens without one).
+  let shown = JSON.parse(document.getElementById("figure-data").textContent) !== null;
 
   function setStale(stale) {
     result.classList.toggle("stale", stale);
@@ -138,6 +142,7 @@
       part.classList.toggle("stale", stale);
       part.inert = stale;
     });
+    if (staleNote) staleNote.textContent = stale && shown ? STALE_NOTE : "";
   }
 
   function showInvalid(count) {
@@ -175,6 +180,7 @@
         if (d.id in open) d.open = open[d.id];
       });
     });
+    shown = true;
     setStale(false);
     applyPrecision();
     document.dispatchEvent(new CustomEvent("calculator:rendered", { detail: parts }));

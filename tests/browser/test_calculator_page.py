@@ -375,3 +375,55 @@ def test_fraction_typed_live_and_division_by_zero(page: Page) -> None:
         "C.y divides by zero; a fraction's denominator must not be 0."
     )
     expect(page.locator("#cy")).to_have_attribute("aria-invalid", "true")
+
+
+STALE_PARTS = ("#result", "#steps", "#code", "#chart", "#view3d")
+
+
+def opacity(page: Page, selector: str) -> float:
+    return float(page.locator(selector).evaluate("el => getComputedStyle(el).opacity"))
+
+
+def test_the_last_result_is_marked_stale_while_a_field_is_wrong(page: Page) -> None:
+    open_calculator(page, triangle_query(*RIGHT))
+    note = page.locator("#stale-note")
+    expect(note).to_have_attribute("role", "status")
+    assert page.locator("#result #stale-note").count() == 0  # outside the result, read apart
+    expect(note).to_be_hidden()
+    stale = re.compile(r"\bstale\b")
+
+    page.locator("#bx").fill("1..2")
+    expect(note).to_have_text(re.compile("for the last valid input"))
+    expect(note).to_be_visible()
+    for selector in STALE_PARTS:
+        expect(page.locator(selector)).to_have_class(stale)
+    # Dimmed: the numbers, the steps, the code, the chart and the 3D view; not the notice.
+    for selector in ("#result .values", "#result .result-actions", "#steps", "#code", "#chart"):
+        assert opacity(page, selector) < 0.6, selector
+    assert opacity(page, "#view3d") < 0.6
+    assert opacity(page, '#result [data-key="invalid"]') == 1
+    expect(cell(page, "normal")).to_have_text("(0, 0, 1)")  # the old numbers, still there
+
+    # A blank field is no valid input either.
+    page.locator("#bx").fill("")
+    expect(note).to_have_text(re.compile("for the last valid input"))
+    expect(page.locator("#chart")).to_have_class(stale)
+
+    page.locator("#bx").fill("2")
+    wait_for_chart_values(page, [0, 0, 2, 2, 1])
+    expect(note).to_be_hidden()
+    expect(note).to_have_text("")
+    for selector in STALE_PARTS:
+        expect(page.locator(selector)).not_to_have_class(stale)
+    for selector in ("#result .values", "#steps", "#code", "#chart", "#view3d"):
+        assert opacity(page, selector) == 1, selector
+
+
+def test_no_stale_note_without_an_earlier_result(page: Page, console: ConsoleWatch) -> None:
+    console.allow(r"status of 422 \(Unprocessable Entity\) \(http://[^)]*/\?ax=")
+    query = triangle_query(("0", "0", "0"), ("x", "0", "0"), ("0", "1", "0"))
+    response = page.goto(f"/?{query}")
+    assert response is not None and response.status == 422
+    page.locator("#by").fill("y")  # still wrong: there never were numbers to call stale
+    expect(page.locator('[data-error-for="by"]')).not_to_have_text("")
+    expect(page.locator("#stale-note")).to_have_text("")
