@@ -144,3 +144,18 @@ def test_a_tiny_mesh_is_reported_without_numba_and_a_larger_one_loads_it() -> No
     )
     assert completed.returncode == 0, completed.stderr[-3000:]
     assert completed.stdout == "outward\n"
+
+
+def test_compile_kernels_compiles_them_although_its_meshes_are_tiny() -> None:
+    script = (
+        "import sys\n"
+        "from mesh_normal import kernels\n"
+        "from mesh_normal.precompile import compile_kernels\n"
+        "compile_kernels()\n"
+        "assert 'numba' in sys.modules\n"
+        "assert kernels.geometry_kernel.signatures, 'nothing compiled'\n"
+    )
+    completed = subprocess.run(
+        [sys.executable, "-c", script], cwd=ROOT, capture_output=True, text=True, check=False
+    )
+    assert completed.returncode == 0, completed.stderr[-3000:]
