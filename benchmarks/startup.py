@@ -23,6 +23,7 @@ import json
 import os
 import shutil
 import signal
+import socket
 import statistics
 import subprocess
 import sys
@@ -67,6 +68,7 @@ def post(url: str, data: bytes) -> float:
 def serve(app: str, port: int, path: str, uploads: int) -> tuple[float, list[float]]:
     """Seconds from starting uvicorn to the first answer of ``path``; then ``uploads`` uploads
     of the tetrahedron, each timed."""
+    free(port)
     started = time.perf_counter()
     server = subprocess.Popen(
         [str(VENV_BIN / "uvicorn"), app, "--host", "127.0.0.1", "--port", str(port)],
@@ -91,6 +93,17 @@ def serve(app: str, port: int, path: str, uploads: int) -> tuple[float, list[flo
         except subprocess.TimeoutExpired:
             server.kill()
             server.wait()
+
+
+def free(port: int) -> None:
+    """Wait until nothing listens on ``port`` (the last round's server and its workers gone),
+    so that the first answer is the new server's."""
+    for _ in range(600):
+        with socket.socket() as probe:
+            if probe.connect_ex(("127.0.0.1", port)) != 0:
+                return
+        time.sleep(0.1)
+    raise RuntimeError(f"port {port} is still in use")
 
 
 def bytecode() -> tuple[int, int]:
@@ -124,11 +137,17 @@ def main() -> None:
         tetra = Path(folder) / "tetra.obj"
         tetra.write_bytes(TETRAHEDRON)
         subprocess.run([cli, "analyze", str(tetra)], check=True, capture_output=True)
+        python = [sys.executable, "-c"]
+        bare_best, bare_median = hyperfine([*python, "pass"], args.runs)
+        numpy_best, numpy_median = hyperfine([*python, "import numpy"], args.runs)
         help_best, help_median = hyperfine([cli, "--help"], args.runs)
         tiny_best, tiny_median = hyperfine([cli, "analyze", str(tetra)], args.runs)
+    # The interpreter's own start and NumPy's import, for scale on a loaded machine.
+    print(f"python -c pass: best {bare_best:.3f} s, median {bare_median:.3f} s; "
+          f"import numpy: best {numpy_best:.3f} s, median {numpy_median:.3f} s")  # fmt: skip
     print(f"mesh-normal --help: best {help_best:.3f} s, median {help_median:.3f} s (target 0.3)")
     print(f"mesh-normal analyze tetra.obj: best {tiny_best:.3f} s, median {tiny_median:.3f} s "
-          "(target 1)")  # fmt: skip
+          f"(target 1); {tiny_best / numpy_best:.2f} times import numpy (best)")  # fmt: skip
     ratios, ours, bare, gaps = [], [], [], []
     serve("app.main:app", PORTS[0], "/", 1)  # numba's cache filled, the files read once
     for _ in range(args.rounds):
