@@ -36,7 +36,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 VENV_BIN = Path(sys.executable).parent
 TETRAHEDRON = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
-PORTS = (19437, 19438)  # ours, the bare app
+PORTS = (19871, 19872)  # ours, the bare app
 
 
 def hyperfine(command: list[str], runs: int) -> tuple[float, float]:
