@@ -19,22 +19,14 @@ The first use of a kernel that is not in the cache says so on stderr, once per p
 
 from __future__ import annotations
 
+import functools
 import math
-import os
 import sys
 import threading
 from collections.abc import Callable
 from typing import Any, Literal, TypeVar
 
 import numpy as np
-from numba import njit, prange
-from numba.core import config as numba_config
-from numba.core.caching import (
-    CompileResultCacheImpl,
-    FunctionCache,
-    InTreeCacheLocator,
-    UserProvidedCacheLocator,
-)
 
 from mesh_normal.tolerances import MESH_DEGENERATE_SINE, MESH_RECOMPUTE_SINE
 from mesh_normal.types import BoolArray, Edges, FloatArray, IndexArray, Vector
@@ -70,81 +62,115 @@ _looked_at = 0
 _announced = False
 
 
-# --- the cache, also on a read-only filesystem ------------------------------------------------
-#
-# numba's own cache locators each insist on a folder they can write: they test it by writing a
-# temporary file there. On a read-only root filesystem (``docker run --read-only``) every one
-# refuses, even for a NUMBA_CACHE_DIR that holds every kernel compiled while the image was
-# built (or a mount the app's user may not write), and ``njit(cache=True)`` then raises at
-# import: "cannot cache function 'index_range': no locator available". The locators below are
-# tried after numba's writable ones: they read the same folder and never write it. A kernel
-# that is not in such a cache (another CPU, another signature) is compiled in memory, as
-# without a cache, and kept for the process.
+#: The stand-in for ``numba.prange`` in a kernel's module until numba is loaded (the kernels
+#: import it from here); :func:`load_numba` puts numba's own in its place.
+prange = range
+
+#: A call of a kernel marked ``python=True`` whose arrays hold this many elements or fewer, in
+#: a process that has not loaded numba, runs the kernel's Python source instead (a tiny mesh
+#: is reported in milliseconds that way, where importing numba and loading the kernels from
+#: its cache take 1-2 s). The same operations on the same doubles, one at a time and in the
+#: same order: the bits are the same (``tests/mesh_normal/test_kernels_in_python.py``).
+PYTHON_ELEMENTS = 6000
+
+_load = threading.Lock()
+_numba_loaded = False
 
 
-class _ReadOnlyLocator:
-    """A locator whose folder is read as it is: nothing checked by writing, nothing saved."""
+class Kernel:
+    """A kernel before numba is loaded: its Python source, and the options of its dispatcher.
 
-    def ensure_cache_path(self) -> None:
-        """Nothing to ensure: the folder is only read (a missing one is an empty cache)."""
+    Calling it loads numba (:func:`load_numba`) unless the call is small enough to run in
+    Python (see :data:`PYTHON_ELEMENTS`); any other attribute is the dispatcher's.
+    """
 
+    def __init__(self, function: Callable[..., Any], options: dict[str, Any], python: int) -> None:
+        self.py_func, self.options, self.python = function, options, python
+        self.dispatcher: Any = None
+        functools.update_wrapper(self, function)
 
-class ReadOnlyCacheDirLocator(_ReadOnlyLocator, UserProvidedCacheLocator):
-    """``NUMBA_CACHE_DIR`` when numba may not write it: e.g. the image's, on a read-only root."""
+    def __call__(self, *args: Any) -> Any:
+        if self.dispatcher is None:
+            if not _numba_loaded and _small(args, self.python):
+                return self.py_func(*args)
+            load_numba()
+            announce_compiling()
+        return self.dispatcher(*args)
 
-    @classmethod
-    def from_function(cls, py_func: Any, py_file: str) -> ReadOnlyCacheDirLocator | None:
-        cache_dir = getattr(numba_config, "CACHE_DIR", "")
-        if not cache_dir or not os.path.exists(py_file):
-            return None
-        return cls(py_func, py_file)
-
-
-class ReadOnlyInTreeLocator(_ReadOnlyLocator, InTreeCacheLocator):
-    """The ``__pycache__`` beside the source, read only: the last resort, so import never fails."""
-
-    @classmethod
-    def from_function(cls, py_func: Any, py_file: str) -> ReadOnlyInTreeLocator | None:
-        return cls(py_func, py_file) if os.path.exists(py_file) else None
-
-
-class _KernelCacheImpl(CompileResultCacheImpl):
-    _locator_classes = [  # noqa: RUF012 (numba's own class attribute)
-        CompileResultCacheImpl._locator_classes[0],  # NUMBA_CACHE_DIR, if numba may write it
-        ReadOnlyCacheDirLocator,
-        *CompileResultCacheImpl._locator_classes[1:],
-        ReadOnlyInTreeLocator,
-    ]
+    def __getattr__(self, name: str) -> Any:
+        if name.startswith("__") or name == "dispatcher":
+            raise AttributeError(name)
+        load_numba()
+        return getattr(self.dispatcher, name)
 
 
-class KernelCache(FunctionCache):
-    """numba's cache of compiled functions, which also reads a cache it may not write."""
-
-    _impl_class = _KernelCacheImpl
-
-    @property
-    def read_only(self) -> bool:
-        return isinstance(self._impl.locator, _ReadOnlyLocator)
-
-    def save_overload(self, sig: Any, data: Any) -> None:
-        if not self.read_only:  # read-only: the kernel stays compiled in memory only
-            super().save_overload(sig, data)  # type: ignore[no-untyped-call]
+def _small(args: tuple[Any, ...], limit: int) -> bool:
+    """Whether the arrays of a call hold ``limit`` elements at most (:data:`PYTHON_ELEMENTS`
+    for a limit of 1, i.e. ``python=True``)."""
+    if limit == 1:
+        limit = PYTHON_ELEMENTS
+    return bool(limit) and sum(arg.size for arg in args if isinstance(arg, np.ndarray)) <= limit
 
 
 def kernel(
-    *, parallel: bool = False, error_model: Literal["python", "numpy"] = "numpy"
+    *,
+    parallel: bool = False,
+    error_model: Literal["python", "numpy"] = "numpy",
+    python: bool | int = False,
 ) -> Callable[[Function], Function]:
-    """``numba.njit(cache=True, ...)`` with :class:`KernelCache` (which also reads a read-only
-    cache), and remember the kernel for :func:`announce_compiling`."""
+    """``numba.njit(cache=True, ...)`` with :class:`~mesh_normal._numba_cache.KernelCache`
+    (which also reads a read-only cache), made when numba is loaded; remember the kernel for
+    :func:`announce_compiling`. ``python``: small calls may run the Python source (only for
+    kernels whose every step gives the same bits in Python: float64 and int64 arithmetic,
+    ``math.sqrt``, comparisons; no NumPy reductions or sorts, no integer overflow); a number
+    over 1 is the largest call, in array elements, for a kernel much slower in Python."""
 
     def compiled(function: Function) -> Function:
-        dispatcher = njit(error_model=error_model, parallel=parallel)(function)
-        # What cache=True does (Dispatcher.enable_caching), with the cache that can read only.
-        dispatcher._cache = KernelCache(function)  # type: ignore[attr-defined,no-untyped-call]
-        _KERNELS.append(dispatcher)
-        return dispatcher  # type: ignore[return-value]
+        options = {"error_model": error_model, "parallel": parallel}
+        made: Any = _dispatcher(function, options) if _numba_loaded else None
+        if made is None:
+            made = Kernel(function, options, int(python))
+        _KERNELS.append(made)
+        return made  # type: ignore[no-any-return]
 
     return compiled
+
+
+def _dispatcher(function: Callable[..., Any], options: dict[str, Any]) -> Any:
+    """What ``njit(cache=True, **options)`` makes, with the cache that can also only read."""
+    from numba import njit
+
+    from mesh_normal._numba_cache import KernelCache
+
+    dispatcher = njit(**options)(function)
+    # What cache=True does (Dispatcher.enable_caching), with the cache that can read only.
+    dispatcher._cache = KernelCache(function)  # type: ignore[no-untyped-call]
+    return dispatcher
+
+
+def load_numba() -> None:
+    """Import numba and make every kernel its dispatcher (each compiled, or loaded from the
+    cache, at its first call): in each kernel's module the name now means the dispatcher, as
+    numba needs for the kernels that call it, and ``prange`` numba's."""
+    global _numba_loaded
+    if _numba_loaded:
+        return
+    with _load:
+        if _numba_loaded:
+            return
+        import numba
+
+        waiting = [made for made in _KERNELS if isinstance(made, Kernel)]
+        for made in waiting:
+            made.dispatcher = _dispatcher(made.py_func, made.options)
+        for made in waiting:
+            namespace = made.py_func.__globals__
+            for name, value in list(namespace.items()):
+                if isinstance(value, Kernel):
+                    namespace[name] = value.dispatcher
+                elif name == "prange" and value is range:
+                    namespace[name] = numba.prange
+        _numba_loaded = True
 
 
 def announce_compiling(*kernels: Any) -> None:
@@ -157,6 +183,8 @@ def announce_compiling(*kernels: Any) -> None:
     so for the mesh kernels its imports defined but it never runs.
     """
     global _looked_at, _announced
+    if not _numba_loaded and not kernels:  # a call that loads numba says so then
+        return
     if kernels:
         with _announce:
             if not _announced and not all(map(is_cached, kernels)):
@@ -203,7 +231,7 @@ def is_cached(dispatcher: Any) -> bool:
 # --- the kernels -------------------------------------------------------------------------------
 
 
-@kernel()
+@kernel(python=True)
 def index_range(faces: IndexArray) -> tuple[int, int]:
     """The smallest and largest of the indices and 0, in one pass."""
     low, high = 0, 0
@@ -212,7 +240,7 @@ def index_range(faces: IndexArray) -> tuple[int, int]:
     return low, high
 
 
-@kernel()
+@kernel(python=True)
 def gather(
     points: FloatArray, factor: float, faces: IndexArray, start: int, corners: FloatArray
 ) -> int:
@@ -230,17 +258,17 @@ def gather(
     return count
 
 
-@kernel()
+@kernel(python=True)
 def dot(p: Vector, q: Vector) -> float:
     return p[0] * q[0] + p[1] * q[1] + p[2] * q[2]
 
 
-@kernel()
+@kernel(python=True)
 def cross(p: Vector, q: Vector) -> Vector:
     return (p[1] * q[2] - p[2] * q[1], p[2] * q[0] - p[0] * q[2], p[0] * q[1] - p[1] * q[0])
 
 
-@kernel()
+@kernel(python=True)
 def face_edges(corners: FloatArray, row: int) -> Edges:
     """The edges B - A, C - B, A - C of one face: corner k lies between edges k - 1 and k."""
     ax, ay, az = corners[row, 0], corners[row, 1], corners[row, 2]
@@ -249,7 +277,7 @@ def face_edges(corners: FloatArray, row: int) -> Edges:
     return (bx - ax, by - ay, bz - az), (cx - bx, cy - by, cz - bz), (ax - cx, ay - cy, az - cz)
 
 
-@kernel()
+@kernel(python=True)
 def face_cross(edges: Edges) -> tuple[Vector, float, int]:
     """(B - A) x (C - A) from its most accurate corner, its squared length, and where from.
 
@@ -279,7 +307,7 @@ def face_cross(edges: Edges) -> tuple[Vector, float, int]:
     return normal, square, AT_LARGEST_CORNER
 
 
-@kernel(parallel=True)
+@kernel(parallel=True, python=True)
 def geometry_kernel(
     points: FloatArray,
     factor: float,

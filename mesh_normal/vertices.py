@@ -25,7 +25,6 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-from numba import prange
 from numpy.typing import ArrayLike
 
 from mesh_normal.faces import FaceGeometry, MeshInput, checked_input, face_geometry
@@ -37,6 +36,7 @@ from mesh_normal.kernels import (
     face_edges,
     gather,
     kernel,
+    prange,
 )
 from mesh_normal.tolerances import MESH_CANCELLED_SUM
 from mesh_normal.types import BoolArray, Edges, FloatArray, IndexArray, Vector
