@@ -9,6 +9,7 @@ from __future__ import annotations
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from fractions import Fraction
 from math import isfinite
 from typing import Annotated
 
@@ -69,6 +70,8 @@ class TriangleInput:
     swap: bool = False
     numbers: dict[str, float] = field(default_factory=dict)
     errors: dict[str, str] = field(default_factory=dict)
+    #: Each coordinate's exact value as typed (``0.1`` is 1/10); absent when it has none.
+    exact: dict[str, Fraction] = field(default_factory=dict)
 
     def points(self) -> tuple[Point, Point, Point]:
         """The three points; call only when there are no errors."""
@@ -104,6 +107,23 @@ def parse_decimal(name: str, text: str) -> float:
     return value
 
 
+#: The largest decimal exponent read exactly: ``Fraction("1e-99999999")`` would never finish.
+MAX_EXACT_EXPONENT = 30
+
+
+def exact_decimal(text: str) -> Fraction | None:
+    """The exact value of decimal text that :func:`parse_decimal` accepted, or ``None``.
+
+    ``None`` when the exponent is beyond ±``MAX_EXACT_EXPONENT``; the exponent is checked
+    before any Fraction is built.
+    """
+    stripped = text.strip(SPACE)
+    _, _, exponent = stripped.lower().partition("e")
+    if exponent and abs(int(exponent)) > MAX_EXACT_EXPONENT:
+        return None
+    return Fraction(stripped)
+
+
 def parse_swap(text: str | None) -> bool:
     if text is None or text in SWAP_OFF:
         return False
@@ -122,6 +142,9 @@ def read_triangle(query: Mapping[str, str]) -> TriangleInput:
             continue
         try:
             result.numbers[name] = parse_decimal(name, query[name])
+            exact = exact_decimal(query[name])
+            if exact is not None:
+                result.exact[name] = exact
         except ApiError as error:
             result.errors[name] = error.error
     try:
