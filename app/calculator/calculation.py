@@ -29,6 +29,8 @@ from app.calculator.plane_angle import angle_math, angle_payload, plane_math, pl
 from app.calculator.presets import COORDINATE_FIELDS
 from mesh_normal.triangle import TriangleNormal, rational_triangle_normal, triangle_normal
 
+Points = tuple[RationalPoint, RationalPoint, RationalPoint]
+
 
 @dataclass(frozen=True, slots=True)
 class Calculation:
@@ -38,6 +40,8 @@ class Calculation:
     exact: Exact
     forms: ExactForms | None
     reason: str | None
+    #: A, B, C as the exact decimals typed, when the result was computed from them.
+    typed: Points | None = None
 
 
 def _finish(
@@ -85,7 +89,7 @@ def from_typed(parsed: TriangleInput) -> Calculation:
     points = ((x[0], x[1], x[2]), (x[3], x[4], x[5]), (x[6], x[7], x[8]))
     result = rational_triangle_normal(*points, swap_winding=parsed.swap)
     a, b, c = parsed.points()  # the corners as typed, -0 included
-    return _finish(replace(result, a=a, b=b, c=c), points, None)
+    return replace(_finish(replace(result, a=a, b=b, c=c), points, None), typed=points)
 
 
 def calculation_payload(calc: Calculation) -> dict[str, Any]:

@@ -58,7 +58,7 @@ def _with_details(context: dict[str, Any]) -> dict[str, Any]:
         "presets": PRESETS,
         "steps": None if result is None else worked_steps(result, context["calculation"].exact),
         "view3d": None if payload is None else view3d_figure(payload),
-        "snippets": [] if payload is None else snippets(payload),
+        "snippets": [] if payload is None else snippets(payload, context["calculation"].typed),
     }
 
 
