@@ -14,6 +14,7 @@ from typing import Any
 from markupsafe import Markup
 
 from app.calculator.exact_forms import (
+    MAX_EXACT_EXPONENT,
     Exact,
     ExactForms,
     RationalPoint,
@@ -23,7 +24,7 @@ from app.calculator.exact_forms import (
     forms_json,
     forms_math,
 )
-from app.calculator.params import MAX_EXACT_EXPONENT, TriangleInput
+from app.calculator.params import TriangleInput
 from app.calculator.payloads import normal_payload
 from app.calculator.plane_angle import angle_math, angle_payload, plane_math, plane_payload
 from app.calculator.presets import COORDINATE_FIELDS

@@ -43,6 +43,23 @@ MAX_DIGITS = 40
 _LIMIT = 10**MAX_DIGITS
 
 
+#: The largest decimal exponent read exactly: ``Fraction("1e-99999999")`` would never finish.
+MAX_EXACT_EXPONENT = 30
+
+
+def exact_decimal(text: str) -> Fraction | None:
+    """The exact value of decimal text that :func:`parse_decimal` accepted, or ``None``.
+
+    ``None`` when the exponent is beyond ±``MAX_EXACT_EXPONENT``; the exponent is checked
+    before any Fraction is built.
+    """
+    stripped = text.strip(" \t\n\r\f\v")  # params.SPACE
+    _, _, exponent = stripped.lower().partition("e")
+    if exponent and abs(int(exponent)) > MAX_EXACT_EXPONENT:
+        return None
+    return Fraction(stripped)
+
+
 @dataclass(frozen=True, slots=True)
 class Exact:
     """A triangle's exact values, with the points in the chosen order (A, B, C or A, C, B)."""

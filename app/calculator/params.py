@@ -15,6 +15,7 @@ from typing import Annotated
 
 from pydantic import BaseModel, Field, JsonValue
 
+from app.calculator.exact_forms import exact_decimal
 from app.calculator.presets import COORDINATE_FIELDS
 from app.web.errors import ApiError, clip
 
@@ -105,23 +106,6 @@ def parse_decimal(name: str, text: str) -> float:
     if not isfinite(value):
         raise ApiError(422, f"{name} is beyond the double range (about ±1.8e308).", name)
     return value
-
-
-#: The largest decimal exponent read exactly: ``Fraction("1e-99999999")`` would never finish.
-MAX_EXACT_EXPONENT = 30
-
-
-def exact_decimal(text: str) -> Fraction | None:
-    """The exact value of decimal text that :func:`parse_decimal` accepted, or ``None``.
-
-    ``None`` when the exponent is beyond ±``MAX_EXACT_EXPONENT``; the exponent is checked
-    before any Fraction is built.
-    """
-    stripped = text.strip(SPACE)
-    _, _, exponent = stripped.lower().partition("e")
-    if exponent and abs(int(exponent)) > MAX_EXACT_EXPONENT:
-        return None
-    return Fraction(stripped)
 
 
 def parse_swap(text: str | None) -> bool:

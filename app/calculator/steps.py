@@ -1,13 +1,14 @@
 """Worked steps: how the calculator gets from the user's points to n, |n|, the plane and more.
 
 Every number is the user's own, written as JavaScript's ``String(x)`` writes it (the
-notation is :mod:`app.calculator.notation`). The exact u, v and n come from the core
-(:func:`mesh_normal.triangle.exact_triangle`, the integers that :func:`triangle_normal`
-rounds); values in between (products, squares, u · v, d) are computed exactly from them and
-rounded once, like the results; from the first number that rounding changed, a chain reads
-"≈" instead of "=". Each line is a :class:`~app.calculator.mathml.Formula`: MathML for the
-page (vectors as columns, determinants as matrices) and plain text beside it. For example, with
-A = (1, 0, 0), B = (0, 2, 0) and C = (0, 0, 3)::
+notation is :mod:`app.calculator.notation`). The exact u, v and n are those of the decimals
+typed (:mod:`app.calculator.calculation`: 0.1 is 1/10), or of the doubles
+(:func:`mesh_normal.triangle.exact_triangle`) when there is no typed text; values in between
+(products, squares, u · v, d) are computed exactly from them and rounded once, like the
+results; from the first number that rounding changed, a chain reads "≈" instead of "=". Each
+line is a :class:`~app.calculator.mathml.Formula`: MathML for the page (vectors as columns,
+determinants as matrices) and plain text beside it. For example, with A = (1, 0, 0),
+B = (0, 2, 0) and C = (0, 0, 3)::
 
     n_x = |u_y u_z; v_y v_z| = |2 0; 0 3| = 2·3 − 0·0 = 6 − 0 = 6
 """
