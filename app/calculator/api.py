@@ -10,9 +10,10 @@ from fastapi import APIRouter, Request
 from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import Response
 
+from app.calculator.calculation import calculation_payload, from_doubles, from_typed
 from app.calculator.chart import bar_figure
 from app.calculator.params import query_parameters_spec, read_triangle
-from app.calculator.payloads import batch_payload, normal_payload, payload_csv
+from app.calculator.payloads import batch_payload, payload_csv
 from app.calculator.schemas import BatchRequest, BatchResult, Figure, NormalRequest, NormalResult
 from app.config import BATCH_LIMIT
 from app.web.errors import ERROR_RESPONSES, ApiError
@@ -39,7 +40,7 @@ def query_payload(request: Request) -> dict[str, Any]:
     parsed = read_triangle(request.query_params)
     if not parsed.valid:
         raise parsed.first_error()
-    return normal_payload(parsed.normal())
+    return calculation_payload(from_typed(parsed))
 
 
 @router.post(
@@ -51,8 +52,8 @@ def query_payload(request: Request) -> dict[str, Any]:
 async def post_normal(request: Request) -> FastJSONResponse:
     """The normal of one triangle given as JSON."""
     body = await read_body(request, NormalRequest)
-    result = triangle_normal(body.a, body.b, body.c, swap_winding=body.swap_winding)
-    return FastJSONResponse(normal_payload(result))
+    calc = from_doubles(body.a, body.b, body.c, swap_winding=body.swap_winding)
+    return FastJSONResponse(calculation_payload(calc))
 
 
 @router.get(

@@ -1,7 +1,9 @@
 """One typed coordinate: a decimal (``1.5``, ``-2e3``, ``2,5``) or an exact fraction (``1/3``).
 
-A decimal means the double it denotes, as before. A fraction means its exact value: when one
-coordinate is a fraction, the triangle is computed on exact rationals and rounded once.
+Each has its exact value as typed (``0.1`` is 1/10, ``1/3`` is 1/3): the page and
+``GET /api/normal`` compute the triangle on those exact rationals and round the result once
+(:func:`app.calculator.calculation.from_typed`). A decimal whose exponent is beyond
+:data:`MAX_EXACT_EXPONENT` has only its double.
 
 Every exponent is checked on the text before a :class:`~fractions.Fraction` is built:
 ``Fraction("1e-99999999")`` would take forever, and ``1e999999`` fits in :data:`MAX_TEXT`.

@@ -8,9 +8,9 @@ from urllib.parse import urlencode
 from fastapi import APIRouter, Request
 from fastapi.responses import HTMLResponse
 
+from app.calculator.calculation import calculation_payload, from_typed, result_math
 from app.calculator.chart import bar_figure
 from app.calculator.params import read_triangle
-from app.calculator.payloads import normal_payload
 from app.calculator.presets import COORDINATE_FIELDS, EXAMPLE, PRESETS
 from app.calculator.snippets import snippets
 from app.calculator.steps import worked_steps
@@ -37,14 +37,18 @@ def _calculation(request: Request) -> dict[str, Any]:
         "result": None,
         "payload": None,
         "figure": None,
+        "calculation": None,
+        "result_math": {},
     }
     swap_text = "on" if parsed.swap else query.get("swap") if "swap" in parsed.errors else None
     params = {**parsed.typed, **({"swap": swap_text} if swap_text else {})}
     context["query"] = urlencode(params)
     if parsed.valid:
-        result = parsed.normal()
-        context["result"] = result
-        context["payload"] = normal_payload(result)
+        calc = from_typed(parsed)
+        context["result"] = calc.result
+        context["calculation"] = calc
+        context["payload"] = calculation_payload(calc)
+        context["result_math"] = result_math(calc, context["payload"])
         context["figure"] = bar_figure(context["payload"])
     return context
 
@@ -55,9 +59,9 @@ def _with_details(context: dict[str, Any]) -> dict[str, Any]:
     return {
         **context,
         "presets": PRESETS,
-        "steps": None if result is None else worked_steps(result),
+        "steps": None if result is None else worked_steps(result, context["calculation"].exact),
         "view3d": None if payload is None else view3d_figure(payload),
-        "snippets": [] if payload is None else snippets(payload),
+        "snippets": [] if payload is None else snippets(payload, context["calculation"].typed),
     }
 
 

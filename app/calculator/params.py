@@ -28,9 +28,9 @@ Text = Annotated[
     Field(
         description=(
             "A number: a decimal such as 1.5 or -2e3 (a decimal comma works too: 2,5), "
-            "read as the double it denotes, or a fraction such as 1/3, -2/7 or 1.5/2, read "
-            "exactly: with any fraction the triangle is computed on the exact values and "
-            "rounded once. Exponents in a fraction stay within ±30."
+            "or a fraction such as 1/3, -2/7 or 1.5/2. Each is read exactly (0.1 is 1/10), "
+            "the triangle is computed on the exact values and rounded once. Exponents in a "
+            "fraction stay within ±30."
         ),
         examples=["1.5", "1/3"],
         json_schema_extra={"pattern": PATTERN, "maxLength": MAX_TEXT},
@@ -113,9 +113,10 @@ class TriangleInput:
     def normal(self) -> TriangleNormal:
         """The triangle's normal; call only when the input is valid.
 
-        With a fraction among the coordinates, on exact rationals: each fraction as typed,
-        each decimal as the double it denotes (so that decimals mean what they always did),
-        and the exact result rounded once. Otherwise on the doubles.
+        The fallback of :func:`app.calculator.calculation.from_typed` when some decimal has
+        no exact value (an exponent beyond ±30): with a fraction among the coordinates, on
+        exact rationals (each fraction as typed, each decimal as its double) rounded once;
+        otherwise on the doubles.
         """
         if not self.fractions:
             return triangle_normal(*self.points(), swap_winding=self.swap)
