@@ -59,6 +59,27 @@ CAMERAS: dict[str, dict[str, dict[str, float]]] = {
     "z": {"up": {"x": 0, "y": 0, "z": 1}, "eye": {"x": 1.25, "y": -1.25, "z": 0.9}},
 }
 
+#: The surface's light: a key light from above the camera's shoulder (LIGHTS) with enough
+#: diffuse and a little specular that curvature reads as a solid, and enough ambient that the
+#: side turned away stays a colour, not black. A simplified surface is shaded smooth (its
+#: facets are the decimation's, not the file's); a mesh drawn whole shows its own facets.
+SURFACE_LIGHTING = {
+    "ambient": 0.45,
+    "diffuse": 0.7,
+    "specular": 0.25,
+    "roughness": 0.45,
+    "fresnel": 0.15,
+    "facenormalsepsilon": 0,
+    "vertexnormalsepsilon": 0,
+}
+#: Where the light is for each up axis: the camera's side, raised along the up axis (Plotly
+#: takes it in scene units; this far away it is a directional light).
+LIGHTS = {
+    "x": {"x": 2e5, "y": 1e5, "z": 1e5},
+    "y": {"x": 1e5, "y": 2e5, "z": 1e5},
+    "z": {"x": 1e5, "y": -1e5, "z": 2e5},
+}
+
 ARROW_COLOR = DEEP_ACCENT
 BOUNDARY_LINE = "#c99a06"
 NONMANIFOLD_LINE = "#862e9c"
@@ -225,11 +246,12 @@ def build_view(
     nonmanifold_edges: NDArray[np.integer[Any]],
     up: str = DEFAULT_UP,
 ) -> dict[str, Any]:
-    """The 3D view: ``{"figure", "shown_faces", "total_faces", "arrows", "counts", "note",
-    "up", "cameras"}``.
+    """The 3D view: ``{"figure", "shown_faces", "total_faces", "simplified", "arrows", "counts",
+    "note", "up", "cameras", "lights"}``.
 
     ``counts`` holds the number of faces of each class in the whole mesh; ``up`` is the axis
-    drawn upward ("x", "y" or "z") and ``cameras`` the camera for each, for the page's switch.
+    drawn upward ("x", "y" or "z"), ``cameras`` and ``lights`` the camera and the surface's
+    light for each, for the page's switch.
     """
     used, local = used_vertices(faces, len(vertices))
     space = view_space(vertices[used])
@@ -260,16 +282,10 @@ def build_view(
                 "j": j,
                 "k": k,
                 "facecolor": [COLORS[int(code)] for code in face_class[solid]],
-                "flatshading": True,
+                "flatshading": not surface.simplified,
                 "hoverinfo": "skip",
-                "lighting": {
-                    "ambient": 0.7,
-                    "diffuse": 0.5,
-                    "specular": 0.05,
-                    "roughness": 0.9,
-                    "fresnel": 0.05,
-                },
-                "lightposition": {"x": 1e5, "y": 2e5, "z": 3e5},
+                "lighting": SURFACE_LIGHTING,
+                "lightposition": LIGHTS[up],
             }
         )
     # The edges name the file's vertices: renumber them on the surface's points.
@@ -318,6 +334,7 @@ def build_view(
         "note": _note(space),
         "up": up,
         "cameras": CAMERAS,
+        "lights": LIGHTS,
     }
 
 

@@ -160,13 +160,20 @@
     document.querySelectorAll("[data-needs-js]").forEach(function (element) { element.hidden = false; });
   }
 
-  // The camera for the chosen up axis (the report's figure carries the format's own).
+  // The camera and the surface's light for the chosen up axis (the report's figure carries
+  // the format's own).
   function viewFigure() {
     const figure = data("mesh-view-data");
     const cameras = data("mesh-view-cameras");
+    const lights = data("mesh-view-lights");
     const select = document.getElementById("mesh-up");
     if (figure && cameras && select && cameras[select.value]) {
       figure.layout.scene.camera = cameras[select.value];
+      figure.data.forEach(function (trace) {
+        if (trace.type === "mesh3d" && lights && lights[select.value]) {
+          trace.lightposition = lights[select.value];
+        }
+      });
     }
     return figure;
   }
