@@ -59,7 +59,7 @@ CAMERAS: dict[str, dict[str, dict[str, float]]] = {
     "z": {"up": {"x": 0, "y": 0, "z": 1}, "eye": {"x": 1.25, "y": -1.25, "z": 0.9}},
 }
 
-#: The surface's light: a key light from above the camera's shoulder (LIGHTS) with enough
+#: The surface's light: a key light from above the camera's shoulder (LIGHT) with enough
 #: diffuse and a little specular that curvature reads as a solid, and enough ambient that the
 #: side turned away stays a colour, not black. A simplified surface is shaded smooth (its
 #: facets are the decimation's, not the file's); a mesh drawn whole shows its own facets.
@@ -72,13 +72,10 @@ SURFACE_LIGHTING = {
     "facenormalsepsilon": 0,
     "vertexnormalsepsilon": 0,
 }
-#: Where the light is for each up axis: the camera's side, raised along the up axis (Plotly
-#: takes it in scene units; this far away it is a directional light).
-LIGHTS = {
-    "x": {"x": 2e5, "y": 1e5, "z": 1e5},
-    "y": {"x": 1e5, "y": 2e5, "z": 1e5},
-    "z": {"x": 1e5, "y": -1e5, "z": 2e5},
-}
+#: Where the light is. Plotly takes the surface's light in the camera's frame (x to the right
+#: of the screen, y up it, z towards the viewer), so it follows the camera: this one is a key
+#: light from in front, above and a little to the right, far enough to be directional.
+LIGHT = {"x": 5e4, "y": 1e5, "z": 3e5}
 
 ARROW_COLOR = DEEP_ACCENT
 BOUNDARY_LINE = "#c99a06"
@@ -247,11 +244,10 @@ def build_view(
     up: str = DEFAULT_UP,
 ) -> dict[str, Any]:
     """The 3D view: ``{"figure", "shown_faces", "total_faces", "simplified", "arrows", "counts",
-    "note", "up", "cameras", "lights"}``.
+    "note", "up", "cameras"}``.
 
     ``counts`` holds the number of faces of each class in the whole mesh; ``up`` is the axis
-    drawn upward ("x", "y" or "z"), ``cameras`` and ``lights`` the camera and the surface's
-    light for each, for the page's switch.
+    drawn upward ("x", "y" or "z") and ``cameras`` the camera for each, for the page's switch.
     """
     used, local = used_vertices(faces, len(vertices))
     space = view_space(vertices[used])
@@ -285,7 +281,7 @@ def build_view(
                 "flatshading": not surface.simplified,
                 "hoverinfo": "skip",
                 "lighting": SURFACE_LIGHTING,
-                "lightposition": LIGHTS[up],
+                "lightposition": LIGHT,
             }
         )
     # The edges name the file's vertices: renumber them on the surface's points.
@@ -334,7 +330,6 @@ def build_view(
         "note": _note(space),
         "up": up,
         "cameras": CAMERAS,
-        "lights": LIGHTS,
     }
 
 

@@ -160,22 +160,86 @@
     document.querySelectorAll("[data-needs-js]").forEach(function (element) { element.hidden = false; });
   }
 
-  // The camera and the surface's light for the chosen up axis (the report's figure carries
-  // the format's own).
-  function viewFigure() {
-    const figure = data("mesh-view-data");
-    const cameras = data("mesh-view-cameras");
-    const lights = data("mesh-view-lights");
-    const select = document.getElementById("mesh-up");
-    if (figure && cameras && select && cameras[select.value]) {
-      figure.layout.scene.camera = cameras[select.value];
-      figure.data.forEach(function (trace) {
-        if (trace.type === "mesh3d" && lights && lights[select.value]) {
-          trace.lightposition = lights[select.value];
+  // Face orientation, as Blender shows it: the surface twice, each face moved a hair along its
+  // own normal (blue) and against it (red). From outside, a mesh wound outward is blue and a
+  // part wound inward (or a single face wound against its neighbours) is red.
+  const FRONT = "#2f6fed";
+  const BACK = "#e0312f";
+  const ORIENTATION_OFFSET = 1e-3;  // of the view's diagonal: clear of depth fighting, too thin to see
+  const PROBLEM_TRACES = ["faces", "boundary edges", "non-manifold edges", "degenerate"];
+
+  function orientationTraces(surface) {
+    const n = surface.i.length;
+    const x = surface.x, y = surface.y, z = surface.z;
+    let low = [Infinity, Infinity, Infinity], high = [-Infinity, -Infinity, -Infinity];
+    for (let v = 0; v < x.length; v++) {
+      const p = [x[v], y[v], z[v]];
+      for (let a = 0; a < 3; a++) { low[a] = Math.min(low[a], p[a]); high[a] = Math.max(high[a], p[a]); }
+    }
+    const diagonal = Math.hypot(high[0] - low[0], high[1] - low[1], high[2] - low[2]) || 1;
+    const offset = ORIENTATION_OFFSET * diagonal;
+    const copies = [[], []].map(function () { return { x: [], y: [], z: [] }; });
+    const corners = [surface.i, surface.j, surface.k];
+    for (let f = 0; f < n; f++) {
+      const p = corners.map(function (c) { return [x[c[f]], y[c[f]], z[c[f]]]; });
+      const u = [p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]];
+      const w = [p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]];
+      const normal = [u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]];
+      const length = Math.hypot(normal[0], normal[1], normal[2]);
+      const scale = length > 0 ? offset / length : 0;
+      [1, -1].forEach(function (side, c) {
+        for (let corner = 0; corner < 3; corner++) {
+          copies[c].x.push(p[corner][0] + side * scale * normal[0]);
+          copies[c].y.push(p[corner][1] + side * scale * normal[1]);
+          copies[c].z.push(p[corner][2] + side * scale * normal[2]);
         }
       });
     }
+    const index = [[], [], []];
+    for (let f = 0; f < n; f++) { index[0].push(3 * f); index[1].push(3 * f + 1); index[2].push(3 * f + 2); }
+    return [["front faces", FRONT], ["back faces", BACK]].map(function (named, c) {
+      return {
+        type: "mesh3d", name: named[0], x: copies[c].x, y: copies[c].y, z: copies[c].z,
+        i: index[0], j: index[1], k: index[2], color: named[1], flatshading: true,
+        hoverinfo: "skip", lighting: surface.lighting, lightposition: surface.lightposition,
+        visible: false,
+      };
+    });
+  }
+
+  function viewMode() {
+    const select = document.getElementById("mesh-mode");
+    return select ? select.value : "problems";
+  }
+
+  // The camera for the chosen up axis (the report's figure carries the format's own), and the
+  // traces of the chosen colours shown, the others hidden.
+  function viewFigure() {
+    const figure = data("mesh-view-data");
+    const cameras = data("mesh-view-cameras");
+    const select = document.getElementById("mesh-up");
+    if (!figure) return figure;
+    if (cameras && select && cameras[select.value]) figure.layout.scene.camera = cameras[select.value];
+    // Rotating and zooming stay when the colours change; a new up axis starts a new view.
+    figure.layout.uirevision = select ? select.value : "view";
+    const surface = figure.data.find(function (trace) { return trace.name === "faces"; });
+    if (surface) figure.data = figure.data.concat(orientationTraces(surface));
+    const orientation = viewMode() === "orientation";
+    figure.data.forEach(function (trace) {
+      if (PROBLEM_TRACES.indexOf(trace.name) !== -1) trace.visible = !orientation;
+      if (trace.name === "front faces" || trace.name === "back faces") trace.visible = orientation;
+    });
     return figure;
+  }
+
+  function syncMode() {
+    const orientation = viewMode() === "orientation";
+    const problems = document.getElementById("mesh-problem-legend");
+    const faces = document.getElementById("mesh-orientation-legend");
+    if (problems) problems.classList.toggle("hidden", orientation);
+    if (faces) faces.classList.toggle("hidden", !orientation);
+    const element = document.getElementById("mesh-view");
+    if (element) element.dataset.mode = viewMode();
   }
 
   // The 3D bundle (557 KB gzipped) loads only when the view scrolls into sight.
@@ -199,6 +263,7 @@
 
   function drawFigures() {
     showScripted();
+    syncMode();
     drawView();
     return drawHistogram();
   }
@@ -404,7 +469,8 @@
   document.addEventListener("change", function (event) {
     if (event.target.id === "normals-kind") syncFields();
     if (event.target.id === "fix-format") syncDropped();
-    if (event.target.id === "mesh-up") {
+    if (event.target.id === "mesh-mode") syncMode();
+    if (event.target.id === "mesh-up" || event.target.id === "mesh-mode") {
       const element = document.getElementById("mesh-view");
       if (element && window.NormalView3D) window.NormalView3D.update(element, viewFigure());
     }
