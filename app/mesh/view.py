@@ -22,6 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from app.mesh.classes import CLASSES, COLORS, DEGENERATE, FLIPPED, OK
+from app.mesh.view_normals import normal_pools
 from app.mesh.view_surface import display_surface, used_vertices
 from app.web.plotly import DEEP_ACCENT, FONT, TRANSPARENT, Trace, cone_trace
 from mesh_normal.types import IndexArray
@@ -244,10 +245,11 @@ def build_view(
     up: str = DEFAULT_UP,
 ) -> dict[str, Any]:
     """The 3D view: ``{"figure", "shown_faces", "total_faces", "simplified", "arrows", "counts",
-    "note", "up", "cameras"}``.
+    "note", "up", "cameras", "normals"}``.
 
     ``counts`` holds the number of faces of each class in the whole mesh; ``up`` is the axis
-    drawn upward ("x", "y" or "z") and ``cameras`` the camera for each, for the page's switch.
+    drawn upward ("x", "y" or "z") and ``cameras`` the camera for each, for the page's switch;
+    ``normals`` the arrows the page may draw instead (:mod:`app.mesh.view_normals`).
     """
     used, local = used_vertices(faces, len(vertices))
     space = view_space(vertices[used])
@@ -330,6 +332,9 @@ def build_view(
         "note": _note(space),
         "up": up,
         "cameras": CAMERAS,
+        "normals": normal_pools(
+            file_points, local, normals, classes == FLIPPED, vertices[used], used
+        ),
     }
 
 

@@ -21,6 +21,7 @@ import threading
 from dataclasses import dataclass
 from typing import Any
 
+import fast_simplification  # imported with the page (not on the first large mesh): see warmup
 import numpy as np
 from numpy.typing import NDArray
 
@@ -69,8 +70,6 @@ def _unit(points: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.
 def _decimate(
     points: NDArray[np.float64], faces: IndexArray, target: int
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
-    import fast_simplification  # imported on first use: the small meshes never need it
-
     with _LOCK:
         out_points, out_faces = fast_simplification.simplify(
             points,

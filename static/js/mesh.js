@@ -207,6 +207,75 @@
     });
   }
 
+  // Normals as arrows: the kind, how many and how long the user chose, from the pools the
+  // report carries (a fair sample in a fixed order, so "how many" takes the first ones).
+  const ARROW_NAMES = ["normals", "flipped normals"];
+  const ARROW_COLOR = "#3a44b0";
+  const FLIPPED_COLOR = "#f76707";
+
+  function diagonalOf(trace) {
+    const low = [Infinity, Infinity, Infinity], high = [-Infinity, -Infinity, -Infinity];
+    [trace.x, trace.y, trace.z].forEach(function (values, a) {
+      values.forEach(function (value) {
+        if (value === null) return;
+        low[a] = Math.min(low[a], value);
+        high[a] = Math.max(high[a], value);
+      });
+    });
+    return Math.hypot(high[0] - low[0], high[1] - low[1], high[2] - low[2]) || 1;
+  }
+
+  function arrowTraces(name, color, pool, rows, length, cone) {
+    if (!rows.length) return [];
+    const line = { x: [], y: [], z: [] }, tips = { x: [], y: [], z: [] }, heads = { u: [], v: [], w: [] };
+    const head = 0.3 * length;
+    rows.forEach(function (r) {
+      const at = pool.at[r], n = pool.normal[r];
+      ["x", "y", "z"].forEach(function (axis, a) {
+        line[axis].push(at[a], at[a] + n[a] * (length - head), null);
+        tips[axis].push(at[a] + n[a] * length);
+      });
+      heads.u.push(n[0] * head); heads.v.push(n[1] * head); heads.w.push(n[2] * head);
+    });
+    const hover = rows.map(function (r) {
+      const n = pool.normal[r];
+      return pool.label[r] + ": normal (" + n.map(function (c) { return Number(c.toPrecision(4)); }).join(", ") + ")";
+    });
+    return [
+      { type: "scatter3d", mode: "lines", name: name, x: line.x, y: line.y, z: line.z,
+        line: { color: color, width: 3 }, hoverinfo: "skip" },
+      Object.assign({}, cone, {
+        type: "cone", name: name, x: tips.x, y: tips.y, z: tips.z, u: heads.u, v: heads.v, w: heads.w,
+        anchor: "tip", sizemode: "raw", sizeref: 1, colorscale: [[0, color], [1, color]],
+        showscale: false, hovertext: hover, hovertemplate: "%{hovertext}<extra></extra>",
+      }),
+    ];
+  }
+
+  // The arrows the controls ask for, in place of the report's; null when the controls are
+  // not on the page. Writes what is drawn into the caption.
+  function chosenArrows(figure) {
+    const pools = data("mesh-view-normals");
+    const kind = document.getElementById("mesh-arrow-kind");
+    const countInput = document.getElementById("mesh-arrow-count");
+    const lengthInput = document.getElementById("mesh-arrow-length");
+    if (!pools || !kind || !countInput || !lengthInput) return null;
+    const pool = pools[kind.value] || pools.face;
+    if (!pool) return null;
+    const count = Math.max(0, Math.min(pool.at.length, Math.round(Number(countInput.value)) || 0));
+    const surface = figure.data.find(function (trace) { return trace.name === "faces"; });
+    const length = Number(lengthInput.value) * (surface ? diagonalOf(surface) : 1);
+    const cone = figure.data.find(function (trace) { return trace.type === "cone"; }) || {};
+    const lighting = cone.lighting ? { lighting: cone.lighting } : {};
+    const rows = [], flipped = [];
+    for (let r = 0; r < count; r++) ((pool.flipped && pool.flipped[r]) ? flipped : rows).push(r);
+    const caption = document.getElementById("mesh-view-arrows");
+    const noun = { face: "faces", vertex: "vertices", corner: "corners" }[pools[kind.value] ? kind.value : "face"];
+    if (caption) caption.textContent = count ? " Arrows: the unit normals of " + count + " " + noun + "." : " No arrows.";
+    return arrowTraces("normals", ARROW_COLOR, pool, rows, length, lighting)
+      .concat(arrowTraces("flipped normals", FLIPPED_COLOR, pool, flipped, length, lighting));
+  }
+
   function viewMode() {
     const select = document.getElementById("mesh-mode");
     return select ? select.value : "problems";
@@ -222,6 +291,11 @@
     if (cameras && select && cameras[select.value]) figure.layout.scene.camera = cameras[select.value];
     // Rotating and zooming stay when the colours change; a new up axis starts a new view.
     figure.layout.uirevision = select ? select.value : "view";
+    const arrows = chosenArrows(figure);
+    if (arrows) {
+      figure.data = figure.data.filter(function (trace) { return ARROW_NAMES.indexOf(trace.name) === -1; })
+        .concat(arrows);
+    }
     const surface = figure.data.find(function (trace) { return trace.name === "faces"; });
     if (surface) figure.data = figure.data.concat(orientationTraces(surface));
     const orientation = viewMode() === "orientation";
@@ -470,7 +544,8 @@
     if (event.target.id === "normals-kind") syncFields();
     if (event.target.id === "fix-format") syncDropped();
     if (event.target.id === "mesh-mode") syncMode();
-    if (event.target.id === "mesh-up" || event.target.id === "mesh-mode") {
+    if (["mesh-up", "mesh-mode", "mesh-arrow-kind", "mesh-arrow-count", "mesh-arrow-length"]
+        .indexOf(event.target.id) !== -1) {
       const element = document.getElementById("mesh-view");
       if (element && window.NormalView3D) window.NormalView3D.update(element, viewFigure());
     }

@@ -303,3 +303,46 @@ def test_the_face_orientation_mode_shows_front_blue_and_back_red(page: Page) -> 
     shown = page.evaluate(VISIBLE)
     assert shown["faces"] and not shown["front faces"]
     expect(page.locator("#mesh-problem-legend")).to_be_visible()
+
+
+ARROWS = """() => document.getElementById('mesh-view').data
+    .filter((t) => t.type === 'cone').map((t) => [t.name, t.u.length, t.x[0], t.u[0]])"""
+
+
+def test_the_arrow_controls_choose_kind_count_and_length(page: Page) -> None:
+    open_mesh_page(page)
+    page.set_input_files("#mesh-file", files=[cube_file()])
+    wait_for_report(page)
+    wait_for_view(page)
+    expect(page.locator("#mesh-arrow-count")).to_have_value("12")
+    # As drawn by the report: 11 face arrows and the flipped one in orange.
+    assert sorted((name, n) for name, n, *_ in page.evaluate(ARROWS)) == [
+        ("flipped normals", 1), ("normals", 11)]  # fmt: skip
+    drawn = page.get_attribute("#mesh-view", "data-drawn")
+    page.select_option("#mesh-arrow-kind", "vertex")
+    page.wait_for_function(
+        "d => document.getElementById('mesh-view').dataset.drawn !== d", arg=drawn
+    )
+    assert [(name, n) for name, n, *_ in page.evaluate(ARROWS)] == [("normals", 8)]
+    expect(page.locator("#mesh-view-arrows")).to_have_text(
+        " Arrows: the unit normals of 8 vertices."
+    )
+    drawn = page.get_attribute("#mesh-view", "data-drawn")
+    page.fill("#mesh-arrow-count", "3")
+    page.locator("#mesh-arrow-count").dispatch_event("change")
+    page.wait_for_function(
+        "d => document.getElementById('mesh-view').dataset.drawn !== d", arg=drawn
+    )
+    ((_, count, _, head),) = page.evaluate(ARROWS)
+    assert count == 3
+    # The cube's diagonal is √3; the head is 0.3 of the 0.04-diagonal arrow, along the
+    # normal (1/√3 on each axis for a cube's corner).
+    assert abs(abs(head) - 0.3 * 0.04 * 3**0.5 / 3**0.5) < 1e-6
+    drawn = page.get_attribute("#mesh-view", "data-drawn")
+    page.fill("#mesh-arrow-length", "0.1")
+    page.locator("#mesh-arrow-length").dispatch_event("change")
+    page.wait_for_function(
+        "d => document.getElementById('mesh-view').dataset.drawn !== d", arg=drawn
+    )
+    ((_, _, _, head),) = page.evaluate(ARROWS)
+    assert abs(abs(head) - 0.3 * 0.1) < 1e-6
