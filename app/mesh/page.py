@@ -3,6 +3,8 @@
 ``GET /mesh`` shows the form; ``POST /mesh`` (multipart field ``file``, once or once per file
 of one mesh) answers with the whole page and its report, so it works without JavaScript.
 ``POST /mesh?part=report`` answers with the report alone, which the page's script swaps in.
+``GET /mesh/sample/{name}`` is the page for one of :mod:`app.mesh.samples`, as if uploaded;
+``GET /mesh/sample/{name}/file`` is that sample's file.
 The server keeps nothing: the page's downloads send the files again to the JSON API.
 """
 
@@ -11,10 +13,11 @@ from __future__ import annotations
 from typing import Any
 
 from fastapi import APIRouter, Request
-from fastapi.responses import HTMLResponse
+from fastapi.responses import HTMLResponse, Response
 
 from app.mesh import work
-from app.mesh.api import run_job, stem
+from app.mesh.api import MEDIA_TYPES, attachment, run_job, stem
+from app.mesh.samples import SAMPLES, sample
 from app.mesh.uploads import read_upload
 from app.mesh.work import FIX_FORMATS
 from app.web.errors import ApiError
@@ -41,6 +44,8 @@ def _form_context(request: Request) -> dict[str, Any]:
         "weld_limit": WELD_LIMIT,
         "report": None,
         "error": None,
+        "samples": SAMPLES.values(),
+        "sample": None,
     }
 
 
@@ -69,3 +74,32 @@ async def mesh_upload(request: Request) -> HTMLResponse:
         )
     name = "_mesh_report.html" if fragment else "mesh.html"
     return templates.TemplateResponse(request, name, context)
+
+
+@router.get("/mesh/sample/{name}", response_class=HTMLResponse)
+async def mesh_sample(request: Request, name: str) -> HTMLResponse:
+    """The page with the report on a sample, as the upload of its file would show it."""
+    chosen = sample(name)
+    upload = chosen.upload()
+    context = _form_context(request)
+    context.update(
+        await run_job(request, "page", upload, work.page, stem(upload.filename), public_url("/"))
+    )
+    context["sample"] = chosen
+    fragment = request.query_params.get("part") == "report"
+    response = templates.TemplateResponse(
+        request, "_mesh_report.html" if fragment else "mesh.html", context
+    )
+    response.headers["link"] = (
+        f'</api/mesh/sample/{chosen.name}>; rel="alternate"; type="application/json"'
+    )
+    return response
+
+
+@router.get("/mesh/sample/{name}/file")
+def mesh_sample_file(name: str) -> Response:
+    """The sample's file itself, to download and send again."""
+    chosen = sample(name)
+    return Response(
+        chosen.data(), media_type=MEDIA_TYPES[chosen.format], headers=attachment(chosen.filename)
+    )
