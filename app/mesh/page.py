@@ -10,13 +10,13 @@ The server keeps nothing: the page's downloads send the files again to the JSON 
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Annotated, Any
 
-from fastapi import APIRouter, Request
+from fastapi import APIRouter, Query, Request
 from fastapi.responses import HTMLResponse, Response
 
 from app.mesh import work
-from app.mesh.api import MEDIA_TYPES, attachment, run_job, stem
+from app.mesh.api import MEDIA_TYPES, FixFormat, attachment, run_job, stem
 from app.mesh.samples import SAMPLES, sample
 from app.mesh.uploads import read_upload
 from app.mesh.work import FIX_FORMATS
@@ -25,6 +25,7 @@ from app.web.links import public_url
 from app.web.middleware import size_text
 from app.web.templating import templates
 from mesh_normal.files.formats import ACCEPTED_SUFFIXES, COMPANION_SUFFIXES
+from mesh_normal.mesh_export import NormalsChoice
 from mesh_normal.tolerances import WELD_LIMIT
 
 __all__ = ["FIX_FORMATS", "router"]
@@ -97,9 +98,28 @@ async def mesh_sample(request: Request, name: str) -> HTMLResponse:
 
 
 @router.get("/mesh/sample/{name}/file")
-def mesh_sample_file(name: str) -> Response:
-    """The sample's file itself, to download and send again."""
+async def mesh_sample_file(
+    request: Request,
+    name: str,
+    file_format: Annotated[FixFormat | None, Query(alias="format")] = None,
+    normals: NormalsChoice | None = None,
+    flip: bool = False,
+    fix: bool = False,
+) -> Response:
+    """The sample's file itself; with ``format``, ``normals``, ``flip`` or ``fix``, written
+    again as ``POST /api/mesh/export`` would (a plain link or GET form, so it works without
+    JavaScript: the server holds the sample's file, not the visitor)."""
     chosen = sample(name)
-    return Response(
-        chosen.data(), media_type=MEDIA_TYPES[chosen.format], headers=attachment(chosen.filename)
-    )
+    if file_format is None and normals is None and not flip and not fix:
+        return Response(
+            chosen.data(),
+            media_type=MEDIA_TYPES[chosen.format],
+            headers=attachment(chosen.filename),
+        )
+    if flip and fix:
+        raise ApiError(422, "flip and fix cannot both be asked for: choose one.", "flip")
+    winding = "flip" if flip else "fix" if fix else "keep"
+    args = (file_format, normals or "auto", "angle", 30.0, winding, None)
+    body, written, headers = await run_job(request, "fix", chosen.upload(), work.export, *args)
+    headers.update(attachment(f"{chosen.name}-{'fixed' if fix else 'export'}.{written}"))
+    return Response(body.data, media_type=MEDIA_TYPES[written], headers=headers)

@@ -12,6 +12,7 @@ from playwright.sync_api import Page, expect
 from app.mesh.samples import CUBE_FACES, CUBE_POINTS
 from mesh_normal.files import read_mesh
 from mesh_normal.topology import mesh_topology
+from tests.browser.conftest import NewPage
 from tests.browser.test_mesh_page import cube_file, open_mesh_page, wait_for_report
 from tests.meshes import CUBE_ONE_FLIPPED_OBJ
 
@@ -78,3 +79,53 @@ def test_a_sample_page_exports_and_fixes_its_own_file(page: Page) -> None:
     fixed = read_mesh(Path(info.value.path()).read_bytes(), "fixed.obj")
     assert fixed.faces.tolist() == [list(face) for face in CUBE_FACES]
     assert mesh_topology(fixed.faces, len(fixed.vertices)).winding_consistent
+
+
+def test_without_javascript_the_page_shows_only_what_works(new_page: NewPage) -> None:
+    page = new_page(java_script_enabled=False, accept_downloads=True)
+    response = page.goto("/mesh/sample/inside-out")
+    assert response is not None and response.status == 200
+    # The 3D card says once that it needs JavaScript, and shows nothing that would need it.
+    card = page.locator(".mesh-view-card")
+    # (Playwright's text matching skips <noscript>: its paragraph is found by tag.)
+    expect(card.locator("noscript p")).to_be_visible()
+    words = " ".join(card.inner_text().split())
+    assert words == "3D view The 3D view needs JavaScript and WebGL."
+    expect(card).not_to_contain_text("loads when it scrolls into sight")
+    for hidden in ("#mesh-view", "#mesh-view-caption", ".mesh-legend", "#mesh-view-title .muted"):
+        expect(page.locator(hidden)).to_be_hidden()
+    expect(page.locator("#mesh-histogram")).to_be_hidden()
+    expect(page.locator("#mesh-histogram-caption")).to_be_visible()  # words, not a chart
+    # No button that does nothing: the script's controls are all hidden.
+    for hidden in ("#normals-form", "#fix-form", "#mesh-report-download", ".mesh-view-controls"):
+        expect(page.locator(hidden)).to_be_hidden()
+    visible_buttons = page.locator("main button:visible")
+    expect(visible_buttons).to_have_text(["Analyse", "Download with normals"])
+    # What is shown works: the sample's export is a plain GET form, the fix a plain link.
+    page.locator("#export-flip").check()
+    page.select_option("#export-format", "ply")
+    with page.expect_download() as info:
+        page.get_by_role("button", name="Download with normals").click()
+    assert info.value.suggested_filename == "inside-out-export.ply"
+    right = read_mesh(Path(info.value.path()).read_bytes(), "right.ply")
+    assert right.faces.tolist() == [list(face) for face in CUBE_FACES]
+    assert right.file_vertex_normals is not None
+    with page.expect_download() as info:
+        page.get_by_role("link", name="the fixed mesh (OBJ)").click()
+    fixed = read_mesh(Path(info.value.path()).read_bytes(), "fixed.obj")
+    assert fixed.faces.tolist() == [list(face) for face in CUBE_FACES]
+
+
+def test_without_javascript_an_upload_hides_the_tools(new_page: NewPage) -> None:
+    page = new_page(java_script_enabled=False)
+    page.goto("/mesh")
+    page.set_input_files("#mesh-file", files=[cube_file()])
+    with page.expect_navigation():
+        page.get_by_role("button", name="Analyse").click()
+    expect(page.locator("#mesh-report-title")).to_contain_text("cube.obj")
+    # The server keeps nothing, so no form could send the file again: none is shown.
+    expect(page.locator("#export-form")).to_be_hidden()
+    expect(page.locator("main button:visible")).to_have_text(["Analyse"])
+    note = page.locator("#mesh-downloads noscript p")
+    expect(note).to_be_visible()
+    assert "Downloads need JavaScript; without it" in note.inner_text()

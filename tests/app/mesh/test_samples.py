@@ -6,7 +6,8 @@ from __future__ import annotations
 import pytest
 from fastapi.testclient import TestClient
 
-from app.mesh.samples import SAMPLES
+from app.mesh.samples import CUBE_FACES, SAMPLES
+from mesh_normal.files import read_mesh
 from tests.app.mesh.test_page import json_block, post
 from tests.conftest import Page, assert_error
 
@@ -91,7 +92,7 @@ def test_page_and_json_twin_equal_the_upload_of_the_file(client: TestClient, nam
     fragment = client.get(f"/mesh/sample/{name}", params={"part": "report"})
     assert "<html" not in fragment.text
     shown = Page(fragment.text)
-    for element in ("mesh-summary", "mesh-problems", "mesh-downloads"):
+    for element in ("mesh-summary", "mesh-problems"):
         text = shown.text(element).replace(shown.text("mesh-sample"), "")
         assert " ".join(text.split()) == posted.text(element), element
     assert json_block(shown, "mesh-view-data") == json_block(posted, "mesh-view-data")
@@ -121,3 +122,30 @@ def test_an_unknown_sample_page_is_an_html_404(client: TestClient, path: str) ->
     assert response.status_code == 404
     assert response.headers["content-type"].startswith("text/html")
     assert "There is no sample mesh named &#39;nope&#39;" in response.text
+
+
+def test_a_sample_file_is_written_again_flipped_or_fixed(client: TestClient) -> None:
+    """The no-JavaScript export of a sample: a GET of its file with the export's choices."""
+    flipped = client.get(
+        "/mesh/sample/inside-out/file", params={"format": "ply", "normals": "face", "flip": "true"}
+    )
+    assert flipped.status_code == 200, flipped.text
+    assert flipped.headers["x-faces-flipped"] == "12" and flipped.headers["x-normals"] == "face"
+    name = 'attachment; filename="inside-out-export.ply"'
+    assert flipped.headers["content-disposition"] == name
+    right = read_mesh(flipped.content, "right.ply")
+    assert right.faces.tolist() == [list(face) for face in CUBE_FACES]
+    fixed = client.get("/mesh/sample/two-pieces/file", params={"fix": "true"})
+    assert fixed.headers["x-faces-flipped"] == "12"
+    assert fixed.headers["content-disposition"] == 'attachment; filename="two-pieces-fixed.obj"'
+    both = client.get("/mesh/sample/cube/file", params={"fix": "true", "flip": "true"})
+    assert both.status_code == 422 and "flip and fix cannot both" in both.text
+
+
+def test_the_sample_export_form_works_without_javascript(client: TestClient) -> None:
+    html = Page(client.get("/mesh/sample/open-box").text)
+    form = html.one("form", id="export-form")
+    assert (form["method"], form["action"]) == ("get", "/mesh/sample/open-box/file")
+    assert "hidden" not in form
+    names = {e.get("name") for e in html.find("select") + html.find("input") if e.get("name")}
+    assert {"format", "normals", "flip"} <= names
