@@ -149,3 +149,21 @@ def test_the_sample_export_form_works_without_javascript(client: TestClient) -> 
     assert "hidden" not in form
     names = {e.get("name") for e in html.find("select") + html.find("input") if e.get("name")}
     assert {"format", "normals", "flip"} <= names
+
+
+def test_captions_and_stored_normals_read_plainly(client: TestClient) -> None:
+    html = Page(client.get("/mesh/sample/cube").text)
+    assert html.text("mesh-histogram-caption") == "12 faces, all of area 0.5."
+    # A tetrahedron whose stored corner normals: 3 agree, 3 point the other way, 6 in between.
+    obj = (
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvn 0 0 1\nvn 0 0 -1\n"
+        "f 1//2 3//2 2//2\nf 1//1 2//1 4//1\nf 1//2 4//2 3//2\nf 2//2 3//2 4//2\n"
+    )
+    _, page = post(client, obj, name="t.obj", part="report")
+    text = page.text("mesh-file-normals")
+    assert text.startswith("The file stores 12 corner normals, compared with our angle-weighted")
+    assert text.endswith(
+        ": 3 agree within 1°, 6 differ by less than 90° (another program's rounding or "
+        "weighting, not a problem), 3 point the other way (see the diagnosis)."
+    )
+    assert "3 normals stored in the file point the other way" in page.text("problem-file_normals")
