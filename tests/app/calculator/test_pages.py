@@ -353,6 +353,7 @@ def test_openapi_lists_the_api_and_not_the_pages(client) -> None:  # type: ignor
         "/api/mesh/normals",
         "/api/mesh/fix",
         "/api/mesh/export",
+        "/api/mesh/sample/{name}",
         "/api/points",
         "/api/points/normals",
     }
