@@ -109,7 +109,7 @@ def _glb(attributes: list[tuple[str, NDArray[np.generic]]], indices: NDArray[np.
     """The GLB container: the JSON chunk, then one binary buffer of every array.
 
     The arrays go into the file as they are (byte views, joined once): no copy of each."""
-    pieces: list[bytes | NDArray[np.uint8]] = []
+    pieces: list[bytes | memoryview] = []
     length = 0  # of the binary buffer so far
     views: list[dict[str, int]] = []
     accessors: list[dict[str, object]] = []
@@ -118,7 +118,7 @@ def _glb(attributes: list[tuple[str, NDArray[np.generic]]], indices: NDArray[np.
         data = np.ascontiguousarray(array).reshape(-1).view(np.uint8)
         target = ELEMENT_ARRAY_BUFFER if name == "indices" else ARRAY_BUFFER
         views.append({"buffer": 0, "byteOffset": length, "byteLength": len(data), "target": target})
-        pieces += [data, b"\0" * (-len(data) % 4)]
+        pieces += [memoryview(data), b"\0" * (-len(data) % 4)]
         length += len(data) + -len(data) % 4
         accessor: dict[str, object] = {
             "bufferView": len(views) - 1,
