@@ -115,10 +115,10 @@ def _glb(attributes: list[tuple[str, NDArray[np.generic]]], indices: NDArray[np.
     accessors: list[dict[str, object]] = []
     named: dict[str, int] = {}
     for name, array in [*attributes, ("indices", indices)]:
-        data = np.ascontiguousarray(array).reshape(-1).view(np.uint8)
+        data = np.ascontiguousarray(array).reshape(-1).view(np.uint8).data
         target = ELEMENT_ARRAY_BUFFER if name == "indices" else ARRAY_BUFFER
         views.append({"buffer": 0, "byteOffset": length, "byteLength": len(data), "target": target})
-        pieces += [memoryview(data), b"\0" * (-len(data) % 4)]
+        pieces += [data, b"\0" * (-len(data) % 4)]
         length += len(data) + -len(data) % 4
         accessor: dict[str, object] = {
             "bufferView": len(views) - 1,
