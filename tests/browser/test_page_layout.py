@@ -117,3 +117,17 @@ def test_the_3d_toolbar_does_not_cover_its_title(new_page: NewPage, width: int) 
     assert title["right"] > title["left"] > 0
     apart = toolbar["left"] >= title["right"] or toolbar["top"] >= title["bottom"]
     assert apart, (title, toolbar)
+
+
+def test_the_mesh_views_hint_says_pinch_on_a_touch_screen(new_page: NewPage) -> None:
+    for options, shown, hidden, words in (
+        ({}, ".hint-mouse", ".hint-touch", "(drag to rotate, scroll to zoom)"),
+        (PHONE, ".hint-touch", ".hint-mouse", "(drag to rotate, pinch to zoom)"),
+    ):
+        page = new_page(**options)
+        response = page.goto("/mesh/sample/cube")
+        assert response is not None and response.status == 200
+        title = page.locator("#mesh-view-title")
+        expect(title.locator(shown)).to_be_visible()
+        expect(title.locator(shown)).to_have_text(words)
+        expect(title.locator(hidden)).to_be_hidden()
