@@ -458,29 +458,11 @@
 
   // --- Downloads: the same file, sent again to the JSON API ---------------------------------
 
-  function downloadStatus(text, kind) {
-    const slot = document.getElementById("mesh-download-status");
-    if (!slot) return;
-    slot.textContent = text;
-    slot.className = "message small" + (kind ? " " + kind : "") + (text ? "" : " hidden");
-  }
+  function downloadStatus(text, kind) { Downloads.status("mesh-download-status", text, kind); }
 
-  function save(blob, name) {
-    const url = URL.createObjectURL(blob);
-    const link = document.createElement("a");
-    link.href = url;
-    link.download = name;
-    document.body.appendChild(link);
-    link.click();
-    link.remove();
-    setTimeout(function () { URL.revokeObjectURL(url); }, 10000);
-  }
+  function save(blob, name) { Downloads.save(blob, name); }
 
-  function filename(response, fallback) {
-    const header = response.headers.get("content-disposition") || "";
-    const match = /filename="([^"]+)"/.exec(header);
-    return match ? match[1] : fallback;
-  }
+  function filename(response, fallback) { return Downloads.filename(response, fallback); }
 
   function fetchDownload(path, params, fallback, button, fields) {
     if (!files.length && input.files.length) files = Array.prototype.slice.call(input.files);

@@ -9,28 +9,11 @@
   const input = document.getElementById("mesh-file");
   if (!input) return;
 
-  function status(text, kind) {
-    const slot = document.getElementById("mesh-download-status");
-    if (!slot) return;
-    slot.textContent = text;
-    slot.className = "message small" + (kind ? " " + kind : "") + (text ? "" : " hidden");
-  }
+  function status(text, kind) { Downloads.status("mesh-download-status", text, kind); }
 
-  function save(blob, name) {
-    const url = URL.createObjectURL(blob);
-    const link = document.createElement("a");
-    link.href = url;
-    link.download = name;
-    document.body.appendChild(link);
-    link.click();
-    link.remove();
-    setTimeout(function () { URL.revokeObjectURL(url); }, 10000);
-  }
+  function save(blob, name) { Downloads.save(blob, name); }
 
-  function filename(response, fallback) {
-    const match = /filename="([^"]+)"/.exec(response.headers.get("content-disposition") || "");
-    return match ? match[1] : fallback;
-  }
+  function filename(response, fallback) { return Downloads.filename(response, fallback); }
 
   // The sample of this report, fetched once and kept as a File in the file field.
   let sampleFile = null;

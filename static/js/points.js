@@ -201,29 +201,11 @@
 
   // --- Downloads: the same file, sent again to the JSON API ---------------------------------
 
-  function downloadStatus(text, kind) {
-    const slot = document.getElementById("points-download-status");
-    if (!slot) return;
-    slot.textContent = text;
-    slot.className = "message small" + (kind ? " " + kind : "") + (text ? "" : " hidden");
-  }
+  function downloadStatus(text, kind) { Downloads.status("points-download-status", text, kind); }
 
-  function save(blob, name) {
-    const url = URL.createObjectURL(blob);
-    const link = document.createElement("a");
-    link.href = url;
-    link.download = name;
-    document.body.appendChild(link);
-    link.click();
-    link.remove();
-    setTimeout(function () { URL.revokeObjectURL(url); }, 10000);
-  }
+  function save(blob, name) { Downloads.save(blob, name); }
 
-  function filename(response, fallback) {
-    const header = response.headers.get("content-disposition") || "";
-    const match = /filename="([^"]+)"/.exec(header);
-    return match ? match[1] : fallback;
-  }
+  function filename(response, fallback) { return Downloads.filename(response, fallback); }
 
   function download(button) {
     if (!file && input.files.length) file = input.files[0];
