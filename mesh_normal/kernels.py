@@ -27,7 +27,7 @@ from collections.abc import Callable
 from typing import Any, Literal, TypeVar
 
 import numpy as np
-from numba import njit, prange
+from numba import njit, prange, types
 from numba.core import config as numba_config
 from numba.core.caching import (
     CompileResultCacheImpl,
@@ -35,6 +35,7 @@ from numba.core.caching import (
     InTreeCacheLocator,
     UserProvidedCacheLocator,
 )
+from numba.extending import intrinsic
 
 from mesh_normal.tolerances import MESH_DEGENERATE_SINE, MESH_RECOMPUTE_SINE
 from mesh_normal.types import BoolArray, Edges, FloatArray, IndexArray, Vector
@@ -279,6 +280,36 @@ def face_cross(edges: Edges) -> tuple[Vector, float, int]:
     return normal, square, AT_LARGEST_CORNER
 
 
+# --- dynamic blocks -------------------------------------------------------------------------
+#
+# A parallel kernel runs one worker per thread (``prange(workers)``), and each worker claims the
+# next block of faces from a shared counter until none is left: a thread that starts late or is
+# descheduled (a shared machine, the first call after an idle second) leaves its blocks to the
+# others instead of stalling the call, as numba's static split of a ``prange`` in equal parts
+# does. Where each block writes its own rows, the bits do not depend on who ran it.
+
+
+@intrinsic
+def claim(typingctx: Any, counter: Any) -> Any:
+    """``counter[0] += 1`` as one atomic step, returning the value before: the next task."""
+    if not (isinstance(counter, types.Array) and counter.dtype == types.int64):
+        return None
+
+    def codegen(context: Any, builder: Any, signature: Any, arguments: Any) -> Any:
+        array = context.make_array(signature.args[0])(context, builder, arguments[0])
+        one = context.get_constant(types.int64, 1)
+        return builder.atomic_rmw("add", array.data, one, "monotonic")
+
+    return types.int64(counter), codegen
+
+
+def workers() -> tuple[IndexArray, int]:
+    """A fresh task counter and the number of workers for a parallel kernel (numba's threads)."""
+    import numba
+
+    return np.zeros(1, dtype=np.int64), numba.get_num_threads()
+
+
 @kernel(parallel=True)
 def geometry_kernel(
     points: FloatArray,
@@ -288,16 +319,56 @@ def geometry_kernel(
     lengths: FloatArray,
     degenerate: BoolArray,
     recomputed: BoolArray,
+    counter: IndexArray,
+    workers: int,
 ) -> None:
     """Each face's cross product, |cross| and flags (see ``FaceGeometry``)."""
     blocks = (len(faces) + BLOCK - 1) // BLOCK
-    for block in prange(blocks):  # blocks write disjoint rows: they run on every core
+    for _ in prange(workers):  # blocks write disjoint rows: any worker may take any block
         corners = np.empty((BLOCK, 9))
-        start = block * BLOCK
-        for row in range(gather(points, factor, faces, start, corners)):
-            face = start + row
-            (x, y, z), square, found = face_cross(face_edges(corners, row))
-            crosses[face, 0], crosses[face, 1], crosses[face, 2] = x, y, z
-            lengths[face] = math.sqrt(square)
-            degenerate[face] = found == DEGENERATE
-            recomputed[face] = found != AT_FIRST_CORNER
+        block = claim(counter)
+        while block < blocks:
+            start = block * BLOCK
+            for row in range(gather(points, factor, faces, start, corners)):
+                face = start + row
+                (x, y, z), square, found = face_cross(face_edges(corners, row))
+                crosses[face, 0], crosses[face, 1], crosses[face, 2] = x, y, z
+                lengths[face] = math.sqrt(square)
+                degenerate[face] = found == DEGENERATE
+                recomputed[face] = found != AT_FIRST_CORNER
+            block = claim(counter)
+
+
+@kernel(parallel=True)
+def face_normals_kernel(
+    points: FloatArray,
+    factor: float,
+    faces: IndexArray,
+    exponent: int,
+    normals: FloatArray,
+    areas: FloatArray,
+    degenerate: BoolArray,
+    counter: IndexArray,
+    workers: int,
+) -> None:
+    """Each face's unit normal, area and degenerate flag in one pass, with the arithmetic of
+    ``geometry_kernel`` then ``FaceGeometry.unit_normals`` and ``geometry_areas``: the unit
+    normal is the cross product over |cross| (over 1 where degenerate, where it is zero) plus
+    0.0, the area ``ldexp(|cross|, exponent)``."""
+    blocks = (len(faces) + BLOCK - 1) // BLOCK
+    for _ in prange(workers):
+        corners = np.empty((BLOCK, 9))
+        block = claim(counter)
+        while block < blocks:
+            start = block * BLOCK
+            for row in range(gather(points, factor, faces, start, corners)):
+                face = start + row
+                (x, y, z), square, found = face_cross(face_edges(corners, row))
+                length = math.sqrt(square)
+                divisor = 1.0 if found == DEGENERATE else length
+                normals[face, 0] = x / divisor + 0.0  # -0.0 becomes 0.0
+                normals[face, 1] = y / divisor + 0.0
+                normals[face, 2] = z / divisor + 0.0
+                areas[face] = math.ldexp(length, exponent)
+                degenerate[face] = found == DEGENERATE
+            block = claim(counter)
