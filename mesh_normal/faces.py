@@ -158,7 +158,7 @@ def face_geometry(vertices: MeshInput, faces: ArrayLike | None = None) -> FaceGe
     crosses = np.empty((count, 3))
     lengths, degenerate = np.empty(count), np.empty(count, dtype=bool)
     recomputed = np.empty(count, dtype=bool)
-    announce_compiling()
+    announce_compiling(geometry_kernel)
     with PARALLEL_KERNELS:
         geometry_kernel(
             mesh.points,
@@ -211,7 +211,7 @@ def face_normals(vertices: MeshInput, faces: ArrayLike | None = None) -> FaceNor
     count = len(mesh.faces)
     normals, areas = np.empty((count, 3)), np.empty(count)
     degenerate = np.empty(count, dtype=bool)
-    announce_compiling()
+    announce_compiling(face_normals_kernel)
     with PARALLEL_KERNELS:
         face_normals_kernel(
             mesh.points,

@@ -214,39 +214,36 @@ def _accumulate(
 
 
 @kernel()
+def _normalise(
+    sums: FloatArray, spare: FloatArray, halves: bool, normals: FloatArray, missing: BoolArray
+) -> None:
+    """Unit rows of ``sums[:, :3]`` (plus ``spare``'s, added row by row, if ``halves``), or
+    zero where they cancel against their fourth column; see :func:`normalise_kernel`."""
+    for row in range(len(sums)):
+        x, y, z, total = sums[row, 0], sums[row, 1], sums[row, 2], sums[row, 3]
+        if halves:  # the same bits as ``sums += spare`` first, without that pass
+            x, y, z, total = (
+                x + spare[row, 0],
+                y + spare[row, 1],
+                z + spare[row, 2],
+                total + spare[row, 3],
+            )
+        square = x * x + y * y + z * z
+        cancel = _CANCELLED * total
+        missing[row] = square <= cancel * cancel
+        length = math.inf if missing[row] else math.sqrt(square)  # x / inf is an exact zero
+        normals[row, 0] = x / length + 0.0  # -0.0 becomes 0.0
+        normals[row, 1] = y / length + 0.0
+        normals[row, 2] = z / length + 0.0
+
+
 def normalise_kernel(sums: FloatArray, normals: FloatArray, missing: BoolArray) -> None:
     """Unit rows of ``sums[:, :3]``, or zero where they cancel against ``sums[:, 3]``.
 
     ``normals`` may share memory with ``sums``: row i is read before rows up to i are
     written, as (n, 3) is packed more densely than (n, 4).
     """
-    for row in range(len(sums)):
-        x, y, z, total = sums[row, 0], sums[row, 1], sums[row, 2], sums[row, 3]
-        square = x * x + y * y + z * z
-        cancel = _CANCELLED * total
-        missing[row] = square <= cancel * cancel
-        length = math.inf if missing[row] else math.sqrt(square)  # x / inf is an exact zero
-        normals[row, 0] = x / length + 0.0  # -0.0 becomes 0.0
-        normals[row, 1] = y / length + 0.0
-        normals[row, 2] = z / length + 0.0
-
-
-@kernel()
-def _normalise_halves(
-    sums: FloatArray, spare: FloatArray, normals: FloatArray, missing: BoolArray
-) -> None:
-    """``normalise_kernel`` of ``sums + spare`` (added row by row, in that order) without
-    the pass that adds them; ``normals`` may share memory with ``sums`` as there."""
-    for row in range(len(sums)):
-        x, y = sums[row, 0] + spare[row, 0], sums[row, 1] + spare[row, 1]
-        z, total = sums[row, 2] + spare[row, 2], sums[row, 3] + spare[row, 3]
-        square = x * x + y * y + z * z
-        cancel = _CANCELLED * total
-        missing[row] = square <= cancel * cancel
-        length = math.inf if missing[row] else math.sqrt(square)  # x / inf is an exact zero
-        normals[row, 0] = x / length + 0.0  # -0.0 becomes 0.0
-        normals[row, 1] = y / length + 0.0
-        normals[row, 2] = z / length + 0.0
+    _normalise(sums, sums, False, normals, missing)
 
 
 def smooth(geometry: FaceGeometry | CheckedMesh, weighting: str) -> tuple[FloatArray, BoolArray]:
@@ -281,7 +278,7 @@ def smooth(geometry: FaceGeometry | CheckedMesh, weighting: str) -> tuple[FloatA
         )
     normals = sums.reshape(-1)[: 3 * count].reshape(count, 3)
     missing = np.empty(count, dtype=bool)
-    _normalise_halves(sums, spare, normals, missing)
+    _normalise(sums, spare, True, normals, missing)
     return normals, missing
 
 
