@@ -548,12 +548,12 @@ def points_text(found: dict[str, Any]) -> str:
     """The summary in plain words, a few lines."""
     kind = " vertices" if found["source_kind"] == "mesh vertices" else ""
     lines = [
-        f"{found['file']}: {found['points']:,} points ({found['format'].upper()}{kind}), "
+        f"{found['file']}: {count(found['points'], 'point')} ({found['format'].upper()}{kind}), "
         f"{found['with_normal']:,} with a normal, {found['without_normal']:,} without"
     ]
     if found["file_points"] != found["points"]:
         left_out = found["file_points"] - found["points"]
-        lines.append(f"the file holds {found['file_points']:,} rows: {left_out:,} left out")
+        lines.append(f"the file holds {count(found['file_points'], 'row')}: {left_out:,} left out")
     lines.extend(f"note: {note}" for note in found["notes"])
     lines.append(f"neighbourhood: {neighbourhood_words(found)}; {orientation_words(found)}")
     lines.extend(
@@ -595,11 +595,11 @@ def vector_words(vector: list[float]) -> str:
 
 
 def component_lines(found: dict[str, Any]) -> list[str]:
-    count, parts = found["component_count"], found["components"]
-    if not count:
+    total, parts = found["component_count"], found["components"]
+    if not total:
         return []
     lines = [
-        f"orientation: {count:,} part(s); {found['flipped']:,} normal(s) flipped, "
+        f"orientation: {count(total, 'part')}; {count(found['flipped'], 'normal')} flipped, "
         f"{found['unoriented']:,} unoriented"
     ]
     for number, part in enumerate(parts[:LISTED_COMPONENTS], 1):
@@ -608,11 +608,11 @@ def component_lines(found: dict[str, Any]) -> list[str]:
             seed = ""
         reason = f"; {part['reason']}" if part["reason"] else ""
         lines.append(
-            f"  part {number}: {part['points']:,} points, {part['flipped']:,} flipped, "
+            f"  part {number}: {count(part['points'], 'point')}, {part['flipped']:,} flipped, "
             f"{part['unoriented']:,} unoriented{seed}{reason}"
         )
-    if count > LISTED_COMPONENTS:
-        lines.append(f"  and {count - LISTED_COMPONENTS:,} more")
+    if total > LISTED_COMPONENTS:
+        lines.append(f"  and {total - LISTED_COMPONENTS:,} more")
     return lines
 
 
@@ -621,28 +621,36 @@ def stored_line(stored: dict[str, Any]) -> str:
         return "the file's normals: none to compare (zero, not finite, or no normal of ours)"
     return (
         f"the file's normals: {stored['compared']:,} compared, median angle between the lines "
-        f"{stored['median_line_degrees']:.3g} degrees; {stored['same_way']:,} point the same "
-        f"way, {stored['opposite']:,} the opposite way"
+        f"{stored['median_line_degrees']:.3g} degrees; {stored['same_way']:,} "
+        f"{'points' if stored['same_way'] == 1 else 'point'} the same way, "
+        f"{stored['opposite']:,} the opposite way"
     )
 
 
 def written_line(found: dict[str, Any], output: str) -> str:
     """What ``-o`` wrote, and what in it is not a normal oriented as asked."""
     rows = found["file_points"] if output.lower().endswith(".npy") else found["points"]
-    line = f"wrote {rows:,} normals to {output}"
+    line = f"wrote {count(rows, 'normal')} to {output}"
     missing, unoriented = found["without_normal"], found["counts"]["unoriented"]
     if missing:
         reasons = ", ".join(
-            f"{count:,} {name}"
-            for name, count in found["counts"].items()
-            if count and name not in ("ok", "unoriented")
+            f"{number:,} {name}"
+            for name, number in found["counts"].items()
+            if number and name not in ("ok", "unoriented")
         )
-        line += f"; {missing:,} point(s) without a normal are zero rows ({reasons})"
+        are = "is a zero row" if missing == 1 else "are zero rows"
+        line += f"; {count(missing, 'point')} without a normal {are} ({reasons})"
     if unoriented:
-        line += f"; {unoriented:,} normal(s) unoriented (their side could not be decided)"
+        its = "its side" if unoriented == 1 else "their side"
+        line += f"; {count(unoriented, 'normal')} unoriented ({its} could not be decided)"
     left_out = found["file_points"] - found["points"]
     if left_out and output.lower().endswith(".npy"):
-        line += f"; {left_out:,} row(s) the file left out are zero rows too"
+        rows_left = (
+            "row the file left out is a zero row"
+            if left_out == 1
+            else ("rows the file left out are zero rows")
+        )
+        line += f"; {left_out:,} {rows_left} too"
     return line + ("; see `mesh-normal points FILE`" if missing or unoriented else "")
 
 

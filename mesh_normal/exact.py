@@ -10,7 +10,10 @@ Rounding to a double happens once, at the end, through Python's correctly rounde
 
 from __future__ import annotations
 
+from fractions import Fraction
 from math import isqrt
+
+from mesh_normal.tolerances import SURD_TRIAL_LIMIT
 
 #: Extra bits kept below a double's 53 when rounding a square root (plus a sticky bit).
 _GUARD_BITS = 64
@@ -125,3 +128,49 @@ def root_over(square: int, denominator: int) -> float:
     shift = max(0, 53 + _GUARD_BITS + deficit // 2 + 1)
     root = _sqrt_with_sticky(square, whole, shift)
     return round_scaled(root, shift + 1)
+
+
+def split_square(value: int, limit: int = SURD_TRIAL_LIMIT) -> tuple[int, int]:
+    """Return ``(s, r)`` with ``value == s * s * r`` for an integer ``value >= 1``.
+
+    ``r`` is square-free as far as trial division by 2 and the odd numbers up to ``limit``
+    can tell: a square ``p**2`` of a prime ``p > limit`` stays inside ``r`` unless what is left
+    after the trial divisions is itself a perfect square (checked once, with ``isqrt``). The
+    work is bounded by ``limit / 2`` divisions whatever the size of ``value``. For example,
+    ``split_square(72) == (6, 2)`` and ``split_square(286) == (1, 286)``.
+    """
+    if value < 1:
+        raise ValueError("split_square needs an integer of at least 1.")
+    outside, inside = 1, 1
+    divisor = 2
+    while divisor <= limit and divisor * divisor <= value:
+        if value % divisor == 0:
+            count = 0
+            while value % divisor == 0:
+                value //= divisor
+                count += 1
+            outside *= divisor ** (count // 2)
+            inside *= divisor ** (count % 2)
+        divisor += 1 if divisor == 2 else 2
+    root = isqrt(value)
+    if root * root == value:
+        return outside * root, inside
+    return outside, inside * value
+
+
+def square_root(square: Fraction, limit: int = SURD_TRIAL_LIMIT) -> tuple[Fraction, int]:
+    """Return ``(c, r)`` with ``sqrt(square) == c * sqrt(r)``: ``r`` an integer, ``c`` rational.
+
+    ``sqrt(p / q) = sqrt(p * q) / q``, then squares come out of ``p * q`` as
+    :func:`split_square` finds them (bounded trial division; a radicand may keep a square of
+    a large prime). Zero is ``(0, 1)``. For example ``sqrt(143 / 2) = sqrt(286) / 2``::
+
+        >>> square_root(Fraction(143, 2))
+        (Fraction(1, 2), 286)
+    """
+    if square < 0:
+        raise ValueError("square_root needs a number of at least 0.")
+    if square == 0:
+        return Fraction(0), 1
+    outside, inside = split_square(square.numerator * square.denominator, limit)
+    return Fraction(outside, square.denominator), inside

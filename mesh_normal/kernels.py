@@ -19,23 +19,14 @@ The first use of a kernel that is not in the cache says so on stderr, once per p
 
 from __future__ import annotations
 
+import functools
 import math
-import os
 import sys
 import threading
 from collections.abc import Callable
 from typing import Any, Literal, TypeVar
 
 import numpy as np
-from numba import njit, prange, types
-from numba.core import config as numba_config
-from numba.core.caching import (
-    CompileResultCacheImpl,
-    FunctionCache,
-    InTreeCacheLocator,
-    UserProvidedCacheLocator,
-)
-from numba.extending import intrinsic
 
 from mesh_normal.tolerances import MESH_DEGENERATE_SINE, MESH_RECOMPUTE_SINE
 from mesh_normal.types import BoolArray, Edges, FloatArray, IndexArray, Vector
@@ -73,75 +64,80 @@ _looked_at = 0
 _announced = False
 
 
-# --- the cache, also on a read-only filesystem ------------------------------------------------
-#
-# numba's own cache locators each insist on a folder they can write: they test it by writing a
-# temporary file there. On a read-only root filesystem (``docker run --read-only``) every one
-# refuses, even for a NUMBA_CACHE_DIR that holds every kernel compiled while the image was
-# built (or a mount the app's user may not write), and ``njit(cache=True)`` then raises at
-# import: "cannot cache function 'index_range': no locator available". The locators below are
-# tried after numba's writable ones: they read the same folder and never write it. A kernel
-# that is not in such a cache (another CPU, another signature) is compiled in memory, as
-# without a cache, and kept for the process.
+#: The stand-in for ``numba.prange`` in a kernel's module until numba is loaded (the kernels
+#: import it from here); :func:`load_numba` puts numba's own in its place.
+prange = range
+
+#: A call of a kernel marked ``python=True`` whose arrays hold this many elements or fewer, in
+#: a process that has not loaded numba, runs the kernel's Python source instead (a tiny mesh
+#: is reported in milliseconds that way, where importing numba and loading the kernels from
+#: its cache take 1-2 s). The same operations on the same doubles, one at a time and in the
+#: same order: the bits are the same (``tests/mesh_normal/test_kernels_in_python.py``).
+PYTHON_ELEMENTS = 6000
+
+_load = threading.Lock()
+_numba_loaded = False
 
 
-class _ReadOnlyLocator:
-    """A locator whose folder is read as it is: nothing checked by writing, nothing saved."""
+class Kernel:
+    """A kernel before numba is loaded: its Python source, and the options of its dispatcher.
 
-    def ensure_cache_path(self) -> None:
-        """Nothing to ensure: the folder is only read (a missing one is an empty cache)."""
+    Calling it loads numba (:func:`load_numba`) unless the call is small enough to run in
+    Python (see :data:`PYTHON_ELEMENTS`); any other attribute is the dispatcher's.
+    """
 
+    def __init__(self, function: Callable[..., Any], options: dict[str, Any], python: int) -> None:
+        self.py_func, self.options, self.python = function, options, python
+        self.dispatcher: Any = None
+        functools.update_wrapper(self, function)
 
-class ReadOnlyCacheDirLocator(_ReadOnlyLocator, UserProvidedCacheLocator):
-    """``NUMBA_CACHE_DIR`` when numba may not write it: e.g. the image's, on a read-only root."""
+    def __call__(self, *args: Any) -> Any:
+        if self.dispatcher is None:
+            if not _numba_loaded and _small(args, self.python):
+                return self.py_func(*args)
+            load_numba()
+            announce_compiling()
+            if self in _NAMED:  # left out of the look-up above: this call runs it
+                announce_compiling(self)
+            if self.options["parallel"] and _takes_workers(self.py_func):
+                # Its workers were counted before numba was loaded (one): all of numba's now.
+                args = (*args[:-1], workers()[1])
+        return self.dispatcher(*args)
 
-    @classmethod
-    def from_function(cls, py_func: Any, py_file: str) -> ReadOnlyCacheDirLocator | None:
-        cache_dir = getattr(numba_config, "CACHE_DIR", "")
-        if not cache_dir or not os.path.exists(py_file):
-            return None
-        return cls(py_func, py_file)
-
-
-class ReadOnlyInTreeLocator(_ReadOnlyLocator, InTreeCacheLocator):
-    """The ``__pycache__`` beside the source, read only: the last resort, so import never fails."""
-
-    @classmethod
-    def from_function(cls, py_func: Any, py_file: str) -> ReadOnlyInTreeLocator | None:
-        return cls(py_func, py_file) if os.path.exists(py_file) else None
-
-
-class _KernelCacheImpl(CompileResultCacheImpl):
-    _locator_classes = [  # noqa: RUF012 (numba's own class attribute)
-        CompileResultCacheImpl._locator_classes[0],  # NUMBA_CACHE_DIR, if numba may write it
-        ReadOnlyCacheDirLocator,
-        *CompileResultCacheImpl._locator_classes[1:],
-        ReadOnlyInTreeLocator,
-    ]
+    def __getattr__(self, name: str) -> Any:
+        if name.startswith("__") or name == "dispatcher":
+            raise AttributeError(name)
+        load_numba()
+        return getattr(self.dispatcher, name)
 
 
-class KernelCache(FunctionCache):
-    """numba's cache of compiled functions, which also reads a cache it may not write."""
+def _takes_workers(function: Callable[..., Any]) -> bool:
+    """Whether a kernel's last parameter is the number of workers (see :func:`workers`)."""
+    code = function.__code__
+    return code.co_argcount > 0 and code.co_varnames[code.co_argcount - 1] == "workers"
 
-    _impl_class = _KernelCacheImpl
 
-    @property
-    def read_only(self) -> bool:
-        return isinstance(self._impl.locator, _ReadOnlyLocator)
-
-    def save_overload(self, sig: Any, data: Any) -> None:
-        if not self.read_only:  # read-only: the kernel stays compiled in memory only
-            super().save_overload(sig, data)  # type: ignore[no-untyped-call]
+def _small(args: tuple[Any, ...], limit: int) -> bool:
+    """Whether the arrays of a call hold ``limit`` elements at most (:data:`PYTHON_ELEMENTS`
+    for a limit of 1, i.e. ``python=True``)."""
+    if limit == 1:
+        limit = PYTHON_ELEMENTS
+    return bool(limit) and sum(arg.size for arg in args if isinstance(arg, np.ndarray)) <= limit
 
 
 def kernel(
     *,
     parallel: bool = False,
     error_model: Literal["python", "numpy"] = "numpy",
+    python: bool | int = False,
     named: bool = False,
 ) -> Callable[[Function], Function]:
-    """``numba.njit(cache=True, ...)`` with :class:`KernelCache` (which also reads a read-only
-    cache), and remember the kernel for :func:`announce_compiling`.
+    """``numba.njit(cache=True, ...)`` with :class:`~mesh_normal._numba_cache.KernelCache`
+    (which also reads a read-only cache), made when numba is loaded; remember the kernel for
+    :func:`announce_compiling`. ``python``: small calls may run the Python source (only for
+    kernels whose every step gives the same bits in Python: float64 and int64 arithmetic,
+    ``math.sqrt``, comparisons; no NumPy reductions or sorts, no integer overflow); a number
+    over 1 is the largest call, in array elements, for a kernel much slower in Python.
 
     ``named``: one of several kernels for the same work, of which a call runs one (the face
     normals from a mesh or from a geometry): left out of the look-up of every kernel defined,
@@ -149,15 +145,57 @@ def kernel(
     """
 
     def compiled(function: Function) -> Function:
-        dispatcher = njit(error_model=error_model, parallel=parallel)(function)
-        # What cache=True does (Dispatcher.enable_caching), with the cache that can read only.
-        dispatcher._cache = KernelCache(function)  # type: ignore[attr-defined,no-untyped-call]
-        _KERNELS.append(dispatcher)
+        options = {"error_model": error_model, "parallel": parallel}
+        made: Any = _dispatcher(function, options) if _numba_loaded else None
+        if made is None:
+            made = Kernel(function, options, int(python))
+        _KERNELS.append(made)
         if named:
-            _NAMED.add(dispatcher)
-        return dispatcher  # type: ignore[return-value]
+            _NAMED.add(made)
+        return made  # type: ignore[no-any-return]
 
     return compiled
+
+
+def _dispatcher(function: Callable[..., Any], options: dict[str, Any]) -> Any:
+    """What ``njit(cache=True, **options)`` makes, with the cache that can also only read."""
+    from numba import njit
+
+    from mesh_normal._numba_cache import KernelCache
+
+    dispatcher = njit(**options)(function)
+    # What cache=True does (Dispatcher.enable_caching), with the cache that can read only.
+    dispatcher._cache = KernelCache(function)  # type: ignore[no-untyped-call]
+    return dispatcher
+
+
+def load_numba() -> None:
+    """Import numba and make every kernel its dispatcher (each compiled, or loaded from the
+    cache, at its first call): in each kernel's module the name now means the dispatcher, as
+    numba needs for the kernels that call it, ``prange`` numba's and ``claim`` the atomic
+    add (:func:`_claim_intrinsic`)."""
+    global _numba_loaded
+    if _numba_loaded:
+        return
+    with _load:
+        if _numba_loaded:
+            return
+        import numba
+
+        python_claim, atomic_claim = claim, _claim_intrinsic()
+        waiting = [made for made in _KERNELS if isinstance(made, Kernel)]
+        for made in waiting:
+            made.dispatcher = _dispatcher(made.py_func, made.options)
+        for made in waiting:
+            namespace = made.py_func.__globals__
+            for name, value in list(namespace.items()):
+                if isinstance(value, Kernel):
+                    namespace[name] = value.dispatcher
+                elif name == "prange" and value is range:
+                    namespace[name] = numba.prange
+                elif name == "claim" and value is python_claim:
+                    namespace[name] = atomic_claim
+        _numba_loaded = True
 
 
 def announce_compiling(*kernels: Any) -> None:
@@ -170,6 +208,10 @@ def announce_compiling(*kernels: Any) -> None:
     so for the mesh kernels its imports defined but it never runs.
     """
     global _looked_at, _announced
+    if not _numba_loaded and not kernels:  # a call that loads numba says so then
+        return
+    if not _numba_loaded and all(isinstance(made, Kernel) and made.python for made in kernels):
+        return  # they may run in Python; the call that loads numba says so then
     if kernels:
         with _announce:
             if not _announced and not all(map(is_cached, kernels)):
@@ -201,11 +243,12 @@ def is_cached(dispatcher: Any) -> bool:
     True when it is compiled already in this process, or when the cache index holds an
     entry that numba's own lookup (``Cache._index_key``) would accept for one of its
     signatures. This reads numba internals (``_cache``, ``_cache_file._load_index``);
-    where they are missing, it answers True (no announcement rather than a wrong one).
+    where they are missing (or ``dispatcher`` is not one: a test's stand-in), it answers
+    True (no announcement rather than a wrong one).
     """
-    if dispatcher.overloads:
-        return True
     try:
+        if dispatcher.overloads:
+            return True
         cache = dispatcher._cache
         codegen = dispatcher.targetctx.codegen()
         index = cache._cache_file._load_index()
@@ -217,7 +260,7 @@ def is_cached(dispatcher: Any) -> bool:
 # --- the kernels -------------------------------------------------------------------------------
 
 
-@kernel()
+@kernel(python=True)
 def index_range(faces: IndexArray) -> tuple[int, int]:
     """The smallest and largest of the indices and 0, in one pass."""
     low, high = 0, 0
@@ -226,7 +269,7 @@ def index_range(faces: IndexArray) -> tuple[int, int]:
     return low, high
 
 
-@kernel()
+@kernel(python=True)
 def gather(
     points: FloatArray, factor: float, faces: IndexArray, start: int, corners: FloatArray
 ) -> int:
@@ -244,17 +287,17 @@ def gather(
     return count
 
 
-@kernel()
+@kernel(python=True)
 def dot(p: Vector, q: Vector) -> float:
     return p[0] * q[0] + p[1] * q[1] + p[2] * q[2]
 
 
-@kernel()
+@kernel(python=True)
 def cross(p: Vector, q: Vector) -> Vector:
     return (p[1] * q[2] - p[2] * q[1], p[2] * q[0] - p[0] * q[2], p[0] * q[1] - p[1] * q[0])
 
 
-@kernel()
+@kernel(python=True)
 def face_edges(corners: FloatArray, row: int) -> Edges:
     """The edges B - A, C - B, A - C of one face: corner k lies between edges k - 1 and k."""
     ax, ay, az = corners[row, 0], corners[row, 1], corners[row, 2]
@@ -263,7 +306,7 @@ def face_edges(corners: FloatArray, row: int) -> Edges:
     return (bx - ax, by - ay, bz - az), (cx - bx, cy - by, cz - bz), (ax - cx, ay - cy, az - cz)
 
 
-@kernel()
+@kernel(python=True)
 def face_cross(edges: Edges) -> tuple[Vector, float, int]:
     """(B - A) x (C - A) from its most accurate corner, its squared length, and where from.
 
@@ -302,33 +345,47 @@ def face_cross(edges: Edges) -> tuple[Vector, float, int]:
 # does. Where each block writes its own rows, the bits do not depend on who ran it.
 
 
-@intrinsic
-def _claim(typingctx: Any, counter: Any) -> Any:  # noqa: ARG001 (numba's typing context)
-    """``counter[0] += 1`` as one atomic step, returning the value before: the next task."""
-    if not (isinstance(counter, types.Array) and counter.dtype == types.int64):
-        return None
-
-    def codegen(context: Any, builder: Any, signature: Any, arguments: Any) -> Any:
-        array = context.make_array(signature.args[0])(context, builder, arguments[0])
-        one = context.get_constant(types.int64, 1)
-        return builder.atomic_rmw("add", array.data, one, "monotonic")
-
-    return types.int64(counter), codegen
+def claim(counter: IndexArray) -> int:
+    """``counter[0] += 1``, returning the value before: the next task. This is the stand-in
+    for a kernel's Python source, run by one worker (:func:`workers` gives one until numba is
+    loaded); :func:`load_numba` puts :func:`_claim_intrinsic`'s atomic add in its place."""
+    value = int(counter[0])
+    counter[0] = value + 1
+    return value
 
 
-#: :func:`_claim` as the kernels call it: ``claim(counter)`` (an intrinsic's own type takes
-#: the typing context first).
-claim: Callable[[IndexArray], int] = _claim  # type: ignore[assignment]
+def _claim_intrinsic() -> Any:
+    """numba's ``claim``: ``counter[0] += 1`` as one atomic step, returning the value before."""
+    from numba import types
+    from numba.extending import intrinsic
+
+    @intrinsic
+    def _claim(typingctx: Any, counter: Any) -> Any:  # noqa: ARG001 (numba's typing context)
+        if not (isinstance(counter, types.Array) and counter.dtype == types.int64):
+            return None
+
+        def codegen(context: Any, builder: Any, signature: Any, arguments: Any) -> Any:
+            array = context.make_array(signature.args[0])(context, builder, arguments[0])
+            one = context.get_constant(types.int64, 1)
+            return builder.atomic_rmw("add", array.data, one, "monotonic")
+
+        return types.int64(counter), codegen
+
+    return _claim
 
 
 def workers() -> tuple[IndexArray, int]:
-    """A fresh task counter and the number of workers for a parallel kernel (numba's threads)."""
+    """A fresh task counter and the number of workers for a parallel kernel: numba's threads,
+    or one where numba is not loaded (a kernel run as Python)."""
+    counter = np.zeros(1, dtype=np.int64)
+    if not _numba_loaded:
+        return counter, 1
     import numba
 
-    return np.zeros(1, dtype=np.int64), numba.get_num_threads()
+    return counter, numba.get_num_threads()
 
 
-@kernel(parallel=True, named=True)
+@kernel(parallel=True, python=True, named=True)
 def geometry_kernel(
     points: FloatArray,
     factor: float,
@@ -357,7 +414,7 @@ def geometry_kernel(
             block = claim(counter)
 
 
-@kernel(parallel=True, named=True)
+@kernel(parallel=True, python=True, named=True)
 def face_normals_kernel(
     points: FloatArray,
     factor: float,
@@ -390,6 +447,11 @@ def face_normals_kernel(
                 normals[face, 0] = x / divisor + 0.0  # -0.0 becomes 0.0
                 normals[face, 1] = y / divisor + 0.0
                 normals[face, 2] = z / divisor + 0.0
-                areas[face] = length * power if power else math.ldexp(length, exponent)
+                if power:
+                    areas[face] = length * power
+                elif exponent > 0 and length and math.frexp(length)[1] + exponent > 1024:
+                    areas[face] = math.inf  # what ldexp gives, where Python's would raise
+                else:
+                    areas[face] = math.ldexp(length, exponent)
                 degenerate[face] = found == DEGENERATE
             block = claim(counter)

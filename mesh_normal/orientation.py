@@ -452,7 +452,7 @@ def _evident(
     return (magnitude > flat) & (magnitude > ORIENT_EVIDENCE * error)
 
 
-@kernel()
+@kernel(python=True)
 def _cone_face(
     points: FloatArray,
     factor: float,
@@ -480,7 +480,7 @@ def _cone_face(
     return ax, ay, az, ux, uy, uz, vx, vy, vz, nx, ny, nz, largest
 
 
-@kernel()
+@kernel(python=True)
 def _cone_kernel(
     points: FloatArray,
     factor: float,
@@ -517,11 +517,15 @@ def _cone_kernel(
         terms[face] = nx * dx + ny * dy + nz * dz
         normal = math.sqrt(nx * nx + ny * ny + nz * nz)
         to_a = math.sqrt(dx * dx + dy * dy + dz * dz)
-        to_b = math.sqrt((dx + ux) ** 2 + (dy + uy) ** 2 + (dz + uz) ** 2)
-        to_c = math.sqrt((dx + vx) ** 2 + (dy + vy) ** 2 + (dz + vz) ** 2)
+        # Squares as products: numba compiles x ** 2 to x * x, NumPy's scalar power may not.
+        bx, by, bz = dx + ux, dy + uy, dz + uz
+        cx, cy, cz = dx + vx, dy + vy, dz + vz
+        ex, ey, ez = vx - ux, vy - uy, vz - uz
+        to_b = math.sqrt(bx * bx + by * by + bz * bz)
+        to_c = math.sqrt(cx * cx + cy * cy + cz * cz)
         ab = math.sqrt(ux * ux + uy * uy + uz * uz)
         ac = math.sqrt(vx * vx + vy * vy + vz * vz)
-        bc = math.sqrt((vx - ux) ** 2 + (vy - uy) ** 2 + (vz - uz) ** 2)
+        bc = math.sqrt(ex * ex + ey * ey + ez * ez)
         bounds[face] = normal * to_a
         sensitivity[face] = 4 * normal + to_a * bc + to_b * ac + to_c * ab
 
@@ -614,7 +618,7 @@ def _inside_largest(low: FloatArray, high: FloatArray) -> BoolArray:
     return found
 
 
-@kernel()
+@kernel(python=True)
 def _winding_numbers(
     points: FloatArray,
     factor: float,

@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 from mesh_normal.corners import corner_normals, corner_weights
 from mesh_normal.faces import face_geometry, face_normals
 from mesh_normal.files.polygons import triangulate
+from mesh_normal.kernels import load_numba
 from mesh_normal.orientation import orient
 from mesh_normal.points import point_normals
 from mesh_normal.points.pcd import lzf_decompress
@@ -49,7 +50,9 @@ _POLYGONS = (
 
 def compile_kernels() -> None:
     """Compile every mesh kernel now (into numba's cache), e.g. while building an image; where
-    the cache holds them already, load them (a server's workers, as they start)."""
+    the cache holds them already, load them (a server's workers, as they start). numba is
+    loaded first: these calls are small enough to run in Python otherwise."""
+    load_numba()
     for vertices, faces in (_NESTED, _OPEN):  # the checks give the kernels read-only views
         _mesh_kernels(vertices, faces)
     counts, corners, points = _POLYGONS

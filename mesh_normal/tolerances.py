@@ -26,6 +26,10 @@ BATCH_TINY = 2.0**-1000
 
 LARGEST_DOUBLE_TEXT = "about 1.8e308"
 
+#: Trial divisors that :func:`mesh_normal.exact.square_root` tries when it pulls squares out of
+#: a radicand (up to about 5,000 divisions, well under a millisecond on 100-digit integers).
+SURD_TRIAL_LIMIT = 10_000
+
 # Meshes (mesh_normal.faces, mesh_normal.vertices). These are relative, so a mesh in millimetres
 # and the same mesh in metres get the same verdicts.
 

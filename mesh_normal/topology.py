@@ -275,7 +275,7 @@ def _sorted_half_edges(
     return low[by_both] * vertex_count + high[by_both], face[by_both], forward[by_both]
 
 
-@kernel()
+@kernel(python=True)
 def _pack_half_edges(
     faces: IndexArray, valid: BoolArray, vertex_count: int, bits: int, packed: IndexArray
 ) -> None:
@@ -319,7 +319,7 @@ def _connected(
     return root, parity
 
 
-@kernel(error_model="python")
+@kernel(error_model="python", python=True)
 def _find(parent: IndexArray, relation: IndexArray, node: int) -> tuple[int, int]:
     """The root of ``node`` and its parity to it; compresses the path on the way."""
     top, parity = node, 0
@@ -334,7 +334,7 @@ def _find(parent: IndexArray, relation: IndexArray, node: int) -> tuple[int, int
     return top, parity
 
 
-@kernel(error_model="python")
+@kernel(error_model="python", python=True)
 def _union_find(
     count: int,
     one: IndexArray,

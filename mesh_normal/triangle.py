@@ -136,15 +136,13 @@ def _as_point(name: str, point: Sequence[float]) -> Vector:
     floats: list[float] = []
     for axis, value in zip(AXES, values, strict=True):
         if isinstance(value, bool) or not isinstance(value, Real):
-            raise ValueError(f"{name.lower()}{axis} must be a number.")
+            raise ValueError(f"{name}.{axis} must be a number.")
         try:
             number = float(value)
         except OverflowError:
             number = float("inf")
         if not isfinite(number):
-            raise ValueError(
-                f"{name.lower()}{axis} must be a finite number within the double range."
-            )
+            raise ValueError(f"{name}.{axis} must be a finite number within the double range.")
         floats.append(number)
     return (floats[0], floats[1], floats[2])
 

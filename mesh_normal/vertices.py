@@ -25,7 +25,6 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-from numba import prange
 from numpy.typing import ArrayLike
 
 from mesh_normal.checks import CheckedMesh
@@ -41,6 +40,7 @@ from mesh_normal.kernels import (
     face_edges,
     gather,
     kernel,
+    prange,
     workers,
 )
 from mesh_normal.tolerances import MESH_CANCELLED_SUM

@@ -36,9 +36,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import prange
 
-from mesh_normal.kernels import PARALLEL_KERNELS, announce_compiling, kernel
+from mesh_normal.kernels import PARALLEL_KERNELS, announce_compiling, kernel, prange
 from mesh_normal.types import BoolArray, FloatArray, IndexArray
 
 #: Rays per side of each sample.
@@ -56,6 +55,10 @@ MARGIN = 0.35
 T_MIN = 2.0**-30
 #: Faces per leaf of the hierarchy.
 _LEAF = 4
+#: The largest call of these kernels, in array elements, that runs in Python before numba is
+#: loaded (see :data:`mesh_normal.kernels.PYTHON_ELEMENTS`): a dozen faces. Casting rays in
+#: Python is about a hundred times slower than compiled (100 faces of a soup took 2.8 s).
+PYTHON_RAYS = 600
 #: What a ray meets (see :func:`_blocked`).
 _CLEAR, _HIT, _UNSURE = range(3)
 #: A hit this close (in barycentric coordinates, or in the sine of the angle to the face's
@@ -202,7 +205,7 @@ def _hierarchy(
     return order, boxes, children, spans, corners
 
 
-@kernel()
+@kernel(python=PYTHON_RAYS)
 def _morton(unit: FloatArray, faces: IndexArray, code: IndexArray) -> None:
     """The Morton code of each face's centroid on a 1024**3 grid over [-1, 1]**3."""
     for face in range(len(faces)):
@@ -223,7 +226,7 @@ def _corners(unit: FloatArray, faces: IndexArray, order: IndexArray) -> FloatArr
     return corners
 
 
-@kernel()
+@kernel(python=PYTHON_RAYS)
 def _split(codes: IndexArray, children: IndexArray, spans: IndexArray) -> int:
     """Split each span where the highest bit that differs in its Morton codes turns (the
     halves of an octree cell; in the middle where the codes are all equal) down to leaves of
@@ -251,7 +254,7 @@ def _split(codes: IndexArray, children: IndexArray, spans: IndexArray) -> int:
     return used
 
 
-@kernel()
+@kernel(python=PYTHON_RAYS)
 def _boxes(corners: FloatArray, children: IndexArray, spans: IndexArray, boxes: FloatArray) -> None:
     """Each node's box, a little larger than its faces' (by 2**-26, more than an unsure hit
     can lie outside a face: 2 ``_UNSURE_BAND`` times its longest edge, at most 4), from the
@@ -274,7 +277,7 @@ def _boxes(corners: FloatArray, children: IndexArray, spans: IndexArray, boxes: 
                 boxes[node, axis + 3] = max(boxes[left, axis + 3], boxes[right, axis + 3])
 
 
-@kernel()
+@kernel(python=PYTHON_RAYS)
 def _entry(
     boxes: FloatArray, node: int, origin: FloatArray, inverse: FloatArray, t_min: float
 ) -> float:
@@ -298,7 +301,7 @@ def _entry(
     return near if near <= far else np.inf
 
 
-@kernel()
+@kernel(python=PYTHON_RAYS)
 def _blocked(
     corners: FloatArray,
     order: IndexArray,
@@ -382,7 +385,7 @@ def _blocked(
     return _UNSURE if unsure else _CLEAR
 
 
-@kernel(parallel=True)
+@kernel(parallel=True, python=PYTHON_RAYS)
 def _cast(
     unit: FloatArray,
     faces: IndexArray,

@@ -3,16 +3,17 @@
 from __future__ import annotations
 
 import re
-from typing import Annotated, Any
+from typing import Any
 
 import numpy as np
-from fastapi import APIRouter, Query, Request
+from fastapi import APIRouter, Request
 from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import Response
 
+from app.calculator.calculation import calculation_payload, from_doubles, from_typed
 from app.calculator.chart import bar_figure
-from app.calculator.params import TriangleParams, read_triangle
-from app.calculator.payloads import batch_payload, normal_payload, payload_csv
+from app.calculator.params import query_parameters_spec, read_triangle
+from app.calculator.payloads import batch_payload, payload_csv
 from app.calculator.schemas import BatchRequest, BatchResult, Figure, NormalRequest, NormalResult
 from app.config import BATCH_LIMIT
 from app.web.errors import ERROR_RESPONSES, ApiError
@@ -37,10 +38,9 @@ router = APIRouter(
 def query_payload(request: Request) -> dict[str, Any]:
     """The result for the page's query parameters, or the first error as an ApiError."""
     parsed = read_triangle(request.query_params)
-    if parsed.errors:
+    if not parsed.valid:
         raise parsed.first_error()
-    a, b, c = parsed.points()
-    return normal_payload(triangle_normal(a, b, c, swap_winding=parsed.swap))
+    return calculation_payload(from_typed(parsed))
 
 
 @router.post(
@@ -52,16 +52,18 @@ def query_payload(request: Request) -> dict[str, Any]:
 async def post_normal(request: Request) -> FastJSONResponse:
     """The normal of one triangle given as JSON."""
     body = await read_body(request, NormalRequest)
-    result = triangle_normal(body.a, body.b, body.c, swap_winding=body.swap_winding)
-    return FastJSONResponse(normal_payload(result))
+    calc = from_doubles(body.a, body.b, body.c, swap_winding=body.swap_winding)
+    return FastJSONResponse(calculation_payload(calc))
 
 
 @router.get(
-    "/normal", summary="Normal of one triangle, from query parameters", response_model=NormalResult
+    "/normal",
+    summary="Normal of one triangle, from query parameters",
+    response_model=NormalResult,
+    openapi_extra=query_parameters_spec(),
 )
 async def get_normal(
     request: Request,
-    params: Annotated[TriangleParams, Query()],  # noqa: ARG001 (declared for the schema and validation; read by read_triangle)
 ) -> FastJSONResponse:
     """The normal for the calculator page's query parameters: the JSON twin of a result page."""
     return FastJSONResponse(query_payload(request))
@@ -71,6 +73,7 @@ async def get_normal(
     "/normal.csv",
     summary="Normal of one triangle as CSV",
     response_class=Response,
+    openapi_extra=query_parameters_spec(),
     responses={
         200: {
             "description": "One header row and one result row.",
@@ -80,7 +83,6 @@ async def get_normal(
 )
 async def get_normal_csv(
     request: Request,
-    params: Annotated[TriangleParams, Query()],  # noqa: ARG001 (declared for the schema and validation; read by read_triangle)
 ) -> Response:
     """The same result as CSV, for spreadsheets (a download)."""
     return Response(
@@ -141,10 +143,14 @@ def refuse_oversized_batch(raw: bytes) -> None:
         )
 
 
-@router.get("/chart", summary="Bar chart of a triangle's normal", response_model=Figure)
+@router.get(
+    "/chart",
+    summary="Bar chart of a triangle's normal",
+    response_model=Figure,
+    openapi_extra=query_parameters_spec(),
+)
 async def get_chart(
     request: Request,
-    params: Annotated[TriangleParams, Query()],  # noqa: ARG001 (declared for the schema and validation; read by read_triangle)
 ) -> FastJSONResponse:
     """The Plotly figure of the bar chart for the page's query parameters."""
     return FastJSONResponse(bar_figure(query_payload(request)))

@@ -8,17 +8,16 @@ from urllib.parse import urlencode
 from fastapi import APIRouter, Request
 from fastapi.responses import HTMLResponse
 
+from app.calculator.calculation import calculation_payload, from_typed, result_math
 from app.calculator.chart import bar_figure
 from app.calculator.params import read_triangle
-from app.calculator.payloads import normal_payload
 from app.calculator.presets import COORDINATE_FIELDS, EXAMPLE, PRESETS
 from app.calculator.snippets import snippets
 from app.calculator.steps import worked_steps
 from app.calculator.view3d import view3d_figure
-from app.web.errors import clip
+from app.web.errors import ApiError, clip
 from app.web.jsonio import FastJSONResponse
 from app.web.templating import templates
-from mesh_normal.triangle import triangle_normal
 
 router = APIRouter(include_in_schema=False)
 
@@ -32,18 +31,24 @@ def _calculation(request: Request) -> dict[str, Any]:
         "typed": parsed.typed,
         "swap": parsed.swap,
         "errors": parsed.errors,
+        "missing": parsed.missing,
+        "missing_line": parsed.missing_line(),
+        "problem": None if parsed.valid else parsed.first_error(),
         "result": None,
         "payload": None,
         "figure": None,
+        "calculation": None,
+        "result_math": {},
     }
     swap_text = "on" if parsed.swap else query.get("swap") if "swap" in parsed.errors else None
     params = {**parsed.typed, **({"swap": swap_text} if swap_text else {})}
     context["query"] = urlencode(params)
-    if not parsed.errors:
-        a, b, c = parsed.points()
-        result = triangle_normal(a, b, c, swap_winding=parsed.swap)
-        context["result"] = result
-        context["payload"] = normal_payload(result)
+    if parsed.valid:
+        calc = from_typed(parsed)
+        context["result"] = calc.result
+        context["calculation"] = calc
+        context["payload"] = calculation_payload(calc)
+        context["result_math"] = result_math(calc, context["payload"])
         context["figure"] = bar_figure(context["payload"])
     return context
 
@@ -54,14 +59,14 @@ def _with_details(context: dict[str, Any]) -> dict[str, Any]:
     return {
         **context,
         "presets": PRESETS,
-        "steps": None if result is None else worked_steps(result),
+        "steps": None if result is None else worked_steps(result, context["calculation"].exact),
         "view3d": None if payload is None else view3d_figure(payload),
-        "snippets": [] if payload is None else snippets(payload),
+        "snippets": [] if payload is None else snippets(payload, context["calculation"].typed),
     }
 
 
 def _status(context: dict[str, Any]) -> int:
-    return 422 if context["errors"] else 200
+    return 200 if context["problem"] is None else 422
 
 
 @router.get("/", response_class=HTMLResponse)
@@ -95,6 +100,7 @@ def partials(request: Request) -> FastJSONResponse:
         {
             "query": context["query"],
             "errors": context["errors"],
+            "missing": context["missing"],
             "html": html,
             "figure": context["figure"],
             "view3d": context["view3d"],
@@ -117,6 +123,7 @@ def _with_theme(context: dict[str, Any], theme: str) -> dict[str, Any]:
         "theme": "auto",
         "figure": None,
         "errors": {"theme": sentence, **context["errors"]},
+        "problem": ApiError(422, sentence, "theme"),
     }
 
 

@@ -87,11 +87,58 @@ CSV_COLUMNS = [
     "area",
     "degenerate",
     "message",
+    "plane_a",
+    "plane_b",
+    "plane_c",
+    "plane_d",
+    "angle_degrees",
+    "angle_radians",
+    "exact_nx",
+    "exact_ny",
+    "exact_nz",
+    "exact_magnitude_squared",
+    "exact_magnitude",
+    "exact_unit_x",
+    "exact_unit_y",
+    "exact_unit_z",
+    "exact_area",
+    "exact_plane_a",
+    "exact_plane_b",
+    "exact_plane_c",
+    "exact_plane_d",
+    "exact_plane_equation",
 ]
 
 
+def _extra_values(payload: dict[str, Any]) -> list[Any]:
+    """Plane, angle and exact forms (as their text, such as ``√286 / 2``); empty when absent."""
+    plane = payload.get("plane") or {}
+    angle = payload.get("angle") or {}
+    exact = payload.get("exact") or {}
+    exact_plane = plane.get("exact") or {}
+    units = exact.get("unit_normal") or [{}, {}, {}]
+    texts = [
+        *(exact.get("normal") or [{}, {}, {}]),
+        exact.get("magnitude_squared", {}),
+        exact.get("magnitude", {}),
+        *units,
+        exact.get("area", {}),
+        *(exact_plane.get(key, {}) for key in "abcd"),
+    ]
+    return [
+        *(plane.get(key) for key in "abcd"),
+        angle.get("degrees"),
+        angle.get("radians"),
+        *(item.get("text") for item in texts),
+        exact_plane.get("equation"),
+    ]
+
+
 def payload_csv(payload: dict[str, Any]) -> str:
-    """One header row and one result row; numbers round-trip, an out-of-range value is empty."""
+    """One header row and one result row; numbers round-trip, an out-of-range value is empty.
+
+    The exact forms are text, as in the JSON (``5/2``, ``√286 / 2``); empty when left out.
+    """
     unit = payload["unit_normal"] or [None, None, None]
     values = [
         payload["order"],
@@ -106,6 +153,7 @@ def payload_csv(payload: dict[str, Any]) -> str:
         payload["area"],
         str(payload["degenerate"]).lower(),
         payload.get("message", ""),
+        *_extra_values(payload),
     ]
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")

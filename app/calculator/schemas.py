@@ -56,6 +56,78 @@ class BatchRequest(BaseModel):
     swap_winding: bool = False
 
 
+Integer = Annotated[str, Field(pattern=r"^-?[0-9]+$", examples=["5"])]
+RationalText = Annotated[str, Field(pattern=r"^-?[0-9]+(/[0-9]+)?$", examples=["1/2"])]
+
+
+class ExactNumber(BaseModel):
+    """An exact rational: ``text`` such as ``5/2`` or ``-3``, and its parts as integer strings."""
+
+    text: str = Field(examples=["5/2"])
+    numerator: Integer
+    denominator: Annotated[str, Field(pattern=r"^[1-9][0-9]*$", examples=["2"])]
+
+
+class ExactSurd(BaseModel):
+    """``coefficient * sqrt(radicand)``, such as ``√286 / 2``; ``radicand`` 1 for a rational."""
+
+    text: str = Field(examples=["√286 / 2"])
+    coefficient: RationalText
+    radicand: Annotated[str, Field(pattern=r"^[1-9][0-9]*$", examples=["286"])]
+
+
+ExactVector = Annotated[list[ExactNumber], Field(min_length=3, max_length=3)]
+SurdVector = Annotated[list[ExactSurd], Field(min_length=3, max_length=3)]
+
+
+class ExactResult(BaseModel):
+    """The exact values, from the decimal text typed (``0.1`` is 1/10) or the JSON doubles."""
+
+    a: ExactVector
+    b: ExactVector
+    c: ExactVector
+    u: ExactVector
+    v: ExactVector
+    normal: ExactVector = Field(description="n = u x v as exact rationals.")
+    magnitude_squared: ExactNumber = Field(description="|n|² = n · n.")
+    magnitude: ExactSurd = Field(description="|n| as a simplified surd.")
+    unit_normal: SurdVector | None = Field(
+        description="n / |n|, each a rational times the surd of |n|; null when degenerate."
+    )
+    area: ExactSurd = Field(description="|n| / 2.")
+
+
+class ExactPlane(BaseModel):
+    a: ExactNumber
+    b: ExactNumber
+    c: ExactNumber
+    d: ExactNumber
+    equation: str = Field(
+        description="The plane scaled to coprime integers.", examples=["6x + 3y + 2z = 6"]
+    )
+
+
+class Plane(BaseModel):
+    """The plane through A with normal n: ax + by + cz = d with (a, b, c) = n and d = n · A."""
+
+    a: MaybeNumber
+    b: MaybeNumber
+    c: MaybeNumber
+    d: MaybeNumber
+    equation: str | None = Field(
+        description="With the rounded values; null when one is out of range.",
+        examples=["6x + 3y + 2z = 6"],
+    )
+    exact: ExactPlane | None = Field(description="Present with the exact forms.")
+
+
+class Angle(BaseModel):
+    """The angle between u and v, atan2(|u x v|, u · v)."""
+
+    degrees: float = Field(ge=0, le=180)
+    radians: float = Field(ge=0, le=3.1415926535897936)
+
+
 class NormalResult(BaseModel):
     """One triangle's normal. ``null`` marks a value outside the double range (see ``message``)."""
 
@@ -71,6 +143,14 @@ class NormalResult(BaseModel):
     area: MaybeNumber
     degenerate: bool = Field(description="The exact n is zero: repeated or collinear points.")
     message: str | None = Field(None, description="Present when there is something to explain.")
+    plane: Plane | None = Field(description="null for a degenerate triangle (see plane_reason).")
+    plane_reason: str | None = Field(description="Why there is no plane; null when there is.")
+    angle: Angle | None = Field(description="null when u or v is zero (see angle_reason).")
+    angle_reason: str | None = Field(description="Why the angle is undefined; null when it is not.")
+    exact: ExactResult | None = Field(
+        description="Exact forms; null when an input has no exact value or they would be too long."
+    )
+    exact_reason: str | None = Field(description="Why the exact forms are left out, or null.")
 
 
 class BatchItem(BaseModel):

@@ -21,6 +21,7 @@ import math
 import sys
 from collections.abc import Sequence
 from dataclasses import dataclass
+from fractions import Fraction
 from textwrap import dedent
 from typing import Any
 
@@ -43,11 +44,18 @@ class Snippet:
     runs_in_tests: bool
 
 
-def snippets(payload: dict[str, Any]) -> list[Snippet]:
-    """The snippets for one result of :func:`~app.calculator.payloads.normal_payload`."""
+Rationals = Sequence[Sequence[Fraction]]
+
+
+def snippets(payload: dict[str, Any], typed: Rationals | None = None) -> list[Snippet]:
+    """The snippets for one result of :func:`~app.calculator.payloads.normal_payload`.
+
+    ``typed`` holds A, B, C as the exact decimals typed, when the page computed with them:
+    the library snippet then passes them as fractions, to print the page's numbers.
+    """
     return [
         Snippet("numpy", "NumPy", "python", _numpy(payload), True),
-        Snippet("mesh_normal", "mesh_normal", "python", _mesh_normal(payload), True),
+        Snippet("mesh_normal", "mesh_normal", "python", _mesh_normal(payload, typed), True),
         Snippet("python", "Pure Python", "python", _python(payload), True),
         Snippet("trimesh", "trimesh", "python", _trimesh(payload), True),
         Snippet("open3d", "Open3D", "python", _open3d(payload), False),
@@ -182,8 +190,14 @@ def _numpy(payload: dict[str, Any]) -> str:
     )
 
 
-def _mesh_normal(payload: dict[str, Any]) -> str:
+def _fraction_coordinates(point: Sequence[Fraction]) -> str:
+    return ", ".join(f'F("{x}")' for x in point)
+
+
+def _mesh_normal(payload: dict[str, Any], typed: Rationals | None = None) -> str:
     """This project's library: the page's own computation, so its numbers to the last bit."""
+    if typed is not None and any(Fraction(float(x)) != x for point in typed for x in point):
+        return _mesh_normal_rational(payload, typed)
     a, b, c = (_coordinates(payload[name]) for name in "abc")
     lines = [
         "# Triangle normal with mesh_normal, the library behind this page: exact and",
@@ -202,6 +216,35 @@ def _mesh_normal(payload: dict[str, Any]) -> str:
         c = ({c})
 
         r = mn.triangle_normal(a, b, c{swap}
+        print("normal =", r.normal)
+        print("magnitude =", r.magnitude)
+        if r.unit_normal is None:
+            print("degenerate: no unit normal")
+        else:
+            print("unit_normal =", r.unit_normal)
+        print("area =", r.area)
+        """,
+    )
+
+
+def _mesh_normal_rational(payload: dict[str, Any], typed: Rationals) -> str:
+    """The library on the exact decimals typed (0.1 is 1/10, not the double nearest it)."""
+    a, b, c = (_fraction_coordinates(point) for point in typed)
+    swap = ", swap_winding=True)  # winding A, C, B: the normal flips" if _swapped(payload) else ")"
+    return _code(
+        "# Triangle normal with mesh_normal, the library behind this page, on the decimals\n"
+        "# as typed (exact fractions: 0.1 is 1/10), rounded once: the page's numbers to the\n"
+        "# last digit.",
+        f"""
+        from fractions import Fraction as F
+
+        from mesh_normal.triangle import rational_triangle_normal
+
+        a = ({a})
+        b = ({b})
+        c = ({c})
+
+        r = rational_triangle_normal(a, b, c{swap}
         print("normal =", r.normal)
         print("magnitude =", r.magnitude)
         if r.unit_normal is None:

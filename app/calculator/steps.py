@@ -1,13 +1,14 @@
 """Worked steps: how the calculator gets from the user's points to n, |n|, the plane and more.
 
 Every number is the user's own, written as JavaScript's ``String(x)`` writes it (the
-notation is :mod:`app.calculator.notation`). The exact u, v and n come from the core
-(:func:`mesh_normal.triangle.exact_triangle`, the integers that :func:`triangle_normal`
-rounds); values in between (products, squares, u · v, d) are computed exactly from them and
-rounded once, like the results; from the first number that rounding changed, a chain reads
-"≈" instead of "=". Each line is a :class:`~app.calculator.mathml.Formula`: MathML for the
-page (vectors as columns, determinants as matrices) and plain text beside it. For example, with
-A = (1, 0, 0), B = (0, 2, 0) and C = (0, 0, 3)::
+notation is :mod:`app.calculator.notation`). The exact u, v and n are those of the decimals
+typed (:mod:`app.calculator.calculation`: 0.1 is 1/10), or of the doubles
+(:func:`mesh_normal.triangle.exact_triangle`) when there is no typed text; values in between
+(products, squares, u · v, d) are computed exactly from them and rounded once, like the
+results; from the first number that rounding changed, a chain reads "≈" instead of "=". Each
+line is a :class:`~app.calculator.mathml.Formula`: MathML for the page (vectors as columns,
+determinants as matrices) and plain text beside it. For example, with A = (1, 0, 0),
+B = (0, 2, 0) and C = (0, 0, 3)::
 
     n_x = |u_y u_z; v_y v_z| = |2 0; 0 3| = 2·3 − 0·0 = 6 − 0 = 6
 """
@@ -17,10 +18,11 @@ from __future__ import annotations
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, replace
 from fractions import Fraction
-from math import atan2, degrees, isfinite
+from math import degrees, isfinite
 
 from markupsafe import Markup
 
+from app.calculator.exact_forms import Exact
 from app.calculator.mathml import (
     ARROW,
     COMMA,
@@ -63,7 +65,7 @@ from app.calculator.notation import (
     term,
     vector,
 )
-from mesh_normal.exact import ratio_sqrt
+from app.calculator.plane_angle import angle_radians
 from mesh_normal.triangle import (
     AXES,
     IntVector,
@@ -118,6 +120,7 @@ class _Exact:
     n: Exact3
     square: Fraction  # |n|²
     dot: Fraction  # u · v
+    start: Exact3  # A
 
 
 # --- Exact values -----------------------------------------------------------------------------
@@ -138,8 +141,19 @@ def _dot(u: Sequence[Fraction], v: Sequence[Fraction]) -> Fraction:
     return sum((a * b for a, b in zip(u, v, strict=True)), Fraction(0))
 
 
-def _exact(result: TriangleNormal) -> _Exact:
-    """The core's exact u, v and n (integers over a power of two), as fractions to show."""
+def _exact(result: TriangleNormal, typed: Exact | None) -> _Exact:
+    """The exact u, v and n: of the typed decimals when given, else of the doubles."""
+    if typed is not None:
+        a, b, c = result.a, result.b, result.c
+        return _Exact(
+            (a, c, b) if result.order == "ACB" else (a, b, c),
+            typed.u,
+            typed.v,
+            typed.n,
+            typed.square,
+            typed.dot,
+            typed.points[0],
+        )
     exact = exact_triangle(result.a, result.b, result.c, swap_winding=result.order == "ACB")
     k = exact.scale
     return _Exact(
@@ -149,6 +163,7 @@ def _exact(result: TriangleNormal) -> _Exact:
         _scaled(exact.n, 2 * k),
         Fraction(exact.square, 1 << (4 * k)),
         Fraction(exact.dot, 1 << (2 * k)),
+        _fractions(exact.points[0]),
     )
 
 
@@ -462,7 +477,7 @@ def _plane_step(result: TriangleNormal, x: _Exact) -> Step:
         return Step("plane", title, "A plane needs a normal direction.", (), (note,), warn=True)
     a = x.points[0]
     n = _shown_vector(result.normal, x.n)
-    d = shown(_dot(x.n, _fractions(a)))
+    d = shown(_dot(x.n, x.start))
     if all(s.value is not None for s in n) and d.value is not None:
         text = (
             "A point (x, y, z) lies on the plane when n · (x, y, z) = d; A is on it, so d = n · A."
@@ -483,24 +498,6 @@ def _plane_step(result: TriangleNormal, x: _Exact) -> Step:
 
 
 # --- 7. Angle ---------------------------------------------------------------------------------
-
-
-def _sqrt_ratio(part: Fraction, whole: Fraction) -> float:
-    """sqrt(part / whole) for 0 <= part <= whole, whole > 0, rounded once."""
-    ratio = part / whole
-    return ratio_sqrt(ratio.numerator, ratio.denominator)
-
-
-def _angle_degrees(square: Fraction, dot: Fraction) -> float:
-    """atan2(|u × v|, u · v) in degrees; only the ratio matters, so scale it into [0, 1].
-
-    ``square`` is |u × v|², and not both it and ``dot`` are 0.
-    """
-    dot_square = dot * dot
-    if square <= dot_square:
-        return degrees(atan2(_sqrt_ratio(square, dot_square), 1.0 if dot > 0 else -1.0))
-    cosine_part = _sqrt_ratio(dot_square, square)
-    return degrees(atan2(1.0, cosine_part if dot >= 0 else -cosine_part))
 
 
 def _angle_notes(result: TriangleNormal, x: _Exact) -> tuple[str, ...]:
@@ -539,7 +536,7 @@ def _angle_step(result: TriangleNormal, x: _Exact) -> Step:
     theta, atan2_name, degree = ident("θ"), ident("atan2"), op("°", "°")
     notes = _angle_notes(result, x)
     if x.square or x.dot:
-        angle = given(_angle_degrees(x.square, x.dot))
+        angle = given(degrees(angle_radians(x.square, x.dot)))
         exact = Shown(angle.value, not x.square or not x.dot)
         lines.append(
             chain(
@@ -619,18 +616,20 @@ def _explain_rounding(steps: list[Step]) -> list[Step]:
     return steps
 
 
-def worked_steps(result: TriangleNormal) -> list[Step]:
+def worked_steps(result: TriangleNormal, exact: Exact | None = None) -> list[Step]:
     """The calculation of ``result`` step by step, with the user's own numbers.
 
     Edges, cross product (and, when plain floats would get it wrong, why), |n|, area, unit
-    normal, plane, the angle between u and v, and why swapping the winding flips n.
+    normal, plane, the angle between u and v, and why swapping the winding flips n. ``exact``
+    holds the exact values of the typed decimals (0.1 is 1/10); without it the steps work
+    with the doubles' exact values.
     """
-    x = _exact(result)
-    exact = _exact_step(result, x)
+    x = _exact(result, exact)
+    why_exact = _exact_step(result, x)
     steps = [
         _edges_step(result, x),
         _cross_step(result, x),
-        *([exact] if exact else []),
+        *([why_exact] if why_exact else []),
         _magnitude_step(result, x),
         _area_step(result, x),
         _unit_step(result, x),

@@ -11,11 +11,12 @@ import re
 from collections.abc import Callable
 from typing import Annotated, Any, Literal, TypeVar
 
-from fastapi import APIRouter, Query, Request
+from fastapi import APIRouter, Path, Query, Request
 from fastapi.responses import Response, StreamingResponse
 
 from app.mesh import work
 from app.mesh.estimates import Task, estimate
+from app.mesh.samples import SAMPLES, sample
 from app.mesh.uploads import (
     UPLOAD_BODY,
     UPLOAD_WELD_BODY,
@@ -48,6 +49,8 @@ router = APIRouter(
         },
     },
 )
+
+_NOT_FOUND = {"content": ERROR_RESPONSES[422]["content"]}
 
 #: The optional weld tolerance as a query parameter (for a raw body; multipart sends the field).
 WeldQuery = Annotated[
@@ -97,6 +100,28 @@ async def post_mesh(request: Request, weld: WeldQuery = None) -> FastJSONRespons
     # The model is rendered once, by pydantic-core, with non-finite floats as null; returning
     # a response skips FastAPI's second validation and encoding of the same model.
     return FastJSONResponse(await run_job(request, "report", upload, work.report, tolerance))
+
+
+#: The sample's name in the address: the schema lists the names, any other is a 404.
+SampleName = Annotated[
+    str,
+    Path(
+        description="one of the page's sample meshes",
+        json_schema_extra={"enum": list(SAMPLES)},
+    ),
+]
+
+
+@router.get(
+    "/sample/{name}",
+    summary="Report on a sample mesh",
+    response_model=MeshReport,
+    responses={404: {"description": "There is no sample of that name.", **_NOT_FOUND}},
+)
+async def get_mesh_sample(request: Request, name: SampleName) -> FastJSONResponse:
+    """The report on one of the mesh page's samples: what POST /api/mesh answers for its file."""
+    upload = sample(name).upload()
+    return FastJSONResponse(await run_job(request, "report", upload, work.report, None))
 
 
 @router.post(

@@ -105,9 +105,9 @@ def histogram_figure(histogram: dict[str, Any]) -> dict[str, Any]:
         xaxis.setdefault("ticktext", []).insert(0, "zero")
         if not log:
             xaxis["tickmode"] = "array"
-            ticks = np.linspace(edges[0], edges[-1], 5)
-            xaxis["tickvals"] += ticks.tolist()
-            xaxis["ticktext"] += [f"{t:.3g}" for t in ticks]
+            values, labels = _round_ticks(float(edges[0]), float(edges[-1]))
+            xaxis["tickvals"] += values
+            xaxis["ticktext"] += labels
     return {
         "data": traces,
         "layout": histogram_layout(xaxis, "faces", GRID),
@@ -115,12 +115,36 @@ def histogram_figure(histogram: dict[str, Any]) -> dict[str, Any]:
 
 
 def _log_ticks(low: float, high: float) -> dict[str, Any]:
-    """Ticks at powers of ten (every few when the span is wide), written as 1e-3."""
+    """Ticks at powers of ten (every few when the span is wide): 0.01, 1, 100, 1e6."""
     first, last = int(np.floor(low)), int(np.ceil(high))
     step = max(1, (last - first) // 6)
     powers = list(range(first, last + 1, step))
     return {
         "tickmode": "array",
         "tickvals": [float(p) for p in powers],
-        "ticktext": [f"1e{p}" for p in powers],
+        "ticktext": [_power(p) for p in powers],
     }
+
+
+def _power(exponent: int) -> str:
+    """10 to the power, as a reader writes it: 0.001 to 1000 in full, 1e-6 or 1e6 beyond."""
+    return f"{10.0**exponent:g}" if -3 <= exponent <= 3 else f"1e{exponent}"
+
+
+def _round_ticks(low: float, high: float, most: int = 6) -> tuple[list[float], list[str]]:
+    """Ticks at round numbers (multiples of 1, 2 or 5 times a power of ten) from low to high,
+    at most ``most`` of them, labelled without rounding noise: 0.3, 0.4, not 0.312, 0.438."""
+    span = high - low
+    if not (np.isfinite(span) and span > 0):
+        return [low], [f"{low:.3g}"]
+    for power in range(int(np.floor(np.log10(span / most))), 400):
+        for digit in (1, 2, 5):
+            step = digit * 10.0**power
+            first, last = int(np.ceil(low / step)), int(np.floor(high / step))
+            if last - first + 1 <= most:
+                decimals = max(0, -power)
+                values = [round(k * step, decimals) for k in range(first, last + 1)]
+                if -4 <= power <= 5:  # as written: 0.0005 to 900000, all with one precision
+                    return values, [f"{value:.{decimals}f}" for value in values]
+                return values, [f"{value:.3g}" for value in values]
+    return [low, high], [f"{low:.3g}", f"{high:.3g}"]

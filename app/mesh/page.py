@@ -3,18 +3,21 @@
 ``GET /mesh`` shows the form; ``POST /mesh`` (multipart field ``file``, once or once per file
 of one mesh) answers with the whole page and its report, so it works without JavaScript.
 ``POST /mesh?part=report`` answers with the report alone, which the page's script swaps in.
+``GET /mesh/sample/{name}`` is the page for one of :mod:`app.mesh.samples`, as if uploaded;
+``GET /mesh/sample/{name}/file`` is that sample's file.
 The server keeps nothing: the page's downloads send the files again to the JSON API.
 """
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Annotated, Any
 
-from fastapi import APIRouter, Request
-from fastapi.responses import HTMLResponse
+from fastapi import APIRouter, Query, Request
+from fastapi.responses import HTMLResponse, Response
 
 from app.mesh import work
-from app.mesh.api import run_job, stem
+from app.mesh.api import MEDIA_TYPES, FixFormat, attachment, run_job, stem
+from app.mesh.samples import SAMPLES, sample
 from app.mesh.uploads import read_upload
 from app.mesh.work import FIX_FORMATS
 from app.web.errors import ApiError
@@ -22,6 +25,7 @@ from app.web.links import public_url
 from app.web.middleware import size_text
 from app.web.templating import templates
 from mesh_normal.files.formats import ACCEPTED_SUFFIXES, COMPANION_SUFFIXES
+from mesh_normal.mesh_export import NormalsChoice
 from mesh_normal.tolerances import WELD_LIMIT
 
 __all__ = ["FIX_FORMATS", "router"]
@@ -41,6 +45,8 @@ def _form_context(request: Request) -> dict[str, Any]:
         "weld_limit": WELD_LIMIT,
         "report": None,
         "error": None,
+        "samples": SAMPLES.values(),
+        "sample": None,
     }
 
 
@@ -69,3 +75,51 @@ async def mesh_upload(request: Request) -> HTMLResponse:
         )
     name = "_mesh_report.html" if fragment else "mesh.html"
     return templates.TemplateResponse(request, name, context)
+
+
+@router.get("/mesh/sample/{name}", response_class=HTMLResponse)
+async def mesh_sample(request: Request, name: str) -> HTMLResponse:
+    """The page with the report on a sample, as the upload of its file would show it."""
+    chosen = sample(name)
+    upload = chosen.upload()
+    context = _form_context(request)
+    context.update(
+        await run_job(request, "page", upload, work.page, stem(upload.filename), public_url("/"))
+    )
+    context["sample"] = chosen
+    fragment = request.query_params.get("part") == "report"
+    response = templates.TemplateResponse(
+        request, "_mesh_report.html" if fragment else "mesh.html", context
+    )
+    response.headers["link"] = (
+        f'</api/mesh/sample/{chosen.name}>; rel="alternate"; type="application/json"'
+    )
+    return response
+
+
+@router.get("/mesh/sample/{name}/file")
+async def mesh_sample_file(
+    request: Request,
+    name: str,
+    file_format: Annotated[FixFormat | None, Query(alias="format")] = None,
+    normals: NormalsChoice | None = None,
+    flip: bool = False,
+    fix: bool = False,
+) -> Response:
+    """The sample's file itself; with ``format``, ``normals``, ``flip`` or ``fix``, written
+    again as ``POST /api/mesh/export`` would (a plain link or GET form, so it works without
+    JavaScript: the server holds the sample's file, not the visitor)."""
+    chosen = sample(name)
+    if file_format is None and normals is None and not flip and not fix:
+        return Response(
+            chosen.data(),
+            media_type=MEDIA_TYPES[chosen.format],
+            headers=attachment(chosen.filename),
+        )
+    if flip and fix:
+        raise ApiError(422, "flip and fix cannot both be asked for: choose one.", "flip")
+    winding = "flip" if flip else "fix" if fix else "keep"
+    args = (file_format, normals or "auto", "angle", 30.0, winding, None)
+    body, written, headers = await run_job(request, "fix", chosen.upload(), work.export, *args)
+    headers.update(attachment(f"{chosen.name}-{'fixed' if fix else 'export'}.{written}"))
+    return Response(body.data, media_type=MEDIA_TYPES[written], headers=headers)

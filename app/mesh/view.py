@@ -2,9 +2,10 @@
 
 The view colours each face by its worst problem (:mod:`app.mesh.classes`: no area, flipped by
 the fix, on a non-manifold edge, on a boundary edge) and draws unit normals as arrows on a
-sample of faces. A large mesh is decimated for display: every problem face is kept (up to a
-cap) and the rest of the budget goes to a deterministic sample of the others, so the same file
-always draws the same way. Degenerate faces have no area to fill, so they are drawn as dots.
+sample of faces. A large mesh is drawn as a simplified surface of about DISPLAY_FACES faces
+(:mod:`app.mesh.view_surface`): every problem face (up to a cap, worst first) exactly as it
+is, the rest decimated, the same way for the same file. Degenerate faces have no area to
+fill, so they are drawn as dots.
 
 WebGL draws in 32-bit floats, so a mesh far from the origin is shifted to its centre, and a
 very large or very small one is scaled by a power of two (exact), as in
@@ -21,13 +22,16 @@ import numpy as np
 from numpy.typing import NDArray
 
 from app.mesh.classes import CLASSES, COLORS, DEGENERATE, FLIPPED, OK
+from app.mesh.view_normals import normal_pools
+from app.mesh.view_surface import display_surface, used_vertices
 from app.web.plotly import DEEP_ACCENT, FONT, TRANSPARENT, Trace, cone_trace
 from mesh_normal.types import IndexArray
 
-#: Most faces the 3D view draws; a larger mesh is decimated.
+#: About the most faces the 3D view draws; a larger mesh is simplified.
 DISPLAY_FACES = 20_000
-#: Of those, at most this many are problem faces (all of them when there are fewer).
-PROBLEM_FACES = 12_000
+#: At most this many problem faces are drawn exactly as they are, worst first; each keeps the
+#: faces around it too (see app.mesh.view_surface), so the cap is well below DISPLAY_FACES.
+PROBLEM_FACES = 6_000
 #: Most faces that get a normal arrow, and the share of the drawn faces that get one.
 ARROW_FACES = 300
 ARROW_SHARE = 8
@@ -56,6 +60,24 @@ CAMERAS: dict[str, dict[str, dict[str, float]]] = {
     "z": {"up": {"x": 0, "y": 0, "z": 1}, "eye": {"x": 1.25, "y": -1.25, "z": 0.9}},
 }
 
+#: The surface's light: a key light from above the camera's shoulder (LIGHT) with enough
+#: diffuse and a little specular that curvature reads as a solid, and enough ambient that the
+#: side turned away stays a colour, not black. A simplified surface is shaded smooth (its
+#: facets are the decimation's, not the file's); a mesh drawn whole shows its own facets.
+SURFACE_LIGHTING = {
+    "ambient": 0.45,
+    "diffuse": 0.7,
+    "specular": 0.25,
+    "roughness": 0.45,
+    "fresnel": 0.15,
+    "facenormalsepsilon": 0,
+    "vertexnormalsepsilon": 0,
+}
+#: Where the light is. Plotly takes the surface's light in the camera's frame (x to the right
+#: of the screen, y up it, z towards the viewer), so it follows the camera: this one is a key
+#: light from in front, above and a little to the right, far enough to be directional.
+LIGHT = {"x": 5e4, "y": 1e5, "z": 3e5}
+
 ARROW_COLOR = DEEP_ACCENT
 BOUNDARY_LINE = "#c99a06"
 NONMANIFOLD_LINE = "#862e9c"
@@ -67,20 +89,21 @@ def _sample(indices: IndexArray, count: int, rng: np.random.Generator) -> IndexA
     return np.sort(rng.choice(indices, size=count, replace=False))
 
 
-def select_faces(
-    classes: NDArray[np.int8], limit: int = DISPLAY_FACES, problem_limit: int = PROBLEM_FACES
-) -> IndexArray:
-    """The faces to draw, in file order: all when they fit, else problems first, then a sample.
+def problem_faces(classes: NDArray[np.int8], limit: int = PROBLEM_FACES) -> IndexArray:
+    """The problem faces to draw as they are, in file order: all of them, or the worst first.
 
-    Deterministic: the same classes give the same selection.
+    Within the class that reaches the cap, a fixed sample: the same classes give the same faces.
     """
-    everything = np.arange(len(classes), dtype=np.intp)
-    if len(classes) <= limit:
-        return everything
     rng = np.random.default_rng(SEED)
-    problems = _sample(everything[classes != OK], min(problem_limit, limit), rng)
-    others = _sample(everything[classes == OK], limit - len(problems), rng)
-    return np.sort(np.concatenate([problems, others]))
+    chosen: list[IndexArray] = []
+    room = limit
+    for item in CLASSES:  # worst first
+        if item.code == OK or room <= 0:
+            continue
+        faces = _sample(np.flatnonzero(classes == item.code).astype(np.intp), room, rng)
+        chosen.append(faces)
+        room -= len(faces)
+    return np.sort(np.concatenate(chosen)) if chosen else np.zeros(0, dtype=np.intp)
 
 
 @dataclass(frozen=True, slots=True)
@@ -221,29 +244,31 @@ def build_view(
     nonmanifold_edges: NDArray[np.integer[Any]],
     up: str = DEFAULT_UP,
 ) -> dict[str, Any]:
-    """The 3D view: ``{"figure", "shown_faces", "total_faces", "arrows", "counts", "note",
-    "up", "cameras"}``.
+    """The 3D view: ``{"figure", "shown_faces", "total_faces", "simplified", "arrows", "counts",
+    "note", "up", "cameras", "normals"}``.
 
     ``counts`` holds the number of faces of each class in the whole mesh; ``up`` is the axis
-    drawn upward ("x", "y" or "z") and ``cameras`` the camera for each, for the page's switch.
+    drawn upward ("x", "y" or "z") and ``cameras`` the camera for each, for the page's switch;
+    ``normals`` the arrows the page may draw instead (:mod:`app.mesh.view_normals`).
     """
-    shown = select_faces(classes)
-    used, local = np.unique(faces[shown], return_inverse=True)
+    used, local = used_vertices(faces, len(vertices))
     space = view_space(vertices[used])
-    points = _rounded(space.points)
-    local = local.reshape(-1, 3)
-    corner_points = points[local] if len(local) else np.zeros((0, 3, 3))
-    centroids = _rounded(corner_points.mean(axis=1))
+    surface = display_surface(space.points, local, problem_faces(classes), DISPLAY_FACES)
+    points = _rounded(surface.points)
+    face_class = np.full(len(surface.faces), OK, dtype=np.int8)
+    copies = surface.source >= 0
+    face_class[copies] = classes[surface.source[copies]]
+    file_points = _rounded(space.points)
+    centroids = _rounded(file_points[local].mean(axis=1)) if len(local) else np.zeros((0, 3))
     diagonal = (
         float(np.linalg.norm(points.max(axis=0) - points.min(axis=0))) if len(points) else 1.0
     )
     length = ARROW_LENGTH * (diagonal or 1.0)
-    where = {int(face): row for row, face in enumerate(shown.tolist())}
     traces: list[Trace] = []
-    solid = classes[shown] != DEGENERATE
+    solid = face_class != DEGENERATE
     if solid.any():
         x, y, z = points.T.tolist()
-        i, j, k = local[solid].T.tolist()
+        i, j, k = surface.faces[solid].T.tolist()
         traces.append(
             {
                 "type": "mesh3d",
@@ -254,21 +279,19 @@ def build_view(
                 "i": i,
                 "j": j,
                 "k": k,
-                "facecolor": [COLORS[int(code)] for code in classes[shown][solid]],
-                "flatshading": True,
+                "facecolor": [COLORS[int(code)] for code in face_class[solid]],
+                "flatshading": not surface.simplified,
                 "hoverinfo": "skip",
-                "lighting": {
-                    "ambient": 0.7,
-                    "diffuse": 0.5,
-                    "specular": 0.05,
-                    "roughness": 0.9,
-                    "fresnel": 0.05,
-                },
-                "lightposition": {"x": 1e5, "y": 2e5, "z": 3e5},
+                "lighting": SURFACE_LIGHTING,
+                "lightposition": LIGHT,
             }
         )
-    traces.extend(_problem_edges(points, used, boundary_edges, nonmanifold_edges))
-    dots = np.flatnonzero(~solid)[:EDGE_LINES]
+    # The edges name the file's vertices: renumber them on the surface's points.
+    on_surface = np.full(len(vertices), -1, dtype=np.intp)
+    kept = surface.vertex_source >= 0
+    on_surface[used[surface.vertex_source[kept]]] = np.flatnonzero(kept)
+    traces.extend(_problem_edges(points, on_surface, boundary_edges, nonmanifold_edges))
+    dots = surface.source[face_class == DEGENERATE][:EDGE_LINES]
     if len(dots):
         x, y, z = centroids[dots].T.tolist()
         traces.append(
@@ -280,12 +303,11 @@ def build_view(
                 "y": y,
                 "z": z,
                 "marker": {"color": COLORS[DEGENERATE], "size": 4},
-                "hovertext": [f"face {int(shown[row])}: no area" for row in dots],
+                "hovertext": [f"face {int(face)}: no area" for face in dots],
                 "hovertemplate": "%{hovertext}<extra></extra>",
             }
         )
-    arrow_faces = _arrow_faces(shown, classes)
-    rows = np.array([where[int(face)] for face in arrow_faces], dtype=np.intp)
+    arrow_faces = _arrow_faces(np.arange(len(faces), dtype=np.intp), classes)
     for name, color, pick in (
         ("normals", ARROW_COLOR, classes[arrow_faces] != FLIPPED),
         ("flipped normals", COLORS[FLIPPED], classes[arrow_faces] == FLIPPED),
@@ -293,7 +315,7 @@ def build_view(
         traces.extend(
             _arrows(
                 name,
-                centroids[rows[pick]] if len(rows) else centroids[:0],
+                centroids[arrow_faces[pick]],
                 normals[arrow_faces[pick]],
                 arrow_faces[pick],
                 length,
@@ -302,34 +324,40 @@ def build_view(
         )
     return {
         "figure": {"data": traces, "layout": _layout(up)},
-        "shown_faces": len(shown),
+        "shown_faces": len(surface.faces),
         "total_faces": len(faces),
+        "simplified": surface.simplified,
         "arrows": len(arrow_faces),
         "counts": {item.key: int(np.count_nonzero(classes == item.code)) for item in CLASSES},
         "note": _note(space),
         "up": up,
         "cameras": CAMERAS,
+        "normals": normal_pools(
+            file_points, local, normals, classes == FLIPPED, vertices[used], used
+        ),
     }
 
 
 def _problem_edges(
     points: NDArray[np.float64],
-    used: IndexArray,
+    on_surface: IndexArray,
     boundary_edges: NDArray[np.integer[Any]],
     nonmanifold_edges: NDArray[np.integer[Any]],
 ) -> list[Trace]:
-    """Boundary and non-manifold edges whose both ends are drawn, in view coordinates."""
+    """Boundary and non-manifold edges whose both ends are drawn, in view coordinates.
+
+    ``on_surface`` gives each vertex of the file its point on the surface, or -1.
+    """
     traces = []
     for name, edges, color, width in (
         ("boundary edges", boundary_edges, BOUNDARY_LINE, 4),
         ("non-manifold edges", nonmanifold_edges, NONMANIFOLD_LINE, 6),
     ):
         edges = np.asarray(edges, dtype=np.intp).reshape(-1, 2)
-        if not len(edges) or not len(used):
+        if not len(edges):
             continue
-        at = np.searchsorted(used, edges).clip(0, len(used) - 1)
-        drawn = (used[at] == edges).all(axis=1)
-        local = at[drawn][:EDGE_LINES]
+        local = on_surface[edges]
+        local = local[(local >= 0).all(axis=1)][:EDGE_LINES]
         if len(local):
             traces.append(_edge_trace(name, points, local, color, width))
     return traces

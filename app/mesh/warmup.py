@@ -29,8 +29,9 @@ from mesh_normal.vertices import Weighting
 
 #: What the fork server imports once, before it forks each worker (so that a worker, the first
 #: or a replacement, starts without importing them itself, and the pages they touch are shared
-#: until written): the jobs, and trimesh's glTF loader, which takes seconds to import.
-PRELOAD = ("app.mesh.warmup", "trimesh.exchange.gltf")
+#: until written): the jobs, trimesh's glTF loader, which takes seconds to import, and numba
+#: (the library imports it only for a kernel's first compiled call).
+PRELOAD = ("app.mesh.warmup", "trimesh.exchange.gltf", "mesh_normal._numba_cache")
 
 #: A closed tetrahedron, wound outward.
 VERTICES = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])

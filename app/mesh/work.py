@@ -31,6 +31,9 @@ from mesh_normal.vertices import Weighting
 
 #: The formats the fixed mesh can be downloaded in: the library's writable ones.
 FIX_FORMATS = WRITABLE
+#: The page's "Download with normals": the formats that hold normals and the kinds offered.
+EXPORT_FORMATS = ("obj", "ply", "glb")
+EXPORT_NORMALS: tuple[NormalsKind, ...] = ("vertex", "face", "corner")
 #: Problems that the fixed mesh (orient()) repairs: their card gets the download button.
 FIXED_BY_ORIENT = frozenset({"winding", "inward", "mixed"})
 
@@ -137,6 +140,8 @@ def page(upload: Upload, stem: str, base_url: str) -> dict[str, Any]:
         "weightings": get_args(Weighting),
         "formats": FORMATS,
         "fix_formats": FIX_FORMATS,
+        "export_formats": EXPORT_FORMATS,
+        "export_normals": EXPORT_NORMALS,
         "fixed_by_orient": FIXED_BY_ORIENT,
     }
 

@@ -13,10 +13,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import prange
 from numpy.typing import NDArray
 
-from mesh_normal.kernels import dot, kernel
+from mesh_normal.kernels import dot, kernel, prange
 from mesh_normal.tolerances import POINT_GAP_RATIO, POINT_LINE_RATIO
 from mesh_normal.types import BoolArray, FloatArray, IndexArray
 

@@ -23,10 +23,10 @@ import math
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from enum import IntEnum
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial import cKDTree  # type: ignore[import-untyped]
 
 from mesh_normal.kernels import PARALLEL_KERNELS, announce_compiling
 from mesh_normal.points._kernels import KERNELS as POINT_KERNELS
@@ -325,6 +325,8 @@ def _estimate(
 ) -> tuple[FloatArray, FloatArray, IndexArray, NDArray[np.uint8], NDArray[np.int32]]:
     """Normals, curvature, counts, codes and the orientation graph, in the frame's order."""
     m = len(frame.points)
+    from scipy.spatial import cKDTree  # type: ignore[import-untyped]  # on first use: 0.5 s
+
     tree = cKDTree(frame.points, balanced_tree=False, compact_nodes=False)
     normals, curvature = np.empty((m, 3)), np.empty(m)
     used, codes = np.empty(m, dtype=np.intp), np.empty(m, dtype=np.intp)
@@ -352,7 +354,7 @@ def _estimate(
 
 
 def _neighbourhoods(
-    tree: cKDTree, k: int | None, bound: float, g: int
+    tree: Any, k: int | None, bound: float, g: int
 ) -> Iterator[tuple[int, IndexArray, IndexArray, IndexArray]]:
     """Per chunk of queries: its start, the neighbour lists as CSR, and the g nearest."""
     points: FloatArray = tree.data

@@ -33,12 +33,6 @@ from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.sparse import coo_matrix  # type: ignore[import-untyped]
-from scipy.sparse.csgraph import (  # type: ignore[import-untyped]
-    breadth_first_order,
-    connected_components,
-    minimum_spanning_tree,
-)
 
 from mesh_normal.points._kernels import graph_edges, propagate_signs
 from mesh_normal.tolerances import ORIENT_POINT_COSINE, ORIENT_SEED_COSINE
@@ -141,6 +135,13 @@ def along_tree(
     offsets : bool
         The ``"riemannian"`` graph: drop edges that leave a tangent plane by over ``max_angle``.
     """
+    from scipy.sparse import coo_matrix  # type: ignore[import-untyped]  # on first use
+    from scipy.sparse.csgraph import (  # type: ignore[import-untyped]
+        breadth_first_order,
+        connected_components,
+        minimum_spanning_tree,
+    )
+
     n = len(points)
     sharp_cosine = math.cos(math.radians(max_angle))
     rows, cols, weights = _edges(points, normals, valid, graph, offsets, sharp_cosine)
@@ -208,6 +209,9 @@ def _main_pieces(
 ) -> BoolArray:
     """(n,) bool: the valid points of each part's largest piece once its tree's sharp edges
     are cut (the first such piece where two are as large)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
     n = len(normals)
     edges = tree.tocoo()
     dots = np.einsum("ij,ij->i", normals[edges.row], normals[edges.col])

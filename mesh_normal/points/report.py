@@ -16,7 +16,6 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 from pydantic import BaseModel, ConfigDict, Field
-from scipy.spatial import cKDTree  # type: ignore[import-untyped]
 
 from mesh_normal.points.estimate import PointNormals, PointStatus, point_normals
 from mesh_normal.points.orient import OrientMode
@@ -252,6 +251,8 @@ def _spacing(points: FloatArray) -> Spacing | None:
     """Nearest other point's distance, from one k = 2 query (the first hit is the point)."""
     if len(points) < 2:
         return None
+    from scipy.spatial import cKDTree  # type: ignore[import-untyped]  # on first use: 0.5 s
+
     distances, _ = cKDTree(points).query(points, k=2, workers=-1)
     nearest = distances[:, 1]
     return Spacing(

@@ -160,15 +160,160 @@
     document.querySelectorAll("[data-needs-js]").forEach(function (element) { element.hidden = false; });
   }
 
-  // The camera for the chosen up axis (the report's figure carries the format's own).
+  // Face orientation, as Blender shows it: the surface twice, each face moved a hair along its
+  // own normal (blue) and against it (red). From outside, a mesh wound outward is blue and a
+  // part wound inward (or a single face wound against its neighbours) is red.
+  const FRONT = "#2f6fed";
+  const BACK = "#e0312f";
+  const ORIENTATION_OFFSET = 1e-3;  // of the view's diagonal: clear of depth fighting, too thin to see
+  const PROBLEM_TRACES = ["faces", "boundary edges", "non-manifold edges", "degenerate"];
+
+  function orientationTraces(surface) {
+    const n = surface.i.length;
+    const x = surface.x, y = surface.y, z = surface.z;
+    let low = [Infinity, Infinity, Infinity], high = [-Infinity, -Infinity, -Infinity];
+    for (let v = 0; v < x.length; v++) {
+      const p = [x[v], y[v], z[v]];
+      for (let a = 0; a < 3; a++) { low[a] = Math.min(low[a], p[a]); high[a] = Math.max(high[a], p[a]); }
+    }
+    const diagonal = Math.hypot(high[0] - low[0], high[1] - low[1], high[2] - low[2]) || 1;
+    const offset = ORIENTATION_OFFSET * diagonal;
+    const copies = [[], []].map(function () { return { x: [], y: [], z: [] }; });
+    const corners = [surface.i, surface.j, surface.k];
+    for (let f = 0; f < n; f++) {
+      const p = corners.map(function (c) { return [x[c[f]], y[c[f]], z[c[f]]]; });
+      const u = [p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]];
+      const w = [p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]];
+      const normal = [u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]];
+      const length = Math.hypot(normal[0], normal[1], normal[2]);
+      const scale = length > 0 ? offset / length : 0;
+      [1, -1].forEach(function (side, c) {
+        for (let corner = 0; corner < 3; corner++) {
+          copies[c].x.push(p[corner][0] + side * scale * normal[0]);
+          copies[c].y.push(p[corner][1] + side * scale * normal[1]);
+          copies[c].z.push(p[corner][2] + side * scale * normal[2]);
+        }
+      });
+    }
+    const index = [[], [], []];
+    for (let f = 0; f < n; f++) { index[0].push(3 * f); index[1].push(3 * f + 1); index[2].push(3 * f + 2); }
+    return [["front faces", FRONT], ["back faces", BACK]].map(function (named, c) {
+      return {
+        type: "mesh3d", name: named[0], x: copies[c].x, y: copies[c].y, z: copies[c].z,
+        i: index[0], j: index[1], k: index[2], color: named[1], flatshading: true,
+        hoverinfo: "skip", lighting: surface.lighting, lightposition: surface.lightposition,
+        visible: false,
+      };
+    });
+  }
+
+  // Normals as arrows: the kind, how many and how long the user chose, from the pools the
+  // report carries (a fair sample in a fixed order, so "how many" takes the first ones).
+  const ARROW_NAMES = ["normals", "flipped normals"];
+  const ARROW_COLOR = "#3a44b0";
+  const FLIPPED_COLOR = "#f76707";
+
+  function diagonalOf(trace) {
+    const low = [Infinity, Infinity, Infinity], high = [-Infinity, -Infinity, -Infinity];
+    [trace.x, trace.y, trace.z].forEach(function (values, a) {
+      values.forEach(function (value) {
+        if (value === null) return;
+        low[a] = Math.min(low[a], value);
+        high[a] = Math.max(high[a], value);
+      });
+    });
+    return Math.hypot(high[0] - low[0], high[1] - low[1], high[2] - low[2]) || 1;
+  }
+
+  function arrowTraces(name, color, pool, rows, length, cone) {
+    if (!rows.length) return [];
+    const line = { x: [], y: [], z: [] }, tips = { x: [], y: [], z: [] }, heads = { u: [], v: [], w: [] };
+    const head = 0.3 * length;
+    rows.forEach(function (r) {
+      const at = pool.at[r], n = pool.normal[r];
+      ["x", "y", "z"].forEach(function (axis, a) {
+        line[axis].push(at[a], at[a] + n[a] * (length - head), null);
+        tips[axis].push(at[a] + n[a] * length);
+      });
+      heads.u.push(n[0] * head); heads.v.push(n[1] * head); heads.w.push(n[2] * head);
+    });
+    const hover = rows.map(function (r) {
+      const n = pool.normal[r];
+      return pool.label[r] + ": normal (" + n.map(function (c) { return Number(c.toPrecision(4)); }).join(", ") + ")";
+    });
+    return [
+      { type: "scatter3d", mode: "lines", name: name, x: line.x, y: line.y, z: line.z,
+        line: { color: color, width: 3 }, hoverinfo: "skip" },
+      Object.assign({}, cone, {
+        type: "cone", name: name, x: tips.x, y: tips.y, z: tips.z, u: heads.u, v: heads.v, w: heads.w,
+        anchor: "tip", sizemode: "raw", sizeref: 1, colorscale: [[0, color], [1, color]],
+        showscale: false, hovertext: hover, hovertemplate: "%{hovertext}<extra></extra>",
+      }),
+    ];
+  }
+
+  // The arrows the controls ask for, in place of the report's; null when the controls are
+  // not on the page. Writes what is drawn into the caption.
+  function chosenArrows(figure) {
+    const pools = data("mesh-view-normals");
+    const kind = document.getElementById("mesh-arrow-kind");
+    const countInput = document.getElementById("mesh-arrow-count");
+    const lengthInput = document.getElementById("mesh-arrow-length");
+    if (!pools || !kind || !countInput || !lengthInput) return null;
+    const pool = pools[kind.value] || pools.face;
+    if (!pool) return null;
+    const count = Math.max(0, Math.min(pool.at.length, Math.round(Number(countInput.value)) || 0));
+    const surface = figure.data.find(function (trace) { return trace.name === "faces"; });
+    const length = Number(lengthInput.value) * (surface ? diagonalOf(surface) : 1);
+    const cone = figure.data.find(function (trace) { return trace.type === "cone"; }) || {};
+    const lighting = cone.lighting ? { lighting: cone.lighting } : {};
+    const rows = [], flipped = [];
+    for (let r = 0; r < count; r++) ((pool.flipped && pool.flipped[r]) ? flipped : rows).push(r);
+    const caption = document.getElementById("mesh-view-arrows");
+    const noun = { face: "faces", vertex: "vertices", corner: "corners" }[pools[kind.value] ? kind.value : "face"];
+    if (caption) caption.textContent = count ? " Arrows: the unit normals of " + count + " " + noun + "." : " No arrows.";
+    return arrowTraces("normals", ARROW_COLOR, pool, rows, length, lighting)
+      .concat(arrowTraces("flipped normals", FLIPPED_COLOR, pool, flipped, length, lighting));
+  }
+
+  function viewMode() {
+    const select = document.getElementById("mesh-mode");
+    return select ? select.value : "problems";
+  }
+
+  // The camera for the chosen up axis (the report's figure carries the format's own), and the
+  // traces of the chosen colours shown, the others hidden.
   function viewFigure() {
     const figure = data("mesh-view-data");
     const cameras = data("mesh-view-cameras");
     const select = document.getElementById("mesh-up");
-    if (figure && cameras && select && cameras[select.value]) {
-      figure.layout.scene.camera = cameras[select.value];
+    if (!figure) return figure;
+    if (cameras && select && cameras[select.value]) figure.layout.scene.camera = cameras[select.value];
+    // Rotating and zooming stay when the colours change; a new up axis starts a new view.
+    figure.layout.uirevision = select ? select.value : "view";
+    const arrows = chosenArrows(figure);
+    if (arrows) {
+      figure.data = figure.data.filter(function (trace) { return ARROW_NAMES.indexOf(trace.name) === -1; })
+        .concat(arrows);
     }
+    const surface = figure.data.find(function (trace) { return trace.name === "faces"; });
+    if (surface) figure.data = figure.data.concat(orientationTraces(surface));
+    const orientation = viewMode() === "orientation";
+    figure.data.forEach(function (trace) {
+      if (PROBLEM_TRACES.indexOf(trace.name) !== -1) trace.visible = !orientation;
+      if (trace.name === "front faces" || trace.name === "back faces") trace.visible = orientation;
+    });
     return figure;
+  }
+
+  function syncMode() {
+    const orientation = viewMode() === "orientation";
+    const problems = document.getElementById("mesh-problem-legend");
+    const faces = document.getElementById("mesh-orientation-legend");
+    if (problems) problems.classList.toggle("hidden", orientation);
+    if (faces) faces.classList.toggle("hidden", !orientation);
+    const element = document.getElementById("mesh-view");
+    if (element) element.dataset.mode = viewMode();
   }
 
   // The 3D bundle (557 KB gzipped) loads only when the view scrolls into sight.
@@ -192,6 +337,7 @@
 
   function drawFigures() {
     showScripted();
+    syncMode();
     drawView();
     return drawHistogram();
   }
@@ -397,7 +543,9 @@
   document.addEventListener("change", function (event) {
     if (event.target.id === "normals-kind") syncFields();
     if (event.target.id === "fix-format") syncDropped();
-    if (event.target.id === "mesh-up") {
+    if (event.target.id === "mesh-mode") syncMode();
+    if (["mesh-up", "mesh-mode", "mesh-arrow-kind", "mesh-arrow-count", "mesh-arrow-length"]
+        .indexOf(event.target.id) !== -1) {
       const element = document.getElementById("mesh-view");
       if (element && window.NormalView3D) window.NormalView3D.update(element, viewFigure());
     }

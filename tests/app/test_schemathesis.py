@@ -33,6 +33,7 @@ OPERATIONS = {
     "POST /api/mesh/normals",
     "POST /api/mesh/fix",
     "POST /api/mesh/export",
+    "GET /api/mesh/sample/{name}",
     "POST /api/points",
     "POST /api/points/normals",
 }

@@ -72,8 +72,8 @@ def free_port() -> int:
 
 @pytest.fixture(scope="session")
 def base_url(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
-    """The real app under uvicorn on a free local port, for the whole session."""
-    port = free_port()
+    """The real app under uvicorn on a free local port (or BROWSER_TEST_PORT), for the session."""
+    port = int(os.environ.get("BROWSER_TEST_PORT") or free_port())
     log_path = tmp_path_factory.mktemp("uvicorn") / "server.log"
     with log_path.open("wb") as log:
         process = subprocess.Popen(

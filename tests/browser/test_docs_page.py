@@ -19,6 +19,7 @@ PATHS = {
     "/api/mesh/normals",
     "/api/mesh/fix",
     "/api/mesh/export",
+    "/api/mesh/sample/{name}",
     "/api/points",
     "/api/points/normals",
 }
@@ -35,9 +36,9 @@ def test_docs_show_the_operations_and_try_them(page: Page, base_url: str) -> Non
     paths = page.locator(".opblock-summary-path")
     expect(paths.first).to_be_visible()
     # GET and POST /api/normal, GET /api/normal.csv, POST /api/normals, GET /api/chart, and
-    # POST /api/mesh, /api/mesh/normals, /api/mesh/fix, /api/mesh/export, /api/points,
-    # /api/points/normals
-    expect(paths).to_have_count(11)
+    # POST /api/mesh, /api/mesh/normals, /api/mesh/fix, /api/mesh/export, GET
+    # /api/mesh/sample/{name}, POST /api/points, /api/points/normals
+    expect(paths).to_have_count(12)
     assert {text.strip() for text in paths.all_inner_texts()} == PATHS
     expect(page.get_by_text("Mesh Normal Calculator").first).to_be_visible()
     expect(page.get_by_role("link", name="← Back to the calculator")).to_have_attribute("href", "/")

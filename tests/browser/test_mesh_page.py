@@ -245,3 +245,104 @@ def test_a_y_up_gltf_stands_up_and_the_up_axis_switches(page: Page) -> None:
         "d => document.getElementById('mesh-view').dataset.drawn !== d", arg=drawn
     )
     assert page.evaluate(CAMERA_UP) == [0, 0, 1]
+
+
+VISIBLE = """() => Object.fromEntries(document.getElementById('mesh-view')._fullData
+    .map((t) => [t.name, t.visible === true]))"""
+
+#: For each face of the front copy, how much farther its centroid is from the cube's centre
+#: than the face's own: the copy is moved along the face's normal.
+FRONT_MOVED = """() => {
+    const data = document.getElementById('mesh-view').data;
+    const faces = data.find((t) => t.name === 'faces');
+    const front = data.find((t) => t.name === 'front faces');
+    const d = (x, y, z) => Math.hypot(x - 0.5, y - 0.5, z - 0.5);
+    return faces.i.map((_, f) => {
+        const c = [faces.i[f], faces.j[f], faces.k[f]];
+        const mean = (t, axis, at) => at.reduce((s, v) => s + t[axis][v], 0) / 3;
+        const own = d(mean(faces, 'x', c), mean(faces, 'y', c), mean(faces, 'z', c));
+        const copy = [3 * f, 3 * f + 1, 3 * f + 2];
+        return d(mean(front, 'x', copy), mean(front, 'y', copy), mean(front, 'z', copy)) - own;
+    });
+}"""
+
+
+def test_the_face_orientation_mode_shows_front_blue_and_back_red(page: Page) -> None:
+    open_mesh_page(page)
+    page.set_input_files("#mesh-file", files=[cube_file()])
+    wait_for_report(page)
+    wait_for_view(page)
+    expect(page.locator("#mesh-mode")).to_have_value("problems")
+    shown = page.evaluate(VISIBLE)
+    assert shown["faces"] and not shown["front faces"] and not shown["back faces"]
+    expect(page.locator("#mesh-orientation-legend")).to_be_hidden()
+    drawn = page.get_attribute("#mesh-view", "data-drawn")
+    requests: list[str] = []
+    page.on("request", lambda request: requests.append(request.url))
+    page.select_option("#mesh-mode", "orientation")
+    page.wait_for_function(
+        "d => document.getElementById('mesh-view').dataset.drawn !== d", arg=drawn
+    )
+    shown = page.evaluate(VISIBLE)
+    assert not shown["faces"] and shown["front faces"] and shown["back faces"]
+    assert shown["normals"], "the arrows stay"
+    assert requests == [], "the switch draws what the page has"
+    expect(page.locator("#mesh-orientation-legend")).to_be_visible()
+    expect(page.locator("#mesh-problem-legend")).to_be_hidden()
+    colors = page.evaluate("""() => document.getElementById('mesh-view').data
+        .filter((t) => t.name.endsWith(' faces')).map((t) => [t.name, t.color])""")
+    assert colors == [["front faces", "#2f6fed"], ["back faces", "#e0312f"]]
+    # Face 0 of the cube is wound inward: its front copy moves in, the eleven others out.
+    moved = page.evaluate(FRONT_MOVED)
+    assert moved[0] < 0 and all(m > 0 for m in moved[1:]), moved
+    drawn = page.get_attribute("#mesh-view", "data-drawn")
+    page.select_option("#mesh-mode", "problems")
+    page.wait_for_function(
+        "d => document.getElementById('mesh-view').dataset.drawn !== d", arg=drawn
+    )
+    shown = page.evaluate(VISIBLE)
+    assert shown["faces"] and not shown["front faces"]
+    expect(page.locator("#mesh-problem-legend")).to_be_visible()
+
+
+ARROWS = """() => document.getElementById('mesh-view').data
+    .filter((t) => t.type === 'cone').map((t) => [t.name, t.u.length, t.x[0], t.u[0]])"""
+
+
+def test_the_arrow_controls_choose_kind_count_and_length(page: Page) -> None:
+    open_mesh_page(page)
+    page.set_input_files("#mesh-file", files=[cube_file()])
+    wait_for_report(page)
+    wait_for_view(page)
+    expect(page.locator("#mesh-arrow-count")).to_have_value("12")
+    # As drawn by the report: 11 face arrows and the flipped one in orange.
+    assert sorted((name, n) for name, n, *_ in page.evaluate(ARROWS)) == [
+        ("flipped normals", 1), ("normals", 11)]  # fmt: skip
+    drawn = page.get_attribute("#mesh-view", "data-drawn")
+    page.select_option("#mesh-arrow-kind", "vertex")
+    page.wait_for_function(
+        "d => document.getElementById('mesh-view').dataset.drawn !== d", arg=drawn
+    )
+    assert [(name, n) for name, n, *_ in page.evaluate(ARROWS)] == [("normals", 8)]
+    expect(page.locator("#mesh-view-arrows")).to_have_text(
+        " Arrows: the unit normals of 8 vertices."
+    )
+    drawn = page.get_attribute("#mesh-view", "data-drawn")
+    page.fill("#mesh-arrow-count", "3")
+    page.locator("#mesh-arrow-count").dispatch_event("change")
+    page.wait_for_function(
+        "d => document.getElementById('mesh-view').dataset.drawn !== d", arg=drawn
+    )
+    ((_, count, _, head),) = page.evaluate(ARROWS)
+    assert count == 3
+    # The cube's diagonal is √3; the head is 0.3 of the 0.04-diagonal arrow, along the
+    # normal (1/√3 on each axis for a cube's corner).
+    assert abs(abs(head) - 0.3 * 0.04 * 3**0.5 / 3**0.5) < 1e-6
+    drawn = page.get_attribute("#mesh-view", "data-drawn")
+    page.fill("#mesh-arrow-length", "0.1")
+    page.locator("#mesh-arrow-length").dispatch_event("change")
+    page.wait_for_function(
+        "d => document.getElementById('mesh-view').dataset.drawn !== d", arg=drawn
+    )
+    ((_, _, _, head),) = page.evaluate(ARROWS)
+    assert abs(abs(head) - 0.3 * 0.1) < 1e-6

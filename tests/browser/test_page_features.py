@@ -238,7 +238,8 @@ PRESET_CHECKS = {
     "right": {"unit_normal": "(0, 0, 1)", "order": "order A, B, C", "normal": "(0, 0, 1)"},
     "swapped": {"unit_normal": "(0, 0, −1)", "order": "order A, C, B"},
     "collinear": {"unit_normal": "none (degenerate triangle)", "normal": "(0, 0, 0)"},
-    "sliver": {"unit_normal": "(0, 0, −1)", "normal": "(0, 0, −1.3552527156068805e−20)"},
+    # (3 + 1e-10)(3 - 1e-10) - 9 = -1e-20 for the decimals typed (the doubles give -1.355e-20).
+    "sliver": {"unit_normal": "(0, 0, −1)", "normal": "(0, 0, −1e−20)"},
     "huge": {
         "magnitude": "out of range",
         "normal": "(0, 0, out of range)",
@@ -341,7 +342,7 @@ def test_downloads_carry_the_pages_numbers(new_page: NewPage) -> None:
     }
     for column, value in numbers.items():
         assert float(row[column]) == value, column
-    assert row["nz"] == "-1.3552527156068805e-20"
+    assert row["nz"] == "-1e-20"  # the typed decimals, exactly: (3 + 1e-10)(3 - 1e-10) - 9
     assert row["degenerate"] == "false"
 
     # After a live edit the links and the copied JSON follow.

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mesh_normal.cli import main
+from mesh_normal.cli import component_lines, main, written_line
 from mesh_normal.points import point_normals, read_points, write_points
 from tests.mesh_normal.points._clouds import sphere
 from tests.mesh_normal.points._pcd import pcd_header
@@ -66,7 +66,7 @@ def test_summary_in_words(ply: Path, capsys: pytest.CaptureFixture[str]) -> None
     assert lines[1].startswith("neighbourhood: the 30 nearest points, itself included; ")
     assert "oriented by mst (max angle 60 degrees)" in lines[1]
     assert f"  ok: {N} (a unit normal, oriented as asked)" in lines
-    assert lines[3].startswith("orientation: 1 part(s); ")
+    assert lines[3].startswith("orientation: 1 part; ")
     assert lines[4].startswith(f"  part 1: {N} points, ")
     # A closed sphere points out, as its stored normals do.
     assert lines[-1].startswith(f"the file's normals: {N} compared, median angle between the")
@@ -162,7 +162,7 @@ def test_points_without_a_normal_are_zero_rows_and_said(
     code, stdout, _ = run(["points", str(path), "--radius", "0.5", "-o", str(out)], capsys)
     assert code == 0
     assert stdout == (
-        f"wrote {N + 2} normals to {out}; 2 point(s) without a normal are zero rows "
+        f"wrote {N + 2} normals to {out}; 2 points without a normal are zero rows "
         "(2 too_few_neighbours); see `mesh-normal points FILE`\n"
     )
     normals = np.load(out)
@@ -177,7 +177,7 @@ def test_unoriented_normals_are_said_when_written(
     code, stdout, _ = run(["points", str(path), "--direction=1,0,0", "-o", str(out)], capsys)
     assert (code, stdout) == (
         0,
-        f"wrote 100 normals to {out}; 100 normal(s) unoriented (their side could not be "
+        f"wrote 100 normals to {out}; 100 normals unoriented (their side could not be "
         "decided); see `mesh-normal points FILE`\n",
     )
 
@@ -194,7 +194,7 @@ def test_npy_rows_are_the_file_rows_when_it_left_some_out(
     path.write_bytes(pcd_header("x y z", "4 4 4", "F F F", 100) + "\n".join(rows).encode() + b"\n")
     code, stdout, _ = run(["points", str(path), "--direction=0,0,1", "-o", str(out)], capsys)
     assert code == 0
-    assert stdout == (f"wrote 100 normals to {out}; 2 row(s) the file left out are zero rows too\n")
+    assert stdout == (f"wrote 100 normals to {out}; 2 rows the file left out are zero rows too\n")
     expected = np.tile([0.0, 0.0, 1.0], (100, 1))
     expected[[7, 50]] = 0.0
     np.testing.assert_array_equal(np.load(out), expected)
@@ -371,3 +371,30 @@ def test_usage_errors_answer_before_the_library_loads(argv: list[str]) -> None:
     loaded, code = modules_after(argv)
     assert code == 2
     assert not sorted(name for name in loaded if name.split(".")[0] in HEAVY)
+
+
+def test_counts_in_words_are_singular_or_plural() -> None:
+    found = {
+        "component_count": 1,
+        "components": [{"points": 1, "flipped": 1, "unoriented": 0, "reason": "", "seed": 0}],
+        "flipped": 1,
+        "unoriented": 0,
+        "orient": "mst",
+    }
+    assert component_lines(found) == [
+        "orientation: 1 part; 1 normal flipped, 0 unoriented",
+        "  part 1: 1 point, 1 flipped, 0 unoriented, seed point 0",
+    ]
+    found.update(component_count=2, flipped=2)
+    assert component_lines(found)[0] == "orientation: 2 parts; 2 normals flipped, 0 unoriented"
+    written = {
+        "file_points": 3,
+        "points": 2,
+        "without_normal": 1,
+        "counts": {"ok": 1, "too_few_neighbours": 1, "unoriented": 1},
+    }
+    assert written_line(written, "n.npy") == (
+        "wrote 3 normals to n.npy; 1 point without a normal is a zero row (1 too_few_neighbours); "
+        "1 normal unoriented (its side could not be decided); 1 row the file left out is a zero "
+        "row too; see `mesh-normal points FILE`"
+    )

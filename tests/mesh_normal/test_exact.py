@@ -11,7 +11,15 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mesh_normal.exact import OutOfRange, ratio_sqrt, round_scaled, sqrt_scaled, to_fixed
+from mesh_normal.exact import (
+    OutOfRange,
+    ratio_sqrt,
+    round_scaled,
+    split_square,
+    sqrt_scaled,
+    square_root,
+    to_fixed,
+)
 from tests.mesh_normal._reference import (
     MAX,
     RefOutOfRange,
@@ -313,3 +321,55 @@ def test_ratio_sqrt_unit_vector_components_have_length_one() -> None:
         unit = [ratio_sqrt(x * x, square) for x in n]
         length_squared = sum(Fraction(x) ** 2 for x in unit)
         assert abs(length_squared - 1) <= Fraction(8, 2**53)
+
+
+# --- Squares out of a radicand ------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("value", "split"),
+    [(1, (1, 1)), (2, (1, 2)), (4, (2, 1)), (72, (6, 2)), (286, (1, 286)), (1000, (10, 10))],
+)
+def test_split_square_by_hand(value: int, split: tuple[int, int]) -> None:
+    assert split_square(value) == split
+
+
+def test_split_square_stops_at_its_limit() -> None:
+    # 10007 is prime: past a limit of 100 its square stays inside, next to another factor.
+    assert split_square(3 * 10007**2 * 10009, limit=100) == (1, 3 * 10007**2 * 10009)
+    assert split_square(3 * 10007**2 * 10009, limit=20_000) == (10007, 3 * 10009)
+    # What the trial divisions leave is checked once for a perfect square.
+    assert split_square(10007**2, limit=100) == (10007, 1)
+
+
+def test_split_square_is_quick_on_huge_numbers() -> None:
+    big = 2**4000 + 1  # no small factor to speak of; the loop ends at the limit
+    outside, inside = split_square(big * 4)
+    assert outside * outside * inside == big * 4 and outside % 2 == 0
+
+
+def test_square_root_by_hand() -> None:
+    assert square_root(Fraction(143, 2)) == (Fraction(1, 2), 286)  # √71.5 = √286 / 2
+    assert square_root(Fraction(49)) == (Fraction(7), 1)
+    assert square_root(Fraction(0)) == (Fraction(0), 1)
+    assert square_root(Fraction(8, 9)) == (Fraction(2, 3), 2)
+    with pytest.raises(ValueError, match="at least 0"):
+        square_root(Fraction(-1))
+
+
+def _square_free(value: int) -> bool:
+    return all(value % (d * d) for d in range(2, math.isqrt(value) + 1))
+
+
+@given(st.integers(min_value=1, max_value=10**7))
+def test_split_square_is_a_factorisation(value: int) -> None:
+    outside, inside = split_square(value)
+    assert outside * outside * inside == value
+    assert _square_free(inside)  # below limit**2 the splitting is complete
+
+
+@given(st.fractions(min_value=0, max_denominator=10**6).filter(lambda q: q < 10**6))
+def test_square_root_squares_back(square: Fraction) -> None:
+    coefficient, radicand = square_root(square)
+    assert coefficient >= 0 and radicand >= 1
+    assert coefficient * coefficient * radicand == square

@@ -512,15 +512,15 @@ def test_never_nan_or_infinity(a, b, c, swap: bool) -> None:
         ((0, 0), (1, 0, 0), (0, 1, 0), "Point A must have 3 coordinates, not 2"),
         ((0, 0, 0), (1, 0, 0, 0), (0, 1, 0), "Point B must have 3 coordinates, not 4"),
         ((0, 0, 0), (1, 0, 0), (), "Point C must have 3 coordinates, not 0"),
-        ((math.nan, 0, 0), (1, 0, 0), (0, 1, 0), "ax must be a finite number"),
-        ((0, 0, 0), (1, math.inf, 0), (0, 1, 0), "by must be a finite number"),
-        ((0, 0, 0), (1, 0, 0), (0, 1, -math.inf), "cz must be a finite number"),
-        ((True, 0, 0), (1, 0, 0), (0, 1, 0), "ax must be a number"),
-        ((0, 0, 0), (1, 0, False), (0, 1, 0), "bz must be a number"),
-        ((0, 0, 0), (1, 0, 0), ("0", 1, 0), "cx must be a number"),
-        ((0, 0, 0), (1, 0, 0), "xyz", "cx must be a number"),
-        ((0, 0, None), (1, 0, 0), (0, 1, 0), "az must be a number"),
-        ((0, 0, 0), (1, 0, 0), (0, 1, 1j), "cz must be a number"),
+        ((math.nan, 0, 0), (1, 0, 0), (0, 1, 0), r"A\.x must be a finite number"),
+        ((0, 0, 0), (1, math.inf, 0), (0, 1, 0), r"B\.y must be a finite number"),
+        ((0, 0, 0), (1, 0, 0), (0, 1, -math.inf), r"C\.z must be a finite number"),
+        ((True, 0, 0), (1, 0, 0), (0, 1, 0), r"A\.x must be a number"),
+        ((0, 0, 0), (1, 0, False), (0, 1, 0), r"B\.z must be a number"),
+        ((0, 0, 0), (1, 0, 0), ("0", 1, 0), r"C\.x must be a number"),
+        ((0, 0, 0), (1, 0, 0), "xyz", r"C\.x must be a number"),
+        ((0, 0, None), (1, 0, 0), (0, 1, 0), r"A\.z must be a number"),
+        ((0, 0, 0), (1, 0, 0), (0, 1, 1j), r"C\.z must be a number"),
     ],
 )
 @pytest.mark.parametrize("swap", [False, True])
@@ -530,7 +530,7 @@ def test_invalid_input_raises_value_error(a, b, c, match: str, swap: bool) -> No
 
 
 def test_integer_too_large_for_a_double_raises_value_error() -> None:
-    with pytest.raises(ValueError, match="ax must be a finite number"):
+    with pytest.raises(ValueError, match=r"A\.x must be a finite number"):
         triangle_normal((10**400, 0, 0), (1, 0, 0), (0, 1, 0))
 
 

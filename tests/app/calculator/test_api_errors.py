@@ -10,6 +10,7 @@ import json
 
 import pytest
 
+from app.calculator.params import label
 from tests.conftest import EXAMPLE_QUERY, assert_error
 
 VALID = {"a": [0, 0, 0], "b": [1, 0, 0], "c": [0, 1, 0], "swap_winding": False}
@@ -257,25 +258,35 @@ def test_oversized_batch_body(client) -> None:  # type: ignore[no-untyped-def]
 # --- GET /api/normal and /api/chart: query strings ---------------------------------------------
 
 BAD_TEXT = [
-    ("abc", "decimal number"),
-    ("", "empty"),
-    ("   ", "empty"),
+    ("abc", "must be a number"),
     ("1e999", "double range"),
     ("-1e999", "double range"),
-    ("0x10", "decimal number"),
-    ("nan", "decimal number"),
-    ("NaN", "decimal number"),
-    ("inf", "decimal number"),
-    ("-inf", "decimal number"),
-    ("Infinity", "decimal number"),
-    ("1,5", "decimal number"),
-    ("1_000", "decimal number"),
-    ("1e", "decimal number"),
-    ("e5", "decimal number"),
-    ("--1", "decimal number"),
-    ("1.2.3", "decimal number"),
+    ("0x10", "must be a number"),
+    ("nan", "must be a number"),
+    ("NaN", "must be a number"),
+    ("inf", "must be a number"),
+    ("-inf", "must be a number"),
+    ("Infinity", "must be a number"),
+    ("1,5,2", "must be a number"),
+    (",5", "must be a number"),
+    ("1,000", "thousands separator"),
+    ("-12,500", "thousands separator"),
+    ("1/0", "divides by zero"),
+    ("-2/0.0", "divides by zero"),
+    ("1/2/3", "must be a number"),
+    ("/3", "must be a number"),
+    ("1/", "must be a number"),
+    ("1e999999/3", "exponent beyond ±30"),
+    ("1/1e-99999999", "exponent beyond ±30"),
+    ("1e30/1e-300", "exponent beyond ±30"),
+    ("1e999999", "double range"),
+    ("1_000", "must be a number"),
+    ("1e", "must be a number"),
+    ("e5", "must be a number"),
+    ("--1", "must be a number"),
+    ("1.2.3", "must be a number"),
     ("1" * 65, "longer than"),
-    ("<script>", "decimal number"),
+    ("<script>", "must be a number"),
 ]
 
 
@@ -284,25 +295,52 @@ BAD_TEXT = [
 @pytest.mark.parametrize("name", ["ax", "cz"])
 def test_bad_query_value(client, route: str, text: str, word: str, name: str) -> None:  # type: ignore[no-untyped-def]
     response = client.get(route, params={**EXAMPLE_QUERY, name: text})
-    body = assert_error(response, 422, name, name, word)
+    body = assert_error(response, 422, name, label(name), word)
+    assert not body["error"].startswith(name)  # "B.y", never "by", in the sentence
     assert len(body["error"]) < 200  # a long value is not echoed whole
 
 
 @pytest.mark.parametrize("text", ["\uff11", "\u0661\u0662", "\u0967.5"])
 def test_non_ascii_digits_are_refused(client, text: str) -> None:  # type: ignore[no-untyped-def]
     response = client.get("/api/normal", params={**EXAMPLE_QUERY, "ax": text})
-    assert_error(response, 422, "ax", "decimal number")
+    assert_error(response, 422, "ax", "must be a number")
 
 
 @pytest.mark.parametrize("route", ["/api/normal", "/api/chart"])
 @pytest.mark.parametrize("name", ["ax", "by", "cz"])
 def test_missing_query_value(client, route: str, name: str) -> None:  # type: ignore[no-untyped-def]
     params = {key: value for key, value in EXAMPLE_QUERY.items() if key != name}
-    assert_error(client.get(route, params=params), 422, name, "missing")
+    assert_error(client.get(route, params=params), 422, name, label(name), "missing")
+
+
+@pytest.mark.parametrize("blank", ["", "   ", "\t"])
+def test_blank_query_value_is_missing(client, blank: str) -> None:  # type: ignore[no-untyped-def]
+    response = client.get("/api/normal", params={**EXAMPLE_QUERY, "by": blank})
+    body = assert_error(response, 422, "by")
+    assert body["error"] == "B.y is missing."
 
 
 def test_no_query_at_all(client) -> None:  # type: ignore[no-untyped-def]
-    assert_error(client.get("/api/normal"), 422, "ax", "missing")
+    body = assert_error(client.get("/api/normal"), 422, "ax")
+    assert body["error"] == "All nine coordinates, A.x to C.z, are missing."
+
+
+def test_a_wrong_value_is_named_before_the_missing_ones(client) -> None:  # type: ignore[no-untyped-def]
+    body = assert_error(client.get("/api/normal?ax=abc"), 422, "ax")
+    assert body["error"] == "A.x must be a number such as 1.5, -2e3 or 1/3, not 'abc'."
+    # Also when the wrong value comes after the missing ones in the form's order.
+    body = assert_error(client.get("/api/normal?cz=1e999&ax=1"), 422, "cz")
+    assert body["error"] == "C.z is beyond the double range (about ±1.8e308)."
+    body = assert_error(client.get("/api/normal?ax=1&swap=maybe"), 422, "swap", "on, true or 1")
+
+
+def test_missing_fields_are_grouped_in_one_sentence(client) -> None:  # type: ignore[no-untyped-def]
+    params = {k: v for k, v in EXAMPLE_QUERY.items() if k not in ("bx", "by", "cz")}
+    body = assert_error(client.get("/api/normal", params=params), 422, "bx")
+    assert body["error"] == "B.x, B.y and C.z are missing."
+    params = {k: v for k, v in EXAMPLE_QUERY.items() if k not in ("ay", "cx")}
+    body = assert_error(client.get("/api/chart", params=params), 422, "ay")
+    assert body["error"] == "A.y and C.x are missing."
 
 
 @pytest.mark.parametrize("route", ["/api/normal", "/api/chart"])

@@ -4,11 +4,15 @@ from __future__ import annotations
 
 import json
 import math
+from fractions import Fraction
 
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from app.calculator.params import read_triangle
+from app.calculator.presets import COORDINATE_FIELDS
+from mesh_normal.triangle import rational_triangle_normal
 from tests.conftest import EXAMPLE_QUERY
 
 RESULT_KEYS = {
@@ -23,6 +27,12 @@ RESULT_KEYS = {
     "unit_normal",
     "area",
     "degenerate",
+    "plane",
+    "plane_reason",
+    "angle",
+    "angle_reason",
+    "exact",
+    "exact_reason",
 }
 
 #: A sliver a naive float cross product calls flat: n_z = 2**-53 - 2**-105 exactly.
@@ -117,14 +127,19 @@ def test_sliver_is_exact_over_http(client) -> None:  # type: ignore[no-untyped-d
 
 
 def test_sliver_is_exact_over_the_query_string(client) -> None:  # type: ignore[no-untyped-def]
+    # Typed text is read as the decimal it is: 1.0000000000000002 * 0.9999999999999999 - 1.
     response = client.get("/api/normal", params=query_for(*SLIVER))
     assert response.status_code == 200, response.text
     body = strict_json(response.text)
-    assert hexes(body["normal"]) == hexes([0.0, 0.0, SLIVER_NZ])
+    assert hexes(body["normal"]) == hexes([0.0, 0.0, float(Fraction(10**16 - 2, 10**32))])
+    # |n|² = (10**16 - 2)**2 / 10**64 has 65 digits: too long to show.
+    assert body["exact"] is None
+    assert "more than 40 digits" in body["exact_reason"]
     assert hexes(body["unit_normal"]) == hexes([0.0, 0.0, 1.0])
-    # The exact decimal expansion of 1 + 2**-52 reads as exactly that double too.
+    # The exact decimal expansions of the doubles give the doubles' answer.
     exact_text = "1.0000000000000002220446049250313080847263336181640625"
-    response = client.get("/api/normal", params=query_for(*SLIVER, bx=exact_text))
+    cy_text = "0.99999999999999988897769753748434595763683319091796875"  # 1 - 2**-53
+    response = client.get("/api/normal", params=query_for(*SLIVER, bx=exact_text, cy=cy_text))
     assert hexes(response.json()["normal"]) == hexes([0.0, 0.0, SLIVER_NZ])
 
 
@@ -258,6 +273,28 @@ def test_any_finite_triangle(client, a, b, c, swap) -> None:  # type: ignore[no-
     assert (body["unit_normal"] is None) == body["degenerate"]
     if body["unit_normal"] is not None:
         assert math.isclose(math.hypot(*body["unit_normal"]), 1.0, rel_tol=1e-15)
-    twin = client.get("/api/normal", params=query_for(a, b, c, **({"swap": "on"} if swap else {})))
+    query = query_for(a, b, c, **({"swap": "on"} if swap else {}))
+    twin = client.get("/api/normal", params=query)
     assert twin.status_code == 200
-    assert json.dumps(strict_json(twin.text)) == json.dumps(body)  # -0.0 and 0.0 differ here
+    # The GET twin reads the decimal text exactly: its result is that of the typed rationals
+    # rounded once (the doubles' when an exponent is beyond ±30, as POST).
+    got = strict_json(twin.text)
+    texts = [query[name] for name in COORDINATE_FIELDS]
+    keys = ("normal", "unit_normal", "magnitude", "area")
+    if len(read_triangle(query).exact) == 9:
+        x = [Fraction(text) for text in texts]
+        points = (x[0], x[1], x[2]), (x[3], x[4], x[5]), (x[6], x[7], x[8])
+        expected = rational_triangle_normal(*points, swap_winding=swap)
+        assert [got[key] for key in keys] == [
+            None if value is None else list(value) if isinstance(value, tuple) else value
+            for value in (expected.normal, expected.unit_normal, expected.magnitude, expected.area)
+        ]
+    else:
+        assert [got[key] for key in keys] == [body[key] for key in keys]
+    if all(
+        Fraction(text) == Fraction(value) for text, value in zip(texts, [*a, *b, *c], strict=True)
+    ):
+        # The same but for POST's hint on long exact forms (JSON numbers are doubles).
+        assert (got["exact_reason"] is None) == (body["exact_reason"] is None)
+        got["exact_reason"] = body["exact_reason"]
+        assert json.dumps(got) == json.dumps(body)  # -0.0 and 0.0 differ here

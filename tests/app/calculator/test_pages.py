@@ -121,10 +121,9 @@ def test_degenerate_triangle_says_so(client) -> None:  # type: ignore[no-untyped
 @pytest.mark.parametrize(
     ("name", "typed", "words"),
     [
-        ("ax", "abc", "decimal number"),
-        ("by", "", "empty"),
+        ("ax", "abc", "must be a number"),
         ("cz", "1e999", "double range"),
-        ("bx", "0x10", "decimal number"),
+        ("bx", "0x10", "must be a number"),
     ],
 )
 def test_bad_value_is_shown_beside_its_field(client, name, typed, words) -> None:  # type: ignore[no-untyped-def]
@@ -156,10 +155,37 @@ def test_every_bad_field_is_shown(client) -> None:  # type: ignore[no-untyped-de
     assert "Fix the highlighted fields" in response.text
 
 
-def test_missing_coordinates_are_named(client) -> None:  # type: ignore[no-untyped-def]
-    response, html = page(client, "/", {"ax": "1"}, status=422)
-    assert set(response.context["errors"]) == set(FIELDS) - {"ax"}
-    assert html.text("cz-error") == "cz is missing."
+def test_missing_coordinates_are_one_calm_line(client) -> None:  # type: ignore[no-untyped-def]
+    response, html = page(client, "/", {"ax": "1", "by": "2", "bz": " "}, status=422)
+    assert response.context["errors"] == {}
+    assert response.context["missing"] == ["ay", "az", "bx", "bz", "cx", "cy", "cz"]
+    assert html.text("missing-note") == "A.y, A.z, B.x, B.z, C.x, C.y and C.z are missing."
+    for name in FIELDS:  # nothing is red: nothing given is wrong
+        assert html.text(f"{name}-error") == ""
+        assert "aria-invalid" not in html.one("input", name=name)
+    assert Page(response.text).cells()["invalid"] == "Fill in every coordinate to see the normal."
+    (invalid,) = [attrs for _, attrs in html.elements if attrs.get("data-key") == "invalid"]
+    assert invalid["class"] == "message"  # shown, and not as an error
+    assert "Fix the highlighted" not in response.text
+
+
+def test_one_wrong_value_is_one_error_and_the_rest_one_line(client) -> None:  # type: ignore[no-untyped-def]
+    response, html = page(client, "/", {"ax": "1e999"}, status=422)
+    assert list(response.context["errors"]) == ["ax"]
+    assert html.text("ax-error") == "A.x is beyond the double range (about ±1.8e308)."
+    assert html.one("input", name="ax")["aria-invalid"] == "true"
+    invalid = [name for name in FIELDS if "aria-invalid" in html.one("input", name=name)]
+    assert invalid == ["ax"]
+    assert [name for name in FIELDS if html.text(f"{name}-error")] == ["ax"]
+    line = "A.y, A.z, B.x, B.y, B.z, C.x, C.y and C.z are missing."
+    assert html.text("missing-note") == line
+    assert Page(response.text).cells()["invalid"] == "Fix the highlighted field to see the normal."
+
+
+def test_a_complete_form_has_no_missing_line(client) -> None:  # type: ignore[no-untyped-def]
+    response, html = page(client, "/", EXAMPLE_QUERY)
+    assert response.context["missing"] == []
+    assert html.text("missing-note") == ""
 
 
 def test_typed_markup_is_escaped(client) -> None:  # type: ignore[no-untyped-def]
@@ -215,11 +241,8 @@ def test_page_payload_equals_its_json_twin(client, query: str) -> None:  # type:
     if context["payload"] is None:
         assert response.status_code == 422
         assert twin.status_code == 422
-        name, sentence = next(iter(context["errors"].items()))
-        assert twin.json()["field"] == name
-        if name in dict(parse_qsl(query, keep_blank_values=True)):
-            assert twin.json()["error"] == sentence
-        # (a missing value travels as an empty one in the link: "is empty" vs "is missing")
+        # The twin names what the page names first: a wrong value, else the missing line.
+        assert twin.json() == context["problem"].body()
     else:
         assert response.status_code == 200
         assert twin.status_code == 200
@@ -255,7 +278,7 @@ def test_embed_is_the_chart_and_a_link_back(client) -> None:  # type: ignore[no-
 
 def test_embed_with_a_bad_value_says_why(client) -> None:  # type: ignore[no-untyped-def]
     response, html = page(client, "/embed", {**EXAMPLE_QUERY, "ax": "abc"}, status=422)
-    assert "ax must be a decimal number" in response.text
+    assert "A.x must be a number" in response.text
     assert not [attrs for attrs, _ in html.scripts if attrs.get("id") == "figure-data"]
     assert urlsplit(html.find("a")[0]["href"]).path == "/"
 
@@ -330,6 +353,7 @@ def test_openapi_lists_the_api_and_not_the_pages(client) -> None:  # type: ignor
         "/api/mesh/normals",
         "/api/mesh/fix",
         "/api/mesh/export",
+        "/api/mesh/sample/{name}",
         "/api/points",
         "/api/points/normals",
     }
@@ -399,8 +423,8 @@ def test_no_inline_executable_script(client, method: str, path: str, status: int
 def test_partials_render_every_live_part_from_the_page_templates(client) -> None:  # type: ignore[no-untyped-def]
     query = {**EXAMPLE_QUERY, "swap": "on"}
     parts = client.get("/partials", params=query).json()
-    assert set(parts) == {"query", "errors", "html", "figure", "view3d"}
-    assert parts["errors"] == {}
+    assert set(parts) == {"query", "errors", "missing", "html", "figure", "view3d"}
+    assert parts["errors"] == {} and parts["missing"] == []
     assert set(parts["html"]) == {"result", "steps", "code"}
     page = client.get("/", params=query)
     # Each part is exactly what the full page renders in that place.
@@ -417,6 +441,7 @@ def test_partials_report_every_bad_field_with_status_200(client) -> None:  # typ
     answer = client.get("/partials", params=query)
     assert answer.status_code == 200
     parts = answer.json()
-    assert set(parts["errors"]) == {"ax", "cz", "swap"}
+    assert set(parts["errors"]) == {"ax", "swap"}
+    assert parts["missing"] == ["cz"]  # blank: not wrong, not given yet
     assert parts["figure"] is None and parts["view3d"] is None
     assert "Fix the highlighted fields" in parts["html"]["result"]

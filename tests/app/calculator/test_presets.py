@@ -11,14 +11,14 @@ from mesh_normal.triangle import triangle_normal
 
 def test_the_example_fills_every_field() -> None:
     assert tuple(EXAMPLE) == COORDINATE_FIELDS
-    assert not read_triangle(EXAMPLE).errors
+    assert read_triangle(EXAMPLE).valid
 
 
 @pytest.mark.parametrize(("key", "title", "lesson", "query"), PRESETS, ids=[p[0] for p in PRESETS])
 def test_every_preset_reads_without_errors(key: str, title: str, lesson: str, query: dict) -> None:  # type: ignore[type-arg]
     assert key and title and lesson.endswith(".")
     parsed = read_triangle(query)
-    assert not parsed.errors, parsed.errors
+    assert parsed.valid, (parsed.errors, parsed.missing)
     assert set(COORDINATE_FIELDS) <= set(query)
 
 

@@ -16,6 +16,8 @@ from typing import Any, NamedTuple
 
 import pytest
 
+from app.calculator.calculation import calculation_payload, from_typed
+from app.calculator.params import read_triangle
 from app.calculator.payloads import normal_payload
 from app.calculator.presets import PRESETS
 from app.calculator.snippets import Snippet, snippets
@@ -347,3 +349,20 @@ def test_partial_renders_each_snippet_with_a_copy_button() -> None:
 def test_partial_without_snippets_says_when_they_come() -> None:
     text = templates.env.get_template("_code.html").render(snippets=[])
     assert "Code to paste" in text and "<pre" not in text
+
+
+@pytest.mark.parametrize("key", PRESET_KEYS)
+def test_mesh_normal_snippet_prints_the_pages_own_numbers(key: str) -> None:
+    """The page computes with the typed decimals: the library snippet does too, when it matters."""
+    query = next(params for name, *_, params in PRESETS if name == key)
+    calc = from_typed(read_triangle(query))
+    payload = calculation_payload(calc)
+    code = {s.key: s for s in snippets(payload, calc.typed)}["mesh_normal"].code
+    # Only the sliver's decimals (1000003.0000000001) are not doubles.
+    assert ("rational_triangle_normal" in code) is (key == "sliver")
+    printed = run(code)
+    assert printed["normal"] == tuple(payload["normal"])
+    assert printed["magnitude"] == payload["magnitude"] and printed["area"] == payload["area"]
+    if key == "sliver":
+        assert payload["normal"][2] == -1e-20  # (3 + 1e-10)(3 - 1e-10) - 9, exactly
+        assert 'F("10000030000000001/10000000000")' in code

@@ -12,6 +12,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from jinja2 import Environment, FileSystemLoader
 
+from app.calculator.calculation import from_typed
+from app.calculator.params import read_triangle
 from app.calculator.steps import Step, worked_steps
 from app.web.formatting import number_text
 from mesh_normal.triangle import TriangleNormal, triangle_normal
@@ -380,3 +382,23 @@ def test_partial_without_a_result(env: Environment) -> None:
     markup, page = render(env, None)
     assert page.find("ol") == []
     assert "The steps appear once every coordinate is a number." in plain_text(markup)
+
+
+# --- Typed decimals, read exactly -----------------------------------------------------------------
+
+
+def typed_steps(query: dict[str, str]) -> dict[str, Step]:
+    calc = from_typed(read_triangle(query))
+    return {step.key: step for step in worked_steps(calc.result, calc.exact)}
+
+
+def test_typed_decimals_are_the_steps_exact_values() -> None:
+    # In doubles 0.3 - 0.1 is 0.19999999999999998; as decimals it is 1/5, shown ≈ 0.2.
+    query = {"ax": "0.1", "ay": "0", "az": "0", "bx": "0.3", "by": "1", "bz": "0"}
+    steps = typed_steps({**query, "cx": "0.1", "cy": "0", "cz": "1"})
+    assert line_starting(steps["edges"], "u_x = ") == "u_x = b_x − a_x = 0.3 − 0.1 ≈ 0.2"
+    # Collinear as decimals (not as doubles): no plane, and the steps say so.
+    line = {"ax": "0.1", "ay": "0", "az": "0", "bx": "0.2", "by": "0.3", "bz": "0"}
+    steps = typed_steps({**line, "cx": "0.3", "cy": "0.6", "cz": "0"})
+    assert line_starting(steps["cross"], "n = (") == "n = (0, 0, 0)"
+    assert steps["plane"].lines == () and steps["unit"].warn

@@ -36,3 +36,23 @@ def test_histogram_is_linear_for_a_narrow_range_and_handles_equal_areas() -> Non
     assert equal["counts"] == [12] and equal["edges"][0] < 0.5 < equal["edges"][1]
     empty = area_histogram(np.zeros(3), np.ones(3, dtype=bool))
     assert empty["counts"] == [] and empty["zero_area"] == 3
+
+
+def test_ticks_are_round_numbers() -> None:
+    # Areas 0.25 to 0.5 with zero-area faces: linear ticks at multiples of 0.05, not 0.312.
+    areas = np.array([0.0, 0.25, 0.3, 0.5])
+    figure = histogram_figure(area_histogram(areas, areas == 0))
+    axis = figure["layout"]["xaxis"]
+    assert axis["ticktext"] == ["zero", "0.25", "0.30", "0.35", "0.40", "0.45", "0.50"]
+    assert axis["tickvals"][1:] == [0.25, 0.3, 0.35, 0.4, 0.45, 0.5]
+    # Log ticks: powers of ten written in full from 0.001 to 1000, as 1e-6 beyond.
+    wide = np.array([1e-6, 1e-4, 1e-2, 1.0])
+    labels = histogram_figure(area_histogram(wide, wide == 0))["layout"]["xaxis"]["ticktext"]
+    assert labels == ["1e-6", "1e-5", "1e-4", "0.001", "0.01", "0.1", "1"]
+    # Whatever the range, no label carries rounding noise.
+    rng = np.random.default_rng(3)
+    for low, high in rng.uniform(0, 10, (20, 2)) * 10.0 ** rng.integers(-3, 4, (20, 1)):
+        values = np.array([0.0, min(low, high) + 1e-9, max(low, high) + 2e-9])
+        axis = histogram_figure(area_histogram(values, values == 0))["layout"]["xaxis"]
+        assert 3 <= len(axis["ticktext"]) <= 7, axis["ticktext"]
+        assert all(len(text) <= 8 for text in axis["ticktext"]), axis["ticktext"]

@@ -305,7 +305,7 @@ def test_view_of_an_obj_is_y_up_with_a_switch(client: TestClient) -> None:
 def test_without_javascript_only_what_works_is_shown(client: TestClient) -> None:
     """Controls the script drives are hidden in the HTML; the script unhides them."""
     _, html = post(client, CUBE_ONE_FLIPPED_OBJ)
-    for element_id in ("normals-form", "fix-form", "mesh-report-download"):
+    for element_id in ("normals-form", "fix-form", "export-form", "mesh-report-download"):
         (element,) = [
             e for e in html.find("form") + html.find("button") if e.get("id") == element_id
         ]

@@ -7,28 +7,25 @@ import json
 import numpy as np
 
 from app.mesh import view as mesh_view
-from app.mesh.classes import COLORS, DEGENERATE, FLIPPED, OK
-from app.mesh.view import build_view, select_faces, view_space
+from app.mesh.classes import BOUNDARY, COLORS, DEGENERATE, FLIPPED, OK
+from app.mesh.view import build_view, problem_faces, view_space
 
 
-def test_decimation_keeps_every_problem_face_and_is_deterministic() -> None:
+def test_problem_faces_are_all_kept_or_the_worst_first() -> None:
     classes = np.full(100_000, OK, dtype=np.int8)
     problems = np.arange(5, 100_000, 97)
     classes[problems] = FLIPPED
-    shown = select_faces(classes)
-    assert len(shown) == mesh_view.DISPLAY_FACES
-    assert np.isin(problems, shown).all()
-    assert (np.diff(shown) > 0).all()
-    assert np.array_equal(shown, select_faces(classes))
-
-
-def test_decimation_caps_the_problem_faces() -> None:
-    classes = np.full(50_000, FLIPPED, dtype=np.int8)
-    classes[:10_000] = OK
-    shown = select_faces(classes)
-    assert len(shown) == mesh_view.DISPLAY_FACES
-    assert np.count_nonzero(classes[shown] != OK) == mesh_view.PROBLEM_FACES
-    assert len(select_faces(classes[:500])) == 500
+    assert np.array_equal(problem_faces(classes), problems)
+    classes[:8_000] = BOUNDARY
+    classes[[1, 2]] = DEGENERATE
+    kept = problem_faces(classes, limit=3_000)
+    assert len(kept) == 3_000 and (np.diff(kept) > 0).all()
+    # The two degenerate faces and every flipped one first, then boundary faces fill the cap.
+    flipped = np.flatnonzero(classes == FLIPPED)
+    assert np.isin([1, 2], kept).all() and np.isin(flipped, kept).all()
+    assert np.count_nonzero(classes[kept] == BOUNDARY) == 3_000 - 2 - len(flipped)
+    assert np.array_equal(kept, problem_faces(classes, limit=3_000))
+    assert not len(problem_faces(np.full(10, OK, dtype=np.int8)))
 
 
 def grid(size: int) -> tuple[np.ndarray, np.ndarray]:
@@ -54,10 +51,11 @@ def test_view_colours_faces_and_caps_a_large_mesh() -> None:
     view = build_view(
         vertices, faces, normals, classes, np.zeros((0, 2), int), np.zeros((0, 2), int)
     )
-    assert (view["shown_faces"], view["total_faces"]) == (mesh_view.DISPLAY_FACES, len(faces))
+    assert view["total_faces"] == len(faces) and view["simplified"]
+    assert abs(view["shown_faces"] - mesh_view.DISPLAY_FACES) < 0.1 * mesh_view.DISPLAY_FACES
     traces = {trace["name"]: trace for trace in view["figure"]["data"]}
     mesh = traces["faces"]
-    assert len(mesh["i"]) == len(mesh["facecolor"]) == mesh_view.DISPLAY_FACES - 1
+    assert len(mesh["i"]) == len(mesh["facecolor"]) == view["shown_faces"] - 1
     assert mesh["facecolor"].count(COLORS[FLIPPED]) == 2
     assert set(mesh["facecolor"]) == {COLORS[OK], COLORS[FLIPPED]}
     assert traces["degenerate"]["x"] and len(traces["degenerate"]["x"]) == 1
@@ -167,3 +165,17 @@ def test_camera_looks_along_the_up_axis_from_far_enough() -> None:
         assert np.linalg.norm(eye) > 1.8
         assert eye["xyz".index(up)] < eye.max()  # looked at from the side, a little above
         assert view["up"] == up and set(view["cameras"]) == {"x", "y", "z"}
+
+
+def test_the_surface_is_lit_from_the_front_and_smooth_only_when_simplified() -> None:
+    for (vertices, faces), flat in ((grid(4), True), (grid(120), False)):
+        view = build_view(
+            vertices, faces, np.tile([0.0, 0.0, 1.0], (len(faces), 1)),
+            np.full(len(faces), OK, dtype=np.int8), np.zeros((0, 2), dtype=np.intp),
+            np.zeros((0, 2), dtype=np.intp),
+        )  # fmt: skip
+        surface = next(t for t in view["figure"]["data"] if t["type"] == "mesh3d")
+        assert surface["flatshading"] is flat
+        light = surface["lightposition"]  # in the camera's frame: z is towards the viewer
+        assert light["z"] > light["y"] > 0 and light["z"] > abs(light["x"])
+        assert surface["lighting"]["diffuse"] > surface["lighting"]["ambient"]

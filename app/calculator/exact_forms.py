@@ -1,0 +1,333 @@
+"""Exact forms of a result: n as rationals, |n| as a simplified surd, beside the rounded values.
+
+The exact values come from the decimal text typed (``0.1`` is 1/10), or from the doubles'
+own values when the input is JSON numbers. For A = (0, 0, 0), B = (1, 0, 1.5), C = (0, 3, 6.5)::
+
+    n = (-9/2, -13/2, 3),  |n|² = 143/2,  |n| = √286 / 2,  n̂_x = -9√286 / 286,  area = √286 / 4
+
+A unit-normal component n_i / (c √r) is written rationalised, (n_i / (c r)) √r. Forms whose
+integers pass ``MAX_DIGITS`` digits are left out with a reason rather than printed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fractions import Fraction
+from math import gcd, lcm
+from typing import Any
+
+from markupsafe import Markup
+
+from app.calculator.mathml import (
+    COMMA,
+    EQUALS,
+    Formula,
+    chained,
+    fenced,
+    fraction,
+    joined,
+    math,
+    op,
+    plain_number,
+    row,
+    sqrt,
+)
+from mesh_normal.exact import OutOfRange, root_over, square_root
+from mesh_normal.triangle import AXES, rational_exact
+
+RationalPoint = tuple[Fraction, Fraction, Fraction]
+Exact3 = tuple[Fraction, Fraction, Fraction]
+
+#: The most digits an integer of an exact form may have; beyond, the forms are left out.
+MAX_DIGITS = 40
+_LIMIT = 10**MAX_DIGITS
+
+
+#: The largest decimal exponent read exactly: ``Fraction("1e-99999999")`` would never finish.
+MAX_EXACT_EXPONENT = 30
+
+
+def exact_decimal(text: str) -> Fraction | None:
+    """The exact value of decimal text that :func:`parse_decimal` accepted, or ``None``.
+
+    ``None`` when the exponent is beyond ±``MAX_EXACT_EXPONENT``; the exponent is checked
+    before any Fraction is built.
+    """
+    stripped = text.strip(" \t\n\r\f\v")  # params.SPACE
+    _, _, exponent = stripped.lower().partition("e")
+    if exponent and abs(int(exponent)) > MAX_EXACT_EXPONENT:
+        return None
+    return Fraction(stripped)
+
+
+@dataclass(frozen=True, slots=True)
+class Exact:
+    """A triangle's exact values, with the points in the chosen order (A, B, C or A, C, B)."""
+
+    points: tuple[RationalPoint, RationalPoint, RationalPoint]
+    u: Exact3
+    v: Exact3
+    n: Exact3
+
+    @property
+    def square(self) -> Fraction:
+        """|n|² = n · n."""
+        return _dot(self.n, self.n)
+
+    @property
+    def dot(self) -> Fraction:
+        """u · v."""
+        return _dot(self.u, self.v)
+
+    @property
+    def plane_d(self) -> Fraction:
+        """n · A: the plane through the triangle is n · (x, y, z) = n · A."""
+        return _dot(self.n, self.points[0])
+
+
+def _dot(p: Exact3, q: Exact3) -> Fraction:
+    return p[0] * q[0] + p[1] * q[1] + p[2] * q[2]
+
+
+def exact_values(
+    a: RationalPoint, b: RationalPoint, c: RationalPoint, *, swap_winding: bool = False
+) -> Exact:
+    """The exact u, v and n of triangle ABC (ACB with ``swap_winding``)."""
+    tri, denominator = rational_exact(a, b, c, swap_winding=swap_winding)
+    points = (a, c, b) if swap_winding else (a, b, c)
+    square_den = denominator * denominator
+
+    def over(values: tuple[int, int, int], den: int) -> Exact3:
+        return Fraction(values[0], den), Fraction(values[1], den), Fraction(values[2], den)
+
+    return Exact(
+        points, over(tri.u, denominator), over(tri.v, denominator), over(tri.n, square_den)
+    )
+
+
+def double_points(
+    a: tuple[float, float, float], b: tuple[float, float, float], c: tuple[float, float, float]
+) -> tuple[RationalPoint, RationalPoint, RationalPoint]:
+    """The exact values of three points of doubles (finite: ``Fraction(x)`` is then quick)."""
+
+    def point(p: tuple[float, float, float]) -> RationalPoint:
+        return Fraction(p[0]), Fraction(p[1]), Fraction(p[2])
+
+    return point(a), point(b), point(c)
+
+
+@dataclass(frozen=True, slots=True)
+class Surd:
+    """``coefficient * sqrt(radicand)``; ``radicand`` is 1 for a rational."""
+
+    coefficient: Fraction
+    radicand: int
+
+    def rounded(self) -> float:
+        """The value rounded once to the nearest double."""
+        p, q = self.coefficient.numerator, self.coefficient.denominator
+        value = root_over(p * p * self.radicand, q)
+        return -value if p < 0 else value
+
+
+@dataclass(frozen=True, slots=True)
+class ExactForms:
+    """Everything the result shows exactly; ``given`` is A, B, C as typed (not reordered)."""
+
+    given: tuple[RationalPoint, RationalPoint, RationalPoint]
+    exact: Exact
+    magnitude: Surd
+    unit: tuple[Surd, Surd, Surd] | None
+    area: Surd
+
+
+def _fits(*values: Fraction | int) -> bool:
+    for value in values:
+        if isinstance(value, Fraction):
+            if abs(value.numerator) >= _LIMIT or value.denominator >= _LIMIT:
+                return False
+        elif abs(value) >= _LIMIT:
+            return False
+    return True
+
+
+TOO_LONG = f"The exact forms are left out: their integers would have more than {MAX_DIGITS} digits."
+
+
+def exact_forms(
+    given: tuple[RationalPoint, RationalPoint, RationalPoint], exact: Exact
+) -> ExactForms | str:
+    """The exact forms, or a sentence saying why they are left out (integers too long)."""
+    x = exact
+    if not _fits(*given[0], *given[1], *given[2], *x.u, *x.v, *x.n, x.plane_d):
+        return TOO_LONG
+    square = x.square
+    if not _fits(square):
+        return TOO_LONG
+    c, r = square_root(square)
+    if not _fits(c, r):
+        return TOO_LONG
+    unit: tuple[Surd, Surd, Surd] | None = None
+    if square:
+        scale = c * r
+        ux, uy, uz = (Surd(ni / scale, r) for ni in x.n)
+        if not _fits(ux.coefficient, uy.coefficient, uz.coefficient):
+            return TOO_LONG
+        unit = (ux, uy, uz)
+    return ExactForms(given, x, Surd(c, r), unit, Surd(c / 2, r))
+
+
+# --- Text and JSON ----------------------------------------------------------------------------
+
+
+def rational_text(x: Fraction) -> str:
+    """``5/2``, ``-3``, ``0``."""
+    return str(x.numerator) if x.denominator == 1 else f"{x.numerator}/{x.denominator}"
+
+
+def surd_text(s: Surd) -> str:
+    """``√286 / 2``, ``-9√286 / 286``, ``7`` (a rational when the radicand is 1)."""
+    if s.radicand == 1 or s.coefficient == 0:
+        return rational_text(s.coefficient)
+    p, q = s.coefficient.numerator, s.coefficient.denominator
+    sign = "-" if p < 0 else ""
+    head = f"{sign}{'' if abs(p) == 1 else abs(p)}√{s.radicand}"
+    return head if q == 1 else f"{head} / {q}"
+
+
+def rational_json(x: Fraction) -> dict[str, str]:
+    return {
+        "text": rational_text(x),
+        "numerator": str(x.numerator),
+        "denominator": str(x.denominator),
+    }
+
+
+def surd_json(s: Surd) -> dict[str, str]:
+    return {
+        "text": surd_text(s),
+        "coefficient": rational_text(s.coefficient),
+        "radicand": str(s.radicand),
+    }
+
+
+def forms_json(forms: ExactForms) -> dict[str, Any]:
+    """The JSON ``exact`` object (see :class:`app.calculator.schemas.ExactResult`)."""
+    x = forms.exact
+    a, b, c = ([rational_json(value) for value in point] for point in forms.given)
+    return {
+        "a": a,
+        "b": b,
+        "c": c,
+        "u": [rational_json(value) for value in x.u],
+        "v": [rational_json(value) for value in x.v],
+        "normal": [rational_json(value) for value in x.n],
+        "magnitude_squared": rational_json(x.square),
+        "magnitude": surd_json(forms.magnitude),
+        "unit_normal": None if forms.unit is None else [surd_json(s) for s in forms.unit],
+        "area": surd_json(forms.area),
+    }
+
+
+def integer_plane(coefficients: tuple[Fraction, Fraction, Fraction, Fraction]) -> list[int]:
+    """a, b, c, d scaled by one positive factor to coprime integers (not all zero)."""
+    scale = lcm(*(value.denominator for value in coefficients))
+    integers = [int(value * scale) for value in coefficients]
+    common = gcd(*integers)
+    return [value // common for value in integers]
+
+
+def equation_text(coefficients: list[str], d: str, minus: str = "-") -> str:
+    """``6x + 3y + 2z = 6`` from the texts of a, b, c (zero terms left out) and d."""
+    parts: list[str] = []
+    for text, axis in zip(coefficients, AXES, strict=True):
+        if text in ("0", "-0"):
+            continue
+        negative = text.startswith("-")
+        size = text.lstrip("-")
+        term = axis if size == "1" else f"{size}{axis}" if "/" not in size else f"({size}){axis}"
+        if parts:
+            parts.append(f" {minus} " if negative else " + ")
+        elif negative:
+            parts.append(minus)
+        parts.append(term)
+    return f"{''.join(parts) or '0'} = {d.replace('-', minus)}"
+
+
+def rounded_exact(x: Fraction) -> float | None:
+    """``x`` rounded once; ``None`` beyond the double range or nonzero and below it."""
+    try:
+        value = x.numerator / x.denominator
+    except OverflowError:
+        return None
+    return None if value == 0 and x != 0 else value
+
+
+def rounded_surd(s: Surd) -> float | None:
+    try:
+        return s.rounded()
+    except OutOfRange:
+        return None
+
+
+# --- MathML for the result card ---------------------------------------------------------------
+
+_NEGATIVE = op("−", "−")
+
+
+def _signed(negative: bool, body: Formula) -> Formula:
+    return row(_NEGATIVE, body) if negative else body
+
+
+def rational_formula(x: Fraction) -> Formula:
+    """5/2 as a built-up fraction; the precision setting leaves exact numbers alone."""
+    top = plain_number(str(abs(x.numerator)))
+    body = top if x.denominator == 1 else fraction(top, plain_number(str(x.denominator)))
+    return _signed(x < 0, body)
+
+
+def surd_formula(s: Surd) -> Formula:
+    """√286 / 2 as a fraction with a square root on top."""
+    if s.radicand == 1 or s.coefficient == 0:
+        return rational_formula(s.coefficient)
+    p, q = abs(s.coefficient.numerator), s.coefficient.denominator
+    root = sqrt(plain_number(str(s.radicand)))
+    top = root if p == 1 else row(plain_number(str(p)), root)
+    return _signed(s.coefficient < 0, top if q == 1 else fraction(top, plain_number(str(q))))
+
+
+def _magnitude_formula(square: Fraction, magnitude: Surd) -> Formula:
+    """``√(143/2) = √286 / 2``; just ``√286`` or ``7`` when there is nothing to simplify."""
+    simplified = surd_formula(magnitude)
+    if magnitude.radicand == 1 or (magnitude.coefficient == 1 and magnitude.radicand == square):
+        return simplified
+    return chained([sqrt(rational_formula(square)), EQUALS, simplified])
+
+
+def _vector(formulas: list[Formula]) -> Formula:
+    return fenced(joined(formulas, COMMA))
+
+
+def _is_double(x: Fraction) -> bool:
+    """Whether ``x`` is a double (the rounded value shown is then already exact)."""
+    return rounded_exact(x) is not None and Fraction(rounded_exact(x) or 0) == x
+
+
+def forms_math(forms: ExactForms) -> dict[str, Markup]:
+    """The result card's exact values as MathML, by the payload key they stand beside.
+
+    A value whose rounded double is already exact (integers, halves) gets no exact twin.
+    """
+    x = forms.exact
+    out: dict[str, Markup] = {}
+    for key, values in (("u", x.u), ("v", x.v), ("normal", x.n)):
+        if not all(_is_double(value) for value in values):
+            out[key] = math(_vector([rational_formula(value) for value in values]))
+    for key, surd in (("magnitude", forms.magnitude), ("area", forms.area)):
+        if surd.radicand != 1 or not _is_double(surd.coefficient):
+            formula = _magnitude_formula(x.square, surd) if key == "magnitude" else None
+            out[key] = math(formula or surd_formula(surd))
+    unit = forms.unit
+    if unit is not None and not all(s.radicand == 1 and _is_double(s.coefficient) for s in unit):
+        out["unit_normal"] = math(_vector([surd_formula(s) for s in unit]))
+    return out

@@ -1,0 +1,154 @@
+"""The plane through the triangle and the angle between its edges u and v.
+
+The plane through A with normal n is n · (x, y, z) = n · A, written ax + by + cz = d with
+(a, b, c) = n and d = n · A, each the exact value rounded once. The angle is
+atan2(|u × v|, u · v), computed from the exact |u × v|² and u · v so that it is accurate near 0°
+and 180° and never NaN; it is undefined only when u or v is the zero vector.
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from math import atan2, degrees
+from typing import Any
+
+from markupsafe import Markup
+
+from app.calculator.exact_forms import (
+    Exact,
+    equation_text,
+    integer_plane,
+    rational_json,
+    rounded_exact,
+)
+from app.calculator.mathml import (
+    EQUALS,
+    MINUS,
+    PLUS,
+    Formula,
+    ident,
+    math,
+    number,
+    op,
+    plain_number,
+    row,
+    word,
+)
+from app.web.formatting import js_number
+from mesh_normal.exact import ratio_sqrt
+from mesh_normal.triangle import AXES
+
+NO_PLANE = (
+    "There is no plane: points on one line (or repeated points) do not fix a single plane, "
+    "since every plane through that line contains them."
+)
+
+
+def plane_payload(exact: Exact, *, with_exact: bool) -> tuple[dict[str, Any] | None, str | None]:
+    """The plane as rounded a, b, c, d and its equation (plus exact ones), or why there is none."""
+    if not exact.square:
+        return None, NO_PLANE
+    values = (*exact.n, exact.plane_d)
+    rounded = [rounded_exact(value) for value in values]
+    equation = None
+    if all(value is not None for value in rounded):
+        texts = [js_number(value) for value in rounded if value is not None]
+        equation = equation_text(texts[:3], texts[3])
+    plane: dict[str, Any] = dict(zip("abcd", rounded, strict=True))
+    plane["equation"] = equation
+    plane["exact"] = None
+    if with_exact:
+        integers = [str(value) for value in integer_plane(values)]
+        plane["exact"] = {
+            **{key: rational_json(value) for key, value in zip("abcd", values, strict=True)},
+            "equation": equation_text(integers[:3], integers[3]),
+        }
+    return plane, None
+
+
+def _sqrt_ratio(part: Fraction, whole: Fraction) -> float:
+    """sqrt(part / whole) for 0 <= part <= whole, whole > 0, rounded once."""
+    ratio = part / whole
+    return ratio_sqrt(ratio.numerator, ratio.denominator)
+
+
+def angle_radians(square: Fraction, dot: Fraction) -> float:
+    """atan2(sqrt(square), dot): only the ratio matters, so it is scaled into [0, 1] first.
+
+    ``square`` is |u × v|² and ``dot`` is u · v, exact; not both are 0. Scaling keeps the
+    result finite whatever the size of u and v (their products may be far beyond doubles).
+    """
+    dot_square = dot * dot
+    if square <= dot_square:
+        return atan2(_sqrt_ratio(square, dot_square), 1.0 if dot > 0 else -1.0)
+    cosine_part = _sqrt_ratio(dot_square, square)
+    return atan2(1.0, cosine_part if dot >= 0 else -cosine_part)
+
+
+def undefined_angle(exact: Exact, order: str) -> str | None:
+    """Why the angle between u and v is undefined (a zero edge), or ``None`` when it is not."""
+    for name, edge, end in (("u", exact.u, order[1]), ("v", exact.v, order[2])):
+        if not any(edge):
+            return (
+                f"{name} has zero length (points A and {end} coincide), so the angle "
+                "between u and v is undefined."
+            )
+    return None
+
+
+def angle_payload(exact: Exact, order: str) -> tuple[dict[str, float] | None, str | None]:
+    """The angle between u and v in degrees and radians, or why it is undefined."""
+    reason = undefined_angle(exact, order)
+    if reason is not None:
+        return None, reason
+    radians = angle_radians(exact.square, exact.dot)
+    return {"degrees": degrees(radians), "radians": radians}, None
+
+
+# --- MathML for the result card ---------------------------------------------------------------
+
+
+def plane_math(plane: dict[str, Any], exact: Exact | None) -> dict[str, Markup]:
+    """The plane's equation, rounded (numbers the precision setting rewrites) and exact.
+
+    ``exact`` is given when the exact forms are shown: the exact equation is scaled to
+    coprime integers.
+    """
+    out: dict[str, Markup] = {}
+    values = [plane[key] for key in "abcd"]
+    if all(value is not None for value in values):
+        terms = [(number(abs(v)), v < 0, abs(v) == 1) for v in values[:3] if v != 0]
+        axes = [axis for axis, v in zip(AXES, values[:3], strict=True) if v != 0]
+        out["plane"] = math(_axes_equation(terms, axes, number(values[3])))
+    if exact is not None and exact.square:
+        integers = integer_plane((*exact.n, exact.plane_d))
+        terms = [(plain_number(str(abs(v))), v < 0, abs(v) == 1) for v in integers[:3] if v != 0]
+        axes = [axis for axis, v in zip(AXES, integers[:3], strict=True) if v != 0]
+        d = integers[3]
+        d_formula = row(op("−", "−"), plain_number(str(-d))) if d < 0 else plain_number(str(d))
+        out["plane_exact"] = math(_axes_equation(terms, axes, d_formula))
+    return out
+
+
+def _axes_equation(terms: list[tuple[Formula, bool, bool]], axes: list[str], d: Formula) -> Formula:
+    parts: list[Formula] = []
+    for (size, negative, one), axis in zip(terms, axes, strict=True):
+        if parts:
+            parts.append(MINUS if negative else PLUS)
+        elif negative:
+            parts.append(op("−", "−"))
+        parts.extend([ident(axis)] if one else [size, ident(axis)])
+    return row(*(parts or [plain_number("0")]), EQUALS, d)
+
+
+def angle_math(angle: dict[str, float]) -> Markup:
+    """``40.9337…° = 0.7144… rad``."""
+    return math(
+        row(
+            number(angle["degrees"]),
+            op("°", "°"),
+            EQUALS,
+            number(angle["radians"]),
+            word(" rad"),
+        )
+    )

@@ -1,0 +1,169 @@
+"""The mesh page's samples (/mesh/sample/...): each report says what its description claims, and
+the sample's page, its JSON twin and its file are those of an upload of the same file."""
+
+from __future__ import annotations
+
+import pytest
+from fastapi.testclient import TestClient
+
+from app.mesh.samples import CUBE_FACES, SAMPLES
+from mesh_normal.files import read_mesh
+from tests.app.mesh.test_page import json_block, post
+from tests.conftest import Page, assert_error
+
+#: What each sample's report must say: its problems (codes), orientation and counts, by hand.
+EXPECTED = {
+    "cube": {"problems": [], "orientation": "outward", "faces": 12, "watertight": True},
+    "inside-out": {"problems": ["inward"], "orientation": "inward", "faces": 12},
+    "some-flipped": {"problems": ["winding"], "orientation": "mixed", "faces": 80},
+    "open-box": {"problems": ["open"], "faces": 10, "boundary_edges": 4, "watertight": False},
+    "degenerate": {"problems": ["degenerate"], "faces": 16, "degenerate_faces": 2},
+    "two-pieces": {"problems": ["mixed", "components"], "faces": 24, "components": 2},
+}
+#: Words of each sample's page: its verdict and diagnosis, as the description promises.
+WORDS = {
+    "cube": (
+        "mesh-verdict",
+        "No problems found: the mesh is closed, consistently wound and faces outward",
+    ),
+    "inside-out": ("problem-inward", "inward"),
+    "some-flipped": ("problem-winding", "wound against their neighbours"),
+    "open-box": ("problem-open", "The mesh is open"),
+    "degenerate": ("problem-degenerate", "2"),
+    "two-pieces": ("mesh-objects", "inward"),
+}
+
+
+def test_every_sample_is_listed_with_its_expectation() -> None:
+    assert set(SAMPLES) == set(EXPECTED) == set(WORDS)
+    for sample in SAMPLES.values():
+        assert sample.format in ("obj", "ply")
+        assert len(sample.data()) < 4096, sample.name
+        assert sample.description.endswith("."), sample.name
+
+
+@pytest.mark.parametrize("name", list(SAMPLES))
+def test_the_report_says_what_the_description_claims(client: TestClient, name: str) -> None:
+    answer = client.get(f"/api/mesh/sample/{name}")
+    assert answer.status_code == 200, answer.text
+    report = answer.json()
+    expected = EXPECTED[name]
+    assert [p["code"] for p in report["problems"]] == expected["problems"]
+    for key, value in expected.items():
+        if key != "problems":
+            assert report[key] == value, (name, key)
+    element, words = WORDS[name]
+    response = client.get(f"/mesh/sample/{name}")
+    assert response.status_code == 200
+    assert words in Page(response.text).text(element)
+
+
+def test_inside_out_says_inside_out_and_the_fix_flips_all(client: TestClient) -> None:
+    html = Page(client.get("/mesh/sample/inside-out").text)
+    assert "12 faces are flipped" in html.text("fix-form")
+    assert "every face reversed" in html.text("mesh-sample")
+    two = Page(client.get("/mesh/sample/two-pieces").text)
+    assert "right" in two.text("mesh-object-1") and "inward" in two.text("mesh-object-1")
+    assert "outward" in two.text("mesh-object-0")
+
+
+@pytest.mark.parametrize("name", list(SAMPLES))
+def test_page_and_json_twin_equal_the_upload_of_the_file(client: TestClient, name: str) -> None:
+    sample = SAMPLES[name]
+    download = client.get(f"/mesh/sample/{name}/file")
+    assert download.status_code == 200
+    assert download.content == sample.data()
+    assert download.headers["content-disposition"] == f'attachment; filename="{sample.filename}"'
+    uploaded = client.post("/api/mesh", files={"file": (sample.filename, download.content)})
+    assert uploaded.status_code == 200
+    twin = client.get(f"/api/mesh/sample/{name}")
+    assert twin.status_code == 200 and twin.json() == uploaded.json()
+
+    response = client.get(f"/mesh/sample/{name}")
+    assert response.template.name == "mesh.html"  # type: ignore[attr-defined]
+    html = Page(response.text)
+    assert json_block(html, "mesh-report") == uploaded.json()
+    assert response.headers["link"] == (
+        f'</api/mesh/sample/{name}>; rel="alternate"; type="application/json"'
+    )
+    assert html.one("link", rel="alternate")["href"] == f"/api/mesh/sample/{name}"
+    # The report is the upload's, to the last figure: only the sample line is added.
+    _, posted = post(client, download.content, name=sample.filename, part="report")
+    fragment = client.get(f"/mesh/sample/{name}", params={"part": "report"})
+    assert "<html" not in fragment.text
+    shown = Page(fragment.text)
+    for element in ("mesh-summary", "mesh-problems"):
+        text = shown.text(element).replace(shown.text("mesh-sample"), "")
+        assert " ".join(text.split()) == posted.text(element), element
+    assert json_block(shown, "mesh-view-data") == json_block(posted, "mesh-view-data")
+
+
+def test_the_page_links_to_every_sample_without_javascript(client: TestClient) -> None:
+    html = Page(client.get("/mesh").text)
+    for name in SAMPLES:
+        assert html.find("a", href=f"/mesh/sample/{name}"), name
+        assert html.find("a", href=f"/mesh/sample/{name}/file"), name
+        assert SAMPLES[name].description in html.text(f"sample-{name}")
+    current = Page(client.get("/mesh/sample/open-box").text).find("a", href="/mesh/sample/open-box")
+    assert any(link.get("aria-current") == "page" for link in current)
+
+
+@pytest.mark.parametrize(
+    "path", ["/api/mesh/sample/nope", "/api/mesh/sample/CUBE", "/api/mesh/sample/cube.obj"]
+)
+def test_an_unknown_sample_is_a_404_sentence(client: TestClient, path: str) -> None:
+    body = assert_error(client.get(path), 404, "name", "no sample mesh named")
+    assert "inside-out" in body["error"]
+
+
+@pytest.mark.parametrize("path", ["/mesh/sample/nope", "/mesh/sample/nope/file"])
+def test_an_unknown_sample_page_is_an_html_404(client: TestClient, path: str) -> None:
+    response = client.get(path)
+    assert response.status_code == 404
+    assert response.headers["content-type"].startswith("text/html")
+    assert "There is no sample mesh named &#39;nope&#39;" in response.text
+
+
+def test_a_sample_file_is_written_again_flipped_or_fixed(client: TestClient) -> None:
+    """The no-JavaScript export of a sample: a GET of its file with the export's choices."""
+    flipped = client.get(
+        "/mesh/sample/inside-out/file", params={"format": "ply", "normals": "face", "flip": "true"}
+    )
+    assert flipped.status_code == 200, flipped.text
+    assert flipped.headers["x-faces-flipped"] == "12" and flipped.headers["x-normals"] == "face"
+    name = 'attachment; filename="inside-out-export.ply"'
+    assert flipped.headers["content-disposition"] == name
+    right = read_mesh(flipped.content, "right.ply")
+    assert right.faces.tolist() == [list(face) for face in CUBE_FACES]
+    fixed = client.get("/mesh/sample/two-pieces/file", params={"fix": "true"})
+    assert fixed.headers["x-faces-flipped"] == "12"
+    assert fixed.headers["content-disposition"] == 'attachment; filename="two-pieces-fixed.obj"'
+    both = client.get("/mesh/sample/cube/file", params={"fix": "true", "flip": "true"})
+    assert both.status_code == 422 and "flip and fix cannot both" in both.text
+
+
+def test_the_sample_export_form_works_without_javascript(client: TestClient) -> None:
+    html = Page(client.get("/mesh/sample/open-box").text)
+    form = html.one("form", id="export-form")
+    assert (form["method"], form["action"]) == ("get", "/mesh/sample/open-box/file")
+    assert "hidden" not in form
+    names = {e.get("name") for e in html.find("select") + html.find("input") if e.get("name")}
+    assert {"format", "normals", "flip"} <= names
+
+
+def test_captions_and_stored_normals_read_plainly(client: TestClient) -> None:
+    html = Page(client.get("/mesh/sample/cube").text)
+    assert html.text("mesh-histogram-caption") == "12 faces, all of area 0.5."
+    # A tetrahedron whose stored corner normals: 3 agree, 3 point the other way, 6 in between.
+    obj = (
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvn 0 0 1\nvn 0 0 -1\n"
+        "f 1//2 3//2 2//2\nf 1//1 2//1 4//1\nf 1//2 4//2 3//2\nf 2//2 3//2 4//2\n"
+    )
+    _, page = post(client, obj, name="t.obj", part="report")
+    text = page.text("mesh-file-normals")
+    assert text.startswith("The file stores 12 corner normals, compared with our angle-weighted")
+    assert text.endswith(
+        ": 3 agree within 1°, 6 differ by less than 90° (another program's rounding or "
+        "weighting, not a problem), 3 point the other way (see the diagnosis)."
+    )
+    assert "3 normals stored in the file point the other way" in page.text("problem-file_normals")
