@@ -170,7 +170,9 @@ def corner_blocks(
         corners = np.flatnonzero(creased[indices].ravel())
         if len(corners):
             groups = vertex_corners(indices, vertex_count, corners)
-            weights = corner_weights(geometry, weighting).T.ravel()  # only where creased
+            # Only the creased corners' weights, in sorted corner order (corner id 3 f + k
+            # is row k of face f): no (3 m,) copy of every corner's.
+            weights = corner_weights(geometry, weighting)[groups.order % 3, groups.order // 3]
             unit = geometry.unit_normals(groups.order // 3)  # in sorted corner order
             found, lost = _creased(unit, weights, groups, threshold)
             missing.reshape(-1)[groups.order] = lost
@@ -305,13 +307,13 @@ def _creased(
     """Corner normals by comparing every pair of corners around each vertex.
 
     ``unit`` is (c, 3), the unit normals of the faces of the corners in ``groups.order``, in
-    that order, and ``weights`` (3 m,) by corner id; the results are in that order too.
+    that order, and ``weights`` their weights in that order; the results are in that order
+    too.
     Vertices with the same number of corners d are done together as (vertices, d, d) blocks
     of dot products, at most ``MESH_PAIR_CHUNK`` pairs at a time; a vertex with more than that
     many pairs is done a block of its corners at a time.
     """
-    normal = unit
-    weight = weights[groups.order]
+    normal, weight = unit, weights
     counts = groups.counts
     sums = np.empty_like(normal)
     totals = np.empty_like(weight)

@@ -245,11 +245,13 @@ def build_view(
     up: str = DEFAULT_UP,
 ) -> dict[str, Any]:
     """The 3D view: ``{"figure", "shown_faces", "total_faces", "simplified", "arrows", "counts",
-    "note", "up", "cameras", "normals"}``.
+    "note", "up", "cameras", "normals", "face_normals"}``.
 
     ``counts`` holds the number of faces of each class in the whole mesh; ``up`` is the axis
     drawn upward ("x", "y" or "z") and ``cameras`` the camera for each, for the page's switch;
-    ``normals`` the arrows the page may draw instead (:mod:`app.mesh.view_normals`).
+    ``normals`` the arrows the page may draw instead (:mod:`app.mesh.view_normals`);
+    ``face_normals`` the unit normal of each face of the drawn surface (the "faces" trace's
+    i/j/k, zero for none), for the page's crease slider, which splits the surface's vertices.
     """
     used, local = used_vertices(faces, len(vertices))
     space = view_space(vertices[used])
@@ -266,6 +268,7 @@ def build_view(
     length = ARROW_LENGTH * (diagonal or 1.0)
     traces: list[Trace] = []
     solid = face_class != DEGENERATE
+    face_normals = _unit_normals(points, surface.faces[solid])
     if solid.any():
         x, y, z = points.T.tolist()
         i, j, k = surface.faces[solid].T.tolist()
@@ -335,7 +338,21 @@ def build_view(
         "normals": normal_pools(
             file_points, local, normals, classes == FLIPPED, vertices[used], used
         ),
+        "face_normals": face_normals,
     }
+
+
+def _unit_normals(points: NDArray[np.float64], faces: IndexArray) -> list[list[float]]:
+    """Unit normals of the faces, rounded to 5 decimals; zero rows for faces without area."""
+    if not len(faces):
+        return []
+    p = points[faces]
+    cross = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    length = np.linalg.norm(cross, axis=1, keepdims=True)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        unit = np.where(length > 0, cross / length, 0.0)
+    unit[~np.isfinite(unit).all(axis=1)] = 0.0
+    return np.round(unit, 5).tolist()  # type: ignore[no-any-return]
 
 
 def _problem_edges(

@@ -6,7 +6,9 @@ count control just takes a prefix. Face arrows start at the centroid; vertex arr
 vertex; corner arrows a fifth of the way from the corner to the centroid, so that the corners
 around one vertex do not overlap. The vertex and corner normals are the library's
 (angle-weighted; corners with a 30° crease), computed on the whole mesh, the corner ones only
-up to CORNER_FACES faces (they take nine numbers a face).
+up to CORNER_FACES faces (they take nine numbers a face). Each sampled corner also carries
+``around``: the area-weighted normals of the faces at its vertex (its own face first, at most
+AROUND of them, scaled to the largest), so that the page's crease slider can recompute it.
 """
 
 from __future__ import annotations
@@ -23,6 +25,8 @@ POOL = 1_000
 #: Corner normals are offered for meshes up to this many faces.
 CORNER_FACES = 300_000
 CREASE_ANGLE = 30.0
+#: Most faces around a sampled corner's vertex sent for the page's crease slider.
+AROUND = 64
 SEED = 20240608
 
 
@@ -87,5 +91,30 @@ def normal_pools(
         labels = [
             f"face {f}, corner {k}" for f, k in zip(face.tolist(), corner.tolist(), strict=True)
         ]
-        pools["corner"] = _pool(starts, corners.normals[face, corner], labels)
+        pools["corner"] = {
+            **_pool(starts, corners.normals[face, corner], labels),
+            "around": _around(points, faces, face, faces[face, corner]),
+        }
     return pools
+
+
+def _around(
+    points: NDArray[np.float64], faces: IndexArray, own: IndexArray, at: IndexArray
+) -> list[list[list[float]]]:
+    """For each corner (face ``own``, vertex ``at``): the area-weighted normals (cross
+    products) of the faces at the vertex, its own face first, scaled so the largest is 1."""
+    p = points[faces]
+    cross = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]) if len(faces) else np.zeros((0, 3))
+    incident = np.repeat(np.arange(len(faces), dtype=np.intp), 3)
+    order = np.argsort(faces.ravel(), kind="stable")
+    by_vertex, incident = faces.ravel()[order], incident[order]
+    low = np.searchsorted(by_vertex, at, side="left")
+    high = np.searchsorted(by_vertex, at, side="right")
+    result = []
+    for f, start, stop in zip(own.tolist(), low.tolist(), high.tolist(), strict=True):
+        others = incident[start:stop]
+        group = np.concatenate([[f], others[others != f][: AROUND - 1]])
+        normals = cross[group]
+        scale = float(np.linalg.norm(normals, axis=1).max())
+        result.append(np.round(normals / (scale or 1.0), 5).tolist())
+    return result

@@ -83,16 +83,17 @@ def write_glb(
             "32-bit floats (up to about 3.4e38); choose PLY or OBJ.",
             422,
         )
-    source = np.arange(len(points), dtype=np.intp)
+    source: NDArray[np.intp] | None = None  # None: every vertex as it is, no gathered copy
     faces, vertex_normals = triangles, None
     if normals is not None and normals_kind is not None:
         source, faces, vertex_normals = split_vertices(triangles, normals, normals_kind)
-    positions = points[source].astype(np.float32)
+    positions = (points if source is None else points[source]).astype(np.float32)
     attributes: list[tuple[str, NDArray[np.generic]]] = [("POSITION", positions)]
     if vertex_normals is not None:
         attributes.append(("NORMAL", vertex_normals.astype(np.float32)))
     if vertex_colors is not None:
-        attributes.append(("COLOR_0", _glb_colors(vertex_colors[source])))
+        colors = vertex_colors if source is None else vertex_colors[source]
+        attributes.append(("COLOR_0", _glb_colors(colors)))
     return _glb(attributes, faces.astype(np.uint32).reshape(-1))
 
 
@@ -105,18 +106,20 @@ def _glb_colors(colors: NDArray[np.generic]) -> NDArray[np.generic]:
 
 
 def _glb(attributes: list[tuple[str, NDArray[np.generic]]], indices: NDArray[np.uint32]) -> bytes:
-    """The GLB container: the JSON chunk, then one binary buffer of every array."""
-    blob = bytearray()
+    """The GLB container: the JSON chunk, then one binary buffer of every array.
+
+    The arrays go into the file as they are (byte views, joined once): no copy of each."""
+    pieces: list[bytes | memoryview] = []
+    length = 0  # of the binary buffer so far
     views: list[dict[str, int]] = []
     accessors: list[dict[str, object]] = []
     named: dict[str, int] = {}
     for name, array in [*attributes, ("indices", indices)]:
-        data = np.ascontiguousarray(array).tobytes()
+        data = np.ascontiguousarray(array).reshape(-1).view(np.uint8).data
         target = ELEMENT_ARRAY_BUFFER if name == "indices" else ARRAY_BUFFER
-        views.append(
-            {"buffer": 0, "byteOffset": len(blob), "byteLength": len(data), "target": target}
-        )
-        blob += data + b"\0" * (-len(data) % 4)
+        views.append({"buffer": 0, "byteOffset": length, "byteLength": len(data), "target": target})
+        pieces += [data, b"\0" * (-len(data) % 4)]
+        length += len(data) + -len(data) % 4
         accessor: dict[str, object] = {
             "bufferView": len(views) - 1,
             "componentType": _COMPONENTS[array.dtype],
@@ -143,17 +146,17 @@ def _glb(attributes: list[tuple[str, NDArray[np.generic]]], indices: NDArray[np.
         "meshes": [{"primitives": [primitive]}],
         "accessors": accessors,
         "bufferViews": views,
-        "buffers": [{"byteLength": len(blob)}],
+        "buffers": [{"byteLength": length}],
     }
     text = json.dumps(header, separators=(",", ":")).encode()
     text += b" " * (-len(text) % 4)
-    total = 12 + 8 + len(text) + 8 + len(blob)
+    total = 12 + 8 + len(text) + 8 + length
     return b"".join(
         [
             struct.pack("<4sII", b"glTF", 2, total),
             struct.pack("<I4s", len(text), b"JSON"),
             text,
-            struct.pack("<I4s", len(blob), b"BIN\0"),
-            bytes(blob),
+            struct.pack("<I4s", length, b"BIN\0"),
+            *pieces,
         ]
     )

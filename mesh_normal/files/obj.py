@@ -22,7 +22,9 @@ is always given the same normal vector.
 from __future__ import annotations
 
 from collections import Counter
+from collections.abc import Iterator
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -113,7 +115,7 @@ class _Statements:
 
 def read_obj(data: bytes) -> LoadedMesh:
     """Read an OBJ file (see the module docstring)."""
-    found = _scan(data.decode("latin-1"))
+    found = _scan(data)
     vertices, counts = found.vertices, found.counts
     vertex_ids, normal_ids = _corner_indices(found)
     positions, source, notes = triangulate(counts, vertex_ids, vertices)
@@ -141,9 +143,9 @@ def read_obj(data: bytes) -> LoadedMesh:
     )
 
 
-def _logical_lines(text: str) -> tuple[list[str], NDArray[np.intp]]:
+def _logical_lines(text: str) -> tuple[list[str], NDArray[np.intp], int]:
     """The lines, with backslash continuations joined, and each one's 1-based line number
-    (of its first physical line).
+    (of its first physical line), and the count of physical lines.
 
     Spaces after the backslash still continue (editors leave them and nobody sees them). A
     comment line ending in a backslash does not: it would silently swallow the statement
@@ -151,7 +153,7 @@ def _logical_lines(text: str) -> tuple[list[str], NDArray[np.intp]]:
     """
     lines = text.splitlines()
     if "\\" not in text:
-        return lines, np.arange(1, len(lines) + 1)
+        return lines, np.arange(1, len(lines) + 1), len(lines)
     joined: list[str] = []
     numbers: list[int] = []
     pending: list[str] = []
@@ -166,51 +168,83 @@ def _logical_lines(text: str) -> tuple[list[str], NDArray[np.intp]]:
     if pending:
         numbers.append(len(lines) - len(pending) + 1)
         joined.append(" ".join(pending))
-    return joined, np.asarray(numbers, dtype=np.intp)
+    return joined, np.asarray(numbers, dtype=np.intp), len(lines)
 
 
-def _scan(text: str) -> _Statements:
-    lines, numbers = _logical_lines(text)
-    del text  # the lines hold it now; each copy of the file counts
-    # Most lines start "v ", "vn", "vt" or "f ": classify those by their first two characters,
-    # and only the rest (comments, groups, indented or tab-separated lines) by splitting.
-    kinds = np.fromiter((_KINDS.get(line[:2], -1) for line in lines), np.int8, len(lines))
+#: Bytes of the file scanned at once (cut at a line end): the lines and words of a chunk, not
+#: of the file, are held as strings (several times their text).
+_TEXT_CHUNK = 1 << 20
+
+
+def _text_chunks(data: bytes) -> Iterator[str]:
+    """The file as text in chunks of about ``_TEXT_CHUNK`` bytes, each ending at a line end
+    whose line does not end in a backslash (so a continued line stays in one chunk)."""
+    position = 0
+    while position < len(data):
+        end = data.find(b"\n", position + _TEXT_CHUNK)
+        while end >= 0 and data[data.rfind(b"\n", 0, end) + 1 : end].rstrip().endswith(b"\\"):
+            end = data.find(b"\n", end + 1)
+        end = len(data) if end < 0 else end + 1
+        yield data[position:end].decode("latin-1")
+        position = end
+
+
+@dataclass
+class _Groups:
+    """The ``o`` and ``g`` state carried from chunk to chunk (see :func:`_face_labels`)."""
+
+    labels: list[str]
+    index: dict[str, int]
+    thing: str = ""
+    group: str = ""
+    latest: int = 0  # the label of the last statement so far ("default" before any)
+    seen: bool = False
+
+
+def _scan(data: bytes) -> _Statements:
+    """Every statement of the file, a chunk of text at a time (see :func:`_scan_chunk`)."""
+    groups = _Groups([_DEFAULT_GROUP], {_DEFAULT_GROUP: 0})
     other: Counter[str] = Counter()
     ignored: Counter[str] = Counter()
-    for row in np.flatnonzero(kinds < 0):
-        parts = lines[row].split(None, 1)
-        key = parts[0] if parts else ""
-        kinds[row] = _KEYS.get(
-            key, IGNORE if not key or key[0] == "#" or key in _IGNORED else OTHER
+    chunks: list[_Chunk] = []
+    offset = vertices = normals = 0
+    for text in _text_chunks(data):
+        chunk = _scan_chunk(text, offset, vertices, normals, groups, other, ignored)
+        offset, vertices, normals = (
+            chunk.lines_after,
+            vertices + len(chunk.vertices),
+            normals + len(chunk.normals),
         )
-        if kinds[row] >= LINE:
-            other[key] += 1
-        elif key in _UNKEPT:
-            ignored[key] += 1
-    ignored["vt"] = int(np.count_nonzero(kinds == TEXTURE))
-    rows = {kind: np.flatnonzero(kinds == kind) for kind in (VERTEX, NORMAL, FACE)}
-    face_labels, labels = _face_labels(
-        lines, np.flatnonzero(np.isin(kinds, (OBJECT, GROUP))), rows[FACE]
-    )
-    vertex_text = [lines[row] for row in rows[VERTEX]]
-    vertices = _numbers(vertex_text, numbers[rows[VERTEX]], "v")
-    normals = _numbers([lines[row] for row in rows[NORMAL]], numbers[rows[NORMAL]], "vn")
-    colors = _vertex_colors(vertex_text)
-    del vertex_text
-    vertex_fields, normal_fields, counts = _face_fields(lines, rows[FACE], numbers)
+        chunks.append(chunk)
+    faced = [chunk for chunk in chunks if len(chunk.counts)]
+    colored = [chunk.colors for chunk in chunks if len(chunk.vertices)]
+    normal_fields = [chunk.normal_fields for chunk in faced]
     return _Statements(
-        vertices=vertices,
-        vertex_lines=numbers[rows[VERTEX]],
-        colors=colors,
-        normals=normals,
-        vertex_fields=vertex_fields,
-        normal_fields=normal_fields,
-        counts=counts,
-        face_lines=numbers[rows[FACE]],
-        vertices_before=np.searchsorted(rows[VERTEX], rows[FACE]),
-        normals_before=np.searchsorted(rows[NORMAL], rows[FACE]),
-        face_labels=face_labels,
-        labels=labels,
+        vertices=_joined([chunk.vertices for chunk in chunks], (0, 3), np.float64),
+        vertex_lines=_joined([chunk.vertex_lines for chunk in chunks], (0,), np.intp),
+        colors=None
+        if not colored or any(part is None for part in colored)
+        else np.concatenate(colored),  # type: ignore[arg-type]
+        normals=_joined([chunk.normals for chunk in chunks], (0, 3), np.float64),
+        vertex_fields=_joined([chunk.vertex_fields for chunk in faced], (0,), np.int64),
+        normal_fields=None
+        if not faced or any(part is None for part in normal_fields)
+        else np.concatenate(normal_fields),  # type: ignore[arg-type]
+        counts=_joined([chunk.counts for chunk in faced], (0,), np.intp),
+        face_lines=_joined([chunk.face_lines for chunk in chunks], (0,), np.intp),
+        vertices_before=_joined([chunk.vertices_before for chunk in chunks], (0,), np.intp),
+        normals_before=_joined([chunk.normals_before for chunk in chunks], (0,), np.intp),
+        face_labels=None
+        if not groups.seen
+        else _joined(
+            [
+                np.zeros(len(chunk.counts), np.intp) if chunk.labels is None else chunk.labels
+                for chunk in chunks
+            ],
+            (0,),
+            np.intp,
+        ),
+        labels=groups.labels if groups.seen else [],
         notes=_skipped(other),
         unkept=[
             f"{words} ({count:,} {key})"
@@ -220,30 +254,113 @@ def _scan(text: str) -> _Statements:
     )
 
 
+def _joined(parts: list[NDArray[Any]], empty: tuple[int, ...], dtype: type) -> NDArray[Any]:
+    """The chunks' arrays as one (a chunk's own when there is one)."""
+    if not parts:
+        return np.zeros(empty, dtype)
+    return parts[0] if len(parts) == 1 else np.concatenate(parts)
+
+
+@dataclass(frozen=True, slots=True)
+class _Chunk:
+    """One chunk's statements (see :class:`_Statements`); ``labels`` ``None`` before any
+    ``o`` or ``g``."""
+
+    lines_after: int
+    vertices: NDArray[np.float64]
+    vertex_lines: NDArray[np.intp]
+    colors: NDArray[np.float64] | None
+    normals: NDArray[np.float64]
+    vertex_fields: NDArray[np.int64]
+    normal_fields: NDArray[np.int64] | None
+    counts: NDArray[np.intp]
+    face_lines: NDArray[np.intp]
+    vertices_before: NDArray[np.intp]
+    normals_before: NDArray[np.intp]
+    labels: NDArray[np.intp] | None
+
+
+def _scan_chunk(
+    text: str,
+    offset: int,
+    vertex_total: int,
+    normal_total: int,
+    groups: _Groups,
+    other: Counter[str],
+    ignored: Counter[str],
+) -> _Chunk:
+    """The statements of one chunk of text whose first line is line ``offset + 1``, after
+    ``vertex_total`` ``v`` and ``normal_total`` ``vn`` statements; ``other`` and ``ignored``
+    count what is skipped."""
+    lines, numbers, physical = _logical_lines(text)
+    del text  # the lines hold it now
+    numbers += offset
+    # Most lines start "v ", "vn", "vt" or "f ": classify those by their first two characters,
+    # and only the rest (comments, groups, indented or tab-separated lines) by splitting.
+    kinds = np.fromiter((_KINDS.get(line[:2], -1) for line in lines), np.int8, len(lines))
+    chunk_ignored: Counter[str] = Counter()
+    for row in np.flatnonzero(kinds < 0):
+        parts = lines[row].split(None, 1)
+        key = parts[0] if parts else ""
+        kinds[row] = _KEYS.get(
+            key, IGNORE if not key or key[0] == "#" or key in _IGNORED else OTHER
+        )
+        if kinds[row] >= LINE:
+            other[key] += 1
+        elif key in _UNKEPT:
+            chunk_ignored[key] += 1
+    chunk_ignored["vt"] = int(np.count_nonzero(kinds == TEXTURE))
+    ignored.update(chunk_ignored)
+    rows = {kind: np.flatnonzero(kinds == kind) for kind in (VERTEX, NORMAL, FACE)}
+    labels = _face_labels(
+        lines, np.flatnonzero(np.isin(kinds, (OBJECT, GROUP))), rows[FACE], groups
+    )
+    vertex_text = [lines[row] for row in rows[VERTEX]]
+    vertices = _numbers(vertex_text, numbers[rows[VERTEX]], "v")
+    normals = _numbers([lines[row] for row in rows[NORMAL]], numbers[rows[NORMAL]], "vn")
+    colors = _vertex_colors(vertex_text)
+    del vertex_text
+    vertex_fields, normal_fields, counts = _face_fields(lines, rows[FACE], numbers)
+    return _Chunk(
+        lines_after=offset + physical,
+        vertices=vertices,
+        vertex_lines=numbers[rows[VERTEX]],
+        colors=colors,
+        normals=normals,
+        vertex_fields=vertex_fields,
+        normal_fields=normal_fields,
+        counts=counts,
+        face_lines=numbers[rows[FACE]],
+        vertices_before=vertex_total + np.searchsorted(rows[VERTEX], rows[FACE]),
+        normals_before=normal_total + np.searchsorted(rows[NORMAL], rows[FACE]),
+        labels=labels,
+    )
+
+
 def _face_labels(
-    lines: list[str], statements: NDArray[np.intp], faces: NDArray[np.intp]
-) -> tuple[NDArray[np.intp] | None, list[str]]:
-    """Each face's group (see the module docstring) and the group names, from the rows of the
-    ``o`` and ``g`` statements and of the faces."""
+    lines: list[str], statements: NDArray[np.intp], faces: NDArray[np.intp], groups: _Groups
+) -> NDArray[np.intp] | None:
+    """Each face's group (see the module docstring), from the rows of the ``o`` and ``g``
+    statements and of the faces in a chunk, ``groups`` the state before it (updated);
+    ``None`` before any statement."""
     if not len(statements):
-        return None, []
-    labels = [_DEFAULT_GROUP]
-    index = {_DEFAULT_GROUP: 0}
+        return None if not groups.seen else np.full(len(faces), groups.latest, dtype=np.intp)
+    before = groups.latest
     current = np.empty(len(statements), dtype=np.intp)
-    thing = group = ""
     for position, row in enumerate(statements.tolist()):
         keyword, *names = lines[row].partition("#")[0].split()
         name = " ".join(names)
         if keyword == "o":
-            thing, group = name, ""
+            groups.thing, groups.group = name, ""
         else:
-            group = name
-        label = "/".join(part for part in (thing, group) if part) or _DEFAULT_GROUP
-        current[position] = index.setdefault(label, len(labels))
-        if len(labels) < len(index):
-            labels.append(label)
+            groups.group = name
+        label = "/".join(part for part in (groups.thing, groups.group) if part) or _DEFAULT_GROUP
+        current[position] = groups.index.setdefault(label, len(groups.labels))
+        if len(groups.labels) < len(groups.index):
+            groups.labels.append(label)
+    groups.latest, groups.seen = int(current[-1]), True
     latest = np.searchsorted(statements, faces) - 1  # the last statement before each face
-    return np.where(latest >= 0, current[np.maximum(latest, 0)], 0), labels
+    return np.where(latest >= 0, current[np.maximum(latest, 0)], before)
 
 
 def _triangle_groups(

@@ -13,6 +13,7 @@ Binary OFF is not supported.
 
 from __future__ import annotations
 
+import io
 import re
 
 import numpy as np
@@ -301,20 +302,30 @@ def write_off(
     if normals is not None and normals_kind == "vertex":
         columns.append(normals)
     keyword = ("C" if vertex_colors is not None else "") + ("N" if len(columns) > 1 else "")
-    vertex_rows = [_rows(np.concatenate(columns, axis=1))]
-    if vertex_colors is not None:
-        vertex_rows.append(_color_rows(vertex_colors))
-    face_rows = [[f"3 {a} {b} {c}" for a, b, c in triangles.tolist()]]
-    if face_colors is not None:
-        face_rows.append(_color_rows(face_colors))
-    lines = [
-        f"{keyword}OFF",
-        f"# written by {MAKER}",
-        f"{len(points)} {len(triangles)} 0",
-        *(" ".join(parts) for parts in zip(*vertex_rows, strict=True)),
-        *(" ".join(parts) for parts in zip(*face_rows, strict=True)),
-    ]
-    return ("\n".join(lines) + "\n").encode()
+    # A chunk of rows at a time into one buffer: the text of every line at once, as strings,
+    # is several times the file.
+    out = io.BytesIO()
+    out.write(f"{keyword}OFF\n# written by {MAKER}\n{len(points)} {len(triangles)} 0\n".encode())
+    for start in range(0, len(points), _CHUNK):
+        part = slice(start, start + _CHUNK)
+        rows = _rows(np.concatenate([column[part] for column in columns], axis=1))
+        _write_lines(out, rows, None if vertex_colors is None else vertex_colors[part])
+    for start in range(0, len(triangles), _CHUNK):
+        part = slice(start, start + _CHUNK)
+        rows = [f"3 {a} {b} {c}" for a, b, c in triangles[part].tolist()]
+        _write_lines(out, rows, None if face_colors is None else face_colors[part])
+    return out.getvalue()
+
+
+#: Rows written at once by :func:`write_off`.
+_CHUNK = 1 << 16
+
+
+def _write_lines(out: io.BytesIO, rows: list[str], colors: NDArray[np.generic] | None) -> None:
+    """``rows``, each with its colour after it when there are colours, a line each."""
+    if colors is not None:
+        rows = [f"{row} {color}" for row, color in zip(rows, _color_rows(colors), strict=True)]
+    out.write(("\n".join(rows) + "\n").encode())
 
 
 def _rows(values: NDArray[np.float64]) -> list[str]:

@@ -260,9 +260,15 @@
     const countInput = document.getElementById("mesh-arrow-count");
     const lengthInput = document.getElementById("mesh-arrow-length");
     if (!pools || !kind || !countInput || !lengthInput) return null;
-    const pool = pools[kind.value] || pools.face;
+    let pool = pools[kind.value] || pools.face;
     if (!pool) return null;
     const count = Math.max(0, Math.min(pool.at.length, Math.round(Number(countInput.value)) || 0));
+    const angle = creaseAngle();
+    const creased = pool.around && angle !== null;
+    if (creased) {
+      const cos = creaseCos(angle);
+      pool = Object.assign({}, pool, { normal: pool.around.slice(0, count).map(function (around) { return creasedCorner(around, cos); }) });
+    }
     const surface = figure.data.find(function (trace) { return trace.name === "faces"; });
     const length = Number(lengthInput.value) * (surface ? diagonalOf(surface) : 1);
     const cone = figure.data.find(function (trace) { return trace.type === "cone"; }) || {};
@@ -271,9 +277,86 @@
     for (let r = 0; r < count; r++) ((pool.flipped && pool.flipped[r]) ? flipped : rows).push(r);
     const caption = document.getElementById("mesh-view-arrows");
     const noun = { face: "faces", vertex: "vertices", corner: "corners" }[pools[kind.value] ? kind.value : "face"];
-    if (caption) caption.textContent = count ? " Arrows: the unit normals of " + count + " " + noun + "." : " No arrows.";
+    if (caption) {
+      caption.textContent = count ? " Arrows: the unit normals of " + count + " " + noun +
+        (creased ? ", smooth by angle " + angle + "°" : "") + "." : " No arrows.";
+    }
     return arrowTraces("normals", ARROW_COLOR, pool, rows, length, lighting)
       .concat(arrowTraces("flipped normals", FLIPPED_COLOR, pool, flipped, length, lighting));
+  }
+
+  // Smooth by angle, as Blender's: each corner of a vertex takes the faces at the vertex whose
+  // normal is within the angle of its own face's (as mesh_normal.corner_normals does), and
+  // corners that take the same faces share one copy of the vertex; the others get their own,
+  // so Plotly's vertex normals (averaged over the faces sharing a vertex) show the creases.
+  const CREASE_SLACK = 1e-6;  // the normals are rounded to 5 decimals
+  const GREEDY_ABOVE = 64;    // a vertex with more corners groups them by the first of each
+
+  function creaseAngle() {
+    const slider = document.getElementById("mesh-crease");
+    return slider ? Math.max(0, Math.min(180, Number(slider.value) || 0)) : null;
+  }
+
+  function creaseWords(angle) {
+    if (angle >= 180) return "180°: every edge smooth";
+    if (angle <= 0) return "0°: every face flat";
+    return angle + "°: edges between faces more than " + angle + "° apart stay sharp";
+  }
+
+  function creaseCos(angle) { return Math.cos(angle * Math.PI / 180) - CREASE_SLACK; }
+
+  function dot(a, b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+  function creasedSurface(surface, normals, angle) {
+    const m = surface.i.length, n = surface.x.length, index = [surface.i, surface.j, surface.k];
+    if (!normals || normals.length !== m) return surface;
+    const cos = creaseCos(angle);
+    const start = new Int32Array(n + 1);
+    for (let c = 0; c < 3; c++) for (let f = 0; f < m; f++) start[index[c][f] + 1]++;
+    for (let v = 0; v < n; v++) start[v + 1] += start[v];
+    const fill = start.slice(0, n), corners = new Int32Array(3 * m);
+    for (let f = 0; f < m; f++) for (let c = 0; c < 3; c++) corners[fill[index[c][f]]++] = 3 * f + c;
+    const x = [], y = [], z = [], out = [new Array(m), new Array(m), new Array(m)];
+    for (let v = 0; v < n; v++) {
+      const around = corners.subarray(start[v], start[v + 1]);
+      const copies = new Map();
+      const seeds = [];
+      for (let a = 0; a < around.length; a++) {
+        const own = normals[Math.floor(around[a] / 3)];
+        let key;
+        if (cos <= -1) key = "all";
+        else if (around.length > GREEDY_ABOVE) {
+          key = seeds.findIndex(function (seed) { return dot(own, normals[Math.floor(around[seed] / 3)]) >= cos; });
+          if (key === -1) { key = seeds.length; seeds.push(a); }
+        } else {
+          const group = [];
+          for (let b = 0; b < around.length; b++) {
+            if (b === a || dot(own, normals[Math.floor(around[b] / 3)]) >= cos) group.push(b);
+          }
+          key = group.join(",");
+        }
+        if (!copies.has(key)) {
+          copies.set(key, x.length);
+          x.push(surface.x[v]); y.push(surface.y[v]); z.push(surface.z[v]);
+        }
+        out[around[a] % 3][Math.floor(around[a] / 3)] = copies.get(key);
+      }
+    }
+    return Object.assign({}, surface, { x: x, y: y, z: z, i: out[0], j: out[1], k: out[2], flatshading: false });
+  }
+
+  // A sampled corner's normal at the slider's angle: the area-weighted normals of the faces at
+  // its vertex (the report sends them, its own face first) within the angle of its own face's.
+  function creasedCorner(around, cos) {
+    const unit = function (a) { const l = Math.hypot(a[0], a[1], a[2]); return l ? [a[0] / l, a[1] / l, a[2] / l] : null; };
+    const own = unit(around[0]);
+    if (!own) return [0, 0, 0];
+    const sum = [0, 0, 0];
+    around.forEach(function (a) {
+      const u = unit(a);
+      if (u && dot(u, own) >= cos) { sum[0] += a[0]; sum[1] += a[1]; sum[2] += a[2]; }
+    });
+    return (unit(sum) || own).map(function (c) { return Math.round(c * 1e5) / 1e5; });
   }
 
   function viewMode() {
@@ -296,7 +379,13 @@
       figure.data = figure.data.filter(function (trace) { return ARROW_NAMES.indexOf(trace.name) === -1; })
         .concat(arrows);
     }
-    const surface = figure.data.find(function (trace) { return trace.name === "faces"; });
+    let surface = figure.data.find(function (trace) { return trace.name === "faces"; });
+    const angle = creaseAngle();
+    if (surface && angle !== null) {
+      const creased = creasedSurface(surface, data("mesh-view-face-normals"), angle);
+      figure.data = figure.data.map(function (trace) { return trace === surface ? creased : trace; });
+      surface = creased;
+    }
     if (surface) figure.data = figure.data.concat(orientationTraces(surface));
     const orientation = viewMode() === "orientation";
     figure.data.forEach(function (trace) {
@@ -549,6 +638,19 @@
       const element = document.getElementById("mesh-view");
       if (element && window.NormalView3D) window.NormalView3D.update(element, viewFigure());
     }
+  });
+  // The smoothing angle redraws as the slider moves, at most once a frame.
+  let creaseFrame = 0;
+  document.addEventListener("input", function (event) {
+    if (event.target.id !== "mesh-crease") return;
+    const words = document.getElementById("mesh-crease-text");
+    if (words) words.textContent = creaseWords(creaseAngle());
+    if (creaseFrame) return;
+    creaseFrame = requestAnimationFrame(function () {
+      creaseFrame = 0;
+      const element = document.getElementById("mesh-view");
+      if (element && window.NormalView3D) window.NormalView3D.update(element, viewFigure());
+    });
   });
   // A new weld tolerance analyses the file the page holds again.
   if (weldInput) weldInput.addEventListener("change", function () { if (files.length) upload(files); });

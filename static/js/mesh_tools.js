@@ -68,6 +68,11 @@
       normals: form.elements.normals.value,
       winding: form.elements.flip.checked ? "flip" : "keep",
     });
+    // Corner normals as the 3D view previews them: at its Smooth by angle slider's angle.
+    const crease = document.getElementById("mesh-crease");
+    if (crease && ["corner", "auto"].indexOf(params.get("normals")) !== -1) {
+      params.set("crease_angle", crease.value);
+    }
     const fallback = "mesh-export." + params.get("format");
     if (button) button.disabled = true;
     status("Preparing " + fallback + "…", "");
@@ -109,6 +114,21 @@
     if (!form.dataset || form.dataset.meshTools !== "export") return;
     event.preventDefault();
     exportMesh(form);
+  });
+
+  // Beside the export's choice of corner normals: the angle they will be smoothed by.
+  function syncCrease() {
+    const slot = document.getElementById("export-crease");
+    const select = document.getElementById("export-normals");
+    const crease = document.getElementById("mesh-crease");
+    if (!slot || !select || !crease) return;
+    slot.textContent = "at " + crease.value + "°, the 3D view's smoothing angle";
+    slot.classList.toggle("hidden", select.value !== "corner");
+  }
+  ["input", "change"].forEach(function (type) {
+    document.addEventListener(type, function (event) {
+      if (event.target.id === "mesh-crease" || event.target.id === "export-normals") syncCrease();
+    });
   });
 
   // A sample's page: fetch its file now, so that the page's other downloads have it too.

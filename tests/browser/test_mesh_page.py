@@ -346,3 +346,68 @@ def test_the_arrow_controls_choose_kind_count_and_length(page: Page) -> None:
     )
     ((_, _, _, head),) = page.evaluate(ARROWS)
     assert abs(abs(head) - 0.3 * 0.1) < 1e-6
+
+
+SURFACE = """() => {
+    const t = document.getElementById('mesh-view').data.find((t) => t.name === 'faces');
+    return [t.x.length, t.i.length, t.flatshading];
+}"""
+
+
+def move_crease(page: Page, angle: int) -> None:
+    drawn = page.get_attribute("#mesh-view", "data-drawn")
+    page.locator("#mesh-crease").fill(str(angle))  # a range input: sets it and fires input
+    page.wait_for_function(
+        "d => document.getElementById('mesh-view').dataset.drawn !== d", arg=drawn
+    )
+
+
+def test_the_smooth_by_angle_slider_splits_the_surface_and_goes_with_the_export(
+    page: Page,
+) -> None:
+    response = page.goto("/mesh/sample/cube")
+    assert response is not None and response.status == 200
+    wait_for_view(page)
+    slider = page.locator("#mesh-crease")
+    expect(slider).to_be_visible()
+    expect(slider).to_have_value("30")
+    # The cube's 8 corners, each split in 3 at 30°: one copy for each side it is on.
+    assert page.evaluate(SURFACE) == [24, 12, False]
+    move_crease(page, 180)
+    expect(page.locator("#mesh-crease-text")).to_have_text("180°: every edge smooth")
+    assert page.evaluate(SURFACE) == [8, 12, False]
+    move_crease(page, 0)
+    expect(page.locator("#mesh-crease-text")).to_have_text("0°: every face flat")
+    assert page.evaluate(SURFACE) == [24, 12, False]
+    move_crease(page, 100)  # above the cube's 90°: smooth again
+    expect(page.locator("#mesh-crease-text")).to_have_text(
+        "100°: edges between faces more than 100° apart stay sharp"
+    )
+    assert page.evaluate(SURFACE)[0] == 8
+    # Corner arrows follow: at 100° a cube's corner takes its three sides, area-weighted.
+    drawn = page.get_attribute("#mesh-view", "data-drawn")
+    page.select_option("#mesh-arrow-kind", "corner")
+    page.wait_for_function(
+        "d => document.getElementById('mesh-view').dataset.drawn !== d", arg=drawn
+    )
+    expect(page.locator("#mesh-view-arrows")).to_contain_text(", smooth by angle 100°.")
+    heads = page.evaluate("""() => document.getElementById('mesh-view').data
+        .filter((t) => t.type === 'cone').flatMap((t) => t.u.map((u, r) => [u, t.v[r], t.w[r]]))""")
+    assert heads
+    for head in heads:
+        length = sum(c * c for c in head) ** 0.5
+        # Each corner of a cube vertex sees its 3 sides, 1 or 2 triangles each: never one axis.
+        assert max(abs(c) for c in head) < 0.99 * length
+    move_crease(page, 0)
+    heads = page.evaluate("""() => document.getElementById('mesh-view').data
+        .filter((t) => t.type === 'cone').flatMap((t) => t.u.map((u, r) => [u, t.v[r], t.w[r]]))""")
+    for head in heads:  # flat: each corner's normal is its face's, along one axis
+        length = sum(c * c for c in head) ** 0.5
+        assert max(abs(c) for c in head) > 0.9999 * length
+    # The export of corner normals says and sends the slider's angle.
+    expect(page.locator("#export-crease")).to_be_hidden()
+    page.select_option("#export-normals", "corner")
+    expect(page.locator("#export-crease")).to_have_text("at 0°, the 3D view's smoothing angle")
+    with page.expect_request(lambda request: "/api/mesh/export" in request.url) as sent:
+        page.click("#download-export")
+    assert "crease_angle=0" in sent.value.url and "normals=corner" in sent.value.url

@@ -29,7 +29,7 @@ def test_the_content_decides_the_factor(task: str) -> None:
         assert estimate(Upload(OBJ, name), task) == int(expected)  # type: ignore[arg-type]
 
 
-def test_stl_costs_less_than_obj_and_unknown_bytes_the_most() -> None:
+def test_each_format_has_its_factor_and_unknown_bytes_the_most() -> None:
     corners = np.tile(np.array([[[0.0, 0, 0], [1, 0, 0], [0, 1, 0]]]), (2000, 1, 1))
     stl = ascii_stl(corners, np.tile([0.0, 0, 1], (2000, 1)))
     unknown = b"\x01\x02" * 50_000
@@ -37,7 +37,8 @@ def test_stl_costs_less_than_obj_and_unknown_bytes_the_most() -> None:
         label: (estimate(Upload(data, "x"), "report") - JOB_OVERHEAD) / len(data)
         for label, data in (("stl", stl), ("obj", OBJ), ("unknown", unknown))
     }
-    assert per_byte == pytest.approx({"stl": 6, "obj": 16, "unknown": UNKNOWN_PER_BYTE}, rel=1e-6)
+    assert per_byte == pytest.approx({"stl": 6, "obj": 6, "unknown": 26}, rel=1e-6)
+    assert UNKNOWN_PER_BYTE == max(MEMORY_PER_BYTE.values()) == 26
 
 
 def test_a_zip_counts_its_members_unpacked() -> None:

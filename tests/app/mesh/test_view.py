@@ -9,6 +9,7 @@ import numpy as np
 from app.mesh import view as mesh_view
 from app.mesh.classes import BOUNDARY, COLORS, DEGENERATE, FLIPPED, OK
 from app.mesh.view import build_view, problem_faces, view_space
+from tests.meshes import CUBE_FACES, CUBE_VERTICES
 
 
 def test_problem_faces_are_all_kept_or_the_worst_first() -> None:
@@ -179,3 +180,28 @@ def test_the_surface_is_lit_from_the_front_and_smooth_only_when_simplified() -> 
         light = surface["lightposition"]  # in the camera's frame: z is towards the viewer
         assert light["z"] > light["y"] > 0 and light["z"] > abs(light["x"])
         assert surface["lighting"]["diffuse"] > surface["lighting"]["ambient"]
+
+
+def test_the_view_sends_face_normals_and_corner_neighbourhoods_for_the_crease_slider() -> None:
+    vertices, faces = CUBE_VERTICES.astype(float), CUBE_FACES
+    no_edges = np.zeros((0, 2), dtype=np.intp)
+    classes = np.full(len(faces), OK, dtype=np.int8)
+    classes[3] = DEGENERATE  # not drawn as a face: the normals follow the trace's faces
+    view = build_view(vertices, faces, np.zeros((len(faces), 3)), classes, no_edges, no_edges)
+    surface = next(t for t in view["figure"]["data"] if t["type"] == "mesh3d")
+    normals = np.array(view["face_normals"])
+    assert normals.shape == (len(surface["i"]), 3) == (11, 3)
+    points = vertices  # near the origin and of size 1: drawn as it is
+    for n, *corners in zip(normals, surface["i"], surface["j"], surface["k"], strict=True):
+        a, b, c = np.array([surface[axis] for axis in "xyz"]).T[corners]
+        assert np.abs(n).sum() == 1.0 and np.abs(n).max() == 1.0  # a unit axis
+        assert np.dot(np.cross(b - a, c - a), n) == 1.0  # along the winding (twice the area 1/2)
+    assert {tuple(p) for p in points} == {tuple(p) for p in np.array([surface[a] for a in "xyz"]).T}
+    corner = view["normals"]["corner"]
+    for label, around in zip(corner["label"], corner["around"], strict=True):
+        f, k = (int(word.strip(",")) for word in label.split()[1::2])
+        v = faces[f, k]
+        assert len(around) == np.count_nonzero((faces == v).any(axis=1))
+        own = np.cross(*(points[faces[f, 1:]] - points[faces[f, 0]]))
+        assert np.allclose(around[0], own)  # its own face first; every cube triangle has area 1/2
+        assert np.allclose(np.linalg.norm(around, axis=1), 1.0)

@@ -219,8 +219,8 @@ def test_full_job_slots_are_a_503_with_retry_after(
 
 @pytest.mark.parametrize("path", ["/api/mesh", "/mesh"])
 def test_a_file_beyond_the_whole_budget_is_a_413(path: str) -> None:
-    """64 MB for every job plus 16 bytes a byte of OBJ: a 2.9 MB OBJ needs about 110 MB."""
-    big = CUBE_OBJ + "# padding\n" * 300_000
+    """64 MB for every job plus 6 bytes a byte of OBJ: an 8 MB OBJ needs about 110 MB."""
+    big = CUBE_OBJ + "# padding\n" * 800_000
     settings = Settings(in_process=True, memory_budget_mb=100)
     with TestClient(create_app(settings=settings), raise_server_exceptions=False) as client:
         refused = client.post(path, files={"file": ("big.obj", big.encode())})
