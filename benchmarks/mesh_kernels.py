@@ -6,7 +6,9 @@ The meshes are synthetic stand-ins with the triangle counts of the Stanford bunn
 dragon (871,414) and Lucy (14,000,000): a torus grid with noise of a tenth of its step on its
 radius (about half as many vertices as faces, valence 6), faces shuffled and cut to the exact
 count. Each kernel runs ``repeats`` times (at most ``--large-repeats`` above 2 million faces),
-all libraries alternately, and the best time is reported; only ratios within one run count.
+all libraries alternately; the best time is reported and, in brackets, the median (ratios of
+medians in brackets too); only ratios within one run count. ``--idle N`` adds rows for face
+and area-weighted vertex normals against Open3D where each call follows a second of sleep.
 
 trimesh's face normals are ``trimesh.triangles.normals(vertices[faces])`` (the gather is
 included, as it is in ours). Its angle-weighted vertex normals are ``mesh.vertex_normals``
@@ -23,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
+import statistics
 import time
 from collections.abc import Callable
 
@@ -140,7 +143,7 @@ LABELS = {
 LARGE = 2_000_000
 
 
-def run(size: int, repeats: int) -> list[str]:
+def run(size: int, repeats: int, idle: int = 0) -> list[str]:
     vertices, faces = torus_mesh(size)
     ours: Kernels = {
         "face": lambda: face_normals(vertices, faces),
@@ -163,17 +166,25 @@ def run(size: int, repeats: int) -> list[str]:
             strict=True,
         )
     )
+    open3d = peers["Open3D"]
     kernels = {("ours", k): v for k, v in ours.items()}
     kernels.update({(peer, k): v for peer, their in peers.items() for k, v in their.items()})
-    times = best_times(kernels, repeats)
+    times, medians = best_times(kernels, repeats)
     rows = []
     for key, mine in ((k, times["ours", k]) for k in ours):
         theirs = [times.get((peer, key)) for peer in PEERS]
         cells = [f"{t:.1f}" if t else "" for t in theirs]
-        ratios = [f"{t / mine:.2f}x" if t else "" for t in theirs]
+        ratios = [
+            f"{t / mine:.2f}x ({medians[peer, key] / medians['ours', key]:.2f}x)" if t else ""
+            for t, peer in zip(theirs, PEERS, strict=True)
+        ]
         rows.append(
-            f"| {size:,} | {LABELS[key]} | {mine:.1f} | " + " | ".join(cells + ratios) + " |"
+            f"| {size:,} | {LABELS[key]} | {mine:.1f} ({medians['ours', key]:.1f}) | "
+            + " | ".join(cells + ratios)
+            + " |"
         )
+    if idle and open3d:
+        rows += after_idle(size, ours, open3d, idle)
     if "angle" in peers["trimesh"]:
         import trimesh
 
@@ -188,15 +199,38 @@ def run(size: int, repeats: int) -> list[str]:
 
 def best_times(
     kernels: dict[tuple[str, str], Callable[[], object]], repeats: int
-) -> dict[tuple[str, str], float]:
-    """Best wall time in milliseconds of each kernel, the kernels run alternately."""
+) -> tuple[dict[tuple[str, str], float], dict[tuple[str, str], float]]:
+    """Best and median wall times in milliseconds of each kernel, the kernels run alternately."""
     times: dict[tuple[str, str], list[float]] = {name: [] for name in kernels}
     for _ in range(repeats):
         for name, kernel in kernels.items():
             start = time.perf_counter()
             kernel()
             times[name].append(time.perf_counter() - start)
-    return {name: 1e3 * min(values) for name, values in times.items()}
+    best = {name: 1e3 * min(values) for name, values in times.items()}
+    return best, {name: 1e3 * statistics.median(values) for name, values in times.items()}
+
+
+def after_idle(size: int, ours: Kernels, open3d: Kernels, repeats: int) -> list[str]:
+    """Ours against Open3D on calls that each follow a second of sleep (threads parked, caches
+    cold), alternately: the best and median times and Open3D / ours of each."""
+    rows = []
+    for key in ("face", "area"):
+        times: dict[str, list[float]] = {"ours": [], "Open3D": []}
+        for _ in range(repeats):
+            for name, call in (("ours", ours[key]), ("Open3D", open3d[key])):
+                time.sleep(1.0)
+                start = time.perf_counter()
+                call()
+                times[name].append(1e3 * (time.perf_counter() - start))
+        (mine, theirs) = (min(times["ours"]), min(times["Open3D"]))
+        middle = {name: statistics.median(values) for name, values in times.items()}
+        rows.append(
+            f"| {size:,} | {LABELS[key]}, each after 1 s idle | {mine:.1f} ({middle['ours']:.1f}) "
+            f"| | | {theirs:.1f} | | | {theirs / mine:.2f}x "
+            f"({middle['Open3D'] / middle['ours']:.2f}x) |"
+        )
+    return rows
 
 
 # --- what each library returns for degenerate and tiny faces --------------------------------
@@ -308,6 +342,9 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--large-repeats", type=int, default=2)
     parser.add_argument("--sizes", type=int, nargs="+", default=list(SIZES))
+    parser.add_argument(
+        "--idle", type=int, default=0, help="also time this many calls after 1 s of sleep each"
+    )
     args = parser.parse_args()
     print(
         "| triangles | kernel | ours (ms) | "
@@ -319,7 +356,7 @@ def main() -> None:
     print("|---:|---|---:|" + "---:|" * 6)
     for size in args.sizes:
         repeats = args.repeats if size < LARGE else min(args.repeats, args.large_repeats)
-        for row in run(size, repeats):
+        for row in run(size, repeats, args.idle if size < LARGE else 0):
             print(row, flush=True)
     print("\nDegenerate and tiny faces (angle-weighted vertex normals; Open3D's are by area):\n")
     print("\n".join(probe()))

@@ -39,7 +39,13 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from mesh_normal.checks import CheckedMesh, as_checked
-from mesh_normal.kernels import PARALLEL_KERNELS, announce_compiling, geometry_kernel
+from mesh_normal.kernels import (
+    PARALLEL_KERNELS,
+    announce_compiling,
+    face_normals_kernel,
+    geometry_kernel,
+    workers,
+)
 from mesh_normal.types import BoolArray, FloatArray, IndexArray
 
 
@@ -152,10 +158,17 @@ def face_geometry(vertices: MeshInput, faces: ArrayLike | None = None) -> FaceGe
     crosses = np.empty((count, 3))
     lengths, degenerate = np.empty(count), np.empty(count, dtype=bool)
     recomputed = np.empty(count, dtype=bool)
-    announce_compiling()
+    announce_compiling(geometry_kernel)
     with PARALLEL_KERNELS:
         geometry_kernel(
-            mesh.points, mesh.factor, mesh.faces, crosses, lengths, degenerate, recomputed
+            mesh.points,
+            mesh.factor,
+            mesh.faces,
+            crosses,
+            lengths,
+            degenerate,
+            recomputed,
+            *workers(),
         )
     return FaceGeometry(mesh, crosses, lengths, degenerate, recomputed)
 
@@ -191,8 +204,26 @@ def face_normals(vertices: MeshInput, faces: ArrayLike | None = None) -> FaceNor
     >>> face_normals([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]]).normals
     array([[0., 0., 1.]])
     """
-    geometry = face_geometry(vertices, faces)
-    return FaceNormals(geometry.normals, geometry_areas(geometry), geometry.degenerate)
+    mesh = checked_input(vertices, faces)
+    if isinstance(mesh, FaceGeometry):
+        return FaceNormals(mesh.normals, geometry_areas(mesh), mesh.degenerate)
+    # From the mesh, one pass (no cross products kept): the same bits, a third of the traffic.
+    count = len(mesh.faces)
+    normals, areas = np.empty((count, 3)), np.empty(count)
+    degenerate = np.empty(count, dtype=bool)
+    announce_compiling(face_normals_kernel)
+    with PARALLEL_KERNELS:
+        face_normals_kernel(
+            mesh.points,
+            mesh.factor,
+            mesh.faces,
+            2 * mesh.scale - 1,
+            normals,
+            areas,
+            degenerate,
+            *workers(),
+        )
+    return FaceNormals(normals, areas, degenerate)
 
 
 def geometry_areas(geometry: FaceGeometry) -> FloatArray:

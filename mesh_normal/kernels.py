@@ -57,6 +57,8 @@ _DEGENERATE = MESH_DEGENERATE_SINE**2
 
 #: Every kernel of the package, in the order its module defined it.
 _KERNELS: list[Any] = []
+#: The kernels that their callers name to :func:`announce_compiling` (see :func:`kernel`).
+_NAMED: set[Any] = set()
 _announce = threading.Lock()
 _looked_at = 0
 _announced = False
@@ -95,6 +97,11 @@ class Kernel:
                 return self.py_func(*args)
             load_numba()
             announce_compiling()
+            if self in _NAMED:  # left out of the look-up above: this call runs it
+                announce_compiling(self)
+            if self.options["parallel"] and _takes_workers(self.py_func):
+                # Its workers were counted before numba was loaded (one): all of numba's now.
+                args = (*args[:-1], workers()[1])
         return self.dispatcher(*args)
 
     def __getattr__(self, name: str) -> Any:
@@ -102,6 +109,12 @@ class Kernel:
             raise AttributeError(name)
         load_numba()
         return getattr(self.dispatcher, name)
+
+
+def _takes_workers(function: Callable[..., Any]) -> bool:
+    """Whether a kernel's last parameter is the number of workers (see :func:`workers`)."""
+    code = function.__code__
+    return code.co_argcount > 0 and code.co_varnames[code.co_argcount - 1] == "workers"
 
 
 def _small(args: tuple[Any, ...], limit: int) -> bool:
@@ -117,13 +130,19 @@ def kernel(
     parallel: bool = False,
     error_model: Literal["python", "numpy"] = "numpy",
     python: bool | int = False,
+    named: bool = False,
 ) -> Callable[[Function], Function]:
     """``numba.njit(cache=True, ...)`` with :class:`~mesh_normal._numba_cache.KernelCache`
     (which also reads a read-only cache), made when numba is loaded; remember the kernel for
     :func:`announce_compiling`. ``python``: small calls may run the Python source (only for
     kernels whose every step gives the same bits in Python: float64 and int64 arithmetic,
     ``math.sqrt``, comparisons; no NumPy reductions or sorts, no integer overflow); a number
-    over 1 is the largest call, in array elements, for a kernel much slower in Python."""
+    over 1 is the largest call, in array elements, for a kernel much slower in Python.
+
+    ``named``: one of several kernels for the same work, of which a call runs one (the face
+    normals from a mesh or from a geometry): left out of the look-up of every kernel defined,
+    which would otherwise find the other one never compiled, and named by its caller instead.
+    """
 
     def compiled(function: Function) -> Function:
         options = {"error_model": error_model, "parallel": parallel}
@@ -131,6 +150,8 @@ def kernel(
         if made is None:
             made = Kernel(function, options, int(python))
         _KERNELS.append(made)
+        if named:
+            _NAMED.add(made)
         return made  # type: ignore[no-any-return]
 
     return compiled
@@ -151,7 +172,8 @@ def _dispatcher(function: Callable[..., Any], options: dict[str, Any]) -> Any:
 def load_numba() -> None:
     """Import numba and make every kernel its dispatcher (each compiled, or loaded from the
     cache, at its first call): in each kernel's module the name now means the dispatcher, as
-    numba needs for the kernels that call it, and ``prange`` numba's."""
+    numba needs for the kernels that call it, ``prange`` numba's and ``claim`` the atomic
+    add (:func:`_claim_intrinsic`)."""
     global _numba_loaded
     if _numba_loaded:
         return
@@ -160,6 +182,7 @@ def load_numba() -> None:
             return
         import numba
 
+        python_claim, atomic_claim = claim, _claim_intrinsic()
         waiting = [made for made in _KERNELS if isinstance(made, Kernel)]
         for made in waiting:
             made.dispatcher = _dispatcher(made.py_func, made.options)
@@ -170,6 +193,8 @@ def load_numba() -> None:
                     namespace[name] = value.dispatcher
                 elif name == "prange" and value is range:
                     namespace[name] = numba.prange
+                elif name == "claim" and value is python_claim:
+                    namespace[name] = atomic_claim
         _numba_loaded = True
 
 
@@ -185,6 +210,8 @@ def announce_compiling(*kernels: Any) -> None:
     global _looked_at, _announced
     if not _numba_loaded and not kernels:  # a call that loads numba says so then
         return
+    if not _numba_loaded and all(isinstance(made, Kernel) and made.python for made in kernels):
+        return  # they may run in Python; the call that loads numba says so then
     if kernels:
         with _announce:
             if not _announced and not all(map(is_cached, kernels)):
@@ -195,6 +222,7 @@ def announce_compiling(*kernels: Any) -> None:
         return
     with _announce:
         fresh, _looked_at = _KERNELS[_looked_at:], len(_KERNELS)
+        fresh = [kernel for kernel in fresh if kernel not in _NAMED]
         if not _announced and not all(map(is_cached, fresh)):
             _announced = True
             _say_compiling()
@@ -215,11 +243,12 @@ def is_cached(dispatcher: Any) -> bool:
     True when it is compiled already in this process, or when the cache index holds an
     entry that numba's own lookup (``Cache._index_key``) would accept for one of its
     signatures. This reads numba internals (``_cache``, ``_cache_file._load_index``);
-    where they are missing, it answers True (no announcement rather than a wrong one).
+    where they are missing (or ``dispatcher`` is not one: a test's stand-in), it answers
+    True (no announcement rather than a wrong one).
     """
-    if dispatcher.overloads:
-        return True
     try:
+        if dispatcher.overloads:
+            return True
         cache = dispatcher._cache
         codegen = dispatcher.targetctx.codegen()
         index = cache._cache_file._load_index()
@@ -307,7 +336,56 @@ def face_cross(edges: Edges) -> tuple[Vector, float, int]:
     return normal, square, AT_LARGEST_CORNER
 
 
-@kernel(parallel=True, python=True)
+# --- dynamic blocks -------------------------------------------------------------------------
+#
+# A parallel kernel runs one worker per thread (``prange(workers)``), and each worker claims the
+# next block of faces from a shared counter until none is left: a thread that starts late or is
+# descheduled (a shared machine, the first call after an idle second) leaves its blocks to the
+# others instead of stalling the call, as numba's static split of a ``prange`` in equal parts
+# does. Where each block writes its own rows, the bits do not depend on who ran it.
+
+
+def claim(counter: IndexArray) -> int:
+    """``counter[0] += 1``, returning the value before: the next task. This is the stand-in
+    for a kernel's Python source, run by one worker (:func:`workers` gives one until numba is
+    loaded); :func:`load_numba` puts :func:`_claim_intrinsic`'s atomic add in its place."""
+    value = int(counter[0])
+    counter[0] = value + 1
+    return value
+
+
+def _claim_intrinsic() -> Any:
+    """numba's ``claim``: ``counter[0] += 1`` as one atomic step, returning the value before."""
+    from numba import types
+    from numba.extending import intrinsic
+
+    @intrinsic
+    def _claim(typingctx: Any, counter: Any) -> Any:  # noqa: ARG001 (numba's typing context)
+        if not (isinstance(counter, types.Array) and counter.dtype == types.int64):
+            return None
+
+        def codegen(context: Any, builder: Any, signature: Any, arguments: Any) -> Any:
+            array = context.make_array(signature.args[0])(context, builder, arguments[0])
+            one = context.get_constant(types.int64, 1)
+            return builder.atomic_rmw("add", array.data, one, "monotonic")
+
+        return types.int64(counter), codegen
+
+    return _claim
+
+
+def workers() -> tuple[IndexArray, int]:
+    """A fresh task counter and the number of workers for a parallel kernel: numba's threads,
+    or one where numba is not loaded (a kernel run as Python)."""
+    counter = np.zeros(1, dtype=np.int64)
+    if not _numba_loaded:
+        return counter, 1
+    import numba
+
+    return counter, numba.get_num_threads()
+
+
+@kernel(parallel=True, python=True, named=True)
 def geometry_kernel(
     points: FloatArray,
     factor: float,
@@ -316,16 +394,64 @@ def geometry_kernel(
     lengths: FloatArray,
     degenerate: BoolArray,
     recomputed: BoolArray,
+    counter: IndexArray,
+    workers: int,
 ) -> None:
     """Each face's cross product, |cross| and flags (see ``FaceGeometry``)."""
     blocks = (len(faces) + BLOCK - 1) // BLOCK
-    for block in prange(blocks):  # blocks write disjoint rows: they run on every core
+    for _ in prange(workers):  # blocks write disjoint rows: any worker may take any block
         corners = np.empty((BLOCK, 9))
-        start = block * BLOCK
-        for row in range(gather(points, factor, faces, start, corners)):
-            face = start + row
-            (x, y, z), square, found = face_cross(face_edges(corners, row))
-            crosses[face, 0], crosses[face, 1], crosses[face, 2] = x, y, z
-            lengths[face] = math.sqrt(square)
-            degenerate[face] = found == DEGENERATE
-            recomputed[face] = found != AT_FIRST_CORNER
+        block = claim(counter)
+        while block < blocks:
+            start = block * BLOCK
+            for row in range(gather(points, factor, faces, start, corners)):
+                face = start + row
+                (x, y, z), square, found = face_cross(face_edges(corners, row))
+                crosses[face, 0], crosses[face, 1], crosses[face, 2] = x, y, z
+                lengths[face] = math.sqrt(square)
+                degenerate[face] = found == DEGENERATE
+                recomputed[face] = found != AT_FIRST_CORNER
+            block = claim(counter)
+
+
+@kernel(parallel=True, python=True, named=True)
+def face_normals_kernel(
+    points: FloatArray,
+    factor: float,
+    faces: IndexArray,
+    exponent: int,
+    normals: FloatArray,
+    areas: FloatArray,
+    degenerate: BoolArray,
+    counter: IndexArray,
+    workers: int,
+) -> None:
+    """Each face's unit normal, area and degenerate flag in one pass, with the arithmetic of
+    ``geometry_kernel`` then ``FaceGeometry.unit_normals`` and ``geometry_areas``: the unit
+    normal is the cross product over |cross| (over 1 where degenerate, where it is zero) plus
+    0.0, the area ``ldexp(|cross|, exponent)``: times 2**exponent where that is a normal
+    double (the same single rounding, without a call per face; measured a third of the
+    kernel's time)."""
+    blocks = (len(faces) + BLOCK - 1) // BLOCK
+    power = math.ldexp(1.0, exponent) if -1022 <= exponent <= 1023 else 0.0
+    for _ in prange(workers):
+        corners = np.empty((BLOCK, 9))
+        block = claim(counter)
+        while block < blocks:
+            start = block * BLOCK
+            for row in range(gather(points, factor, faces, start, corners)):
+                face = start + row
+                (x, y, z), square, found = face_cross(face_edges(corners, row))
+                length = math.sqrt(square)
+                divisor = 1.0 if found == DEGENERATE else length
+                normals[face, 0] = x / divisor + 0.0  # -0.0 becomes 0.0
+                normals[face, 1] = y / divisor + 0.0
+                normals[face, 2] = z / divisor + 0.0
+                if power:
+                    areas[face] = length * power
+                elif exponent > 0 and length and math.frexp(length)[1] + exponent > 1024:
+                    areas[face] = math.inf  # what ldexp gives, where Python's would raise
+                else:
+                    areas[face] = math.ldexp(length, exponent)
+                degenerate[face] = found == DEGENERATE
+            block = claim(counter)

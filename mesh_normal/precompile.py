@@ -69,7 +69,8 @@ def compile_kernels() -> None:
 def _mesh_kernels(vertices: FloatArray, faces: IndexArray) -> None:
     geometry = face_geometry(vertices, faces)
     face_normals(geometry)
-    vertex_normals(geometry)  # one kernel for every weighting
+    face_normals(geometry.mesh)  # from a mesh: its own one-pass kernel
+    vertex_normals(geometry)  # one kernel for every weighting, from a geometry or a mesh
     corner_normals(geometry, crease_angle=30.0)
     corner_weights(geometry, "angle")  # corner_normals needs them only at creased vertices
     orient(geometry)

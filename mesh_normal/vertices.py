@@ -27,16 +27,21 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
-from mesh_normal.faces import FaceGeometry, MeshInput, checked_input, face_geometry
+from mesh_normal.checks import CheckedMesh
+from mesh_normal.faces import FaceGeometry, MeshInput, checked_input
 from mesh_normal.kernels import (
     BLOCK,
+    DEGENERATE,
     PARALLEL_KERNELS,
     announce_compiling,
+    claim,
     dot,
+    face_cross,
     face_edges,
     gather,
     kernel,
     prange,
+    workers,
 )
 from mesh_normal.tolerances import MESH_CANCELLED_SUM
 from mesh_normal.types import BoolArray, Edges, FloatArray, IndexArray, Vector
@@ -95,10 +100,11 @@ def face_weights(code: int, edges: Edges, length: float) -> Vector:
     return length / (s2 * s0), length / (s0 * s1), length / (s1 * s2)
 
 
-#: The faces are summed in this many halves (in parallel where there are cores), each into
-#: its own (n, 4) buffer, and the buffers are added in a fixed order: the result has the same
-#: bits on every machine, whatever its number of cores.
-_CHUNKS = 2
+#: The faces are summed in two halves (in whole blocks), each into its own (n, 4) buffer, and
+#: the buffers are added in a fixed order: the result has the same bits on every machine,
+#: whatever its number of cores. The halves are two tasks that the workers claim (see
+#: :func:`mesh_normal.kernels.claim`): one thread alone, or a second one late, takes both.
+_HALVES = 2
 
 
 @kernel(parallel=True)
@@ -110,25 +116,29 @@ def _vertex_sums_kernel(
     crosses: FloatArray,
     lengths: FloatArray,
     degenerate: BoolArray,
+    fused: bool,
     sums: FloatArray,
     spare: FloatArray,
+    counter: IndexArray,
+    workers: int,
 ) -> None:
     """Add each usable face's weighted unit normal and its weight into its vertices' rows.
 
     ``sums`` and ``spare`` are (n, 4) zeros: the sum of weighted normals and the sum of
     weights side by side, so that each corner updates one cache line. The first half of the
-    faces (in whole blocks) goes into ``sums``, the rest into ``spare``; the caller adds
-    ``spare`` to ``sums``.
+    faces (in whole blocks) goes into ``sums``, the rest into ``spare``. ``fused``: the cross
+    products are taken here, as ``geometry_kernel`` takes them (``crosses``, ``lengths`` and
+    ``degenerate`` are not read), else they are read from those arrays.
     """
     half = (len(faces) + 2 * BLOCK - 1) // (2 * BLOCK) * BLOCK
-    for chunk in prange(_CHUNKS):
-        if chunk == 0:
-            _accumulate(code, points, factor, faces, crosses, lengths, degenerate, 0, half, sums)
-        else:
-            stop = len(faces)
+    for _ in prange(min(workers, _HALVES)):
+        task = claim(counter)
+        while task < _HALVES:
+            first, stop, into = (0, half, sums) if task == 0 else (half, len(faces), spare)
             _accumulate(
-                code, points, factor, faces, crosses, lengths, degenerate, half, stop, spare
+                code, points, factor, faces, crosses, lengths, degenerate, fused, first, stop, into
             )
+            task = claim(counter)
 
 
 @kernel()
@@ -140,65 +150,84 @@ def _accumulate(
     crosses: FloatArray,
     lengths: FloatArray,
     degenerate: BoolArray,
+    fused: bool,
     first: int,
     stop: int,
     sums: FloatArray,
 ) -> None:
     """The sums of faces ``first`` to ``stop`` (``first`` a multiple of the block size).
 
-    Only the angle and max weightings need the edges, so only they gather the corners.
+    The corners are gathered where the products are taken here or the weights need the
+    edges (angle, max). The adds are written out: a view per corner (``sums[v]``) measured
+    13-29 % slower.
     """
     corners = np.empty((BLOCK, 9))
     stop = min(stop, len(faces))  # the first half may be rounded up past the end
     for start in range(first, stop, BLOCK):
-        if code >= _ANGLE:
+        if fused or code >= _ANGLE:
             gather(points, factor, faces[:stop], start, corners)
         for face in range(start, min(start + BLOCK, stop)):
-            if degenerate[face]:
-                continue
-            length = lengths[face]
-            normal = (crosses[face, 0], crosses[face, 1], crosses[face, 2])
+            if fused:
+                (nx, ny, nz), square, found = face_cross(face_edges(corners, face - start))
+                if found == DEGENERATE:
+                    continue
+                length = math.sqrt(square)
+            else:
+                if degenerate[face]:
+                    continue
+                length = lengths[face]
+                nx, ny, nz = crosses[face, 0], crosses[face, 1], crosses[face, 2]
+            a, b, c = faces[face, 0], faces[face, 1], faces[face, 2]
             if code == _AREA:  # the cross product itself is the unit normal times |n|
-                for k in range(3):
-                    _add_raw(sums[faces[face, k]], length, normal)
+                # n, not weight * n / |n|, which would round twice more
+                sums[a, 0] += nx
+                sums[a, 1] += ny
+                sums[a, 2] += nz
+                sums[a, 3] += length
+                sums[b, 0] += nx
+                sums[b, 1] += ny
+                sums[b, 2] += nz
+                sums[b, 3] += length
+                sums[c, 0] += nx
+                sums[c, 1] += ny
+                sums[c, 2] += nz
+                sums[c, 3] += length
                 continue
-            x, y, z = normal[0] / length, normal[1] / length, normal[2] / length
+            x, y, z = nx / length, ny / length, nz / length
             w0, w1, w2 = (
                 face_weights(code, face_edges(corners, face - start), length)
                 if code >= _ANGLE
                 else (1.0, 1.0, 1.0)
             )
-            _add(sums[faces[face, 0]], w0, x, y, z)
-            _add(sums[faces[face, 1]], w1, x, y, z)
-            _add(sums[faces[face, 2]], w2, x, y, z)
+            sums[a, 0] += w0 * x
+            sums[a, 1] += w0 * y
+            sums[a, 2] += w0 * z
+            sums[a, 3] += w0
+            sums[b, 0] += w1 * x
+            sums[b, 1] += w1 * y
+            sums[b, 2] += w1 * z
+            sums[b, 3] += w1
+            sums[c, 0] += w2 * x
+            sums[c, 1] += w2 * y
+            sums[c, 2] += w2 * z
+            sums[c, 3] += w2
 
 
 @kernel()
-def _add_raw(total: FloatArray, weight: float, normal: Vector) -> None:
-    """Area weighting: add n (not weight * n / |n|, which would round twice more)."""
-    total[0] += normal[0]
-    total[1] += normal[1]
-    total[2] += normal[2]
-    total[3] += weight
-
-
-@kernel()
-def _add(total: FloatArray, weight: float, x: float, y: float, z: float) -> None:
-    total[0] += weight * x
-    total[1] += weight * y
-    total[2] += weight * z
-    total[3] += weight
-
-
-@kernel()
-def normalise_kernel(sums: FloatArray, normals: FloatArray, missing: BoolArray) -> None:
-    """Unit rows of ``sums[:, :3]``, or zero where they cancel against ``sums[:, 3]``.
-
-    ``normals`` may share memory with ``sums``: row i is read before rows up to i are
-    written, as (n, 3) is packed more densely than (n, 4).
-    """
+def _normalise(
+    sums: FloatArray, spare: FloatArray, halves: bool, normals: FloatArray, missing: BoolArray
+) -> None:
+    """Unit rows of ``sums[:, :3]`` (plus ``spare``'s, added row by row, if ``halves``), or
+    zero where they cancel against their fourth column; see :func:`normalise_kernel`."""
     for row in range(len(sums)):
         x, y, z, total = sums[row, 0], sums[row, 1], sums[row, 2], sums[row, 3]
+        if halves:  # the same bits as ``sums += spare`` first, without that pass
+            x, y, z, total = (
+                x + spare[row, 0],
+                y + spare[row, 1],
+                z + spare[row, 2],
+                total + spare[row, 3],
+            )
         square = x * x + y * y + z * z
         cancel = _CANCELLED * total
         missing[row] = square <= cancel * cancel
@@ -208,13 +237,28 @@ def normalise_kernel(sums: FloatArray, normals: FloatArray, missing: BoolArray) 
         normals[row, 2] = z / length + 0.0
 
 
-def smooth(geometry: FaceGeometry, weighting: str) -> tuple[FloatArray, BoolArray]:
-    """Vertex normals and their mask, from the face geometry.
+def normalise_kernel(sums: FloatArray, normals: FloatArray, missing: BoolArray) -> None:
+    """Unit rows of ``sums[:, :3]``, or zero where they cancel against ``sums[:, 3]``.
+
+    ``normals`` may share memory with ``sums``: row i is read before rows up to i are
+    written, as (n, 3) is packed more densely than (n, 4).
+    """
+    _normalise(sums, sums, False, normals, missing)
+
+
+def smooth(geometry: FaceGeometry | CheckedMesh, weighting: str) -> tuple[FloatArray, BoolArray]:
+    """Vertex normals and their mask, from the face geometry, or from a checked mesh in one
+    pass that takes the cross products as it goes (the same bits, none of them kept).
 
     The sums are (n, 4) and the normals are packed into the same memory as (n, 3).
     """
     code = weighting_code(weighting)
-    mesh = geometry.mesh
+    if isinstance(geometry, FaceGeometry):
+        mesh, fused = geometry.mesh, False
+        crosses, lengths, degenerate = geometry.crosses, geometry.lengths, geometry.degenerate
+    else:
+        mesh, fused = geometry, True
+        crosses, lengths, degenerate = _NO_CROSSES, _NO_LENGTHS, _NO_FLAGS
     count = len(mesh.vertices)
     sums, spare = np.zeros((count, 4)), np.zeros((count, 4))
     announce_compiling()
@@ -224,18 +268,23 @@ def smooth(geometry: FaceGeometry, weighting: str) -> tuple[FloatArray, BoolArra
             mesh.points,
             mesh.factor,
             mesh.faces,
-            geometry.crosses,
-            geometry.lengths,
-            geometry.degenerate,
+            crosses,
+            lengths,
+            degenerate,
+            fused,
             sums,
             spare,
+            *workers(),
         )
-    sums += spare
-    del spare
     normals = sums.reshape(-1)[: 3 * count].reshape(count, 3)
     missing = np.empty(count, dtype=bool)
-    normalise_kernel(sums, normals, missing)
+    _normalise(sums, spare, True, normals, missing)
     return normals, missing
+
+
+#: What the fused pass is given for the arrays it does not read (the types of a geometry's).
+_NO_CROSSES, _NO_LENGTHS = np.empty((0, 3)), np.empty(0)
+_NO_FLAGS = np.empty(0, dtype=bool)
 
 
 def vertex_normals(
@@ -261,4 +310,4 @@ def vertex_normals(
     """
     source = checked_input(vertices, faces)
     weighting_code(weighting)  # refused before the kernels run
-    return VertexNormals(*smooth(face_geometry(source), weighting))
+    return VertexNormals(*smooth(source, weighting))

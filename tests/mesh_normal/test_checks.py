@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Callable
 
 import numpy as np
 import pytest
 
 from mesh_normal import checks
 from mesh_normal import faces as faces_module
+from mesh_normal import vertices as vertices_module
 from mesh_normal.checks import check_mesh, checked_mesh
 from mesh_normal.corners import corner_normals
 from mesh_normal.faces import face_geometry, face_normals
@@ -161,6 +163,20 @@ def test_a_checked_mesh_is_checked_once_and_its_cross_products_computed_once(
         counts["crosses"] += 1
         real_kernel(*arguments)
 
+    def counting(real: Callable[..., None], crosses: Callable[..., bool]) -> Callable[..., None]:
+        def counted(*arguments: object) -> None:
+            counts["crosses"] += crosses(*arguments)
+            real(*arguments)
+
+        return counted
+
+    # The one-pass kernels take the cross products too: of faces from a mesh, and the vertex
+    # sums when fused (their eighth argument).
+    real_faces, real_sums = faces_module.face_normals_kernel, vertices_module._vertex_sums_kernel
+    monkeypatch.setattr(faces_module, "face_normals_kernel", counting(real_faces, lambda *_: True))
+    monkeypatch.setattr(
+        vertices_module, "_vertex_sums_kernel", counting(real_sums, lambda *a: bool(a[7]))
+    )
     monkeypatch.setattr(checks, "_as_vertices", counted_check)
     monkeypatch.setattr(faces_module, "geometry_kernel", counted_kernel)
     geometry = face_geometry(vertices, faces)

@@ -1,0 +1,194 @@
+"""The one-pass kernels give the bits of the step-by-step path, on any number of threads.
+
+``face_normals`` and ``vertex_normals`` of raw arrays (or a checked mesh) take the cross
+products as they go; given a :class:`FaceGeometry` they read its arrays. Both must agree bit
+for bit with each other and with a straightforward NumPy reference of the documented
+arithmetic, and a run on one thread, two or three (either threading layer) must give the
+same bytes.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from mesh_normal import face_normals, vertex_normals
+from mesh_normal.checks import checked_mesh
+from mesh_normal.faces import face_geometry
+from mesh_normal.kernels import BLOCK
+from mesh_normal.tolerances import MESH_CANCELLED_SUM
+from mesh_normal.vertices import WEIGHTINGS
+from tests.paths import ROOT
+
+
+def soup(seed: int = 0, count: int = 3000, faces: int = 5 * BLOCK + 17) -> tuple:
+    """Random faces with repeated indices, coincident, collinear and nearly coincident points."""
+    rng = np.random.default_rng(seed)
+    points = rng.normal(size=(count, 3))
+    points[100:200] = points[100]
+    points[200:300] = np.linspace(0.0, 1.0, 100)[:, None] * np.array([1.0, 2.0, 3.0])
+    points[300:400] = points[400:500] + 1e-12 * rng.normal(size=(100, 3))
+    indices = rng.integers(0, count, size=(faces, 3))
+    indices[: faces // 10, 1] = indices[: faces // 10, 0]
+    indices[faces // 10 : faces // 5] = rng.integers(100, 500, size=(faces // 5 - faces // 10, 3))
+    return points, indices
+
+
+#: Scales whose area exponent 2 * scale - 1 falls inside the normal range (multiplied), at
+#: its edge (areas become subnormal) and outside it (huge, tiny and subnormal coordinates).
+SCALES = [1.0, 2.0**-511, 2.0**-520, 2.0**511, 1e150, 1e-160, 1e-310, 1e300]
+
+
+@pytest.mark.parametrize("scale", SCALES)
+def test_face_normals_of_a_mesh_are_the_geometry_s_bits(scale: float) -> None:
+    points, indices = soup()
+    vertices = points * scale
+    geometry = face_geometry(vertices, indices)
+    reference_normals = (
+        np.where(
+            geometry.degenerate[:, None],
+            0.0,
+            geometry.crosses / np.where(geometry.degenerate, 1.0, geometry.lengths)[:, None],
+        )
+        + 0.0
+    )
+    with np.errstate(over="ignore"):
+        reference_areas = np.ldexp(geometry.lengths, 2 * geometry.mesh.scale - 1)
+    for result in (face_normals(vertices, indices), face_normals(checked_mesh(vertices, indices))):
+        assert result.normals.tobytes() == reference_normals.tobytes()
+        assert result.areas.tobytes() == reference_areas.tobytes()
+        assert result.degenerate.tobytes() == geometry.degenerate.tobytes()
+    via_geometry = face_normals(geometry)
+    assert via_geometry.areas.tobytes() == reference_areas.tobytes()
+    assert via_geometry.normals.tobytes() == reference_normals.tobytes()
+
+
+def test_areas_at_the_edge_of_the_normal_range_are_the_subnormals_ldexp_gives() -> None:
+    # Coordinates near 2**-511: the area exponent is -1023 + 1, the areas of small faces are
+    # subnormal, and multiplying by 2**exponent must round them as ldexp does.
+    vertices = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [3, 1e-9, 0], [1e-7, 2e-7, 5e-8]])
+    vertices = vertices * 2.0**-512
+    indices = np.array([[0, 1, 2], [0, 3, 4], [1, 4, 2], [0, 4, 3]])
+    geometry = face_geometry(vertices, indices)
+    assert -1022 <= 2 * geometry.mesh.scale - 1 <= 1023
+    areas = face_normals(vertices, indices).areas
+    assert (areas[1:] < 2.0**-1022).any() and (areas > 0).all()
+    assert areas.tobytes() == np.ldexp(geometry.lengths, 2 * geometry.mesh.scale - 1).tobytes()
+
+
+def dot(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """p . q over the last axis, summed in the kernels' order: x, then y, then z."""
+    return p[..., 0] * q[..., 0] + p[..., 1] * q[..., 1] + p[..., 2] * q[..., 2]
+
+
+def reference_vertex_normals(vertices: np.ndarray, indices: np.ndarray, weighting: str) -> tuple:
+    """The documented sums in NumPy: each half of the faces (in whole blocks) summed in face
+    order (``np.add.at`` is unbuffered and in order), the halves added, then normalised."""
+    geometry = face_geometry(vertices, indices)
+    usable = ~geometry.degenerate
+    lengths = np.where(usable, geometry.lengths, 1.0)
+    units = geometry.crosses / lengths[:, None]
+    corners = geometry.mesh.points[indices] * geometry.mesh.factor
+    edges = np.roll(corners, -1, axis=1) - corners  # edge k runs from corner k to k + 1
+    incoming, outgoing = np.roll(edges, 1, axis=1), edges
+    if weighting == "uniform":
+        weights = np.ones((len(indices), 3))
+    elif weighting == "area":
+        weights = np.repeat(lengths[:, None], 3, axis=1)
+    elif weighting == "angle":
+        weights = np.arctan2(lengths[:, None], -dot(incoming, outgoing))
+    else:
+        squares = dot(edges, edges)
+        with np.errstate(divide="ignore", invalid="ignore"):  # degenerate rows are left out
+            weights = lengths[:, None] / (np.roll(squares, 1, axis=1) * squares)
+        weights[~usable] = 0.0
+    if weighting == "area":
+        terms = np.repeat(geometry.crosses[:, None, :], 3, axis=1)
+    else:
+        terms = weights[:, :, None] * units[:, None, :]
+    half = (len(indices) + 2 * BLOCK - 1) // (2 * BLOCK) * BLOCK
+    halves = []
+    for rows in (slice(0, half), slice(half, None)):
+        sums = np.zeros((len(vertices), 4))
+        keep = usable[rows]
+        np.add.at(sums[:, :3], indices[rows][keep].ravel(), terms[rows][keep].reshape(-1, 3))
+        np.add.at(sums[:, 3], indices[rows][keep].ravel(), weights[rows][keep].ravel())
+        halves.append(sums)
+    total = halves[0] + halves[1]
+    square = dot(total[:, :3], total[:, :3])
+    cancel = MESH_CANCELLED_SUM * total[:, 3]
+    missing = square <= cancel * cancel
+    length = np.where(missing, np.inf, np.sqrt(square))
+    return total[:, :3] / length[:, None] + 0.0, missing
+
+
+@pytest.mark.parametrize("weighting", WEIGHTINGS)
+@pytest.mark.parametrize("scale", [1.0, 1e150, 1e-160])
+def test_vertex_normals_match_the_reference_sums_bit_for_bit(weighting: str, scale: float) -> None:
+    points, indices = soup(seed=1)
+    vertices = points * scale
+    normals, missing = reference_vertex_normals(vertices, indices, weighting)
+    assert missing.any() and not missing.all()
+    for source in (
+        (vertices, indices),
+        (checked_mesh(vertices, indices), None),
+        (face_geometry(vertices, indices), None),
+    ):
+        result = vertex_normals(*source, weighting=weighting)  # type: ignore[arg-type]
+        assert result.missing.tobytes() == missing.tobytes()
+        assert result.normals.tobytes() == normals.tobytes()
+
+
+SCRIPT = """
+import hashlib
+import numpy as np
+from mesh_normal import face_normals, vertex_normals
+from mesh_normal.faces import face_geometry
+from tests.mesh_normal.test_kernel_bits import soup
+
+digest = hashlib.sha256()
+for seed, count, faces in ((0, 3000, 40_000), (1, 600, 1500), (2, 500, 1)):
+    vertices, indices = soup(seed, count, faces)
+    for result in (face_normals(vertices, indices), face_normals(face_geometry(vertices, indices))):
+        for array in (result.normals, result.areas, result.degenerate):
+            digest.update(array.tobytes())
+    geometry = face_geometry(vertices, indices)
+    for array in (geometry.crosses, geometry.lengths, geometry.degenerate, geometry.recomputed):
+        digest.update(array.tobytes())
+    for weighting in ("uniform", "area", "angle", "max"):
+        for source in ((vertices, indices), (geometry, None)):
+            result = vertex_normals(*source, weighting=weighting)
+            digest.update(result.normals.tobytes())
+            digest.update(result.missing.tobytes())
+print(digest.hexdigest())
+"""
+
+
+def digest_with(threads: int, layer: str) -> str:
+    environment = {**os.environ, "NUMBA_NUM_THREADS": str(threads), "NUMBA_THREADING_LAYER": layer}
+    result = subprocess.run(
+        [sys.executable, "-c", SCRIPT],
+        cwd=ROOT,
+        env=environment,
+        capture_output=True,
+        text=True,
+        timeout=600,
+        check=False,
+    )
+    assert result.returncode == 0, result.stderr[-2000:]
+    return result.stdout.strip()
+
+
+def test_the_bits_do_not_depend_on_the_number_of_threads() -> None:
+    digests = {
+        (threads, layer): digest_with(threads, layer)
+        for threads, layer in ((1, "default"), (2, "default"), (3, "default"), (2, "workqueue"))
+    }
+    assert len(set(digests.values())) == 1, digests
+    assert len(next(iter(digests.values()))) == 64
+    assert hashlib.sha256(b"").hexdigest() not in digests.values()
