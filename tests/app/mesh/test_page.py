@@ -313,3 +313,30 @@ def test_without_javascript_only_what_works_is_shown(client: TestClient) -> None
     for button in html.find("button", class_="small copy"):
         assert "hidden" in button
     assert "loads when it scrolls into sight" not in html.text("mesh-view")
+
+
+def test_without_javascript_the_advice_names_what_works(client: TestClient) -> None:
+    """The fixed-mesh button needs the script: without it, the advice names the command."""
+    response, _ = post(client, CUBE_ONE_FLIPPED_OBJ)
+    text = response.text
+    with_script = (
+        '<p class="problem-action" data-needs-js hidden><b>What to do:</b> '
+        "Download the fixed mesh, or call orient() in your own code.</p>"
+    )
+    without = (
+        '<noscript><p class="problem-action"><b>What to do:</b> '
+        "Fix the file with the command mesh-normal fix, or call orient() in your own code."
+        "</p></noscript>"
+    )
+    assert with_script in text and without in text
+    assert text.count("What to do:") == 2  # one sentence for each reader, nothing else
+
+
+def test_a_samples_advice_is_left_as_it_is(client: TestClient) -> None:
+    """A sample's page has a plain link to its fixed mesh: the advice stays as it is."""
+    text = client.get("/mesh/sample/inside-out").text
+    assert (
+        '<p class="problem-action"><b>What to do:</b> Download the fixed mesh (every face reversed)'
+        in text
+    )
+    assert "Fix the file with the command mesh-normal fix" not in text
