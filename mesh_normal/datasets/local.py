@@ -1,0 +1,67 @@
+"""The embedded engine: every core of this machine, one persistent worker process each."""
+
+from __future__ import annotations
+
+import os
+import queue
+import threading
+from collections.abc import Iterator, Sequence
+from typing import Any
+
+from mesh_normal.datasets.runner import FileRunner
+from mesh_normal.datasets.tasks import BatchOptions, FileTask
+
+
+def default_workers() -> int:
+    """Every core this process may use."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # not on Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def run_local(
+    tasks: Sequence[FileTask], options: BatchOptions, workers: int | None = None
+) -> Iterator[dict[str, Any]]:
+    """The rows of ``tasks`` as their files finish, on ``workers`` processes (every core).
+
+    Each worker is a thread here driving its own :class:`~mesh_normal.datasets.runner.FileRunner`
+    (a child process, so numba and NumPy run in parallel); closing the iterator early (Ctrl-C,
+    ``break``) stops the children, and the files not finished have no row.
+    """
+    count = min(workers or default_workers(), max(1, len(tasks)))
+    todo: queue.SimpleQueue[FileTask | None] = queue.SimpleQueue()
+    for task in tasks:
+        todo.put(task)
+    done: queue.SimpleQueue[dict[str, Any] | BaseException] = queue.SimpleQueue()
+    stop = threading.Event()
+    runners = [FileRunner() for _ in range(count)]
+
+    def work(runner: FileRunner) -> None:
+        try:
+            while not stop.is_set():
+                try:
+                    task = todo.get_nowait()
+                except queue.Empty:
+                    return
+                if task is None:
+                    return
+                done.put(runner.run(task, options))
+        except BaseException as error:
+            done.put(error)
+        finally:
+            runner.close()
+
+    threads = [threading.Thread(target=work, args=(runner,), daemon=True) for runner in runners]
+    for thread in threads:
+        thread.start()
+    try:
+        for _ in range(len(tasks)):
+            found = done.get()
+            if isinstance(found, BaseException):
+                raise found
+            yield found
+    finally:
+        stop.set()
+        for runner in runners:
+            runner.kill()

@@ -1,0 +1,238 @@
+"""A persistent worker process that runs one file at a time, within a time and memory limit.
+
+:class:`FileRunner` starts a child Python once (``python -m mesh_normal.datasets.runner``), which
+imports the library and warms its compiled kernels, then runs
+:func:`~mesh_normal.datasets.job.run_file` for each file sent to it over a pipe: no process
+start per file, yet a file that hangs or eats the machine's memory costs only the child. A file
+over ``timeout`` seconds kills the child (a ``timed_out`` row) and the next file gets a new
+one; the child's address space is limited to its size after the warm-up plus
+``options.memory_mb`` (``RLIMIT_AS``), so a file that needs more fails in it (a ``too_large``
+row), and a child that dies any other way is a ``too_large`` row too.
+
+The child is a plain subprocess (not :mod:`multiprocessing`), so a runner also works inside a
+daemonic process such as a Dask worker: :func:`shared_runner` is the one of the process.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from multiprocessing.connection import Connection
+from typing import Any
+
+from mesh_normal.datasets.schema import failed_row
+from mesh_normal.datasets.tasks import BatchOptions, FileTask
+
+#: Seconds a new child may take to import and warm the kernels (numba's cache is on disk;
+#: a cold cache compiles them, which takes a minute on a slow machine).
+START_SECONDS = 600.0
+
+
+class RunnerError(RuntimeError):
+    """The child could not be started (not a file's fault)."""
+
+
+class FileRunner:
+    """One child process, reused file after file; ``run`` is thread-safe (one file at a time).
+
+    ``threads`` is the child's numba thread count: 1 by default, since a batch runs a child
+    for every core.
+    """
+
+    def __init__(self, threads: int = 1) -> None:
+        self.threads = threads
+        self._lock = threading.Lock()
+        self._child: _Child | None = None
+        self.started = 0  # how many children it has started, for the tests
+
+    def run(self, task: FileTask, options: BatchOptions) -> dict[str, Any]:
+        """The row of ``task``, never an exception for the file's fault."""
+        kind = "points" if options.points else "mesh"
+        limit = options.max_file_mb
+        if limit is not None and task.size > limit * 1e6:
+            from mesh_normal.datasets.job import too_large_sentence
+
+            return failed_row(task, "too_large", too_large_sentence(task.size, limit), kind=kind)
+        with self._lock:
+            child = self._ensure()
+            start = time.perf_counter()
+            try:
+                child.send((task, options))
+                if child.wait(options.timeout):
+                    row: dict[str, Any] = child.receive()
+                    return row
+            except (EOFError, OSError):  # the child died: out of memory, or killed
+                code = self._stop()
+                seconds = time.perf_counter() - start
+                sentence = f"Its worker process died ({_exit_words(code)}): out of memory?"
+                return failed_row(task, "too_large", sentence, kind=kind, seconds=seconds)
+            self._stop()
+            seconds = time.perf_counter() - start
+            sentence = f"It took longer than the limit of {options.timeout:g} s (--timeout)."
+            return failed_row(task, "timed_out", sentence, kind=kind, seconds=seconds)
+
+    def close(self) -> None:
+        """Stop the child (a new one starts on the next ``run``)."""
+        with self._lock:
+            self._stop()
+
+    def kill(self) -> None:
+        """Kill the child now, from any thread, even while it runs a file (which then has
+        no row worth keeping): how an interrupted batch stops at once."""
+        child = self._child
+        if child is not None and child.process.poll() is None:
+            child.process.kill()
+
+    def _ensure(self) -> _Child:
+        if self._child is None or self._child.process.poll() is not None:
+            self._stop()
+            self._child = _Child(self.threads)
+            self.started += 1
+        return self._child
+
+    def _stop(self) -> int | None:
+        child, self._child = self._child, None
+        return None if child is None else child.kill()
+
+    def __del__(self) -> None:
+        child = getattr(self, "_child", None)
+        if child is not None:
+            child.kill()
+
+
+def _exit_words(code: int | None) -> str:
+    if code is not None and code < 0:
+        try:
+            return f"signal {signal.Signals(-code).name}"
+        except ValueError:
+            return f"signal {-code}"
+    return f"exit code {code}"
+
+
+class _Child:
+    """The child process and the two pipes to it."""
+
+    def __init__(self, threads: int) -> None:
+        to_child_read, to_child_write = os.pipe()
+        from_child_read, from_child_write = os.pipe()
+        env = {**os.environ, "NUMBA_NUM_THREADS": str(threads)}
+        command = [sys.executable, "-m", "mesh_normal.datasets.runner"]
+        command += [str(to_child_read), str(from_child_write)]
+        self.process = subprocess.Popen(
+            command,
+            pass_fds=(to_child_read, from_child_write),
+            env=env,
+            stdin=subprocess.DEVNULL,
+            start_new_session=True,  # Ctrl-C goes to the driver, which stops the children
+        )
+        os.close(to_child_read)
+        os.close(from_child_write)
+        self.to_child = Connection(to_child_write, readable=False)
+        self.from_child = Connection(from_child_read, writable=False)
+        if not self.from_child.poll(START_SECONDS) or self.from_child.recv() != "ready":
+            self.kill()
+            raise RunnerError("The worker process did not start.")
+
+    def send(self, message: object) -> None:
+        self.to_child.send(message)
+
+    def wait(self, timeout: float | None) -> bool:
+        return self.from_child.poll(timeout)
+
+    def receive(self) -> Any:
+        return self.from_child.recv()
+
+    def kill(self) -> int | None:
+        if self.process.poll() is None:
+            self.process.kill()
+        code = self.process.wait()
+        for connection in (self.to_child, self.from_child):
+            connection.close()
+        return code
+
+
+_shared: FileRunner | None = None
+_shared_lock = threading.Lock()
+
+
+def shared_runner() -> FileRunner:
+    """The process's one runner, made on first use (a Dask task calls
+    ``shared_runner().run(task, options)``)."""
+    global _shared
+    with _shared_lock:
+        if _shared is None:
+            _shared = FileRunner()
+        return _shared
+
+
+# --- the child ----------------------------------------------------------------------------
+
+
+def warm() -> None:
+    """Run the mesh report once on a tetrahedron: imports and loads every kernel it uses."""
+    import numpy as np
+
+    from mesh_normal.analysis import analyse_mesh, build_report
+    from mesh_normal.files import read_mesh, write_mesh
+
+    vertices = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=np.float64)
+    faces = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    data = write_mesh(vertices, faces, "stl")
+    build_report(analyse_mesh(read_mesh(data, "warm.stl"), "warm.stl", len(data)))
+
+
+def _address_space() -> int:
+    """The process's virtual memory size in bytes (``VmSize``), or 0 when unknown."""
+    try:
+        with open("/proc/self/status", "rb") as status:
+            for line in status:
+                if line.startswith(b"VmSize:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return 0
+
+
+def _limit_memory(baseline: int, memory_mb: float | None) -> None:
+    import resource
+
+    _, hard = resource.getrlimit(resource.RLIMIT_AS)
+    soft = hard if memory_mb is None or not baseline else baseline + int(memory_mb * 1e6)
+    if hard != resource.RLIM_INFINITY:
+        soft = min(soft, hard)
+    resource.setrlimit(resource.RLIMIT_AS, (soft, hard))
+
+
+def serve(receive: Connection, send: Connection) -> None:
+    """The child's loop: a (task, options) in, its row out, until the pipe closes."""
+    from mesh_normal.datasets.job import run_file
+
+    warm()
+    baseline = _address_space()
+    send.send("ready")
+    while True:
+        try:
+            task, options = receive.recv()
+        except EOFError:
+            return
+        _limit_memory(baseline, options.memory_mb)
+        row = run_file(task, options)
+        _limit_memory(baseline, None)
+        send.send(row)
+
+
+def main(argv: list[str]) -> None:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    receive = Connection(int(argv[0]), writable=False)
+    send = Connection(int(argv[1]), readable=False)
+    with contextlib.suppress(BrokenPipeError, EOFError):
+        serve(receive, send)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
