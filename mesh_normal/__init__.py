@@ -24,9 +24,9 @@ __version__ = "0.2.0"
 
 if TYPE_CHECKING:
     from mesh_normal.analysis import analyse
-    from mesh_normal.batch import BatchNormals, triangle_normals
     from mesh_normal.checks import CheckedMesh, checked_mesh
     from mesh_normal.corners import CornerNormals, corner_normals
+    from mesh_normal.datasets.driver import batch
     from mesh_normal.faces import FaceGeometry, FaceNormals, face_areas, face_geometry, face_normals
     from mesh_normal.files import LoadedMesh, MeshFileError, read_mesh, write_mesh
     from mesh_normal.orientation import Orientation, orient, signed_volume
@@ -43,14 +43,16 @@ if TYPE_CHECKING:
     from mesh_normal.report import MeshReport
     from mesh_normal.topology import MeshTopology, mesh_topology
     from mesh_normal.triangle import TriangleNormal, triangle_normal
+    from mesh_normal.triangle_batch import BatchNormals, triangle_normals
     from mesh_normal.vertices import VertexNormals, vertex_normals
 
 #: Public name to the module that defines it (``module:name`` where the name differs there). No
 #: module may be named like a public name: the submodule, once imported, would shadow it as an
 #: attribute of the package.
 _HOMES = {
-    "BatchNormals": "batch",
-    "triangle_normals": "batch",
+    "BatchNormals": "triangle_batch",
+    "triangle_normals": "triangle_batch",
+    "batch": "datasets.driver",  # mn.batch(paths, out=DIR): a Parquet table of reports
     "CheckedMesh": "checks",
     "checked_mesh": "checks",
     "CornerNormals": "corners",
@@ -104,6 +106,7 @@ __all__ = [
     "VertexNormals",
     "__version__",
     "analyse",
+    "batch",
     "checked_mesh",
     "compile_kernels",
     "corner_normals",

@@ -24,7 +24,7 @@ from app.web.jsonio import (
     read_body,
     request_body_spec,
 )
-from mesh_normal.batch import triangle_normals
+from mesh_normal.triangle_batch import triangle_normals
 from mesh_normal.triangle import triangle_normal
 
 router = APIRouter(

@@ -6,7 +6,7 @@ import csv
 import io
 from typing import Any
 
-from mesh_normal.batch import BatchNormals
+from mesh_normal.triangle_batch import BatchNormals
 from mesh_normal.triangle import TriangleNormal
 
 

@@ -104,9 +104,10 @@ def _mesh(task: FileTask, options: BatchOptions, data: bytes, row: dict[str, Any
     report = build_report(analysis)
     stored = report.file_normals
     codes = [problem.code for problem in report.problems]
+    serious = any(problem.severity != "info" for problem in report.problems)
     row.update(
         format=mesh.format,
-        status="problems" if codes else "ok",
+        status="problems" if serious else "ok",
         vertices=report.vertices,
         faces=report.faces,
         components=report.components,

@@ -20,6 +20,17 @@ def default_workers() -> int:
         return max(1, os.cpu_count() or 1)
 
 
+#: fsspec protocols whose files live in one process: a worker process would see none of them.
+IN_PROCESS_PROTOCOLS = ("memory://",)
+
+
+def in_process(tasks: Sequence[FileTask], options: BatchOptions) -> bool:
+    """Whether the batch must run here, in this process: its inputs or outputs are in
+    ``memory://`` (then one file at a time, without the time and memory limits)."""
+    urls = [options.out, *(task.url for task in tasks)]
+    return any(url.startswith(IN_PROCESS_PROTOCOLS) for url in urls)
+
+
 def run_local(
     tasks: Sequence[FileTask], options: BatchOptions, workers: int | None = None
 ) -> Iterator[dict[str, Any]]:
@@ -27,8 +38,15 @@ def run_local(
 
     Each worker is a thread here driving its own :class:`~mesh_normal.datasets.runner.FileRunner`
     (a child process, so numba and NumPy run in parallel); closing the iterator early (Ctrl-C,
-    ``break``) stops the children, and the files not finished have no row.
+    ``break``) stops the children, and the files not finished have no row. A batch in
+    ``memory://`` runs in this process instead (see :func:`in_process`).
     """
+    if in_process(tasks, options):
+        from mesh_normal.datasets.job import run_file
+
+        for task in tasks:
+            yield run_file(task, options)
+        return
     count = min(workers or default_workers(), max(1, len(tasks)))
     todo: queue.SimpleQueue[FileTask | None] = queue.SimpleQueue()
     for task in tasks:

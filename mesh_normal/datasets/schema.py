@@ -32,7 +32,8 @@ COLUMNS: tuple[tuple[str, str, bool, str], ...] = (
         "status",
         _STRING,
         False,
-        "ok (no problem found), problems (read, with problems listed), unreadable, too_large "
+        "ok (read; no problem, or only notes of severity info), problems (an error or a warning "
+        "of the diagnosis: problems_found), unreadable, too_large "
         "(over --max-file-mb or the memory limit), timed_out (over --timeout).",
     ),
     ("error", _STRING, True, "Why the file has no report, in one sentence; null otherwise."),

@@ -53,7 +53,7 @@ def test_the_core_modules_are_found() -> None:
         "mesh_normal",
         "mesh_normal.exact",
         "mesh_normal.triangle",
-        "mesh_normal.batch",
+        "mesh_normal.triangle_batch",
         "mesh_normal.tolerances",
         "mesh_normal.files",
         "mesh_normal.report",

@@ -46,7 +46,7 @@ def single(client, triangle, swap: bool = False):  # type: ignore[no-untyped-def
 
 
 def assert_agrees(item: dict, exact: dict) -> None:
-    """A batch row against the exact single-triangle answer (batch.py's documented precision)."""
+    """A batch row against the exact single-triangle answer (triangle_batch.py's documented precision)."""
     assert set(item) == ITEM_KEYS
     assert item["degenerate"] is exact["degenerate"]
     for key in ("magnitude", "area"):
@@ -76,7 +76,7 @@ def test_batch_agrees_with_the_single_endpoint(client, swap: bool) -> None:  # t
 
 @pytest.mark.parametrize("swap", [False, True])
 def test_every_sign_matches_the_single_endpoint(client, swap: bool) -> None:  # type: ignore[no-untyped-def]
-    """batch.py promises the sign of every component (zeros included) is the exact one."""
+    """triangle_batch.py promises the sign of every component (zeros included) is the exact one."""
     results = post_batch(client, MIXED, swap)
     for item, triangle in zip(results, MIXED, strict=True):
         exact = single(client, triangle, swap)

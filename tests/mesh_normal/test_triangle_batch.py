@@ -1,4 +1,4 @@
-"""Tests for mesh_normal.batch: vectorised float64 normals with an exact fallback."""
+"""Tests for mesh_normal.triangle_batch: vectorised float64 normals with an exact fallback."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from hypothesis.extra import numpy as hnp
 from mesh_normal import BatchNormals, TriangleNormal, triangle_normal, triangle_normals
 
 #: The documented worst case for a row kept in float64: its unit normal points within
-#: about sqrt(3) / 2**26 radians of the exact one (module docstring of mesh_normal.batch).
+#: about sqrt(3) / 2**26 radians of the exact one (module docstring of mesh_normal.triangle_batch).
 DOCUMENTED_ANGLE = 3e-8
 #: What ordinary triangles (no near-cancellation) should achieve.
 GENERAL = 1e-12
