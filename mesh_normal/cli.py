@@ -1,4 +1,5 @@
-"""The ``mesh-normal`` command: analyse, export normals, fix winding; point-cloud normals.
+"""The ``mesh-normal`` command: analyse, export normals, fix winding; point-cloud normals;
+``batch``, the report on every file of a dataset (:mod:`mesh_normal.datasets.command`).
 
 Exit codes a script can use:
 
@@ -880,6 +881,10 @@ def parser() -> argparse.ArgumentParser:
     )
     points_parser.add_argument("--json", action="store_true", help="the summary as JSON")
     points_parser.set_defaults(run=points)
+
+    from mesh_normal.datasets.command import add_batch
+
+    add_batch(commands)
 
     serve_parser = commands.add_parser(
         "serve",

@@ -150,9 +150,18 @@ def batch_options(**given: Any) -> BatchOptions:
 
 
 def fingerprint(options: BatchOptions) -> str:
-    """What rows depend on (every option but where they are written): a part made with other
-    options is not reused."""
-    text = repr(astuple(replace(options, out="")))
+    """What a report depends on (every option but where outputs go and the limits): a part
+    made with other options is not reused."""
+    unlimited = replace(options, out="", timeout=None, max_file_mb=None, memory_mb=None)
+    return _digest(repr(astuple(unlimited)))
+
+
+def limits_key(options: BatchOptions) -> str:
+    """The limits: a timed_out or too_large row is reused only under the same ones."""
+    return _digest(repr((options.timeout, options.max_file_mb, options.memory_mb)))
+
+
+def _digest(text: str) -> str:
     return hashlib.blake2b(text.encode(), digest_size=8).hexdigest()
 
 
@@ -164,12 +173,14 @@ def run_batch(
     scheduler: str | None = None,
     workers: int | None = None,
     progress: Callable[[BatchProgress], None] | None = None,
+    flush_rows: int = FLUSH_ROWS,
 ) -> BatchResult:
-    """:func:`batch`, with what the run did beside the table."""
+    """:func:`batch`, with what the run did beside the table; ``flush_rows`` new rows make a
+    part (or :data:`FLUSH_SECONDS`)."""
     start = time.perf_counter()
     _needs_pyarrow()
     found = discover(paths, points=options.points, exclude=options.out)
-    store = PartStore(options.out, fingerprint(options))
+    store = PartStore(options.out, fingerprint(options), limits_key(options), flush_rows)
     kept = store.reusable(found.tasks)
     todo = [task for task in found.tasks if task.path not in kept]
     engine, rows = _engine(todo, options, client, scheduler, workers)
@@ -202,6 +213,8 @@ def run_batch(
 
 
 FAILED = frozenset({"unreadable", "too_large", "timed_out"})
+#: The statuses a limit decides: such a row is run again under other limits.
+LIMITED = frozenset({"too_large", "timed_out"})
 
 
 def _needs_pyarrow() -> None:
@@ -246,6 +259,8 @@ class PartStore:
 
     out: str
     options_key: str
+    limits: str
+    flush_rows: int = FLUSH_ROWS
     pending: list[dict[str, Any]] = field(default_factory=list)
     last_flush: float = field(default_factory=time.monotonic)
 
@@ -271,8 +286,12 @@ class PartStore:
             except (OSError, ValueError):  # a part cut short: its rows are run again
                 continue
             metadata = table.schema.metadata or {}
-            if metadata.get(b"options") == self.options_key.encode():
-                yield from table.to_pylist()
+            if metadata.get(b"options") != self.options_key.encode():
+                continue
+            same_limits = metadata.get(b"limits") == self.limits.encode()
+            for row in table.to_pylist():
+                if same_limits or row["status"] not in LIMITED:
+                    yield row
 
     def reusable(self, tasks: Sequence[FileTask]) -> dict[str, dict[str, Any]]:
         """The earlier rows that still hold: same path and size, and the same hash (a file
@@ -292,7 +311,7 @@ class PartStore:
     def add(self, row: dict[str, Any]) -> None:
         self.pending.append(row)
         late = time.monotonic() - self.last_flush > FLUSH_SECONDS
-        if len(self.pending) >= FLUSH_ROWS or late:
+        if len(self.pending) >= self.flush_rows or late:
             self.flush()
 
     def flush(self) -> None:
@@ -308,7 +327,11 @@ class PartStore:
         self.pending = []
 
     def _marked(self, table: pa.Table) -> pa.Table:
-        metadata = {**(table.schema.metadata or {}), b"options": self.options_key.encode()}
+        metadata = {
+            **(table.schema.metadata or {}),
+            b"options": self.options_key.encode(),
+            b"limits": self.limits.encode(),
+        }
         return table.replace_schema_metadata(metadata)
 
     def _write(self, name: str, table: pa.Table) -> str:

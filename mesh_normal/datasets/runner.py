@@ -174,8 +174,13 @@ def shared_runner() -> FileRunner:
 
 
 def warm() -> None:
-    """Run the mesh report once on a tetrahedron: imports and loads every kernel it uses."""
+    """Load every compiled kernel (numba's cache), and run the mesh report once on a
+    tetrahedron, so that no file pays for a first call."""
     import numpy as np
+
+    from mesh_normal.precompile import compile_kernels
+
+    compile_kernels()
 
     from mesh_normal.analysis import analyse_mesh, build_report
     from mesh_normal.files import read_mesh, write_mesh
@@ -226,8 +231,18 @@ def serve(receive: Connection, send: Connection) -> None:
         send.send(row)
 
 
+def _watch_parent(parent: int) -> None:
+    """Exit when the driver is gone (killed: no one reads the rows), even while the main
+    thread is blocked in a file that hangs."""
+    while os.getppid() == parent:
+        time.sleep(1.0)
+    os._exit(1)
+
+
 def main(argv: list[str]) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    watcher = threading.Thread(target=_watch_parent, args=(os.getppid(),), daemon=True)
+    watcher.start()
     receive = Connection(int(argv[0]), writable=False)
     send = Connection(int(argv[1]), readable=False)
     with contextlib.suppress(BrokenPipeError, EOFError):
