@@ -66,7 +66,7 @@ def test_hidden_files_and_the_output_folder_are_not_inputs(tmp_path: Path) -> No
 
 @pytest.mark.parametrize("given", ["/no/such/folder", "/no/such/*.stl", "memory://nothing/here"])
 def test_an_input_that_names_nothing_is_an_error(given: str) -> None:
-    with pytest.raises(InputError, match="nothing|not a file|matches no file"):
+    with pytest.raises(InputError, match=r"not a file|matches no file"):
         discover([given])
 
 
