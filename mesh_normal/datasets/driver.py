@@ -278,7 +278,8 @@ class PartStore:
         files = [f"{root}/{REPORT}"] if fs.exists(f"{root}/{REPORT}") else []
         if fs.isdir(f"{root}/{PARTS}"):
             parts = fs.ls(f"{root}/{PARTS}", detail=False)
-            files += sorted(p for p in parts if p.endswith(".parquet") and "/." not in p)
+            names = [(part.rsplit("/", 1)[-1], part) for part in parts]
+            files += sorted(part for name, part in names if _is_part(name))
         for path in files:
             try:
                 with fs.open(path, "rb") as file:
@@ -354,6 +355,11 @@ class PartStore:
         if fs.isdir(f"{root}/{PARTS}"):
             fs.rm(f"{root}/{PARTS}", recursive=True)
         return self.out.rstrip("/") + "/" + REPORT if is_url(self.out) else target
+
+
+def _is_part(name: str) -> bool:
+    """A finished part (not a temporary one, which starts with a dot)."""
+    return name.startswith("part-") and name.endswith(".parquet")
 
 
 def _same_hash(task: FileTask, row: dict[str, Any]) -> bool:
