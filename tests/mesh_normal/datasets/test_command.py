@@ -178,3 +178,18 @@ def test_killed_and_interrupted_runs_end_with_the_same_table(tmp_path: Path) -> 
         row["outputs"] = [path.replace(str(whole), str(out)) for path in row["outputs"]]
     assert mine == theirs
     assert mine[-1]["path"].endswith("zz/hang.stl") and mine[-1]["volume"] == 343.0
+
+
+def test_points(dataset: Dataset, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    root, _ = dataset
+    argv = ["batch", str(root / "other"), "--out", str(tmp_path), "--points", "--json"]
+    assert main([*argv, "--normals", "vertex", "--format", "ply"]) == 0
+    found = json.loads(capsys.readouterr().out)
+    assert found["by_status"]["ok"] == 1 and found["by_status"]["unreadable"] == 1
+    table = pq.read_table(tmp_path / "report.parquet").to_pylist()
+    cloud, notes = table
+    assert cloud["kind"] == "points" and cloud["points"] == 200
+    assert cloud["outputs"] == [
+        f"{tmp_path}/normals/{root.as_posix()[1:]}/other/cloud.xyz.points.ply"
+    ]
+    assert notes["path"].endswith("notes.txt") and notes["status"] == "unreadable"
