@@ -24,8 +24,8 @@ from app.web.jsonio import (
     read_body,
     request_body_spec,
 )
-from mesh_normal.triangle_batch import triangle_normals
 from mesh_normal.triangle import triangle_normal
+from mesh_normal.triangle_batch import triangle_normals
 
 router = APIRouter(
     prefix="/api",

@@ -6,8 +6,8 @@ import csv
 import io
 from typing import Any
 
-from mesh_normal.triangle_batch import BatchNormals
 from mesh_normal.triangle import TriangleNormal
+from mesh_normal.triangle_batch import BatchNormals
 
 
 def normal_payload(result: TriangleNormal) -> dict[str, Any]:

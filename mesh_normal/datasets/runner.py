@@ -128,6 +128,7 @@ class _Child:
             pass_fds=(to_child_read, from_child_write),
             env=env,
             stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL,  # the driver's stdout is the summary (--json: JSON)
             start_new_session=True,  # Ctrl-C goes to the driver, which stops the children
         )
         os.close(to_child_read)

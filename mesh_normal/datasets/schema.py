@@ -52,7 +52,12 @@ COLUMNS: tuple[tuple[str, str, bool, str], ...] = (
     ("faces_flipped", _INT, True, "How many faces the fix (--fix, mn.orient) reverses."),
     ("stored_normals", _STRING, True, "Which normals the file stores (face, vertex, corner)."),
     ("stored_compared", _INT, True, "Stored normals compared with ours."),
-    ("stored_agreeing", _INT, True, "Of those, how many agree with ours (within 1 degree)."),
+    (
+        "stored_agreeing",
+        _INT,
+        True,
+        "Of those, how many agree with ours (1 degree; clouds: 10, as lines).",
+    ),
     ("stored_opposite", _INT, True, "Of those, how many point against ours (over 90 degrees)."),
     (
         "stored_median_degrees",
@@ -68,8 +73,9 @@ COLUMNS: tuple[tuple[str, str, bool, str], ...] = (
         "problems_found",
         _STRINGS,
         False,
-        "The problem codes found (mesh: winding, inward, open, degenerate, ...; points: the "
-        "diagnosis' codes); empty when none.",
+        "The problem codes found, every severity (meshes: the report's, such as winding, "
+        "inward, open, degenerate, nonmanifold, components; point clouds: without_normal, "
+        "unoriented, file_normals); empty when none.",
     ),
     ("outputs", _STRINGS, False, "The files written for it under --out, as URLs."),
     ("wall_seconds", _FLOAT, False, "The time its job took, reading and writing included."),

@@ -46,7 +46,7 @@ def single(client, triangle, swap: bool = False):  # type: ignore[no-untyped-def
 
 
 def assert_agrees(item: dict, exact: dict) -> None:
-    """A batch row against the exact single-triangle answer (triangle_batch.py's documented precision)."""
+    """A batch row against the exact single-triangle answer (triangle_batch's precision)."""
     assert set(item) == ITEM_KEYS
     assert item["degenerate"] is exact["degenerate"]
     for key in ("magnitude", "area"):

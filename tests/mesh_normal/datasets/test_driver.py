@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 from typing import Any
 
@@ -150,3 +151,32 @@ def test_a_memory_dataset() -> None:
 def test_bad_options_are_one_sentence(given: dict[str, Any], sentence: str) -> None:
     with pytest.raises(ValueError, match=sentence):
         mn.batch("nowhere", out="out", **given)
+
+
+def test_a_hung_and_a_large_file_do_not_stop_the_batch(tmp_path: Path) -> None:
+    inputs = tmp_path / "in"
+    inputs.mkdir()
+    for side in (1, 2, 3):
+        (inputs / f"cube{side}.ply").write_bytes(cube(side, "ply"))
+    os.mkfifo(inputs / "hang.stl")  # blocks whoever reads it
+    # A cube of side 5 with a comment of 2 MB.
+    (inputs / "large.obj").write_bytes(cube(5, "obj") + b"# " + b"x" * 2_000_000 + b"\n")
+    result = run_batch(
+        [str(inputs)], batch_options(out=str(tmp_path / "out"), timeout=1.0, max_file_mb=1.0)
+    )
+    rows = {Path(row["path"]).name: row for row in result.table.to_pylist()}
+    assert [rows[f"cube{side}.ply"]["volume"] for side in (1, 2, 3)] == [1.0, 8.0, 27.0]
+    assert rows["hang.stl"]["status"] == "timed_out"
+    assert rows["large.obj"]["status"] == "too_large"
+    assert rows["large.obj"]["error"] == "It is 2.0 MB, over the limit of 1 MB (--max-file-mb)."
+    # Run again under the same limits: every row is kept (the pipe is not opened again) ...
+    assert run_batch([str(inputs)], batch_options(out=str(tmp_path / "out"), timeout=1.0,
+                     max_file_mb=1.0)).reused == 5  # fmt: skip
+    # ... and under others the two limited rows run again.
+    (inputs / "hang.stl").unlink()
+    (inputs / "hang.stl").write_bytes(cube(4, "stl"))
+    again = run_batch([str(inputs)], batch_options(out=str(tmp_path / "out"), max_file_mb=5))
+    assert again.reused == 3
+    volumes = {Path(row["path"]).name: row["volume"] for row in again.table.to_pylist()}
+    assert volumes == {"cube1.ply": 1.0, "cube2.ply": 8.0, "cube3.ply": 27.0, "hang.stl": 64.0,
+                       "large.obj": 125.0}  # fmt: skip

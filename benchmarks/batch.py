@@ -1,0 +1,138 @@
+"""The batch on many small files: files per second on one and two local workers, per-file cost.
+
+    make bench-batch              # or: .venv/bin/python -m benchmarks.batch [--files 1000]
+    make bench-batch ARGS="--files 100 --rounds 2"
+
+N binary STL files of noisy tori (:func:`benchmarks.mesh_kernels.torus_mesh`) with face counts
+spread evenly on a log scale from 1,000 to 100,000 (Thingi10K-sized; 1,000 files are about
+1 GB), written once to ``$BATCH_BENCH_DIR`` (default ``/tmp/mesh-batch-bench``) and reused.
+Each round, in turn:
+
+1. the report of every file in this process (``mn.analyse(path)``, numba warm, one thread as
+   in a worker): the sum of the per-file report times, the work itself;
+2. ``run_batch`` with one worker, then with two, each into a fresh output folder: the wall
+   time from the call to the table written, worker start included;
+3. the start alone: a batch of one tiny file.
+
+Printed: files per second for each, the two-worker speed-up (target at least 1.8), and the
+per-file overhead, (one-worker batch - sum of report times) / N, with and without the worker's
+start (target under 10 ms). Medians over ``--rounds``; the machine is shared, so only ratios
+within one run count (note the load, ``uptime``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import statistics
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from benchmarks.mesh_kernels import torus_mesh
+
+CACHE = Path(os.environ.get("BATCH_BENCH_DIR", "/tmp/mesh-batch-bench"))
+TARGET_SPEEDUP, TARGET_OVERHEAD = 1.8, 0.010
+
+
+def face_counts(files: int, low: int = 1_000, high: int = 100_000) -> list[int]:
+    """``files`` face counts, evenly spread on a log scale from ``low`` to ``high``."""
+    return [round(n) for n in np.geomspace(low, high, files)]
+
+
+def dataset(files: int) -> Path:
+    """The folder of ``files`` STL files, written once and reused."""
+    import mesh_normal as mn
+
+    folder = CACHE / f"stl-{files}"
+    if folder.exists() and len(list(folder.iterdir())) == files:
+        return folder
+    shutil.rmtree(folder, ignore_errors=True)
+    partial = folder.with_suffix(".partial")
+    shutil.rmtree(partial, ignore_errors=True)
+    partial.mkdir(parents=True)
+    for index, faces in enumerate(face_counts(files)):
+        vertices, triangles = torus_mesh(faces, seed=index)
+        (partial / f"torus-{index:05d}.stl").write_bytes(mn.write_mesh(vertices, triangles, "stl"))
+    partial.rename(folder)
+    return folder
+
+
+def report_seconds(folder: Path) -> float:
+    """The sum of the per-file report times, in this process."""
+    import mesh_normal as mn
+
+    total = 0.0
+    for path in sorted(folder.iterdir()):
+        start = time.perf_counter()
+        mn.analyse(path)
+        total += time.perf_counter() - start
+    return total
+
+
+def batch_seconds(inputs: Path, workers: int) -> float:
+    """One batch's wall time, from the call to the table written."""
+    from mesh_normal.datasets.driver import batch_options, run_batch
+
+    with tempfile.TemporaryDirectory(prefix="bench-batch-") as out:
+        start = time.perf_counter()
+        result = run_batch([str(inputs)], batch_options(out=out), workers=workers)
+        seconds = time.perf_counter() - start
+    statuses = set(result.table.column("status").to_pylist())
+    assert statuses <= {"ok", "problems"}, statuses
+    return seconds
+
+
+def main() -> None:
+    # The reports in this process on one thread, as each worker runs them (NUMBA_NUM_THREADS=1).
+    os.environ["NUMBA_NUM_THREADS"] = "1"
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--files", type=int, default=1_000)
+    parser.add_argument("--rounds", type=int, default=2)
+    args = parser.parse_args()
+    import mesh_normal as mn
+
+    folder = dataset(args.files)
+    size = sum(path.stat().st_size for path in folder.iterdir())
+    print(f"{args.files} STL files, 1,000 to 100,000 faces, {size / 1e6:,.0f} MB; load {load()}")
+    tiny = CACHE / "tiny"
+    tiny.mkdir(parents=True, exist_ok=True)
+    vertices, faces = torus_mesh(100)
+    (tiny / "tiny.stl").write_bytes(mn.write_mesh(vertices, faces, "stl"))
+    mn.compile_kernels()
+    reports, ones, twos, starts = [], [], [], []
+    for _ in range(args.rounds):
+        reports.append(report_seconds(folder))
+        ones.append(batch_seconds(folder, 1))
+        twos.append(batch_seconds(folder, 2))
+        starts.append(batch_seconds(tiny, 1))
+    report, one, two, start = (statistics.median(x) for x in (reports, ones, twos, starts))
+    n = args.files
+    print(f"sum of the per-file reports, in process: {report:.2f} s ({n / report:.1f} files/s)")
+    print(f"batch, 1 worker:  {one:.2f} s  {n / one:.1f} files/s")
+    print(f"batch, 2 workers: {two:.2f} s  {n / two:.1f} files/s")
+    speedup, steady_speedup = one / two, (one - start) / (two - start)
+    verdict = "meets" if speedup >= TARGET_SPEEDUP else "misses"
+    print(
+        f"2 workers / 1 worker: {speedup:.2f}x ({verdict} the {TARGET_SPEEDUP}x target); "
+        f"{steady_speedup:.2f}x without the workers' start (they start side by side)"
+    )
+    overhead = (one - report) / n
+    steady = (one - start - report) / n
+    verdict = "meets" if steady < TARGET_OVERHEAD else "misses"
+    print(
+        f"per-file overhead: {1e3 * overhead:.1f} ms with the worker's start ({start:.2f} s "
+        f"once), {1e3 * steady:.1f} ms without ({verdict} the 10 ms target)"
+    )
+    print(f"load after: {load()}")
+
+
+def load() -> str:
+    return ", ".join(f"{value:.2f}" for value in os.getloadavg())
+
+
+if __name__ == "__main__":
+    main()
