@@ -18,7 +18,7 @@ from app.mesh import warmup
 from app.points import api as points_api
 from app.points import page as points_page
 from app.points import work as points_work
-from app.web import handlers
+from app.web import handlers, health
 from app.web.jobs import Jobs
 from app.web.jsonio import FastJSONResponse
 from app.web.middleware import BodyLimit, HeadAsGet, PageCompression, SecurityHeaders
@@ -89,6 +89,7 @@ def create_app(upload_limit: int | None = None, settings: config.Settings | None
     app.include_router(pages.router)
     app.include_router(mesh_page.router)
     app.include_router(points_page.router)
+    app.include_router(health.router)
     app.mount("/static", CompressedStaticFiles(directory=STATIC_DIR), name="static")
     app.add_middleware(PageCompression)
     app.state.upload_limit = settings.upload_limit if upload_limit is None else upload_limit
