@@ -73,17 +73,23 @@ def report_seconds(folder: Path) -> float:
     return total
 
 
-def batch_seconds(inputs: Path, workers: int) -> float:
-    """One batch's wall time, from the call to the table written."""
+def batch_seconds(inputs: Path, workers: int) -> tuple[float, float]:
+    """One batch's wall time, from the call to the table written, and the CPU time its
+    worker processes used (they are waited for when the batch ends)."""
     from mesh_normal.datasets.driver import batch_options, run_batch
 
     with tempfile.TemporaryDirectory(prefix="bench-batch-") as out:
+        before = os.times()
         start = time.perf_counter()
         result = run_batch([str(inputs)], batch_options(out=out), workers=workers)
         seconds = time.perf_counter() - start
+        after = os.times()
     statuses = set(result.table.column("status").to_pylist())
     assert statuses <= {"ok", "problems"}, statuses
-    return seconds
+    cpu = (after.children_user + after.children_system) - (
+        before.children_user + before.children_system
+    )
+    return seconds, cpu
 
 
 def main() -> None:
@@ -104,12 +110,21 @@ def main() -> None:
     (tiny / "tiny.stl").write_bytes(mn.write_mesh(vertices, faces, "stl"))
     mn.compile_kernels()
     reports, ones, twos, starts = [], [], [], []
+    cpu_ones, cpu_twos, cpu_starts = [], [], []
     for _ in range(args.rounds):
         reports.append(report_seconds(folder))
-        ones.append(batch_seconds(folder, 1))
-        twos.append(batch_seconds(folder, 2))
-        starts.append(batch_seconds(tiny, 1))
+        seconds, cpu = batch_seconds(folder, 1)
+        ones.append(seconds)
+        cpu_ones.append(cpu)
+        seconds, cpu = batch_seconds(folder, 2)
+        twos.append(seconds)
+        cpu_twos.append(cpu)
+        seconds, cpu = batch_seconds(tiny, 1)
+        starts.append(seconds)
+        cpu_starts.append(cpu)
     report, one, two, start = (statistics.median(x) for x in (reports, ones, twos, starts))
+    cpu_one, cpu_two = statistics.median(cpu_ones), statistics.median(cpu_twos)
+    cpu_start = statistics.median(cpu_starts)
     n = args.files
     print(f"sum of the per-file reports, in process: {report:.2f} s ({n / report:.1f} files/s)")
     print(f"batch, 1 worker:  {one:.2f} s  {n / one:.1f} files/s")
@@ -119,6 +134,12 @@ def main() -> None:
     print(
         f"2 workers / 1 worker: {speedup:.2f}x ({verdict} the {TARGET_SPEEDUP}x target); "
         f"{steady_speedup:.2f}x without the workers' start (they start side by side)"
+    )
+    work_one, work_two = cpu_one - cpu_start, cpu_two - 2 * cpu_start
+    print(
+        f"workers' CPU time: {cpu_one:.2f} s on 1, {cpu_two:.2f} s on 2, {cpu_start:.2f} s a "
+        f"start; without the starts {work_one:.2f} s and {work_two:.2f} s: "
+        f"{work_one / work_two:.2f} of the work per file (the wall ratio needs two idle cores)"
     )
     overhead = (one - report) / n
     steady = (one - start - report) / n

@@ -24,6 +24,10 @@ def default_workers() -> int:
 IN_PROCESS_PROTOCOLS = ("memory://",)
 
 
+#: Seconds to wait for a worker thread to stop once its child is killed.
+JOIN_SECONDS = 5.0
+
+
 def in_process(tasks: Sequence[FileTask], options: BatchOptions) -> bool:
     """Whether the batch must run here, in this process: its inputs or outputs are in
     ``memory://`` (then one file at a time, without the time and memory limits)."""
@@ -83,3 +87,5 @@ def run_local(
         stop.set()
         for runner in runners:
             runner.kill()
+        for thread in threads:  # each reaps its child (a killed one returns at once)
+            thread.join(JOIN_SECONDS)
