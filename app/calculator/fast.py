@@ -17,13 +17,13 @@ compares the two on random and adversarial triangles.
 
 from __future__ import annotations
 
-from math import atan2, degrees, gcd, isfinite
+from math import atan2, degrees, gcd, isfinite, isqrt
 from typing import Any
 
 from app.calculator.calculation import DOUBLES_HINT
 from app.calculator.exact_forms import MAX_DIGITS, TOO_LONG, equation_text
 from app.web.formatting import js_number
-from mesh_normal.exact import OutOfRange, ratio_sqrt, sqrt_scaled
+from mesh_normal.exact import _GUARD_BITS, OutOfRange, ratio_sqrt
 
 Point = list[float]
 
@@ -37,42 +37,64 @@ def fast_payload(a: Point, b: Point, c: Point, swap_winding: bool) -> dict[str, 
     """The same dict as the exact path for ABC (ACB with ``swap_winding``), or ``None``.
 
     ``None`` where the fast path cannot be sure of the same answer (see the module docstring).
+    Written out long hand: every call and comprehension here costs a request's time.
     """
-    given = (*a, *b, *c)
-    if len(given) != 9 or not all(type(x) is float and isfinite(x) for x in given):
+    if len(a) != 3 or len(b) != 3 or len(c) != 3:
         return None
     p, q, r = (a, c, b) if swap_winding else (a, b, c)
+    px, py, pz = p
+    qx, qy, qz = q
+    rx, ry, rz = r
+    for x in (px, py, pz, qx, qy, qz, rx, ry, rz):
+        if type(x) is not float:
+            return None
+    # A sum that is not finite: some value is not, or the sum overflows (then the exact path).
+    if not isfinite(px + py + pz + qx + qy + qz + rx + ry + rz):
+        return None
     # u and v: one correctly rounded subtraction each (+ 0.0 writes the exact zero as 0.0).
-    u = [q[0] - p[0] + 0.0, q[1] - p[1] + 0.0, q[2] - p[2] + 0.0]
-    v = [r[0] - p[0] + 0.0, r[1] - p[1] + 0.0, r[2] - p[2] + 0.0]
-    if not all(isfinite(x) for x in (*u, *v)):
+    u = [qx - px + 0.0, qy - py + 0.0, qz - pz + 0.0]
+    v = [rx - px + 0.0, ry - py + 0.0, rz - pz + 0.0]
+    if not isfinite(abs(u[0]) + abs(u[1]) + abs(u[2]) + abs(v[0]) + abs(v[1]) + abs(v[2])):
         return None
 
-    # Every coordinate as an integer over one scale 2**-k (mesh_normal.exact.to_fixed).
-    ratios = [x.as_integer_ratio() for x in (*p, *q, *r)]
-    shifts = [den.bit_length() - 1 for _, den in ratios]
-    k = max(shifts)
-    px, py, pz, qx, qy, qz, rx, ry, rz = (
-        num << (k - shift) for (num, _), shift in zip(ratios, shifts, strict=True)
-    )
-    ux, uy, uz = qx - px, qy - py, qz - pz
-    vx, vy, vz = rx - px, ry - py, rz - pz
+    # Every coordinate as an integer over one scale 1 / D, D = 2**k (mesh_normal.exact.to_fixed).
+    pxn, pxd = px.as_integer_ratio()
+    pyn, pyd = py.as_integer_ratio()
+    pzn, pzd = pz.as_integer_ratio()
+    qxn, qxd = qx.as_integer_ratio()
+    qyn, qyd = qy.as_integer_ratio()
+    qzn, qzd = qz.as_integer_ratio()
+    rxn, rxd = rx.as_integer_ratio()
+    ryn, ryd = ry.as_integer_ratio()
+    rzn, rzd = rz.as_integer_ratio()
+    scale = max(pxd, pyd, pzd, qxd, qyd, qzd, rxd, ryd, rzd)
+    k = scale.bit_length() - 1
+    px_, py_, pz_ = pxn * (scale // pxd), pyn * (scale // pyd), pzn * (scale // pzd)
+    ux = qxn * (scale // qxd) - px_
+    uy = qyn * (scale // qyd) - py_
+    uz = qzn * (scale // qzd) - pz_
+    vx = rxn * (scale // rxd) - px_
+    vy = ryn * (scale // ryd) - py_
+    vz = rzn * (scale // rzd) - pz_
     nx, ny, nz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx  # over 2**(2k)
     square = nx * nx + ny * ny + nz * nz  # |n|**2 over 2**(4k)
     if square == 0:
         return None  # degenerate: the exact path writes its message
-
-    d = nx * px + ny * py + nz * pz  # the plane's n . A, over 2**(3k)
-    if _forms_may_fit(ratios, k, (ux, uy, uz, vx, vy, vz), (nx, ny, nz), d, square):
+    d = nx * px_ + ny * py_ + nz * pz_  # the plane's n . A, over 2**(3k)
+    if _forms_may_fit(k, (ux, uy, uz, vx, vy, vz, nx, ny, nz, d, square), (*p, *q, *r)):
         return None
+
+    den2 = scale * scale
     try:
-        den2 = 1 << (2 * k)
-        normal = [_divided(nx, den2), _divided(ny, den2), _divided(nz, den2)]
-        magnitude = sqrt_scaled(square, 2 * k)
-        area = sqrt_scaled(square, 2 * k + 1)
-    except OutOfRange:
-        return None  # the exact path names the values beyond the double range
-    unit = [_unit(nx, square), _unit(ny, square), _unit(nz, square)]
+        normal = [nx / den2, ny / den2, nz / den2]  # int / int: rounded once
+    except OverflowError:
+        return None
+    if (normal[0] == 0.0 and nx) or (normal[1] == 0.0 and ny) or (normal[2] == 0.0 and nz):
+        return None  # nonzero below the doubles: the exact path says so
+    magnitude = _root_scaled(square, 2 * k)
+    if magnitude is None or magnitude < _HALVES_EXACTLY:
+        return None
+    area = magnitude * 0.5  # the exact half rounded once, as the magnitude is a normal double
     return {
         "a": list(a),
         "b": list(b),
@@ -82,7 +104,7 @@ def fast_payload(a: Point, b: Point, c: Point, swap_winding: bool) -> dict[str, 
         "v": v,
         "normal": normal,
         "magnitude": magnitude,
-        "unit_normal": unit,
+        "unit_normal": [_unit(nx, square), _unit(ny, square), _unit(nz, square)],
         "area": area,
         "degenerate": False,
         "plane": _plane(normal, d, 3 * k),
@@ -94,6 +116,36 @@ def fast_payload(a: Point, b: Point, c: Point, swap_winding: bool) -> dict[str, 
     }
 
 
+#: From here up, halving a double is exact and is the correctly rounded half of its exact value.
+_HALVES_EXACTLY = 2.0**-1020
+
+
+def _root_scaled(square: int, exponent: int) -> float | None:
+    """:func:`mesh_normal.exact.sqrt_scaled`, step for step; ``None`` for out of range."""
+    shift = max(0, 53 + _GUARD_BITS - square.bit_length() // 2)
+    quotient = square << (2 * shift)
+    root = isqrt(quotient)
+    sticky = (root << 1) | (root * root != quotient)
+    try:
+        value = sticky / (1 << (exponent + shift + 1))
+    except OverflowError:
+        return None
+    return value or None  # zero: nonzero below the doubles
+
+
+def _unit(ni: int, square: int) -> float:
+    """``ni / sqrt(square)`` as :func:`mesh_normal.exact.ratio_sqrt` rounds it, step for step."""
+    if ni == 0:
+        return 0.0
+    part = ni * ni
+    shift = 53 + _GUARD_BITS + max(0, square.bit_length() - part.bit_length()) // 2 + 1
+    quotient, remainder = divmod(part << (2 * shift), square)
+    root = isqrt(quotient)
+    sticky = (root << 1) | (remainder != 0 or root * root != quotient)
+    value = sticky / (1 << (shift + 1))  # below the doubles: 0.0, as ratio_sqrt has it
+    return -value if ni < 0 else value
+
+
 def _divided(value: int, denominator: int) -> float:
     """``value / denominator`` rounded once (int / int is correctly rounded in Python)."""
     try:
@@ -103,11 +155,6 @@ def _divided(value: int, denominator: int) -> float:
     if result == 0.0 and value != 0:
         raise OutOfRange("underflow")
     return result
-
-
-def _unit(ni: int, square: int) -> float:
-    value = ratio_sqrt(ni * ni, square)
-    return -value if ni < 0 else value
 
 
 def _plane(normal: list[float], d_scaled: int, d_bits: int) -> dict[str, Any]:
@@ -170,23 +217,20 @@ def _dyadic_fits(value: int, bits: int) -> bool:
     return bits - zeros <= _MAX_DENOMINATOR_BITS and abs(value >> zeros) < _LIMIT
 
 
-def _forms_may_fit(
-    ratios: list[tuple[int, int]],
-    k: int,
-    edges: tuple[int, ...],
-    n: tuple[int, int, int],
-    d: int,
-    square: int,
-) -> bool:
+def _forms_may_fit(k: int, values: tuple[int, ...], corners: tuple[float, ...]) -> bool:
     """False when :func:`app.calculator.exact_forms.exact_forms` certainly says ``TOO_LONG``.
 
     Its first two checks, on the same values: the corners, u, v, n and the plane's d, then
     |n|**2 (each reduced, as Fractions are). Beyond them (the surd of |n|) the exact path
-    decides.
+    decides. ``values`` are u, v (over 2**k), n (2**2k), d (2**3k) and |n|**2 (2**4k).
     """
+    ux, uy, uz, vx, vy, vz, nx, ny, nz, d, square = values
     # Any one value that does not fit is enough: the likeliest (the longest) first.
     if not (_dyadic_fits(d, 3 * k) and _dyadic_fits(square, 4 * k)):
         return False
-    if not all(_dyadic_fits(x, 2 * k) for x in n) or not all(_dyadic_fits(x, k) for x in edges):
+    if not (_dyadic_fits(nx, 2 * k) and _dyadic_fits(ny, 2 * k) and _dyadic_fits(nz, 2 * k)):
         return False
+    if not all(_dyadic_fits(x, k) for x in (ux, uy, uz, vx, vy, vz)):
+        return False
+    ratios = [x.as_integer_ratio() for x in corners]
     return all(abs(num) < _LIMIT and den < _LIMIT for num, den in ratios)
