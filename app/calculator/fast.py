@@ -17,7 +17,7 @@ compares the two on random and adversarial triangles.
 
 from __future__ import annotations
 
-from math import atan2, degrees, gcd, isfinite, isqrt
+from math import atan2, degrees, frexp, gcd, isfinite, isqrt, ldexp
 from typing import Any
 
 from app.calculator.calculation import DOUBLES_HINT
@@ -104,12 +104,16 @@ def fast_payload(a: Point, b: Point, c: Point, swap_winding: bool) -> dict[str, 
         "v": v,
         "normal": normal,
         "magnitude": magnitude,
-        "unit_normal": [_unit(nx, square), _unit(ny, square), _unit(nz, square)],
+        "unit_normal": [
+            _unit(nx, square, normal[0], magnitude),
+            _unit(ny, square, normal[1], magnitude),
+            _unit(nz, square, normal[2], magnitude),
+        ],
         "area": area,
         "degenerate": False,
         "plane": _plane(normal, d, 3 * k),
         "plane_reason": None,
-        "angle": _angle(square, ux * vx + uy * vy + uz * vz),
+        "angle": _angle(square, ux * vx + uy * vy + uz * vz, den2, magnitude),
         "angle_reason": None,
         "exact": None,
         "exact_reason": _REASON,
@@ -133,17 +137,59 @@ def _root_scaled(square: int, exponent: int) -> float | None:
     return value or None  # zero: nonzero below the doubles
 
 
-def _unit(ni: int, square: int) -> float:
-    """``ni / sqrt(square)`` as :func:`mesh_normal.exact.ratio_sqrt` rounds it, step for step."""
+def _unit(ni: int, square: int, normal: float, magnitude: float) -> float:
+    """``ni / sqrt(square)`` rounded once, certified from the float ``normal / magnitude``."""
     if ni == 0:
         return 0.0
-    part = ni * ni
+    value = _certified_root(ni * ni, square, abs(normal) / magnitude)
+    if value is None:
+        value = _exact_unit(ni * ni, square)
+    return -value if ni < 0 else value
+
+
+def _exact_unit(part: int, square: int) -> float:
+    """:func:`mesh_normal.exact.ratio_sqrt`, step for step."""
     shift = 53 + _GUARD_BITS + max(0, square.bit_length() - part.bit_length()) // 2 + 1
     quotient, remainder = divmod(part << (2 * shift), square)
     root = isqrt(quotient)
     sticky = (root << 1) | (remainder != 0 or root * root != quotient)
-    value = sticky / (1 << (shift + 1))  # below the doubles: 0.0, as ratio_sqrt has it
-    return -value if ni < 0 else value
+    return sticky / (1 << (shift + 1))  # below the doubles: 0.0, as ratio_sqrt has it
+
+
+#: Below this a guess is not certified (the grid of subnormals is coarser).
+_SMALLEST_CERTIFIED = 2.0**-1000
+#: The most steps of one ulp a guess is moved while certifying it.
+_CERTIFY_STEPS = 3
+
+
+def _certified_root(part: int, whole: int, guess: float) -> float | None:
+    """``sqrt(part / whole)`` rounded to the nearest double, for ``0 < part <= whole``, or
+    ``None`` when it cannot be certified near ``guess`` (a few ulps away at most).
+
+    A double ``y = Y * 2**E`` (``2**52 < Y < 2**53``) is the nearest to ``t = sqrt(part /
+    whole)`` exactly when ``t`` is strictly inside ``(y - h, y + h)``, ``h = 2**(E - 1)`` half
+    an ulp: ``(2Y - 1)**2 * whole < part * 2**(2 - 2E) < (2Y + 1)**2 * whole``, in integers.
+    A power of two (its lower neighbour is nearer), a tie and a tiny ``y`` are left to the
+    exact path, which rounds the same value once (so both give the same double).
+    """
+    if not _SMALLEST_CERTIFIED <= guess < 1.0:
+        return None
+    mantissa, exponent = frexp(guess)
+    top = int(mantissa * 9007199254740992.0)  # Y, 53 bits
+    scaled = part << (108 - 2 * exponent)  # part * 2**(2 - 2E), E = exponent - 53
+    for _ in range(_CERTIFY_STEPS):
+        if top == 4503599627370496 or top >= 9007199254740992:  # 2**52 (a power of two), 2**53
+            return None
+        low = 2 * top - 1
+        if scaled <= low * low * whole:
+            top -= 1  # t is at or below the lower midpoint
+            continue
+        high = 2 * top + 1
+        if scaled >= high * high * whole:
+            top += 1
+            continue
+        return ldexp(float(top), exponent - 53)
+    return None
 
 
 def _divided(value: int, denominator: int) -> float:
@@ -189,22 +235,31 @@ def _number_text(x: float) -> str:
     return text[:-2] if text.endswith(".0") else text
 
 
-def _angle(square: int, dot: int) -> dict[str, float]:
+def _angle(square: int, dot: int, den2: int, magnitude: float) -> dict[str, float]:
     """:func:`app.calculator.plane_angle.angle_radians` on the same exact values.
 
-    ``square`` is |u x v|**2 and ``dot`` is u . v, both over 2**(4k) once ``dot`` is squared;
-    each ratio is reduced as the Fraction there is, so ``ratio_sqrt`` sees the same integers.
+    ``square`` is |u x v|**2 and ``dot`` is u . v, both over 2**(4k) once ``dot`` is squared
+    (``den2`` is 2**(2k), ``magnitude`` the rounded |u x v|). Each square root of a ratio is
+    certified from a float guess, else rounded as the Fraction there is, reduced.
     """
     dot_square = dot * dot
+    try:
+        dot_value = abs(dot / den2)
+    except OverflowError:  # beyond the doubles: no guess, the exact roots then
+        dot_value = 0.0
     if square <= dot_square:
-        radians = atan2(_ratio_root(square, dot_square), 1.0 if dot > 0 else -1.0)
+        guess = magnitude / dot_value if dot_value else 0.0
+        radians = atan2(_ratio_root(square, dot_square, guess), 1.0 if dot > 0 else -1.0)
     else:
-        cosine_part = _ratio_root(dot_square, square)
+        cosine_part = _ratio_root(dot_square, square, dot_value / magnitude)
         radians = atan2(1.0, cosine_part if dot >= 0 else -cosine_part)
     return {"degrees": degrees(radians), "radians": radians}
 
 
-def _ratio_root(part: int, whole: int) -> float:
+def _ratio_root(part: int, whole: int, guess: float) -> float:
+    value = _certified_root(part, whole, guess)
+    if value is not None:
+        return value
     common = gcd(part, whole)
     return ratio_sqrt(part // common, whole // common)
 

@@ -12,9 +12,10 @@ from hypothesis import strategies as st
 
 from app.calculator.calculation import calculation_payload, from_doubles
 from app.calculator.exact_forms import _fits
-from app.calculator.fast import _dyadic_fits, _number_text, fast_payload
+from app.calculator.fast import _certified_root, _dyadic_fits, _number_text, fast_payload
 from app.web.formatting import js_number
 from app.web.jsonio import json_bytes
+from mesh_normal.exact import ratio_sqrt
 
 Point = list[float]
 
@@ -163,3 +164,26 @@ def test_the_api_answers_as_the_exact_path(client: TestClient) -> None:
             response = client.post("/api/normal", json=body)
             assert response.status_code == 200
             assert response.content == exact_bytes(a, b, c, swap)
+
+
+@settings(max_examples=500)
+@given(st.integers(1, 2**400), st.integers(0, 2**400), st.integers(-3, 3))
+@example(1, 4, 0)  # 1/2: a power of two, left to the exact root
+@example(2, 2, 0)  # 1
+@example(9, 16, 0)  # 3/4 exactly
+@example((2**53 + 1) ** 2, 2**108, 0)  # a tie between two doubles
+def test_a_certified_root_is_the_exact_root(part: int, extra: int, ulps: int) -> None:
+    """Whatever the guess (a few ulps off), a certified root is ratio_sqrt's double."""
+    whole = part + extra
+    guess = math.sqrt(part / whole)
+    for _ in range(abs(ulps)):
+        guess = math.nextafter(guess, math.inf if ulps > 0 else 0.0)
+    value = _certified_root(part, whole, guess)
+    exact = ratio_sqrt(part, whole)
+    assert value is None or value == exact
+    mantissa, exponent = math.frexp(exact)
+    top, scaled = int(mantissa * 2**53), part << (108 - 2 * exponent)
+    tie = scaled in ((2 * top - 1) ** 2 * whole, (2 * top + 1) ** 2 * whole)
+    awkward = mantissa == 0.5 or tie  # a power of two, or the root exactly between two doubles
+    if abs(ulps) <= 1 and 2.0**-1000 < guess < 0.5 and not awkward:
+        assert value is not None  # near its answer, away from the awkward cases: certified
