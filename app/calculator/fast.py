@@ -21,7 +21,7 @@ from math import atan2, degrees, frexp, gcd, isfinite, isqrt, ldexp
 from typing import Any
 
 from app.calculator.calculation import DOUBLES_HINT
-from app.calculator.exact_forms import MAX_DIGITS, TOO_LONG, equation_text
+from app.calculator.exact_forms import MAX_DIGITS, TOO_LONG
 from app.web.formatting import js_number
 from mesh_normal.exact import _GUARD_BITS, OutOfRange, ratio_sqrt
 
@@ -209,18 +209,30 @@ def _plane(normal: list[float], d_scaled: int, d_bits: int) -> dict[str, Any]:
         d: float | None = _divided(d_scaled, 1 << d_bits)
     except OutOfRange:
         d = None
-    equation = None
-    if d is not None:
-        texts = [_number_text(value) for value in normal]
-        equation = equation_text(texts, _number_text(d))
     return {
         "a": normal[0],
         "b": normal[1],
         "c": normal[2],
         "d": d,
-        "equation": equation,
+        "equation": None if d is None else _equation(normal, d),
         "exact": None,
     }
+
+
+def _equation(normal: list[float], d: float) -> str:
+    """:func:`app.calculator.exact_forms.equation_text` of the numbers' texts, which are
+    never ``-0`` and hold no ``/``: ``35.275x - 2.28y + 26.425z = 60.685``."""
+    text = ""
+    for value, axis in zip(normal, "xyz", strict=True):
+        if value == 0:
+            continue
+        size = _number_text(-value if value < 0 else value)
+        term = axis if size == "1" else size + axis
+        if text:
+            text += (" - " if value < 0 else " + ") + term
+        else:
+            text = "-" + term if value < 0 else term
+    return f"{text or '0'} = {_number_text(d)}"
 
 
 def _number_text(x: float) -> str:

@@ -11,8 +11,14 @@ from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from app.calculator.calculation import calculation_payload, from_doubles
-from app.calculator.exact_forms import _fits
-from app.calculator.fast import _certified_root, _dyadic_fits, _number_text, fast_payload
+from app.calculator.exact_forms import _fits, equation_text
+from app.calculator.fast import (
+    _certified_root,
+    _dyadic_fits,
+    _equation,
+    _number_text,
+    fast_payload,
+)
 from app.web.formatting import js_number
 from app.web.jsonio import json_bytes
 from mesh_normal.exact import ratio_sqrt
@@ -187,3 +193,13 @@ def test_a_certified_root_is_the_exact_root(part: int, extra: int, ulps: int) ->
     awkward = mantissa == 0.5 or tie  # a power of two, or the root exactly between two doubles
     if abs(ulps) <= 1 and 2.0**-1000 < guess < 0.5 and not awkward:
         assert value is not None  # near its answer, away from the awkward cases: certified
+
+
+@given(
+    st.lists(
+        st.one_of(ANY, DYADIC, st.sampled_from([1.0, -1.0, 0.0, -0.0])), min_size=4, max_size=4
+    )
+)
+def test_equation_is_equation_text(values: list[float]) -> None:
+    texts = [js_number(value) for value in values]
+    assert _equation(values[:3], values[3]) == equation_text(texts[:3], texts[3])
