@@ -12,6 +12,7 @@ from fastapi.responses import Response
 
 from app.calculator.calculation import calculation_payload, from_doubles, from_typed
 from app.calculator.chart import bar_figure
+from app.calculator.fast import fast_payload
 from app.calculator.params import query_parameters_spec, read_triangle
 from app.calculator.payloads import batch_payload, payload_csv
 from app.calculator.schemas import BatchRequest, BatchResult, Figure, NormalRequest, NormalResult
@@ -52,8 +53,11 @@ def query_payload(request: Request) -> dict[str, Any]:
 async def post_normal(request: Request) -> FastJSONResponse:
     """The normal of one triangle given as JSON."""
     body = await read_body(request, NormalRequest)
-    calc = from_doubles(body.a, body.b, body.c, swap_winding=body.swap_winding)
-    return FastJSONResponse(calculation_payload(calc))
+    payload = fast_payload(body.a, body.b, body.c, body.swap_winding)
+    if payload is None:  # where the fast path cannot be sure of the same answer
+        calc = from_doubles(body.a, body.b, body.c, swap_winding=body.swap_winding)
+        payload = calculation_payload(calc)
+    return FastJSONResponse(payload)
 
 
 @router.get(

@@ -32,6 +32,12 @@ from mesh_normal.triangle import TriangleNormal, rational_triangle_normal, trian
 
 Points = tuple[RationalPoint, RationalPoint, RationalPoint]
 
+#: Said after the reason when JSON numbers' exact forms are left out.
+DOUBLES_HINT = (
+    " JSON numbers are doubles, whose exact values are long (0.1 is "
+    "3602879701896397/36028797018963968); GET /api/normal reads decimal text exactly."
+)
+
 
 @dataclass(frozen=True, slots=True)
 class Calculation:
@@ -67,11 +73,7 @@ def from_doubles(
     calc = _finish(result, double_points(result.a, result.b, result.c), None)
     if calc.reason is None:
         return calc
-    hint = (
-        " JSON numbers are doubles, whose exact values are long (0.1 is "
-        "3602879701896397/36028797018963968); GET /api/normal reads decimal text exactly."
-    )
-    return Calculation(calc.result, calc.exact, None, calc.reason + hint)
+    return Calculation(calc.result, calc.exact, None, calc.reason + DOUBLES_HINT)
 
 
 def from_typed(parsed: TriangleInput) -> Calculation:

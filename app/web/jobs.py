@@ -223,7 +223,7 @@ class Jobs:
         function: Callable[..., Value],
         args: tuple[Any, ...],
     ) -> Value:
-        worker = await pool.acquire(self.settings.queue_seconds)
+        worker = await pool.acquire(self.settings.queue_seconds, (function, args))
         if worker is None:  # the workers are still starting, or being replaced
             raise busy()
         job = asyncio.ensure_future(worker.call(function, args))

@@ -123,7 +123,9 @@ def _refuse_repeated(tokens: list[bytes]) -> None:
     """The 422 for the first key of one object that comes twice (``"a":`` tokens)."""
     seen: set[str] = set()
     for token in tokens:
-        key = json.loads(token[:-1].rstrip())  # "\\u0061" and "a" are the same key
+        text = token[:-1].rstrip()
+        # "\\u0061" and "a" are the same key; without a backslash the bytes are the key.
+        key = json.loads(text) if b"\\" in text else text[1:-1].decode()
         if key in seen:
             raise ApiError(
                 422,

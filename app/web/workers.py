@@ -14,6 +14,12 @@ Starting a process blocks (the first start waits for the fork server to import `
 seconds), so it happens in a thread: the event loop serves pages meanwhile, at start-up and
 while a worker is replaced.
 
+Until the first worker is ready (seconds after the server's first page: the fork server imports
+``preload``, the worker warms), a job that its module has marked as safe to run in the server
+(:func:`run_in_server_while_starting`: the real mesh jobs, on a file of a few kilobytes, which
+end in milliseconds in the kernels' Python path, with nothing to cancel and no memory to run
+out of) runs in a thread of the server instead of waiting; any other job waits for a worker.
+
 Jobs travel as pickles of protocol 5: large buffers (``pickle.PickleBuffer``, NumPy arrays)
 go out of band as raw bytes, so a 200 MB upload is not copied into a pickle on its way.
 """
@@ -48,6 +54,26 @@ logger = logging.getLogger(__name__)
 #: an empty cache (every kernel for read-only and writable arrays, mesh_normal.precompile) took
 #: 114 s on two cores shared with other work, 2.5 times the 46 s of the writable ones alone.
 STARTUP_SECONDS = 120
+
+
+#: Jobs that may run in the server while no worker is ready yet: each function, with its test
+#: of the job's arguments (see :func:`run_in_server_while_starting`).
+_STARTUP_JOBS: dict[Callable[..., Any], Callable[..., bool]] = {}
+
+
+def run_in_server_while_starting(function: Callable[..., Any], small: Callable[..., bool]) -> None:
+    """Let ``function`` run in a thread of the server, until the first worker is ready, when
+    ``small(*args)`` says its arguments are small: for jobs that end in milliseconds there and
+    can neither crash the process nor exhaust its memory (a worker is what stops a job whose
+    client left, and what survives an abort)."""
+    _STARTUP_JOBS[function] = small
+
+
+def _starting_job(job: tuple[Callable[..., Any], Sequence[Any]] | None) -> bool:
+    if job is None:
+        return False
+    small = _STARTUP_JOBS.get(job[0])
+    return small is not None and small(*job[1])
 
 
 class WorkerDied(Exception):
@@ -224,6 +250,21 @@ class Worker:
         self.connection.close()
 
 
+class ServerThread:
+    """Stands in for a worker while none is ready: the job runs in a thread of the server (see
+    :func:`run_in_server_while_starting`); its endings come back as a worker's do."""
+
+    async def call(self, function: Callable[..., Any], args: Sequence[Any]) -> Any:
+        ending, value = await asyncio.to_thread(run, function, args)
+        if ending == REFUSED:
+            raise ApiError(*value)
+        if ending == NO_MEMORY:
+            raise WorkerOutOfMemory()
+        if ending == CRASHED:
+            raise WorkerCrashed(value)
+        return value
+
+
 class WorkerPool:
     """``count`` workers; :meth:`acquire` lends an idle one, :meth:`release` takes it back
     (replacing it when its job did not end cleanly)."""
@@ -321,13 +362,19 @@ class WorkerPool:
         self._changed.set()
         self._changed = asyncio.Event()
 
-    async def acquire(self, timeout: float) -> Worker | None:
+    async def acquire(
+        self, timeout: float, job: tuple[Callable[..., Any], Sequence[Any]] | None = None
+    ) -> Worker | ServerThread | None:
         """An idle worker within ``timeout`` seconds, or ``None``. Before the first worker is
-        ready (the kernels load, or compile into an empty cache), up to STARTUP_SECONDS."""
+        ready (the kernels load, or compile into an empty cache), up to STARTUP_SECONDS; or,
+        for a small ``job`` marked so (:func:`run_in_server_while_starting`), a thread of the
+        server at once."""
         self.start()
         assert self._warmed is not None
         loop = asyncio.get_running_loop()
         started = self._warmed.is_set()
+        if not started and not self.idle and _starting_job(job):
+            return ServerThread()
         deadline = loop.time() + (timeout if started else max(timeout, STARTUP_SECONDS))
         while not self.idle:
             assert self._changed is not None
@@ -342,8 +389,10 @@ class WorkerPool:
         self.busy.add(worker)
         return worker
 
-    def release(self, worker: Worker, clean: bool) -> None:
+    def release(self, worker: Worker | ServerThread, clean: bool) -> None:
         """Take a worker back: idle again after a clean job, else stopped and replaced."""
+        if isinstance(worker, ServerThread):
+            return  # its thread ends with its small job
         self.busy.discard(worker)
         if clean and worker.process.is_alive():
             self.idle.append(worker)

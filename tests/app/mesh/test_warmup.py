@@ -102,3 +102,56 @@ def test_polygons_are_triangulated_and_the_gltf_is_the_tetrahedron() -> None:
 
 def test_the_warm_up_runs() -> None:
     warmup.warm()  # every job on every small file: none refuses its file
+
+
+#: In a fresh process that imported the app, as a server has: the jobs that may run in the
+#: server while the workers start, each on the small files they are let take. None may load
+#: numba or trimesh (seconds, and their memory, in the server itself).
+IN_SERVER = r"""
+import sys
+import app.main
+from app.mesh import warmup, work
+from app.web.workers import _STARTUP_JOBS
+import mesh_normal.kernels as kernels
+
+tetra = [u for u in warmup.uploads() if u.filename in ("warm.stl", "warm.obj")]
+small = [*tetra, *(u for u in warmup.uploads() if u.filename == "ascii.stl")]
+open_box = warmup.Upload(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\n", "open.obj")
+assert set(_STARTUP_JOBS) == {work.report, work.fix, work.normals}, _STARTUP_JOBS
+for upload in [*small, open_box]:
+    assert warmup.small_file(upload), upload.filename
+    work.report(upload, None)
+    work.report(upload, 1e-6)
+    work.fix(upload, "obj", None)
+    assert warmup.small_face_normals(upload, "face", "angle", 30.0)
+    work.normals(upload, "face", "angle", 30.0)
+assert not kernels._numba_loaded and "numba" not in sys.modules, "numba loaded"
+assert "trimesh" not in sys.modules, "trimesh imported"
+print("ok")
+"""
+
+
+def test_the_jobs_run_in_the_server_load_neither_numba_nor_trimesh() -> None:
+    done = subprocess.run(
+        [sys.executable, "-c", IN_SERVER], cwd=ROOT, capture_output=True, text=True, timeout=300
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "ok"
+
+
+def test_only_small_files_read_without_trimesh_run_in_the_server() -> None:
+    tetra = warmup.uploads()[2]  # warm.obj
+    assert tetra.filename == "warm.obj" and warmup.small_file(tetra, None)
+    padded = warmup.Upload(tetra.data + b"#" * warmup.SMALL_FILE_BYTES, "warm.obj")
+    assert not warmup.small_file(padded, None)
+    by_name = {upload.filename: upload for upload in warmup.uploads()}
+    assert not warmup.small_file(by_name["warm.glb"])  # trimesh's glTF reader
+    assert not warmup.small_file(by_name["polygons.obj"])  # polygons: numba's triangulation
+    assert not warmup.small_file(by_name["warm.ply"])  # PLY and OFF may hold polygons
+    assert warmup.small_file(by_name["warm.stl"]) and warmup.small_file(by_name["ascii.stl"])
+    assert not warmup.small_file(by_name["warm.3mf"])
+    assert not warmup.small_file(by_name["warm.zip"])
+    several = [upload for upload in warmup.uploads() if upload.parts]
+    assert several and not warmup.small_file(several[0])
+    assert not warmup.small_face_normals(tetra, "vertex", "angle", 30.0)  # loads numba
+    assert warmup.small_face_normals(tetra, "face", "angle", 30.0)

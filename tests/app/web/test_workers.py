@@ -159,3 +159,35 @@ def test_a_worker_whose_start_ends_after_the_pool_closed_is_stopped(
     asyncio.run(main())  # which waits for the thread, as the loop's executor shuts down
     assert len(started) == 1
     assert not started[0].process.is_alive()
+
+
+def test_a_small_job_marked_so_runs_in_the_server_until_a_worker_is_ready(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Before the first worker is ready, a marked job whose arguments pass its test runs in a
+    thread of this process; an unmarked job, or one that fails the test, waits for a worker;
+    once a worker is ready, every job goes to one."""
+    monkeypatch.setattr(workers, "_STARTUP_JOBS", {})
+    workers.run_in_server_while_starting(jobhooks.value, lambda data: len(data) <= 4)
+
+    async def scenario(pool: WorkerPool) -> None:
+        assert not pool.idle  # the worker is still starting
+        thread = await pool.acquire(60, (jobhooks.value, (b"tiny",)))
+        assert isinstance(thread, workers.ServerThread)
+        pid, back = await thread.call(jobhooks.value, (b"tiny",))
+        pool.release(thread, clean=True)
+        assert (pid, back) == (os.getpid(), b"tiny")
+        with pytest.raises(ApiError):  # a refusal comes back as from a worker
+            await workers.ServerThread().call(jobhooks.refuse, ())
+        # Too large for its test, then not marked: both wait for the worker.
+        worker = await pool.acquire(60, (jobhooks.value, (b"large",)))
+        assert isinstance(worker, Worker)
+        pool.release(worker, clean=True)
+        assert pool._warmed is not None and pool._warmed.is_set()
+        worker = await pool.acquire(60, (jobhooks.value, (b"tiny",)))
+        assert isinstance(worker, Worker)  # a worker is ready now: it takes the job
+        pid, _ = await worker.call(jobhooks.value, (b"tiny",))
+        pool.release(worker, clean=True)
+        assert pid != os.getpid()
+
+    with_pool(scenario)
