@@ -563,9 +563,10 @@ def _face_corners(lines: list[str]) -> tuple[list[str], NDArray[np.intp]]:
     if len(tokens) == width * len(lines) and tokens[::width].count("f") == len(lines):
         del tokens[::width]
         return tokens, np.full(len(lines), width - 1, dtype=np.intp)
-    starts = np.array([i for i, token in enumerate(tokens) if token == "f"], dtype=np.intp)
-    counts = np.diff(np.append(starts, len(tokens))) - 1
-    return [token for token in tokens if token != "f"], counts
+    # Line by line: a line continued into another "f" has that "f" as a corner (an error).
+    words = [line.split() for line in lines]
+    counts = np.array([len(line) - 1 for line in words], dtype=np.intp)
+    return [word for line in words for word in line[1:]], counts
 
 
 def _corner_indices(found: _Statements) -> tuple[NDArray[np.intp], NDArray[np.intp] | None]:
