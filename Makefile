@@ -11,7 +11,7 @@ UV := $(shell command -v uv 2>/dev/null || echo .tools/bin/uv)
 HOST ?= 127.0.0.1
 PORT ?= 8000
 
-.PHONY: run test lint bench bench-mesh bench-mesh-e2e bench-orient bench-points bench-soak bench-memory bench-startup bench-batch env clean vendor
+.PHONY: run test lint bench bench-mesh bench-mesh-e2e bench-readers bench-orient bench-points bench-soak bench-memory bench-startup bench-batch env clean vendor
 
 # uv itself comes from PyPI when the machine does not have it yet.
 .tools/bin/uv:
@@ -80,6 +80,10 @@ bench-memory: .venv/.test
 bench-startup: .venv/.test
 	$(COMPILE_SOURCES)
 	.venv/bin/python -m benchmarks.startup $(ARGS)
+
+bench-readers: .venv/.test
+	$(UV) sync --locked --group test --group bench
+	.venv/bin/python -m benchmarks.readers $(ARGS)
 
 bench-mesh-e2e: .venv/.test
 	$(UV) sync --locked --group test --group bench

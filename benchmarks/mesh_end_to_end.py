@@ -2,6 +2,10 @@
 
     make bench-mesh-e2e   # or: .venv/bin/python -m benchmarks.mesh_end_to_end
                           #     [--sizes 69451 871414] [--repeats 7] [--skip-lucy]
+                          #     [--skip-readers]
+
+0. The readers table of :mod:`benchmarks.readers` (OBJ, PLY and OFF against trimesh's
+   ``load(process=False)``), unless ``--skip-readers``.
 
 1. ``POST /api/mesh`` with a binary STL as a multipart upload, against one uvicorn worker of
    ``app.main:app`` on a free loopback port; the file is in memory beforehand, the clock runs
@@ -306,7 +310,17 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=7)
     parser.add_argument("--lucy-runs", type=int, default=2)
     parser.add_argument("--skip-lucy", action="store_true")
+    parser.add_argument("--skip-readers", action="store_true")
     args = parser.parse_args()
+    if not args.skip_readers:  # the file readers against trimesh's (benchmarks/readers.py)
+        from benchmarks import readers
+
+        reader_repeats = min(args.repeats, 5)
+        print(
+            readers.table(
+                readers.bench(list(readers.FILES), readers.SIZE, reader_repeats), reader_repeats
+            )
+        )
 
     rows = bench_uploads(args.sizes, args.repeats)
     print(

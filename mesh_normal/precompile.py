@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 from mesh_normal.corners import corner_normals, corner_weights
 from mesh_normal.faces import face_geometry, face_normals
 from mesh_normal.files.polygons import triangulate
+from mesh_normal.files.text_kernels import ObjScanner, binary_items
 from mesh_normal.kernels import load_numba
 from mesh_normal.orientation import orient
 from mesh_normal.points import point_normals
@@ -46,6 +47,9 @@ _POLYGONS = (
     np.array([0, 1, 2, 3, 0, 1, 4]),
     np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0.5, -1, 0]]),
 )
+#: An OBJ chunk for the text kernel (files from ``obj.FAST_BYTES`` on): its bytes are read-only,
+#: as are a binary PLY's for its list kernel (``ply.COMPILED_ITEMS`` items on).
+_OBJ = b"v 0 0 0\nv 1.5 0 0\nv 0 1 0.12345678901234567\nvn 0 0 1\nf 1//1 2//1 3//1\n"
 
 
 def compile_kernels() -> None:
@@ -62,6 +66,10 @@ def compile_kernels() -> None:
         )
     # Point clouds: the neighbourhood kernel (k nearest and within a radius take the same
     # types) and the signs down the spanning tree; binary_compressed PCD's LZF (one literal).
+    ObjScanner().scan(_OBJ, 0, len(_OBJ))
+    binary_items(
+        np.frombuffer(bytes(13), np.uint8), 1, 13, 4, True, True, np.empty((1, 3), np.int64)
+    )
     point_normals(np.random.default_rng(0).normal(size=(40, 3)), k=10)
     lzf_decompress(b"\x00a", 1)
 

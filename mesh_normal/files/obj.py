@@ -22,7 +22,7 @@ is always given the same normal vector.
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -33,6 +33,7 @@ from mesh_normal.files.errors import MeshFileError
 from mesh_normal.files.formats import MAKER
 from mesh_normal.files.loaded import LoadedMesh, build
 from mesh_normal.files.polygons import triangulate
+from mesh_normal.files.text_kernels import ObjScanner
 
 _IGNORED = {
     "s",
@@ -176,17 +177,22 @@ def _logical_lines(text: str) -> tuple[list[str], NDArray[np.intp], int]:
 _TEXT_CHUNK = 1 << 20
 
 
-def _text_chunks(data: bytes) -> Iterator[str]:
-    """The file as text in chunks of about ``_TEXT_CHUNK`` bytes, each ending at a line end
-    whose line does not end in a backslash (so a continued line stays in one chunk)."""
+def _text_chunks(data: bytes) -> Iterator[tuple[int, int]]:
+    """The file in chunks of about ``_TEXT_CHUNK`` bytes, ``(start, end)``, each ending at a
+    line end whose line does not end in a backslash (so a continued line stays in one chunk)."""
     position = 0
     while position < len(data):
         end = data.find(b"\n", position + _TEXT_CHUNK)
         while end >= 0 and data[data.rfind(b"\n", 0, end) + 1 : end].rstrip().endswith(b"\\"):
             end = data.find(b"\n", end + 1)
         end = len(data) if end < 0 else end + 1
-        yield data[position:end].decode("latin-1")
+        yield position, end
         position = end
+
+
+#: Files of this many bytes or more are scanned by the compiled kernel (:func:`_scan_fast`);
+#: smaller ones in Python, in milliseconds, where loading numba and the kernel take 1-2 s.
+FAST_BYTES = 1 << 18
 
 
 @dataclass
@@ -208,8 +214,17 @@ def _scan(data: bytes) -> _Statements:
     ignored: Counter[str] = Counter()
     chunks: list[_Chunk] = []
     offset = vertices = normals = 0
-    for text in _text_chunks(data):
-        chunk = _scan_chunk(text, offset, vertices, normals, groups, other, ignored)
+    scanner = ObjScanner() if len(data) >= FAST_BYTES else None
+    for start, end in _text_chunks(data):
+        chunk = None
+        if scanner is not None:
+            chunk = _scan_fast(
+                scanner, data, start, end, offset, vertices, normals, groups, other, ignored
+            )
+        if chunk is None:
+            text = data[start:end].decode("latin-1")
+            chunk = _scan_chunk(text, offset, vertices, normals, groups, other, ignored)
+            del text
         offset, vertices, normals = (
             chunk.lines_after,
             vertices + len(chunk.vertices),
@@ -300,15 +315,7 @@ def _scan_chunk(
     kinds = np.fromiter((_KINDS.get(line[:2], -1) for line in lines), np.int8, len(lines))
     chunk_ignored: Counter[str] = Counter()
     for row in np.flatnonzero(kinds < 0):
-        parts = lines[row].split(None, 1)
-        key = parts[0] if parts else ""
-        kinds[row] = _KEYS.get(
-            key, IGNORE if not key or key[0] == "#" or key in _IGNORED else OTHER
-        )
-        if kinds[row] >= LINE:
-            other[key] += 1
-        elif key in _UNKEPT:
-            chunk_ignored[key] += 1
+        kinds[row] = _split_kind(lines[row], other, chunk_ignored)
     chunk_ignored["vt"] = int(np.count_nonzero(kinds == TEXTURE))
     ignored.update(chunk_ignored)
     rows = {kind: np.flatnonzero(kinds == kind) for kind in (VERTEX, NORMAL, FACE)}
@@ -337,8 +344,81 @@ def _scan_chunk(
     )
 
 
+def _split_kind(line: str, other: Counter[str], unkept: Counter[str]) -> int:
+    """The kind of a line that its first two characters do not settle, by its first word;
+    ``other`` counts the statements skipped with a note, ``unkept`` those the mesh drops."""
+    parts = line.split(None, 1)
+    key = parts[0] if parts else ""
+    kind = _KEYS.get(key, IGNORE if not key or key[0] == "#" or key in _IGNORED else OTHER)
+    if kind >= LINE:
+        other[key] += 1
+    elif key in _UNKEPT:
+        unkept[key] += 1
+    return kind
+
+
+def _scan_fast(
+    scanner: ObjScanner,
+    data: bytes,
+    start: int,
+    end: int,
+    offset: int,
+    vertex_total: int,
+    normal_total: int,
+    groups: _Groups,
+    other: Counter[str],
+    ignored: Counter[str],
+) -> _Chunk | None:
+    """What :func:`_scan_chunk` finds in ``data[start:end]``, read by the compiled kernel
+    (:func:`~mesh_normal.files.text_kernels.scan_obj`); ``None`` (nothing counted, nothing
+    changed) where it cannot certify the chunk: a line continued, a number or corner it does
+    not read exactly as the Python path does, an indented ``v``, a character that Python
+    splits lines or words at and the kernel does not."""
+    if data.find(b"\\", start, end) >= 0:
+        return None
+    read = scanner.scan(data, start, end)
+    if read is None:
+        return None
+    kinds, vertices, colors, normals, vertex_fields, normal_fields, counts, texts = read
+    chunk_other: Counter[str] = Counter()
+    chunk_ignored: Counter[str] = Counter()
+    statements: dict[int, str] = {}
+    for row, text in texts.items():
+        kind = _KINDS.get(text[:2], -1)
+        if kind < 0:
+            kind = _split_kind(text, chunk_other, chunk_ignored)
+        if kind in (VERTEX, NORMAL, TEXTURE, FACE):
+            return None  # "v\t1 2 3", " f 1 2 3": the Python path reads those
+        if kind in (OBJECT, GROUP):
+            statements[row] = text
+        kinds[row] = kind
+    chunk_ignored["vt"] = int(np.count_nonzero(kinds == TEXTURE))
+    other.update(chunk_other)
+    ignored.update(chunk_ignored)
+    numbers = np.arange(offset + 1, offset + 1 + len(kinds), dtype=np.intp)
+    rows = {kind: np.flatnonzero(kinds == kind) for kind in (VERTEX, NORMAL, FACE)}
+    labels = _face_labels(statements, np.array(sorted(statements), np.intp), rows[FACE], groups)
+    return _Chunk(
+        lines_after=offset + len(kinds),
+        vertices=vertices,
+        vertex_lines=numbers[rows[VERTEX]],
+        colors=colors,
+        normals=normals,
+        vertex_fields=vertex_fields,
+        normal_fields=normal_fields,
+        counts=counts,
+        face_lines=numbers[rows[FACE]],
+        vertices_before=vertex_total + np.searchsorted(rows[VERTEX], rows[FACE]),
+        normals_before=normal_total + np.searchsorted(rows[NORMAL], rows[FACE]),
+        labels=labels,
+    )
+
+
 def _face_labels(
-    lines: list[str], statements: NDArray[np.intp], faces: NDArray[np.intp], groups: _Groups
+    lines: Mapping[int, str] | list[str],
+    statements: NDArray[np.intp],
+    faces: NDArray[np.intp],
+    groups: _Groups,
 ) -> NDArray[np.intp] | None:
     """Each face's group (see the module docstring), from the rows of the ``o`` and ``g``
     statements and of the faces in a chunk, ``groups`` the state before it (updated);
@@ -483,9 +563,10 @@ def _face_corners(lines: list[str]) -> tuple[list[str], NDArray[np.intp]]:
     if len(tokens) == width * len(lines) and tokens[::width].count("f") == len(lines):
         del tokens[::width]
         return tokens, np.full(len(lines), width - 1, dtype=np.intp)
-    starts = np.array([i for i, token in enumerate(tokens) if token == "f"], dtype=np.intp)
-    counts = np.diff(np.append(starts, len(tokens))) - 1
-    return [token for token in tokens if token != "f"], counts
+    # Line by line: a line continued into another "f" has that "f" as a corner (an error).
+    words = [line.split() for line in lines]
+    counts = np.array([len(line) - 1 for line in words], dtype=np.intp)
+    return [word for line in words for word in line[1:]], counts
 
 
 def _corner_indices(found: _Statements) -> tuple[NDArray[np.intp], NDArray[np.intp] | None]:

@@ -22,16 +22,20 @@ vertex or face normals or colours beside them (:func:`ply_bytes`).
 from __future__ import annotations
 
 import struct
+import sys
 from collections.abc import Iterator
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
+from numpy.lib.recfunctions import structured_to_unstructured
 from numpy.typing import NDArray
 
 from mesh_normal.files.errors import MeshFileError
 from mesh_normal.files.formats import MAKER
 from mesh_normal.files.loaded import LoadedMesh, build
 from mesh_normal.files.polygons import triangulate
+from mesh_normal.files.text_kernels import binary_items
 
 _TYPES = {
     "char": "i1",
@@ -66,6 +70,7 @@ class _Element:
     lists: dict[str, tuple[str, str]] = field(default_factory=dict)  # name: (count, item)
     order: list[str] = field(default_factory=list)  # every property name in order
     data: dict[str, object] = field(default_factory=dict)
+    records: NDArray[np.void] | None = None  # a binary element of scalars, as read
 
 
 def read_ply(data: bytes) -> LoadedMesh:
@@ -173,6 +178,7 @@ def _frombuffer(element: _Element, data: bytes, dtype: np.dtype, offset: int) ->
         )
     records = np.frombuffer(data, dtype, element.count, offset)
     element.data = {name: records[name] for name in dtype.names or ()}
+    element.records = records
     return offset + size
 
 
@@ -198,11 +204,34 @@ def _binary_lists(element: _Element, data: bytes, offset: int, endian: str) -> i
             records = np.frombuffer(data, dtype, element.count, offset)
             if all(np.all(records[name]["count"] == first[name]) for name in element.lists):
                 element.data = {
-                    name: records[name]["items"] if name in element.lists else records[name]
+                    name: _items(records, name, data, offset) if name in element.lists
+                    else records[name]
                     for name in element.order
-                }
+                }  # fmt: skip
                 return offset + dtype.itemsize * element.count
     return _binary_records(element, data, offset, endian)
+
+
+#: Lists of this many items or more are read by the compiled loop (:func:`_items`).
+COMPILED_ITEMS = 1 << 16
+
+
+def _items(records: NDArray[np.void], name: str, data: bytes, offset: int) -> NDArray[Any]:
+    """The items of the list ``name`` of binary records whose lists have one length: integers
+    as int64, read by :func:`~mesh_normal.files.text_kernels.binary_items` when there are many,
+    else (and floats) the records' own view."""
+    items = records[name]["items"]
+    kind = items.dtype
+    if items.size < COMPILED_ITEMS or kind.kind not in "iu" or kind.itemsize > 4:
+        return items
+    out = np.empty(items.shape, np.int64)
+    fields, inner = records.dtype.fields, records.dtype[name].fields
+    assert fields is not None and inner is not None  # records of named fields
+    at = offset + fields[name][1] + inner["items"][1]
+    view = np.frombuffer(data, np.uint8)
+    little = kind.byteorder == "<" or (kind.byteorder in "=|" and sys.byteorder == "little")
+    binary_items(view, at, records.dtype.itemsize, kind.itemsize, kind.kind == "i", little, out)
+    return out
 
 
 def _kind(element: _Element, name: str) -> str:
@@ -540,16 +569,21 @@ def _mesh(elements: list[_Element], notes: list[str]) -> LoadedMesh:
     vertex = named.get("vertex")
     if vertex is None or not {"x", "y", "z"} <= vertex.data.keys():
         raise MeshFileError("The PLY file has no vertex element with x, y and z.")
-    vertices = np.stack([np.asarray(vertex.data[axis], dtype=np.float64) for axis in "xyz"], axis=1)
+    vertices = _xyz(vertex)
     face = named.get("face")
     key = _indices_key(face)
     if face is None or key is None:
         counts, flat = np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp)
     else:
         counts, flat = _polygons(face.data[key])
-    positions, source, fan_notes = triangulate(counts, flat, vertices)
-    notes += fan_notes
-    faces = flat[positions]
+    if len(flat) >= COMPILED_ITEMS and counts[0] == 3 and np.all(counts == 3):
+        # Many triangles: they are their own fans (what triangulate gives, without building
+        # the fans' corner positions and gathering the corners through them).
+        faces, source = flat.reshape(-1, 3), np.arange(len(counts))
+    else:
+        positions, source, fan_notes = triangulate(counts, flat, vertices)
+        notes += fan_notes
+        faces = flat[positions]
     strips = _read_strips(named.get("tristrips"))
     if strips is not None:
         notes.append(strips.note)
@@ -585,6 +619,17 @@ def _mesh(elements: list[_Element], notes: list[str]) -> LoadedMesh:
             else f"triangle strip {strips.source[i - from_polygons]:,} (counting from 0)"
         ),
     )
+
+
+def _xyz(vertex: _Element) -> NDArray[np.float64]:
+    """The ``x y z`` columns as one (n, 3) array: from binary records whose three share one
+    float type as one copy of the records' rows (a third of the time of three columns)."""
+    declared = dict(vertex.scalars)
+    kinds = {declared.get(axis) for axis in "xyz"}
+    if vertex.records is not None and len(kinds) == 1 and kinds <= {"f4", "f8"}:
+        rows = structured_to_unstructured(vertex.records[["x", "y", "z"]])
+        return np.array(rows, dtype=np.float64)
+    return np.stack([np.asarray(vertex.data[axis], dtype=np.float64) for axis in "xyz"], axis=1)
 
 
 def _indices_key(element: _Element | None) -> str | None:
@@ -686,10 +731,11 @@ def strip_triangles(
 def _polygons(column: object) -> tuple[NDArray[np.intp], NDArray[np.int64]]:
     """Corner counts and the flat corner indices of a list column (array or list of rows)."""
     if isinstance(column, np.ndarray) and column.ndim == 2:
-        flat = column.ravel()
-        if flat.dtype.kind == "f" and not np.all(flat == np.round(flat)):  # ASCII, "2.9"
+        if column.dtype.kind == "f" and not np.all(column == np.round(column)):  # ASCII, "2.9"
             raise MeshFileError("The PLY file has a face index that is not a whole number.")
-        return np.full(len(column), column.shape[1], dtype=np.intp), flat.astype(np.int64)
+        # One pass from the records' strided view to a contiguous copy, then flattened free.
+        flat = column.astype(np.int64, copy=False).ravel()
+        return np.full(len(column), column.shape[1], dtype=np.intp), flat
     rows = list(column)  # type: ignore[call-overload]
     counts = np.fromiter(map(len, rows), dtype=np.intp, count=len(rows))
     listed = [value for row in rows for value in row]

@@ -1,0 +1,80 @@
+"""Binary PLY lists read by the compiled loop give the arrays NumPy's view of the records gives."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mesh_normal.files import ply
+from mesh_normal.files.errors import MeshFileError
+
+
+def binary_ply(endian: str, count: str, item: str, extra: bool, faces: np.ndarray) -> bytes:
+    """A binary PLY of four vertices and ``faces``, each face's list of ``item`` after a
+    ``count``, and (``extra``) a ``uchar`` before and a ``float`` after it."""
+    order = {"<": "binary_little_endian", ">": "binary_big_endian"}[endian]
+    names = {"u1": "uchar", "i2": "short", "u2": "ushort", "i4": "int", "u4": "uint"}
+    header = [
+        "ply",
+        f"format {order} 1.0",
+        "element vertex 4",
+        "property float x",
+        "property float y",
+        "property float z",
+        f"element face {len(faces)}",
+        *(["property uchar flag"] if extra else []),
+        f"property list {names[count]} {names[item]} vertex_indices",
+        *(["property float quality"] if extra else []),
+        "end_header",
+        "",
+    ]
+    vertices = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=endian + "f4")
+    fields = [
+        *([("flag", "u1")] if extra else []),
+        ("count", endian + count),
+        ("items", endian + item, (faces.shape[1],)),
+        *([("quality", endian + "f4")] if extra else []),
+    ]
+    records = np.zeros(len(faces), dtype=fields)
+    records["count"], records["items"] = faces.shape[1], faces
+    if extra:
+        records["flag"], records["quality"] = 7, 0.5
+    return "\n".join(header).encode() + vertices.tobytes() + records.tobytes()
+
+
+@pytest.mark.parametrize("endian", ["<", ">"])
+@pytest.mark.parametrize(
+    ("count", "item"), [("u1", "i4"), ("u1", "u4"), ("u2", "i2"), ("u1", "u1")]
+)
+@pytest.mark.parametrize("extra", [False, True])
+def test_the_compiled_lists_match_numpy(
+    monkeypatch: pytest.MonkeyPatch, endian: str, count: str, item: str, extra: bool
+) -> None:
+    faces = np.random.default_rng(5).integers(0, 4, (50, 3))
+    faces[:, 1] = (faces[:, 0] + 1) % 4
+    faces[:, 2] = (faces[:, 0] + 2) % 4
+    data = binary_ply(endian, count, item, extra, faces)
+    monkeypatch.setattr(ply, "COMPILED_ITEMS", 0)
+    compiled = ply.read_ply(data)
+    monkeypatch.setattr(ply, "COMPILED_ITEMS", 1 << 62)
+    viewed = ply.read_ply(data)
+    np.testing.assert_array_equal(compiled.faces, faces)
+    np.testing.assert_array_equal(compiled.faces, viewed.faces)
+    assert compiled.vertices.tobytes() == viewed.vertices.tobytes()
+    assert compiled.notes == viewed.notes and compiled.source_faces == viewed.source_faces == 50
+
+
+@pytest.mark.parametrize(("item", "value"), [("i4", -1), ("i2", -2), ("i4", 2**31 - 1)])
+def test_signed_items_keep_their_sign(
+    monkeypatch: pytest.MonkeyPatch, item: str, value: int
+) -> None:
+    faces = np.array([[0, 1, value]])
+    monkeypatch.setattr(ply, "COMPILED_ITEMS", 0)
+    with pytest.raises(MeshFileError, match=f"{value:,}"):
+        ply.read_ply(binary_ply(">", "u1", item, True, faces))
+
+
+def test_quads_still_go_through_triangulate(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(ply, "COMPILED_ITEMS", 0)
+    mesh = ply.read_ply(binary_ply("<", "u1", "i4", False, np.array([[0, 1, 2, 3]])))
+    assert len(mesh.faces) == 2 and mesh.source_faces == 1
