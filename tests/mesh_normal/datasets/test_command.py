@@ -193,3 +193,15 @@ def test_points(dataset: Dataset, tmp_path: Path, capsys: pytest.CaptureFixture[
         f"{tmp_path}/normals/{root.as_posix()[1:]}/other/cloud.xyz.points.ply"
     ]
     assert notes["path"].endswith("notes.txt") and notes["status"] == "unreadable"
+
+
+def test_the_progress_line() -> None:
+    from mesh_normal.datasets.command import duration, progress_line
+    from mesh_normal.datasets.driver import BatchProgress
+
+    # 100 kept from before, 20 run in 4 s: 5 files/s, 880 left at 5 a second is 176 s.
+    state = BatchProgress(done=120, total=1_000, failures=3, reused=100, elapsed=4.0, row={})
+    assert progress_line(state) == "120/1,000 files (12%) · 5.0 files/s · 3 failed · 2 m 56 s left"
+    done = BatchProgress(done=1_000, total=1_000, failures=0, reused=0, elapsed=50.0, row={})
+    assert progress_line(done) == "1,000/1,000 files (100%) · 20.0 files/s · 0 failed"
+    assert [duration(s) for s in (42.4, 185, 7_800)] == ["42 s", "3 m 05 s", "2 h 10 m"]
