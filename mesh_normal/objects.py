@@ -56,10 +56,11 @@ def object_reports(
         return np.bincount(groups, weights, count).astype(np.intp)
 
     # Faces with a repeated point are in no component (-1): they have no edges, no verdict.
+    # Each component's answer looked up a face at a time, -1 reading the appended False: one
+    # byte a face each, no index array of 8.
     in_part = component >= 0
-    part = np.where(in_part, component, 0)
-    decidable = in_part & (table.method[part] != _NONE)
-    with_verdict = in_part & (table.orientation[part] != _UNDETERMINED)
+    decidable = np.append(table.method != _NONE, False)[component]
+    with_verdict = np.append(table.orientation != _UNDETERMINED, False)[component]
     total, flips = per_object(), per_object(flipped)
     decided, decided_flips = per_object(decidable), per_object(decidable & flipped)
     area = np.array([np.sum(areas)]) if count == 1 else np.bincount(groups, areas, count)

@@ -82,7 +82,7 @@ from mesh_normal.tolerances import (
 )
 from mesh_normal.topology import KEY_LIMIT, Structure, by_position, structure
 from mesh_normal.topology import MeshTopology as MeshTopology  # re-exported: Orientation has one
-from mesh_normal.types import BoolArray, FloatArray, IndexArray
+from mesh_normal.types import BoolArray, FloatArray, IndexArray, ParityArray
 from mesh_normal.visibility import MARGIN as VISIBILITY_MARGIN
 from mesh_normal.visibility import visible_sides
 
@@ -318,17 +318,25 @@ def oriented(
     topology, group, parity = found.topology, found.group, found.parity
     bins = found.patches + 1  # the last for faces with a repeated point
 
-    def per_patch(weights: FloatArray | IndexArray | None = None) -> FloatArray:
-        return np.bincount(group, weights, bins)[:-1].astype(np.float64)  # counts too
+    def per_patch(weights: FloatArray | ParityArray | None = None) -> FloatArray:
+        # np.bincount's sums (in face order, the same bits), without the copies it makes of
+        # a read-only group array (8 bytes a face) and of weights that are not float64.
+        sums = np.zeros(bins)
+        announce_compiling()
+        if weights is None:
+            _count_by_group(group, sums)
+        else:
+            _sum_by_group(group, weights, sums)
+        return sums[:-1]
 
+    size, against = per_patch(), per_patch(parity)
     cone = _cone_terms(geometry, group, bins)
     terms, scale = cone.terms, cone.scale
     terms_sum = float(np.sum(terms))  # the input's volume, if it is closed and consistent
     # The volume of each patch with its winding made consistent, its first face unchanged:
     # the terms turned in place (the copies np.where makes are 16 bytes a face).
-    np.negative(terms, out=terms, where=parity.astype(bool))
+    np.negative(terms, out=terms, where=parity.view(bool))
     volume = per_patch(terms) / 6
-    size, against = per_patch(), per_patch(parity)
     orientable = found.orientable
     closed = found.closed[found.patch_component]
     shells = orientable & closed & _evident(volume, cone, len(indices))
@@ -342,7 +350,7 @@ def oriented(
     # purpose or not) is left as it is: turning it would only make two faces one.
     open_patches = orientable & ~closed & (area > 0)
     if open_patches.any():  # a closed mesh has none: no key a face to sort
-        open_patches &= per_patch((~_twinned(points)).astype(np.intp)) > 0
+        open_patches &= per_patch((~_twinned(points)).view(np.int8)) > 0
     score = visible_sides(geometry.mesh.vertices, indices, group, parity, open_patches, area)
     seen = np.abs(np.nan_to_num(score)) >= VISIBILITY_MARGIN
     inward = score < 0
@@ -404,29 +412,46 @@ def _cone_terms(geometry: FaceGeometry, group: IndexArray, groups: int) -> _Cone
     """
     mesh = geometry.mesh
     count = len(mesh.faces)
-    terms, bounds, sensitivity = np.empty(count), np.empty(count), np.empty(count)
-    sums = np.zeros((groups, 5))  # area-weighted centroid sums, the area, the largest |x|
+    terms = np.empty(count)
+    # Per group: the area-weighted centroid sums, the area, the largest |x|, and the sums of
+    # the bounds and the sensitivities (summed in face order, as np.bincount sums them: the
+    # same bits, without two arrays of 8 bytes a face).
+    sums = np.zeros((groups, 7))
     announce_compiling()
     _cone_kernel(
-        mesh.points,
-        mesh.factor,
-        mesh.faces,
-        geometry.crosses,
-        geometry.recomputed,
-        group,
-        sums,
-        terms,
-        bounds,
-        sensitivity,
-    )
-    points = mesh.vertices
+        mesh.points, mesh.factor, mesh.faces, geometry.crosses, geometry.recomputed, group,
+        sums, terms,
+    )  # fmt: skip
+    unit = FLOAT32_UNIT if _single(mesh.vertices) else EPSILON
+    return _Cone(terms, sums[:, 5].copy(), sums[:, 6].copy(), sums[:, 4].copy(), unit, mesh.scale)
+
+
+#: Rows of vertices compared with their float32 rounding at a time (so that the copy is small).
+_SINGLE_BLOCK = 65_536
+
+
+def _single(points: FloatArray) -> bool:
+    """Whether every coordinate is a float32 value, checked a block at a time."""
     with np.errstate(over="ignore"):  # beyond the float32 range is not float32 data
-        single = bool(np.array_equal(points.astype(np.float32), points))
-    unit = FLOAT32_UNIT if single else EPSILON
-    bound_sums, sensitivity_sums = (
-        np.bincount(group, values, groups).astype(np.float64) for values in (bounds, sensitivity)
-    )
-    return _Cone(terms, bound_sums, sensitivity_sums, sums[:, 4], unit, mesh.scale)
+        for start in range(0, len(points), _SINGLE_BLOCK):
+            block = points[start : start + _SINGLE_BLOCK]
+            if not np.array_equal(block.astype(np.float32), block):
+                return False
+    return True
+
+
+@kernel(python=True)
+def _sum_by_group(group: IndexArray, weights: FloatArray | ParityArray, sums: FloatArray) -> None:
+    """``sums[g]`` += the weights of the faces of group g, in face order."""
+    for face in range(len(group)):
+        sums[group[face]] += weights[face]
+
+
+@kernel(python=True)
+def _count_by_group(group: IndexArray, counts: FloatArray) -> None:
+    """``counts[g]``: how many faces group g has."""
+    for face in range(len(group)):
+        counts[group[face]] += 1.0
 
 
 def _evident(
@@ -490,10 +515,9 @@ def _cone_kernel(
     group: IndexArray,
     sums: FloatArray,
     terms: FloatArray,
-    bounds: FloatArray,
-    sensitivity: FloatArray,
 ) -> None:
-    """Two passes over the faces: the groups' centroids, then each face's term and bounds."""
+    """Two passes over the faces: the groups' centroids, then each face's term, with its
+    bounds summed by group."""
     for face in range(len(faces)):
         ax, ay, az, ux, uy, uz, vx, vy, vz, nx, ny, nz, largest = _cone_face(
             points, factor, faces, crosses, recomputed, face
@@ -526,8 +550,8 @@ def _cone_kernel(
         ab = math.sqrt(ux * ux + uy * uy + uz * uz)
         ac = math.sqrt(vx * vx + vy * vy + vz * vz)
         bc = math.sqrt(ex * ex + ey * ey + ez * ez)
-        bounds[face] = normal * to_a
-        sensitivity[face] = 4 * normal + to_a * bc + to_b * ac + to_c * ab
+        row[5] += normal * to_a
+        row[6] += 4 * normal + to_a * bc + to_b * ac + to_c * ab
 
 
 # --- shells inside shells ----------------------------------------------------------------------

@@ -48,7 +48,7 @@ from numpy.typing import ArrayLike, NDArray
 from mesh_normal.checks import CheckedMesh, check_faces, read_only
 from mesh_normal.faces import FaceGeometry
 from mesh_normal.kernels import announce_compiling, kernel
-from mesh_normal.types import BoolArray, FloatArray, IndexArray
+from mesh_normal.types import BoolArray, FloatArray, IndexArray, ParityArray
 
 #: Sort keys (edge * 3m + half-edge, vertex * 3m + corner) must stay below this to fit int64
 #: with room to spare.
@@ -102,7 +102,7 @@ class Structure:
     topology: MeshTopology
     group: IndexArray  # (m,) patch of each face; faces with a repeated point get ``patches``
     patches: int
-    parity: IndexArray  # (m,) 1 where a face must flip to agree with its patch's first face
+    parity: ParityArray  # (m,) 1 where a face must flip to agree with its patch's first face
     orientable: BoolArray  # (patches,)
     patch_component: IndexArray  # (patches,)
     closed: BoolArray  # (components,)
@@ -166,27 +166,26 @@ def structure(faces: IndexArray, vertex_count: int) -> Structure:
     valid = (faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2])
     valid &= faces[:, 2] != faces[:, 0]
     key, face, forward = _sorted_half_edges(faces, valid, vertex_count)
-    # At each sorted position: is the edge the same as the previous one, the next, the one
-    # after next? Edges used once, twice and more follow. Each array of a half-edge is freed
-    # as soon as it is used: a mesh has three of them a face.
-    after = np.zeros(len(key), dtype=bool)
-    after[:-1] = key[1:] == key[:-1]
-    starting = np.ones(len(key), dtype=bool)
-    starting[1:] = ~after[:-1]
-    after_next = np.zeros(len(key), dtype=bool)
-    after_next[:-1] = after[1:]
-    first = starting & after
-    boundary = np.flatnonzero(starting & ~after)
-    del after
-    paired = np.flatnonzero(first & ~after_next)
-    nonmanifold = np.flatnonzero(first & after_next)
-    del first, after_next
+    # The runs of equal keys: edges used once (boundary), twice (paired: their positions in 4
+    # bytes where they fit) and more (non-manifold: their first position and how many use
+    # it), found in one compiled walk with nothing kept a half-edge.
+    counts = np.zeros(3, dtype=np.intp)
+    announce_compiling()
+    _count_runs(key, counts)
+    boundary, nonmanifold, uses = (np.empty(counts[i], dtype=np.intp) for i in (0, 2, 2))
+    paired = np.empty(counts[1], dtype=np.int32 if len(key) < 2**31 else np.intp)
+    _find_runs(key, boundary, paired, nonmanifold, uses)
     boundary_edge_list = _edge_list(key[boundary], forward[boundary], vertex_count)
     nonmanifold_edge_list = _edge_list(key[nonmanifold], None, vertex_count)
     del key
     # The two faces of each manifold edge, and whether they run along it the same way.
-    one, two = face[paired], face[paired + 1]
-    same = forward[paired] == forward[paired + 1]
+    one = face[paired]
+    paired += 1
+    two = face[paired]
+    same = forward[paired]
+    paired -= 1
+    same ^= forward[paired]
+    same ^= 1  # 1 where the two run along the edge the same way
     del paired, forward
     root, parity = _connected(len(faces), one, two, same)
     patch, firsts = _numbered(root, valid)
@@ -195,7 +194,7 @@ def structure(faces: IndexArray, vertex_count: int) -> Structure:
     orientable = np.ones(patches, dtype=bool)
     orientable[patch[one[(parity[one] ^ parity[two]) != same]]] = False
     del one, two
-    face_component, components = _merged(patch, patches, face, starting, nonmanifold)
+    face_component, components = _merged(patch, patches, face, nonmanifold, uses)
     closed = np.ones(components, dtype=bool)
     closed[face_component[face[np.r_[boundary, nonmanifold]]]] = False
     topology = MeshTopology(
@@ -293,8 +292,8 @@ def _pack_half_edges(
 
 
 def _connected(
-    count: int, one: IndexArray, two: IndexArray, same: IndexArray
-) -> tuple[IndexArray, IndexArray]:
+    count: int, one: IndexArray, two: IndexArray, same: IndexArray | ParityArray
+) -> tuple[IndexArray, ParityArray]:
     """Label the nodes of a graph with the smallest node connected to them.
 
     Nodes ``one[i]`` and ``two[i]`` are joined, with parity ``same[i]`` (1 when exactly one
@@ -303,7 +302,7 @@ def _connected(
     parities conflict and are meaningless, but the labels are right regardless.
     """
     root = np.empty(count, dtype=np.intp)
-    parity = np.empty(count, dtype=np.intp)
+    parity = np.empty(count, dtype=np.int8)  # 0 or 1: one byte a face
     # The edges' nodes in 4 bytes (as the half-edge sort gives them; one compiled kernel for
     # every graph of fewer than 2**31 nodes), the parities in one.
     node = np.int32 if count < 2**31 else np.intp
@@ -320,7 +319,7 @@ def _connected(
 
 
 @kernel(error_model="python", python=True)
-def _find(parent: IndexArray, relation: IndexArray, node: int) -> tuple[int, int]:
+def _find(parent: IndexArray, relation: ParityArray, node: int) -> tuple[int, int]:
     """The root of ``node`` and its parity to it; compresses the path on the way."""
     top, parity = node, 0
     while parent[top] != top:
@@ -341,7 +340,7 @@ def _union_find(
     two: IndexArray,
     same: IndexArray,
     root: IndexArray,
-    parity: IndexArray,
+    parity: ParityArray,
 ) -> None:
     """Union-find with parities, one pass over the edges; the smaller root always wins.
 
@@ -367,15 +366,14 @@ def _merged(
     patch: IndexArray,
     patches: int,
     face: IndexArray,
-    starting: BoolArray,
     nonmanifold: IndexArray,
+    uses: IndexArray,
 ) -> tuple[IndexArray, int]:
-    """Join the patches around each non-manifold edge into components; number them."""
+    """Join the patches around each non-manifold edge (its first sorted position and how many
+    half-edges use it) into components; number them."""
     if not len(nonmanifold):
         return patch, patches
     # Link each later half-edge of a non-manifold edge to the edge's first half-edge.
-    first = np.flatnonzero(starting)
-    uses = np.diff(np.r_[first, len(face)])[np.searchsorted(first, nonmanifold)]
     group = np.repeat(nonmanifold, uses)
     position = group + np.arange(len(group)) - np.repeat(np.cumsum(uses) - uses, uses)
     one, two = patch[face[group]], patch[face[position]]
@@ -384,14 +382,86 @@ def _merged(
     return np.where(patch >= 0, number[patch], -1), len(firsts)
 
 
+@kernel(python=True)
+def _count_runs(key: IndexArray, counts: IndexArray) -> None:
+    """How many runs of equal sorted keys are one long, two, and more."""
+    start, count = 0, len(key)
+    while start < count:
+        end = start + 1
+        while end < count and key[end] == key[start]:
+            end += 1
+        counts[min(end - start, 3) - 1] += 1
+        start = end
+
+
+@kernel(python=True)
+def _find_runs(
+    key: IndexArray,
+    boundary: IndexArray,
+    paired: IndexArray,
+    nonmanifold: IndexArray,
+    uses: IndexArray,
+) -> None:
+    """The first position of each run of equal sorted keys, by its length (one, two, more),
+    and the length of the longer ones."""
+    start, count = 0, len(key)
+    ones = twos = more = 0
+    while start < count:
+        end = start + 1
+        while end < count and key[end] == key[start]:
+            end += 1
+        if end - start == 1:
+            boundary[ones] = start
+            ones += 1
+        elif end - start == 2:
+            paired[twos] = start
+            twos += 1
+        else:
+            nonmanifold[more] = start
+            uses[more] = end - start
+            more += 1
+        start = end
+
+
 def _numbered(root: IndexArray, valid: BoolArray) -> tuple[IndexArray, IndexArray]:
-    """Number the roots 0, 1, ... in order; -1 for invalid nodes. Also returns the roots."""
-    is_root = valid & (root == np.arange(len(root)))
-    number = np.cumsum(is_root) - 1
-    numbered = number[root]
-    if not valid.all():
-        numbered[~valid] = -1
-    return numbered, np.flatnonzero(is_root)
+    """Number the roots 0, 1, ... in order; -1 for invalid nodes. Also returns the roots.
+
+    ``root`` (each node's smallest connected node, as :func:`_connected` labels them) is
+    overwritten with the numbers: one array a face instead of four at once.
+    """
+    announce_compiling()
+    count = _number_roots(root, valid)
+    firsts = np.empty(count, dtype=np.intp)
+    _first_of_each(root, firsts)
+    return root, firsts
+
+
+@kernel(python=True)
+def _number_roots(root: IndexArray, valid: BoolArray) -> int:
+    """Replace each valid node's root by its root's number (roots numbered in order), -1 for
+    an invalid node; return how many roots. In place: a root comes before every node that it
+    labels, so its number is written before they read it."""
+    count = 0
+    for node in range(len(root)):
+        top = root[node]
+        if not valid[node]:
+            root[node] = -1
+        elif top == node:
+            root[node] = count
+            count += 1
+        else:
+            root[node] = root[top]
+    return count
+
+
+@kernel(python=True)
+def _first_of_each(numbered: IndexArray, firsts: IndexArray) -> None:
+    """The first node of each number (the numbers first appear in increasing order)."""
+    following = 0
+    for node in range(len(numbered)):
+        if numbered[node] == following:
+            firsts[following] = node
+            following += 1
 
 
 # --- corners around vertices ------------------------------------------------------------------

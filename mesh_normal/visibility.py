@@ -38,7 +38,7 @@ import math
 import numpy as np
 
 from mesh_normal.kernels import PARALLEL_KERNELS, announce_compiling, kernel, prange
-from mesh_normal.types import BoolArray, FloatArray, IndexArray
+from mesh_normal.types import BoolArray, FloatArray, IndexArray, ParityArray
 
 #: Rays per side of each sample.
 DIRECTIONS = 16
@@ -81,7 +81,7 @@ def visible_sides(
     points: FloatArray,
     faces: IndexArray,
     group: IndexArray,
-    parity: IndexArray,
+    parity: ParityArray,
     candidates: BoolArray,
     area: FloatArray,
 ) -> FloatArray:

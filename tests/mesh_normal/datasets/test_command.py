@@ -95,8 +95,10 @@ class Watched:
         command = [sys.executable, "-m", "mesh_normal", "--progress", "batch", str(root)]
         command += ["--out", str(out), "--workers", "1", "--flush-rows", "5", "--fix"]
         command += ["--timeout", "600"]
+        # A run that does not end is aborted: faulthandler then writes every thread's stack.
+        env = {**os.environ, "PYTHONFAULTHANDLER": "1"}
         self.process = subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE,
-                                        stderr=subprocess.PIPE, text=True)  # fmt: skip
+                                        stderr=subprocess.PIPE, text=True, env=env)  # fmt: skip
         self.err: list[str] = []
         self.reader = threading.Thread(target=self._read, daemon=True)
         self.reader.start()
@@ -114,7 +116,13 @@ class Watched:
             time.sleep(0.1)
 
     def finish(self) -> str:
-        self.process.wait(timeout=PATIENCE)
+        try:
+            self.process.wait(timeout=PATIENCE)
+        except subprocess.TimeoutExpired:
+            self.process.send_signal(signal.SIGABRT)  # its threads' stacks, on stderr
+            self.process.wait(timeout=PATIENCE)
+            self.reader.join(timeout=PATIENCE)
+            pytest.fail("the batch did not end:\n" + "".join(self.err)[-6000:])
         self.reader.join()
         assert self.process.stdout is not None
         self.process.stdout.close()
