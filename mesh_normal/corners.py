@@ -159,15 +159,21 @@ def corner_blocks(
     threshold = _crease_cosine(crease_angle)
     source = checked_input(vertices, faces)
     weighting_code(weighting)
-    geometry = face_geometry(source)
-    smooth_normals, cancelled = smooth(geometry, weighting)
+    if isinstance(source, FaceGeometry):
+        geometry = source
+        smooth_normals, cancelled = smooth(geometry, weighting)
+    else:
+        # The vertex normals first, in the pass that takes the cross products as it goes (the
+        # same bits): its two (n, 4) sums are never held beside the geometry's products.
+        smooth_normals, cancelled = smooth(source, weighting)
+        geometry = face_geometry(source)
     indices, vertex_count = geometry.mesh.faces, len(geometry.mesh.vertices)
     missing = cancelled[indices]
     creased_ids = np.empty(0, dtype=np.intp)
     creased_normals = np.empty((0, 3))
     if float(crease_angle) < 180.0:
         creased = _creased_vertices(geometry, smooth_normals, crease_angle, rows)
-        corners = np.flatnonzero(creased[indices].ravel())
+        corners = _creased_corners(creased, indices, rows)
         if len(corners):
             groups = vertex_corners(indices, vertex_count, corners)
             # Only the creased corners' weights, in sorted corner order (corner id 3 f + k
@@ -184,6 +190,18 @@ def corner_blocks(
     return CornerBlocks(
         indices, smooth_normals, geometry.degenerate, creased_ids, creased_normals, missing
     )
+
+
+def _creased_corners(creased: BoolArray, indices: IndexArray, rows: int) -> IndexArray:
+    """The ids 3 f + k of the corners at a creased vertex, increasing: a block of faces at a
+    time (no (m, 3) mask), none at all when no vertex is creased."""
+    if not creased.any():
+        return np.empty(0, dtype=np.intp)
+    found = [
+        np.flatnonzero(creased[indices[start : start + rows]].ravel()) + 3 * start
+        for start in range(0, len(indices), rows)
+    ]
+    return np.concatenate(found) if found else np.empty(0, dtype=np.intp)
 
 
 def _creased_vertices(

@@ -56,24 +56,35 @@ def object_reports(
         return np.bincount(groups, weights, count).astype(np.intp)
 
     # Faces with a repeated point are in no component (-1): they have no edges, no verdict.
-    # Each component's answer looked up a face at a time, -1 reading the appended False: one
-    # byte a face each, no index array of 8.
-    in_part = component >= 0
-    decidable = np.append(table.method != _NONE, False)[component]
-    with_verdict = np.append(table.orientation != _UNDETERMINED, False)[component]
     total, flips = per_object(), per_object(flipped)
-    decided, decided_flips = per_object(decidable), per_object(decidable & flipped)
+    if count == 1:  # the components' own counts: nothing a face
+        decidable_parts = table.method != _NONE
+        decided = np.array([np.sum(table.faces[decidable_parts])], dtype=np.intp)
+        decided_flips = np.array([np.sum(table.flipped[decidable_parts])], dtype=np.intp)
+        with_verdict_faces = np.sum(table.faces[table.orientation != _UNDETERMINED])
+        has_verdict = np.array([with_verdict_faces > 0])
+        in_part = None
+    else:
+        # Each component's answer looked up a face at a time, -1 reading the appended False:
+        # one byte a face each, no index array of 8.
+        in_part = component >= 0
+        decidable = np.append(table.method != _NONE, False)[component]
+        with_verdict = np.append(table.orientation != _UNDETERMINED, False)[component]
+        decided, decided_flips = per_object(decidable), per_object(decidable & flipped)
+        has_verdict = per_object(with_verdict) > 0
+        del decidable, with_verdict
     area = np.array([np.sum(areas)]) if count == 1 else np.bincount(groups, areas, count)
     degenerates = per_object(degenerate)
     if count == 1:  # the one object is the mesh: its topology has counted what it holds
         topology = orientation.topology
         parts = np.array([topology.components], dtype=np.intp)
         edges_ok = topology.boundary_edges == 0 and topology.nonmanifold_edges == 0
-        closed = np.array([bool(in_part.any()) and edges_ok])
+        closed = np.array([bool(np.any(component >= 0)) and edges_ok])
     else:
+        assert in_part is not None
         parts = _parts(groups[in_part], component[in_part], count)
         closed = _closed(groups[in_part], points[in_part], count)
-    verdicts = _verdicts(per_object(with_verdict) > 0, flips, decided, decided_flips)
+    verdicts = _verdicts(has_verdict, flips, decided, decided_flips)
     return [
         ObjectReport(
             name=names[index],
