@@ -2,9 +2,9 @@
 
 The admission control (:mod:`app.web.jobs`) charges each job this estimate against the
 server's memory budget. The factors are the peak memory measured per byte of upload by
-``make bench-memory`` (issue 10; reading and the report: binary STL 4.8, ASCII STL 3.2, OBJ
-4.8, binary PLY 5.7, ASCII PLY 3.9, OFF 5.8, GLB 7.5; the normals and the fix at most 0.2
-more), rounded up with a margin; lower them here, in this one table, when the readers take
+``make bench-memory`` (issue 10; the largest of reading, the report, the normals and the fix:
+binary STL 5.1, ASCII STL 3.3, OBJ 4.9, binary PLY 4.9, ASCII PLY 3.8, OFF 6.0, GLB 5.9),
+rounded up with a margin; lower them here, in this one table, when the readers take
 less.
 """
 
@@ -27,7 +27,7 @@ MEMORY_PER_BYTE: dict[str, float] = {
     "obj": 6,
     "ply": 7,
     "off": 7,
-    "glb": 9,
+    "glb": 7,
     "gltf": 26,
     "3mf": 26,
 }
