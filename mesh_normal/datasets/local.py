@@ -75,9 +75,9 @@ def run_local(
             runner.close()
 
     threads = [threading.Thread(target=work, args=(runner,), daemon=True) for runner in runners]
-    for thread in threads:
-        thread.start()
     try:
+        for thread in threads:  # inside: a Ctrl-C between two starts stops the first too
+            thread.start()
         for _ in range(len(tasks)):
             found = done.get()
             if isinstance(found, BaseException):
@@ -88,4 +88,5 @@ def run_local(
         for runner in runners:
             runner.kill()
         for thread in threads:  # each reaps its child (a killed one returns at once)
-            thread.join(JOIN_SECONDS)
+            if thread.is_alive():
+                thread.join(JOIN_SECONDS)

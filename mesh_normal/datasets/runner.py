@@ -48,6 +48,7 @@ class FileRunner:
         self.threads = threads
         self._lock = threading.Lock()
         self._child: _Child | None = None
+        self._killed = threading.Event()  # kill() was called: start no child from now on
         self.started = 0  # how many children it has started, for the tests
 
     def run(self, task: FileTask, options: BatchOptions) -> dict[str, Any]:
@@ -59,6 +60,8 @@ class FileRunner:
 
             return failed_row(task, "too_large", too_large_sentence(task.size, limit), kind=kind)
         with self._lock:
+            if self._killed.is_set():
+                raise RunnerError("The batch was stopped.")
             child = self._ensure()
             start = time.perf_counter()
             try:
@@ -84,6 +87,7 @@ class FileRunner:
     def kill(self) -> None:
         """Kill the child now, from any thread, even while it runs a file (which then has
         no row worth keeping): how an interrupted batch stops at once."""
+        self._killed.set()  # a child starting now stops itself (see _Child.__init__)
         child = self._child
         if child is not None and child.process.poll() is None:
             child.process.kill()
@@ -91,7 +95,7 @@ class FileRunner:
     def _ensure(self) -> _Child:
         if self._child is None or self._child.process.poll() is not None:
             self._stop()
-            self._child = _Child(self.threads)
+            self._child = _Child(self.threads, self._killed)
             self.started += 1
         return self._child
 
@@ -117,7 +121,7 @@ def _exit_words(code: int | None) -> str:
 class _Child:
     """The child process and the two pipes to it."""
 
-    def __init__(self, threads: int) -> None:
+    def __init__(self, threads: int, killed: threading.Event | None = None) -> None:
         to_child_read, to_child_write = os.pipe()
         from_child_read, from_child_write = os.pipe()
         env = {**os.environ, "NUMBA_NUM_THREADS": str(threads)}
@@ -135,7 +139,14 @@ class _Child:
         os.close(from_child_write)
         self.to_child = Connection(to_child_write, readable=False)
         self.from_child = Connection(from_child_read, writable=False)
-        if not self.from_child.poll(START_SECONDS) or self.from_child.recv() != "ready":
+        # Waited for in steps, so that a runner killed meanwhile (Ctrl-C while the kernels
+        # load) does not leave this child running on.
+        deadline = time.monotonic() + START_SECONDS
+        while not self.from_child.poll(min(0.2, max(0.0, deadline - time.monotonic()))):
+            if (killed is not None and killed.is_set()) or time.monotonic() >= deadline:
+                self.kill()
+                raise RunnerError("The worker process did not start.")
+        if self.from_child.recv() != "ready":
             self.kill()
             raise RunnerError("The worker process did not start.")
 

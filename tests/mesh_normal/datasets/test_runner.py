@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import threading
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -10,7 +11,7 @@ import numpy as np
 import pytest
 
 import mesh_normal as mn
-from mesh_normal.datasets.runner import FileRunner, shared_runner
+from mesh_normal.datasets.runner import FileRunner, RunnerError, shared_runner
 from mesh_normal.datasets.tasks import BatchOptions, FileTask
 from tests.mesh_normal.datasets.dataset import cube
 
@@ -95,3 +96,31 @@ def test_a_worker_that_dies_is_a_too_large_row(runner: FileRunner, tmp_path: Pat
 
 def test_the_shared_runner_is_one_per_process() -> None:
     assert shared_runner() is shared_runner()
+
+
+def test_a_runner_killed_while_its_child_starts_leaves_no_child(tmp_path: Path) -> None:
+    # Ctrl-C in the first second of a batch: the child is still loading the kernels, and is
+    # not yet the runner's, when kill() comes.
+    path = tmp_path / "cube.stl"
+    path.write_bytes(cube(1, "stl"))
+    fresh = FileRunner()
+    errors: list[BaseException] = []
+
+    def run() -> None:
+        try:
+            fresh.run(task_of(path), BatchOptions(out=str(tmp_path / "out")))
+        except BaseException as error:
+            errors.append(error)
+
+    thread = threading.Thread(target=run)
+    thread.start()
+    fresh.kill()
+    thread.join(timeout=120)  # a guard: the child stops itself at its next step
+    assert not thread.is_alive()
+    assert [str(error) for error in errors] in (
+        ["The worker process did not start."],
+        ["The batch was stopped."],
+    )
+    assert fresh._child is None
+    with pytest.raises(RunnerError, match="stopped"):
+        fresh.run(task_of(path), BatchOptions(out=str(tmp_path / "out")))
