@@ -37,7 +37,15 @@ import math
 
 import numpy as np
 
-from mesh_normal.kernels import PARALLEL_KERNELS, announce_compiling, kernel, prange
+from mesh_normal.kernels import (
+    BLOCK,
+    PARALLEL_KERNELS,
+    announce_compiling,
+    claim,
+    kernel,
+    prange,
+    workers,
+)
 from mesh_normal.types import BoolArray, FloatArray, IndexArray, ParityArray
 
 #: Rays per side of each sample.
@@ -189,15 +197,13 @@ def _hierarchy(
     at 80 bytes each: a leaf holds up to ``_LEAF`` faces), and 70 more for a moment while the
     nodes are made (measured on 328k faces: 149 bytes a face kept, with the vertices).
     """
-    code = np.empty(len(faces), dtype=np.int64)
     announce_compiling()
-    _morton(unit, faces, code)
-    order = np.argsort(code, kind="stable").astype(np.intp)
+    codes, order = _morton_order(unit, faces)
     nodes = max(1, 2 * len(faces))  # at least one face per leaf: fewer than 2 m nodes
     children = np.full((nodes, 2), -1, dtype=np.intp)
     spans = np.zeros((nodes, 2), dtype=np.intp)
-    used = _split(code[order], children, spans)
-    del code
+    used = _split(codes, children, spans)
+    del codes
     children, spans = children[:used].copy(), spans[:used].copy()
     corners = _corners(unit, faces, order)
     boxes = np.empty((used, 6))
@@ -205,25 +211,82 @@ def _hierarchy(
     return order, boxes, children, spans, corners
 
 
-@kernel(python=PYTHON_RAYS)
-def _morton(unit: FloatArray, faces: IndexArray, code: IndexArray) -> None:
-    """The Morton code of each face's centroid on a 1024**3 grid over [-1, 1]**3."""
-    for face in range(len(faces)):
-        value = 0
-        for axis in range(3):
-            total = unit[faces[face, 0], axis] + unit[faces[face, 1], axis]
-            total += unit[faces[face, 2], axis]
-            cell = min(max(int((total / 3 + 1.0) * 512.0), 0), 1023)
-            for bit in range(10):
-                value |= ((cell >> bit) & 1) << (3 * bit + axis)
-        code[face] = value
+def _morton_order(unit: FloatArray, faces: IndexArray) -> tuple[IndexArray, IndexArray]:
+    """The faces' Morton codes (:func:`_morton`) in increasing order, and the order: that of a
+    stable sort. Each code and its face number are one int64 key (the code above, the number
+    below ``_FACE_BITS``), so a plain sort of distinct keys gives the stable order (measured
+    7 times faster than ``argsort(kind="stable")`` at 871k faces)."""
+    keys = np.empty(len(faces), dtype=np.int64)
+    counter, threads = workers()
+    if len(faces) > 2**_FACE_BITS:  # never in memory (about 200 GB of faces): the plain way
+        _morton(unit, faces, 0, keys, counter, threads)
+        order = np.argsort(keys, kind="stable").astype(np.intp)
+        return keys[order], order
+    _morton(unit, faces, _FACE_BITS, keys, counter, threads)
+    keys.sort()
+    order = keys & (2**_FACE_BITS - 1)
+    keys >>= _FACE_BITS
+    return keys, order
+
+
+#: The bits of a face's number below its Morton code (30 bits) in a sort key.
+_FACE_BITS = 33
+
+
+@kernel(parallel=True, python=PYTHON_RAYS)
+def _morton(
+    unit: FloatArray, faces: IndexArray, shift: int, keys: IndexArray, counter: IndexArray,
+    workers: int,
+) -> None:  # fmt: skip
+    """The Morton code of each face's centroid on a 1024**3 grid over [-1, 1]**3, shifted
+    left by ``shift`` bits and the face's number added (when ``shift`` is not 0)."""
+    blocks = (len(faces) + BLOCK - 1) // BLOCK
+    for _ in prange(workers):  # blocks write disjoint rows: any worker may take any block
+        block = claim(counter)
+        while block < blocks:
+            for face in range(block * BLOCK, min(len(faces), (block + 1) * BLOCK)):
+                value = 0
+                for axis in range(3):
+                    total = unit[faces[face, 0], axis] + unit[faces[face, 1], axis]
+                    total += unit[faces[face, 2], axis]
+                    cell = min(max(int((total / 3 + 1.0) * 512.0), 0), 1023)
+                    # The cell's 10 bits spread to every third bit (bit b to bit 3 b).
+                    cell = (cell | (cell << 16)) & 0x30000FF
+                    cell = (cell | (cell << 8)) & 0x300F00F
+                    cell = (cell | (cell << 4)) & 0x30C30C3
+                    cell = (cell | (cell << 2)) & 0x9249249
+                    value |= cell << axis
+                keys[face] = (value << shift) | face if shift else value
+            block = claim(counter)
 
 
 def _corners(unit: FloatArray, faces: IndexArray, order: IndexArray) -> FloatArray:
     """(m, 9): each face's corners A, B, C in the hierarchy's order, so that a leaf's faces
     lie side by side in memory (the rays' time is mostly waiting for memory)."""
-    corners: FloatArray = unit[faces[order]].reshape(len(order), 9)
+    corners = np.empty((len(order), 9))
+    counter, threads = workers()
+    _gather_corners(unit, faces, order, corners, counter, threads)
     return corners
+
+
+@kernel(parallel=True, python=PYTHON_RAYS)
+def _gather_corners(
+    unit: FloatArray, faces: IndexArray, order: IndexArray, corners: FloatArray,
+    counter: IndexArray, workers: int,
+) -> None:  # fmt: skip
+    """``corners[k] = unit[faces[order[k]]].ravel()`` (measured 10 times faster than NumPy's
+    two gathers, which also make a temporary of 24 bytes a face)."""
+    blocks = (len(order) + BLOCK - 1) // BLOCK
+    for _ in prange(workers):
+        block = claim(counter)
+        while block < blocks:
+            for k in range(block * BLOCK, min(len(order), (block + 1) * BLOCK)):
+                face = order[k]
+                for corner in range(3):
+                    vertex = faces[face, corner]
+                    for axis in range(3):
+                        corners[k, 3 * corner + axis] = unit[vertex, axis]
+            block = claim(counter)
 
 
 @kernel(python=PYTHON_RAYS)

@@ -1,20 +1,24 @@
 """Exact welding: merge corners with identical coordinates, in order of first appearance.
 
 Two corners merge only when their coordinates are equal as numbers (``-0.0`` equals ``0.0``);
-there is no tolerance. The work is one sort: each corner's coordinate bits are hashed to 64
-bits, the corner's own index is packed into the low bits, and a plain ``np.sort`` of those keys
-(several times faster than ``argsort``, ``lexsort`` or ``np.unique`` on rows) brings equal
-corners together, each group ordered by index, so a group's first corner is its first
-appearance and numbering the groups needs no second sort. The result is then checked bit for
-bit; the groups of any two different corners that shared a hash (it happens: the hash keeps
-only the bits the packed index leaves, about 1 in 50 meshes of a million points has a pair) are
-split again exactly with a ``lexsort`` of just their rows.
+there is no tolerance. The work is one sort: a compiled pass hashes each corner's coordinate
+bits and packs the corner's own index into the low bits of the key, a plain ``np.sort`` of
+those keys (several times faster than ``argsort``, ``lexsort`` or ``np.unique`` on rows) brings
+equal corners together, each group ordered by index, and a second compiled pass walks the
+groups: each corner is compared bit for bit with the first corner of each distinct point of
+its group (two different points share a hash now and then, about 1 in 50 meshes of a million
+points has a pair), so a group's first corner of a point is that point's first appearance, and
+one pass in index order numbers the points. A group of more than ``_MOST_DISTINCT`` different
+points (only a file made to collide) is welded by the exact NumPy way of before instead.
 """
 
 from __future__ import annotations
 
 import numpy as np
 from numpy.typing import NDArray
+
+from mesh_normal.kernels import announce_compiling, kernel
+from mesh_normal.types import BoolArray, IndexArray
 
 _MULTIPLIERS = (
     np.uint64(0x9E3779B97F4A7C15),
@@ -40,8 +44,128 @@ def weld(corners: NDArray[np.floating]) -> tuple[NDArray[np.float64], NDArray[np
     """
     points = np.ascontiguousarray(corners)
     points = points + points.dtype.type(0)  # -0.0 + 0.0 is +0.0: one bit pattern for zero
-    if len(points) == 0:
+    count = len(points)
+    if count == 0:
         return np.empty((0, 3)), np.empty(0, dtype=np.intp)
+    # The coordinates' bits, as 4 or 8 byte integers (one kernel for each).
+    bits = points.view(np.int32 if points.itemsize == 4 else np.int64)
+    index_bits = max(1, (count - 1).bit_length())
+    keys = np.empty(count, dtype=np.int64)
+    announce_compiling()
+    _hash_keys(bits, index_bits, _HASH_MASK, keys)
+    keys.sort()
+    is_leader = np.zeros(count, dtype=bool)
+    index = np.empty(count, dtype=np.intp)
+    if not _group(keys, index_bits, bits, _MOST_DISTINCT, is_leader, index):
+        del keys, is_leader, index
+        return _weld_sorted(points)
+    return points[is_leader].astype(np.float64), index
+
+
+#: The hash bits kept in a key (all of them; a test keeps fewer to make groups collide).
+_HASH_MASK = (1 << 62) - 1
+#: The most different points in one group of equal hashes that the compiled walk separates.
+_MOST_DISTINCT = 8
+_M32 = 0xFFFFFFFF
+_MURMUR = 0x5BD1E995  # below 2**31: a product with a 32-bit value fits an int64
+
+
+@kernel(python=True)
+def _mix(state: int, piece: int) -> int:
+    """MurmurHash2's step of a 32-bit ``piece`` into a 32-bit ``state`` (no overflow)."""
+    piece = (piece * _MURMUR) & _M32
+    piece ^= piece >> 24
+    piece = (piece * _MURMUR) & _M32
+    return ((state * _MURMUR) & _M32) ^ piece
+
+
+@kernel(python=True)
+def _final(state: int) -> int:
+    state ^= state >> 13
+    state = (state * _MURMUR) & _M32
+    return state ^ (state >> 15)
+
+
+@kernel(python=True)
+def _hash_keys(bits: IndexArray, index_bits: int, mask: int, keys: IndexArray) -> None:
+    """Each row's key: a 62-bit hash of its integers (two 31-bit halves), its low
+    ``index_bits`` bits replaced by the row's number."""
+    low = (1 << index_bits) - 1
+    columns = bits.shape[1]
+    for row in range(len(bits)):
+        first, second = 0x9747B28C, 0x3C6EF372
+        for column in range(columns):
+            word = int(bits[row, column])  # a Python int in the Python source: no overflow
+            first = _mix(first, word & _M32)
+            second = _mix(second, (word >> 16) & _M32)  # a 4-byte word's high half, shifted in
+            if bits.itemsize == 8:
+                first = _mix(first, (word >> 32) & _M32)
+                second = _mix(second, (word >> 48) & _M32)
+        digest = ((_final(first) >> 1) << 31) | (_final(second) >> 1)
+        keys[row] = ((digest & mask) & ~low) | row
+
+
+@kernel(python=True)
+def _group(
+    keys: IndexArray,
+    index_bits: int,
+    bits: IndexArray,
+    most: int,
+    is_leader: BoolArray,
+    index: IndexArray,
+) -> bool:
+    """Walk the sorted keys' groups of equal hashes of the rows (three integers each): mark
+    each point's first row and number every row's point by first appearance in ``index``;
+    False (and nothing numbered) if a group holds more than ``most`` different points.
+
+    The rows' bits are gathered in key order first (a copy of ``bits``): compared where they
+    lie, the walk measured three times slower, waiting on memory at every row."""
+    low = (1 << index_bits) - 1
+    count = len(bits)
+    ordered = np.empty_like(bits)
+    for position in range(count):
+        row = keys[position] & low
+        ordered[position, 0], ordered[position, 1] = bits[row, 0], bits[row, 1]
+        ordered[position, 2] = bits[row, 2]
+    heads = np.empty(most, dtype=np.int64)  # the first position of each point of the group
+    start = 0
+    while start < count:
+        end = start + 1
+        while end < count and keys[end] >> index_bits == keys[start] >> index_bits:
+            end += 1
+        found = 0
+        for position in range(start, end):  # in row order: a point's first row comes first
+            x, y, z = ordered[position, 0], ordered[position, 1], ordered[position, 2]
+            head = -1
+            for h in range(found):
+                first = heads[h]
+                if x == ordered[first, 0] and y == ordered[first, 1] and z == ordered[first, 2]:
+                    head = first
+                    break
+            row = keys[position] & low
+            if head < 0:
+                if found == most:
+                    return False
+                heads[found] = position
+                found += 1
+                is_leader[row] = True
+                head = position
+            index[row] = keys[head] & low
+        start = end
+    # Number the points in row order: a row's first row is earlier, so numbered already.
+    number = 0
+    for row in range(count):
+        if is_leader[row]:
+            index[row] = number
+            number += 1
+        else:
+            index[row] = index[index[row]]
+    return True
+
+
+def _weld_sorted(points: NDArray[np.floating]) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
+    """:func:`weld` of ``points`` (no -0.0) the NumPy way: a sort of hash keys, the groups
+    checked after and those that mixed points split exactly with a ``lexsort``."""
     words = _words(points)
     is_leader, index = _number(*_hash_groups(words))
     wrong = np.zeros(len(points), dtype=bool)

@@ -157,3 +157,29 @@ def test_the_scores_are_the_same_far_from_the_origin(shift: float) -> None:
     decided = np.abs(np.nan_to_num(here)) >= visibility.MARGIN
     assert np.array_equal(decided, np.abs(np.nan_to_num(there)) >= visibility.MARGIN)
     np.testing.assert_allclose(there, here, atol=1 / visibility.DIRECTIONS / 2)
+
+
+def _reference_morton(unit: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """The Morton codes of the faces' centroids, bit by bit in NumPy."""
+    total = unit[faces[:, 0]] + unit[faces[:, 1]]
+    total += unit[faces[:, 2]]
+    cells = np.clip(((total / 3 + 1.0) * 512.0).astype(np.int64), 0, 1023)
+    code = np.zeros(len(faces), dtype=np.int64)
+    for bit in range(10):
+        for axis in range(3):
+            code |= ((cells[:, axis] >> bit) & 1) << (3 * bit + axis)
+    return code
+
+
+@pytest.mark.parametrize("count", [1, 7, 600, 5000])
+def test_the_hierarchy_order_is_the_stable_sort_of_the_morton_codes(count: int) -> None:
+    rng = np.random.default_rng(count)
+    unit = rng.uniform(-1, 1, (count + 2, 3))
+    unit[: count // 3] = np.round(unit[: count // 3], 1)  # many equal codes: ties in file order
+    faces = rng.integers(0, len(unit), (count, 3)).astype(np.intp)
+    expected = _reference_morton(unit, faces)
+    codes, order = visibility._morton_order(unit, faces)
+    np.testing.assert_array_equal(order, np.argsort(expected, kind="stable"))
+    np.testing.assert_array_equal(codes, expected[order])
+    corners = visibility._corners(unit, faces, order)
+    np.testing.assert_array_equal(corners, unit[faces[order]].reshape(-1, 9))

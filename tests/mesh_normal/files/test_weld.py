@@ -28,18 +28,51 @@ def test_matches_a_dictionary(dtype: type) -> None:
     assert vertices.dtype == np.float64 and index.dtype == np.intp
 
 
-def test_hash_collisions_are_split_exactly(monkeypatch: pytest.MonkeyPatch) -> None:
+@pytest.mark.parametrize("rows", [500, 20_000])  # the Python source, and compiled
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+@pytest.mark.parametrize(
+    ("hash_bits", "most"),
+    [(2, 1024), (2, 8), (0, 8)],  # 4 groups split in the walk; too many points: the NumPy way
+)
+def test_hash_collisions_are_split_exactly(
+    monkeypatch: pytest.MonkeyPatch, rows: int, dtype: type, hash_bits: int, most: int
+) -> None:
+    index_bits = (rows - 1).bit_length()
+    monkeypatch.setattr(weld_module, "_HASH_MASK", (1 << index_bits + hash_bits) - 1)
+    monkeypatch.setattr(weld_module, "_MOST_DISTINCT", most)
+    corners = np.random.default_rng(5).integers(0, 4, (rows, 3)).astype(dtype)
+    corners[::5] *= -1.0  # -0.0 among them
+    vertices, index = weld(corners)
+    expected_vertices, expected_index = reference(corners)
+    np.testing.assert_array_equal(vertices, expected_vertices)
+    np.testing.assert_array_equal(index, expected_index)
+
+
+def test_the_numpy_way_splits_its_own_collisions(monkeypatch: pytest.MonkeyPatch) -> None:
     def everything_collides(words):  # type: ignore[no-untyped-def]
         starts = np.zeros(len(words[0]), dtype=bool)
         starts[0] = True
         return np.arange(len(words[0])), starts
 
     monkeypatch.setattr(weld_module, "_hash_groups", everything_collides)
+    monkeypatch.setattr(weld_module, "_HASH_MASK", 0)
     corners = np.random.default_rng(5).integers(0, 4, (500, 3)).astype(np.float64)
     vertices, index = weld(corners)
     expected_vertices, expected_index = reference(corners)
     np.testing.assert_array_equal(vertices, expected_vertices)
     np.testing.assert_array_equal(index, expected_index)
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_a_large_mesh_matches_the_numpy_way(dtype: type) -> None:
+    rng = np.random.default_rng(8)
+    points = rng.standard_normal((30_000, 3)).astype(dtype)
+    corners = points[rng.integers(0, len(points), 100_000)]
+    vertices, index = weld(corners)
+    expected_vertices, expected_index = weld_module._weld_sorted(corners + dtype(0))
+    np.testing.assert_array_equal(vertices, expected_vertices)
+    np.testing.assert_array_equal(index, expected_index)
+    np.testing.assert_array_equal(vertices[index], corners.astype(np.float64))
 
 
 def test_empty() -> None:
