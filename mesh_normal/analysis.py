@@ -21,6 +21,7 @@ from mesh_normal.diagnosis import problems
 from mesh_normal.faces import FaceGeometry, FaceNormals, face_geometry, geometry_areas
 from mesh_normal.files import LoadedMesh, read_mesh
 from mesh_normal.files.read import MeshSource, source_bytes
+from mesh_normal.kernels import column_bounds
 from mesh_normal.objects import object_reports
 from mesh_normal.orientation import Orientation, oriented
 from mesh_normal.report import (
@@ -246,7 +247,8 @@ def first_indices(mask: NDArray[np.bool_]) -> list[int]:
 def _bounds(vertices: NDArray[np.float64]) -> Bounds | None:
     if not len(vertices):
         return None
-    return Bounds(min=vertices.min(axis=0).tolist(), max=vertices.max(axis=0).tolist())
+    low, high = column_bounds(vertices)
+    return Bounds(min=low.tolist(), max=high.tolist())
 
 
 def flips_by_component(orientation: Orientation) -> str:

@@ -455,3 +455,47 @@ def face_normals_kernel(
                     areas[face] = math.ldexp(length, exponent)
                 degenerate[face] = found == DEGENERATE
             block = claim(counter)
+
+
+def column_bounds(
+    points: FloatArray, faces: IndexArray | None = None
+) -> tuple[FloatArray, FloatArray]:
+    """The smallest and largest of each column of ``points`` (finite, at least one row), or
+    of the rows that ``faces`` use: one pass, where NumPy's ``min(axis=0)`` and
+    ``max(axis=0)`` take two slow ones (and a used-rows copy); a zero's sign is the first's."""
+    low, high = np.empty(3), np.empty(3)
+    if faces is None:
+        _bounds_kernel(points, low, high)
+    else:
+        _used_bounds_kernel(points, faces, low, high)
+    return low, high
+
+
+@kernel(python=True)
+def _bounds_kernel(points: FloatArray, low: FloatArray, high: FloatArray) -> None:
+    for axis in range(3):
+        low[axis] = high[axis] = points[0, axis]
+    for row in range(1, len(points)):
+        for axis in range(3):
+            value = points[row, axis]
+            if value < low[axis]:
+                low[axis] = value
+            elif value > high[axis]:
+                high[axis] = value
+
+
+@kernel(python=True)
+def _used_bounds_kernel(
+    points: FloatArray, faces: IndexArray, low: FloatArray, high: FloatArray
+) -> None:
+    for axis in range(3):
+        low[axis] = high[axis] = points[faces[0, 0], axis]
+    for face in range(len(faces)):
+        for corner in range(3):
+            row = faces[face, corner]
+            for axis in range(3):
+                value = points[row, axis]
+                if value < low[axis]:
+                    low[axis] = value
+                elif value > high[axis]:
+                    high[axis] = value

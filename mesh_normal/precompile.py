@@ -24,7 +24,7 @@ from mesh_normal.faces import face_geometry, face_normals
 from mesh_normal.files.polygons import triangulate
 from mesh_normal.files.text_kernels import ObjScanner, binary_items
 from mesh_normal.files.weld import weld
-from mesh_normal.kernels import load_numba
+from mesh_normal.kernels import column_bounds, load_numba
 from mesh_normal.orientation import orient
 from mesh_normal.points import point_normals
 from mesh_normal.points.pcd import lzf_decompress
@@ -68,6 +68,8 @@ def compile_kernels() -> None:
     # Point clouds: the neighbourhood kernel (k nearest and within a radius take the same
     # types) and the signs down the spanning tree; binary_compressed PCD's LZF (one literal).
     ObjScanner().scan(_OBJ, 0, len(_OBJ))
+    for read_only in (False, True):  # a report's bounds, of the vertices as read
+        column_bounds(_kept(points, read_only))
     for dtype in (np.float32, np.float64):  # binary STL corners, and text ones
         weld(np.array([[0.0, 0, 0], [1, 0, 0], [0, 0, 0]], dtype))
     binary_items(

@@ -42,6 +42,7 @@ from mesh_normal.kernels import (
     PARALLEL_KERNELS,
     announce_compiling,
     claim,
+    column_bounds,
     kernel,
     prange,
     workers,
@@ -124,12 +125,8 @@ def visible_sides(
         return score
     # The box of the vertices the faces use (never the origin's: a mesh far from it is
     # tested at its own size).
-    mask = np.zeros(len(points), dtype=bool)
-    mask[faces.ravel()] = True
-    used = points[mask]
-    low, high = used.min(axis=0), used.max(axis=0)
+    low, high = column_bounds(points, faces)
     centre, half = low / 2 + high / 2, float(np.max(high / 2 - low / 2))  # no overflow
-    del used
     if not half > 0 or not math.isfinite(half):
         return score
     most = RAYS // (2 * DIRECTIONS * FEWEST)
@@ -207,7 +204,7 @@ def _hierarchy(
     children, spans = children[:used].copy(), spans[:used].copy()
     corners = _corners(unit, faces, order)
     boxes = np.empty((used, 6))
-    _boxes(corners, children, spans, boxes)
+    _boxes(corners, children, spans, boxes, *workers())
     return order, boxes, children, spans, corners
 
 
@@ -317,24 +314,35 @@ def _split(codes: IndexArray, children: IndexArray, spans: IndexArray) -> int:
     return used
 
 
-@kernel(python=PYTHON_RAYS)
-def _boxes(corners: FloatArray, children: IndexArray, spans: IndexArray, boxes: FloatArray) -> None:
+@kernel(parallel=True, python=PYTHON_RAYS)
+def _boxes(
+    corners: FloatArray, children: IndexArray, spans: IndexArray, boxes: FloatArray,
+    counter: IndexArray, workers: int,
+) -> None:  # fmt: skip
     """Each node's box, a little larger than its faces' (by 2**-26, more than an unsure hit
-    can lie outside a face: 2 ``_UNSURE_BAND`` times its longest edge, at most 4), from the
-    leaves up."""
+    can lie outside a face: 2 ``_UNSURE_BAND`` times its longest edge, at most 4): the
+    leaves' on every core, then the others from the leaves up."""
     pad = 2.0**-26
-    for node in range(len(children) - 1, -1, -1):
-        if children[node, 0] < 0:
-            for axis in range(3):
-                boxes[node, axis], boxes[node, axis + 3] = np.inf, -np.inf
-            for k in range(spans[node, 0], spans[node, 1]):
-                for corner in range(3):
-                    for axis in range(3):
-                        value = corners[k, 3 * corner + axis]
-                        boxes[node, axis] = min(boxes[node, axis], value - pad)
-                        boxes[node, axis + 3] = max(boxes[node, axis + 3], value + pad)
-        else:
-            left, right = children[node, 0], children[node, 1]
+    nodes = len(children)
+    blocks = (nodes + BLOCK - 1) // BLOCK
+    for _ in prange(workers):  # each leaf writes its own row
+        block = claim(counter)
+        while block < blocks:
+            for node in range(block * BLOCK, min(nodes, (block + 1) * BLOCK)):
+                if children[node, 0] >= 0:
+                    continue
+                for axis in range(3):
+                    boxes[node, axis], boxes[node, axis + 3] = np.inf, -np.inf
+                for k in range(spans[node, 0], spans[node, 1]):
+                    for corner in range(3):
+                        for axis in range(3):
+                            value = corners[k, 3 * corner + axis]
+                            boxes[node, axis] = min(boxes[node, axis], value - pad)
+                            boxes[node, axis + 3] = max(boxes[node, axis + 3], value + pad)
+            block = claim(counter)
+    for node in range(nodes - 1, -1, -1):
+        left, right = children[node, 0], children[node, 1]
+        if left >= 0:
             for axis in range(3):
                 boxes[node, axis] = min(boxes[left, axis], boxes[right, axis])
                 boxes[node, axis + 3] = max(boxes[left, axis + 3], boxes[right, axis + 3])
