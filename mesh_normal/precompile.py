@@ -68,8 +68,8 @@ def compile_kernels() -> None:
     # Point clouds: the neighbourhood kernel (k nearest and within a radius take the same
     # types) and the signs down the spanning tree; binary_compressed PCD's LZF (one literal).
     ObjScanner().scan(_OBJ, 0, len(_OBJ))
-    for read_only in (False, True):  # a report's bounds, of the vertices as read
-        column_bounds(_kept(points, read_only))
+    for frozen in (False, True):  # a report's bounds, of the vertices as read
+        column_bounds(_kept(points, frozen))
     for dtype in (np.float32, np.float64):  # binary STL corners, and text ones
         weld(np.array([[0.0, 0, 0], [1, 0, 0], [0, 0, 0]], dtype))
     binary_items(
