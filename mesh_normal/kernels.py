@@ -472,16 +472,22 @@ def column_bounds(
 
 
 @kernel(python=True)
+def _widen(points: FloatArray, row: int, low: FloatArray, high: FloatArray) -> None:
+    """Widen the bounds ``low``, ``high`` to hold row ``row`` of ``points``."""
+    for axis in range(3):
+        value = points[row, axis]
+        if value < low[axis]:
+            low[axis] = value
+        elif value > high[axis]:
+            high[axis] = value
+
+
+@kernel(python=True)
 def _bounds_kernel(points: FloatArray, low: FloatArray, high: FloatArray) -> None:
     for axis in range(3):
         low[axis] = high[axis] = points[0, axis]
     for row in range(1, len(points)):
-        for axis in range(3):
-            value = points[row, axis]
-            if value < low[axis]:
-                low[axis] = value
-            elif value > high[axis]:
-                high[axis] = value
+        _widen(points, row, low, high)
 
 
 @kernel(python=True)
@@ -492,10 +498,4 @@ def _used_bounds_kernel(
         low[axis] = high[axis] = points[faces[0, 0], axis]
     for face in range(len(faces)):
         for corner in range(3):
-            row = faces[face, corner]
-            for axis in range(3):
-                value = points[row, axis]
-                if value < low[axis]:
-                    low[axis] = value
-                elif value > high[axis]:
-                    high[axis] = value
+            _widen(points, faces[face, corner], low, high)
