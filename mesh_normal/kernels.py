@@ -467,7 +467,9 @@ def column_bounds(
     if faces is None:
         _bounds_kernel(points, low, high)
     else:
-        _used_bounds_kernel(points, faces, low, high)
+        used = np.zeros(len(points), dtype=bool)
+        used[faces.ravel()] = True
+        _used_bounds_kernel(points, used, low, high)
     return low, high
 
 
@@ -492,10 +494,13 @@ def _bounds_kernel(points: FloatArray, low: FloatArray, high: FloatArray) -> Non
 
 @kernel(python=True)
 def _used_bounds_kernel(
-    points: FloatArray, faces: IndexArray, low: FloatArray, high: FloatArray
+    points: FloatArray, used: BoolArray, low: FloatArray, high: FloatArray
 ) -> None:
+    first = 0
+    while not used[first]:
+        first += 1
     for axis in range(3):
-        low[axis] = high[axis] = points[faces[0, 0], axis]
-    for face in range(len(faces)):
-        for corner in range(3):
-            _widen(points, faces[face, corner], low, high)
+        low[axis] = high[axis] = points[first, axis]
+    for row in range(first + 1, len(points)):
+        if used[row]:
+            _widen(points, row, low, high)
