@@ -17,11 +17,11 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from mesh_normal.bounds import column_bounds
 from mesh_normal.diagnosis import problems
 from mesh_normal.faces import FaceGeometry, FaceNormals, face_geometry, geometry_areas
 from mesh_normal.files import LoadedMesh, read_mesh
 from mesh_normal.files.read import MeshSource, source_bytes
-from mesh_normal.kernels import column_bounds
 from mesh_normal.objects import object_reports
 from mesh_normal.orientation import Orientation, oriented
 from mesh_normal.report import (

@@ -19,12 +19,13 @@ from typing import TypeVar
 import numpy as np
 from numpy.typing import NDArray
 
+from mesh_normal.bounds import column_bounds
 from mesh_normal.corners import corner_normals, corner_weights
 from mesh_normal.faces import face_geometry, face_normals
 from mesh_normal.files.polygons import triangulate
 from mesh_normal.files.text_kernels import ObjScanner, binary_items
 from mesh_normal.files.weld import weld
-from mesh_normal.kernels import column_bounds, load_numba
+from mesh_normal.kernels import load_numba
 from mesh_normal.orientation import orient
 from mesh_normal.points import point_normals
 from mesh_normal.points.pcd import lzf_decompress

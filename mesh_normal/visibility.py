@@ -37,12 +37,12 @@ import math
 
 import numpy as np
 
+from mesh_normal.bounds import column_bounds
 from mesh_normal.kernels import (
     BLOCK,
     PARALLEL_KERNELS,
     announce_compiling,
     claim,
-    column_bounds,
     kernel,
     prange,
     workers,
