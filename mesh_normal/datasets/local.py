@@ -26,6 +26,10 @@ IN_PROCESS_PROTOCOLS = ("memory://",)
 
 #: Seconds to wait for a worker thread to stop once its child is killed.
 JOIN_SECONDS = 5.0
+#: How often the waiting main thread wakes up. A Ctrl-C that the system hands to a worker's
+#: thread is only a note for the main thread, read when it next runs Python: a wait without
+#: a timeout would never read it (seen as a batch that ignored Ctrl-C).
+WAKE_SECONDS = 0.25
 
 
 def in_process(tasks: Sequence[FileTask], options: BatchOptions) -> bool:
@@ -79,7 +83,7 @@ def run_local(
         for thread in threads:  # inside: a Ctrl-C between two starts stops the first too
             thread.start()
         for _ in range(len(tasks)):
-            found = done.get()
+            found = _next(done)
             if isinstance(found, BaseException):
                 raise found
             yield found
@@ -90,3 +94,12 @@ def run_local(
         for thread in threads:  # each reaps its child (a killed one returns at once)
             if thread.is_alive():
                 thread.join(JOIN_SECONDS)
+
+
+def _next(done: queue.SimpleQueue[Any]) -> Any:
+    """The next item of ``done``, waking every ``WAKE_SECONDS`` so that a signal is seen."""
+    while True:
+        try:
+            return done.get(timeout=WAKE_SECONDS)
+        except queue.Empty:
+            continue
