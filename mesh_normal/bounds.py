@@ -1,8 +1,8 @@
 """The bounds of a mesh's points: one compiled pass over the rows.
 
-Its own module, imported by the analysis and the visibility test only: a kernel defined in a
-module that every first call imports would be looked up (and announced as compiling) by calls
-that never run it (see :func:`mesh_normal.kernels.announce_compiling`).
+A module of its own, imported by the analysis and the visibility test: the kernels of a module
+that every first call imports (``mesh_normal.kernels``) are looked up, and announced as
+compiling, by calls that never run them (see :func:`mesh_normal.kernels.announce_compiling`).
 """
 
 from __future__ import annotations

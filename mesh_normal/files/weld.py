@@ -20,12 +20,6 @@ from numpy.typing import NDArray
 from mesh_normal.kernels import announce_compiling, kernel
 from mesh_normal.types import BoolArray, IndexArray
 
-_MULTIPLIERS = (
-    np.uint64(0x9E3779B97F4A7C15),
-    np.uint64(0xC2B2AE3D27D4EB4F),
-    np.uint64(0x165667B19E3779F9),
-)
-
 
 def weld(corners: NDArray[np.floating]) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
     """Merge identical points, numbering them by first appearance.
@@ -57,8 +51,8 @@ def weld(corners: NDArray[np.floating]) -> tuple[NDArray[np.float64], NDArray[np
     is_leader = np.zeros(count, dtype=bool)
     index = np.empty(count, dtype=np.intp)
     if not _group(keys, index_bits, bits, _MOST_DISTINCT, is_leader, index):
-        del keys, is_leader, index
-        return _weld_sorted(points)
+        del is_leader, index
+        return _weld_sorted(points, keys, index_bits)
     return points[is_leader].astype(np.float64), index
 
 
@@ -163,11 +157,14 @@ def _group(
     return True
 
 
-def _weld_sorted(points: NDArray[np.floating]) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
-    """:func:`weld` of ``points`` (no -0.0) the NumPy way: a sort of hash keys, the groups
-    checked after and those that mixed points split exactly with a ``lexsort``."""
+def _weld_sorted(
+    points: NDArray[np.floating], keys: NDArray[np.int64], index_bits: int
+) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
+    """:func:`weld` of ``points`` (no -0.0) the NumPy way, from the sorted keys: the groups of
+    equal hashes numbered, checked after, and those that mixed points split exactly with a
+    ``lexsort``."""
     words = _words(points)
-    is_leader, index = _number(*_hash_groups(words))
+    is_leader, index = _number(*_hash_groups(keys, index_bits))
     wrong = np.zeros(len(points), dtype=bool)
     for word in words:
         wrong |= word[is_leader][index] != word
@@ -185,27 +182,15 @@ def _words(points: NDArray[np.floating]) -> list[NDArray[np.unsignedinteger]]:
 
 
 def _hash_groups(
-    words: list[NDArray[np.unsignedinteger]],
+    keys: NDArray[np.int64], index_bits: int
 ) -> tuple[NDArray[np.intp], NDArray[np.bool_]]:
-    """An order bringing equal rows together, by index within a group, and where each group
-    starts. Rows of different groups may be merged when they share a hash (checked later)."""
-    count = len(words[0])
-    index_bits = max(1, (count - 1).bit_length())
-    with np.errstate(over="ignore"):
-        key = words[0] * _MULTIPLIERS[0]
-        for word, multiplier in zip(words[1:], _MULTIPLIERS[1:], strict=False):
-            key ^= key >> np.uint64(29)
-            key ^= word * multiplier
-        key ^= key >> np.uint64(32)
-        key *= _MULTIPLIERS[2]
-    low = np.uint64((1 << index_bits) - 1)
-    key &= ~low
-    key |= np.arange(count, dtype=np.uint64)
-    key.sort()
-    order = (key & low).astype(_index_type(count))
-    key >>= np.uint64(index_bits)
+    """The order that the sorted keys (:func:`_hash_keys`) bring the rows in, and where each
+    group of equal hashes starts; rows of different points may share one (checked later)."""
+    count = len(keys)
+    order = (keys & ((1 << index_bits) - 1)).astype(_index_type(count))
+    hashes = keys >> index_bits
     starts = np.ones(count, dtype=bool)
-    np.not_equal(key[1:], key[:-1], out=starts[1:])
+    np.not_equal(hashes[1:], hashes[:-1], out=starts[1:])
     return order, starts
 
 
