@@ -28,6 +28,7 @@ MESH_PATHS = frozenset(
         "/api/mesh",
         "/api/mesh/normals",
         "/api/mesh/fix",
+        "/api/mesh/export",
         "/mesh",
         "/api/points",
         "/api/points/normals",

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 from fastapi.testclient import TestClient
 
+from app import config
 from app.main import create_app
 from app.mesh.api import FixFormat
 from app.mesh.page import FIX_FORMATS
@@ -773,3 +774,20 @@ def test_openapi_documents_the_weld(client: TestClient, stepped: bytes) -> None:
     report = client.post("/api/mesh", files={"file": ("s.ply", stepped)}, data={"weld": "1e-6"})
     schema = {"$ref": "#/components/schemas/MeshReport"}
     assert undocumented(spec, schema, report.json(), "report") == []
+
+
+def test_every_address_that_takes_a_file_gets_the_upload_limit(client: TestClient) -> None:
+    # Each multipart endpoint in the schema streams its body against the upload limit; one
+    # left out answered 413 for any file over 64 KB (the export, once).
+    paths = client.get("/openapi.json").json()["paths"]
+    takes_files = {
+        path
+        for path, methods in paths.items()
+        for operation in methods.values()
+        if "multipart/form-data" in operation.get("requestBody", {}).get("content", {})
+    }
+    assert {"/api/mesh", "/api/mesh/export", "/api/points"} <= takes_files
+    assert takes_files <= config.MESH_PATHS
+    padded = CUBE_OBJ + "# padding past the 64 KB limit of other addresses\n" * 2000
+    response = upload(client, "/api/mesh/export?format=ply", padded)
+    assert response.status_code == 200, response.text
