@@ -11,6 +11,7 @@ skips (their suffixes name no mesh format).
 from __future__ import annotations
 
 import shutil
+import signal
 from pathlib import Path
 from typing import Any
 
@@ -143,3 +144,10 @@ def copy_real(root: Path) -> None:
     """The real meshes alone (for small runs)."""
     for name in REAL:
         shutil.copy(DATA / name, root / name)
+
+
+def hear_ctrl_c() -> None:
+    """In the child before it starts: SIGINT back to its default. A test run started in the
+    background by a shell without job control inherits SIGINT ignored, and then Python (and
+    so the batch) ignores Ctrl-C too, as a background job should."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)

@@ -16,7 +16,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from mesh_normal.cli import main
-from tests.mesh_normal.datasets.dataset import MESH_FILES, cube, make_dataset
+from tests.mesh_normal.datasets.dataset import MESH_FILES, cube, hear_ctrl_c, make_dataset
 from tests.paths import ROOT
 
 Dataset = tuple[Path, dict[str, dict[str, Any]]]
@@ -98,7 +98,8 @@ class Watched:
         # A run that does not end is aborted: faulthandler then writes every thread's stack.
         env = {**os.environ, "PYTHONFAULTHANDLER": "1"}
         self.process = subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE,
-                                        stderr=subprocess.PIPE, text=True, env=env)  # fmt: skip
+                                        stderr=subprocess.PIPE, text=True, env=env,
+                                        preexec_fn=hear_ctrl_c)  # fmt: skip
         self.err: list[str] = []
         self.reader = threading.Thread(target=self._read, daemon=True)
         self.reader.start()

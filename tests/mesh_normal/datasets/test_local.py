@@ -10,6 +10,7 @@ from typing import Any
 from mesh_normal.datasets.inputs import discover
 from mesh_normal.datasets.local import run_local
 from mesh_normal.datasets.tasks import BatchOptions
+from tests.mesh_normal.datasets.dataset import hear_ctrl_c
 from tests.paths import ROOT
 
 Dataset = tuple[Path, dict[str, dict[str, Any]]]
@@ -72,7 +73,7 @@ def test_a_ctrl_c_that_lands_on_a_worker_thread_still_stops_the_batch(tmp_path: 
     # when it next runs Python, so the main thread must not wait without a timeout.
     result = subprocess.run(
         [sys.executable, "-c", _CTRL_C_ON_A_WORKER, str(tmp_path)],
-        cwd=ROOT, capture_output=True, text=True, timeout=60,
+        cwd=ROOT, capture_output=True, text=True, timeout=60, preexec_fn=hear_ctrl_c,
     )  # fmt: skip
     assert result.returncode == 0, result.stderr[-2000:]
     assert result.stdout.strip() == "stopped"
