@@ -25,6 +25,7 @@ from app.web.jsonio import (
     read_body,
     request_body_spec,
 )
+from app.web.routes import RequestRoute
 from mesh_normal.triangle import triangle_normal
 from mesh_normal.triangle_batch import triangle_normals
 
@@ -33,6 +34,7 @@ router = APIRouter(
     tags=["normals"],
     responses=ERROR_RESPONSES,
     default_response_class=FastJSONResponse,
+    route_class=RequestRoute,
 )
 
 
