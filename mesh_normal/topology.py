@@ -237,9 +237,9 @@ def _sorted_half_edges(
         # Packed in one pass, straight into the array that is sorted: 8 bytes a half-edge
         # (NumPy's minimum, maximum and shifts held three (m, 3) int64 arrays at once).
         packed = np.empty(3 * int(np.count_nonzero(valid)), dtype=np.int64)
+        starts = np.zeros(vertex_count + 1, dtype=np.intp)
         announce_compiling()
-        _pack_half_edges(faces, valid, vertex_count, bits, packed)
-        packed.sort()
+        _pack_half_edges(faces, valid, vertex_count, bits, packed, starts)
         direction = np.empty(len(packed), dtype=np.int8)  # a byte, not eight, for a 0 or 1
         if bits <= 32 and sys.byteorder == "little":
             # The face and direction are in the low 32 bits: read them there, 4 bytes a face.
@@ -276,10 +276,29 @@ def _sorted_half_edges(
 
 @kernel(python=True)
 def _pack_half_edges(
-    faces: IndexArray, valid: BoolArray, vertex_count: int, bits: int, packed: IndexArray
+    faces: IndexArray,
+    valid: BoolArray,
+    vertex_count: int,
+    bits: int,
+    packed: IndexArray,
+    starts: IndexArray,
 ) -> None:
-    """``packed``: (min * n + max) << bits | face << 1 | forward for the valid faces' edges."""
-    row = 0
+    """``packed``: (min * n + max) << bits | face << 1 | forward for the valid faces' edges,
+    sorted. ``starts`` (n + 1 zeros) is scratch space.
+
+    A counting sort by the smaller vertex, the key's leading part, then a sort of each vertex's
+    few half-edges (its valence, about six on a closed surface): the same values in the same
+    order as sorting the whole array, in two passes over it instead of a full sort's many
+    (measured on 2.6M half-edges: about 40 ms instead of 150-210 ms).
+    """
+    for face in range(len(faces)):
+        if valid[face]:
+            for corner in range(3):
+                start, end = faces[face, corner], faces[face, (corner + 1) % 3]
+                starts[min(start, end) + 1] += 1
+    for vertex in range(vertex_count):
+        starts[vertex + 1] += starts[vertex]
+    # Each half-edge into its vertex's place; ``starts`` then holds each vertex's end.
     for face in range(len(faces)):
         if not valid[face]:
             continue
@@ -287,8 +306,22 @@ def _pack_half_edges(
             start, end = faces[face, corner], faces[face, (corner + 1) % 3]
             forward = 1 if start < end else 0
             low, high = (start, end) if forward else (end, start)
-            packed[row] = (low * vertex_count + high) << bits | face << 1 | forward
-            row += 1
+            packed[starts[low]] = (low * vertex_count + high) << bits | face << 1 | forward
+            starts[low] += 1
+    first = 0
+    for vertex in range(vertex_count):
+        last = starts[vertex]
+        if last - first > 16:
+            packed[first:last].sort()
+        else:  # an insertion sort: a few values, mostly in order already (faces in turn)
+            for row in range(first + 1, last):
+                value = packed[row]
+                place = row
+                while place > first and packed[place - 1] > value:
+                    packed[place] = packed[place - 1]
+                    place -= 1
+                packed[place] = value
+        first = last
 
 
 def _connected(

@@ -1,0 +1,79 @@
+"""The half-edges sorted by edge, then by face: a counting sort by vertex, against a sort."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+
+from mesh_normal import topology
+from mesh_normal.kernels import load_numba
+
+
+def reference(faces: np.ndarray, valid: np.ndarray, vertex_count: int) -> np.ndarray:
+    """The packed half-edges of the valid faces, sorted by NumPy."""
+    bits = len(faces).bit_length() + 1
+    following = faces[:, [1, 2, 0]]
+    low, high = np.minimum(faces, following), np.maximum(faces, following)
+    forward = (faces < following).astype(np.int64)
+    face = np.arange(len(faces))[:, None]
+    packed = (low * vertex_count + high) << bits | face << 1 | forward
+    return np.sort(packed[valid].ravel())
+
+
+def packed_sorted(faces: np.ndarray, valid: np.ndarray, vertex_count: int, python: bool):  # type: ignore[no-untyped-def]
+    bits = len(faces).bit_length() + 1
+    packed = np.empty(3 * int(valid.sum()), dtype=np.int64)
+    starts = np.zeros(vertex_count + 1, dtype=np.intp)
+    run = topology._pack_half_edges.py_func if python else topology._pack_half_edges
+    if not python:
+        load_numba()
+    run(faces, valid, vertex_count, bits, packed, starts)
+    return packed
+
+
+def valid_of(faces: np.ndarray) -> np.ndarray:
+    return (
+        (faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 2] != faces[:, 0])
+    )
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    vertex_count=st.integers(3, 40),
+    faces=arrays(np.int64, st.tuples(st.integers(0, 120), st.just(3)), elements=st.integers(0, 39)),
+    python=st.booleans(),
+)
+def test_random_faces_come_out_as_a_full_sort_gives_them(vertex_count, faces, python) -> None:  # type: ignore[no-untyped-def]
+    faces = faces % vertex_count  # repeated edges, non-manifold ones and degenerate faces
+    valid = valid_of(faces)
+    expected = reference(faces, valid, vertex_count)
+    assert np.array_equal(packed_sorted(faces, valid, vertex_count, python), expected)
+
+
+@pytest.mark.parametrize("python", [False, True])
+def test_a_vertex_of_high_valence_and_shuffled_faces(python: bool) -> None:
+    rng = np.random.default_rng(7)
+    rim = 400  # a fan of 400 faces around vertex 0, then a shuffled strip
+    fan = np.stack([np.zeros(rim, np.int64), 1 + np.arange(rim), 1 + (np.arange(rim) + 1) % rim], 1)
+    strip = rng.integers(0, rim + 1, size=(300, 3))
+    faces = np.concatenate([fan, strip])[rng.permutation(rim + 300)]
+    faces[::3] = faces[::3, ::-1].copy()  # both directions along the edges
+    valid = valid_of(faces)
+    expected = reference(faces, valid, rim + 1)
+    assert np.array_equal(packed_sorted(faces, valid, rim + 1, python), expected)
+
+
+def test_the_sorted_half_edges_give_key_face_and_direction() -> None:
+    faces = np.array([[0, 1, 2], [2, 1, 3], [0, 0, 1], [3, 1, 0]])
+    valid = valid_of(faces)
+    key, face, forward = topology._sorted_half_edges(faces, valid, 4)
+    pairs = [
+        (int(k) // 4, int(k) % 4, int(f), int(d))
+        for k, f, d in zip(key, face, forward, strict=True)
+    ]
+    assert pairs == sorted(pairs)
+    assert len(pairs) == 9  # the face with a repeated vertex has no half-edges
+    assert (0, 1, 0, 1) in pairs and (0, 1, 3, 0) in pairs and (1, 2, 1, 0) in pairs
