@@ -254,6 +254,8 @@ def _sorted_half_edges(
             face_of &= (1 << bits - 1) - 1
         packed >>= bits
         return packed, face_of, direction
+    if vertex_count * vertex_count < KEY_LIMIT:
+        return _wide_half_edges(faces, valid, vertex_count)
     following = faces[:, [1, 2, 0]]
     low, high = np.minimum(faces, following), np.maximum(faces, following)
     forward = (faces < following).view(np.int8)
@@ -272,6 +274,79 @@ def _sorted_half_edges(
     else:
         by_both = np.lexsort((high, low))
     return low[by_both] * vertex_count + high[by_both], face[by_both], forward[by_both]
+
+
+def _wide_half_edges(
+    faces: IndexArray, valid: BoolArray, vertex_count: int
+) -> tuple[IndexArray, IndexArray, NDArray[np.int8]]:
+    """:func:`_sorted_half_edges` where the edge key fits int64 but not with the face beside
+    it (the Lucy size: 7M points): the same arrays in the same order, from a counting sort by
+    the smaller vertex and a stable sort of each vertex's few by the larger, instead of two
+    full sorts of positions (14.7 s on 42M half-edges; this, about 1.5 s)."""
+    count = 3 * int(np.count_nonzero(valid))
+    key = np.empty(count, dtype=np.int64)
+    face: IndexArray = np.empty(count, dtype=np.int32 if len(faces) < 2**31 else np.intp)
+    forward = np.empty(count, dtype=np.int8)
+    starts = np.zeros(vertex_count + 1, dtype=np.intp)
+    announce_compiling()
+    _sort_wide_half_edges(faces, valid, vertex_count, key, face, forward, starts)
+    return key, face, forward
+
+
+@kernel(python=True)
+def _sort_wide_half_edges(
+    faces: IndexArray,
+    valid: BoolArray,
+    vertex_count: int,
+    key: IndexArray,
+    face_of: IndexArray,
+    forward: NDArray[np.int8],
+    starts: IndexArray,
+) -> None:
+    """``key`` (min * n + max), ``face_of`` and ``forward`` of the valid faces' half-edges,
+    sorted by key, then by face (then by corner); ``starts`` (n + 1 zeros) is scratch space.
+
+    A counting sort by the smaller vertex puts each half-edge in its vertex's run in face
+    order; a stable sort of the run by the larger vertex finishes it (an insertion sort for a
+    few, as :func:`_pack_half_edges`; a merge sort for a vertex of high valence)."""
+    for face in range(len(faces)):
+        if valid[face]:
+            for corner in range(3):
+                start, end = faces[face, corner], faces[face, (corner + 1) % 3]
+                starts[min(start, end) + 1] += 1
+    for vertex in range(vertex_count):
+        starts[vertex + 1] += starts[vertex]
+    # Each half-edge into its vertex's run, the larger vertex in ``key`` for now.
+    for face in range(len(faces)):
+        if not valid[face]:
+            continue
+        for corner in range(3):
+            start, end = faces[face, corner], faces[face, (corner + 1) % 3]
+            place = starts[min(start, end)]
+            key[place] = max(start, end)
+            face_of[place] = face
+            forward[place] = 1 if start < end else 0
+            starts[min(start, end)] = place + 1
+    first = 0
+    for vertex in range(vertex_count):
+        last = starts[vertex]
+        if last - first > 16:
+            order = np.argsort(key[first:last], kind="mergesort")  # stable: faces in turn
+            highs, faces_of, forwards = key[first:last], face_of[first:last], forward[first:last]
+            key[first:last], face_of[first:last] = highs[order], faces_of[order]
+            forward[first:last] = forwards[order]
+        else:
+            for row in range(first + 1, last):
+                high, face, ahead = key[row], face_of[row], forward[row]
+                place = row
+                while place > first and key[place - 1] > high:
+                    key[place], face_of[place] = key[place - 1], face_of[place - 1]
+                    forward[place] = forward[place - 1]
+                    place -= 1
+                key[place], face_of[place], forward[place] = high, face, ahead
+        for row in range(first, last):
+            key[row] += vertex * vertex_count
+        first = last
 
 
 @kernel(python=True)

@@ -438,3 +438,17 @@ def test_twinned_faces_match_the_rotations_definition() -> None:
     # Points too many for one key a face: the lexsorted way, same definition.
     faces = rng.integers(0, 6, (400, 3)).astype(np.intp) * 2**21
     np.testing.assert_array_equal(_twinned(faces), by_rotations(faces))
+    # Too many for one key, but a pair fits: groups by the smallest point (a few, many).
+    from mesh_normal.kernels import load_numba
+    from mesh_normal.orientation import _even, _twin_groups, _twinned_lexsorted
+
+    load_numba()
+    for top in (3, 6, 30, 300):
+        faces = rng.integers(0, top, (600, 3)).astype(np.intp)
+        for run in (_twin_groups, _twin_groups.py_func):
+            twinned = np.zeros(len(faces), dtype=bool)
+            order = np.empty(len(faces), dtype=np.int32)
+            run(faces, top, np.zeros(top + 1, dtype=np.intp), order, twinned)
+            np.testing.assert_array_equal(twinned, by_rotations(faces))
+    faces = rng.integers(0, 6, (400, 3)).astype(np.intp) * 2**21 + 2**22
+    np.testing.assert_array_equal(_twinned_lexsorted(faces, _even(faces)), by_rotations(faces))
