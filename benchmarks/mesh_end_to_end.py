@@ -54,6 +54,8 @@ SIZES = (69_451, 871_414)
 LUCY = 14_000_000
 TARGET_UPLOAD = 1.5  # seconds, dragon size
 TARGET_LUCY_SECONDS, TARGET_LUCY_RSS = 30.0, 6 * 2**30
+#: Issue 13: ``mesh-normal analyze`` of the Lucy size under 15 s, in the same memory.
+TARGET_LUCY_ANALYZE_SECONDS = 15.0
 CACHE = Path(os.environ.get("MESH_E2E_DIR", "/tmp/mesh-e2e"))
 CLI = str(Path(sys.executable).with_name("mesh-normal"))
 
@@ -288,13 +290,10 @@ def bench_lucy(runs: int) -> list[str]:
     for label, args in commands:
         wall, rss, stages, _ = run_cli(args)
         stage_text = ", ".join(f"{name} {seconds:.1f} s" for name, seconds in stages.items())
+        limit = TARGET_LUCY_ANALYZE_SECONDS if label == "analyze" else TARGET_LUCY_SECONDS
         verdict = (
-            ""
-            if label == "analyze"
-            else (
-                f"{'met' if wall < TARGET_LUCY_SECONDS else 'MISSED'} / "
-                f"{'met' if rss < TARGET_LUCY_RSS else 'MISSED'}"
-            )
+            f"{'met' if wall < limit else 'MISSED'} / "
+            f"{'met' if rss < TARGET_LUCY_RSS else 'MISSED'}"
         )
         rows.append(
             f"| `mesh-normal {label}` | {wall:.1f} | {rss / 2**30:.2f} | {stage_text} | {verdict} |"
@@ -335,7 +334,7 @@ def main() -> None:
         size = (84 + 50 * LUCY) / 2**20
         print(
             f"\n| {LUCY:,} triangles, binary STL ({size:,.0f} MiB) | wall (s) | peak RSS (GiB) "
-            "| stages (the CLI's --progress) | 30 s / 6 GiB |"
+            "| stages (the CLI's --progress) | 30 s (analyze 15 s) / 6 GiB |"
         )
         print("|---|---:|---:|---|---|")
         print("\n".join(rows))
