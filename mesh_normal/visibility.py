@@ -197,8 +197,10 @@ def _hierarchy(
     announce_compiling()
     codes, order = _morton_order(unit, faces)
     nodes = max(1, 2 * len(faces))  # at least one face per leaf: fewer than 2 m nodes
-    children = np.full((nodes, 2), -1, dtype=np.intp)
-    spans = np.zeros((nodes, 2), dtype=np.intp)
+    # Room for every node there can be, written by _split only as far as it makes them (at
+    # the Lucy size, filling 2m rows with -1 first cost about 1 s of page faults).
+    children = np.empty((nodes, 2), dtype=np.intp)
+    spans = np.empty((nodes, 2), dtype=np.intp)
     used = _split(codes, children, spans)
     del codes
     children, spans = children[:used].copy(), spans[:used].copy()
@@ -290,7 +292,8 @@ def _gather_corners(
 def _split(codes: IndexArray, children: IndexArray, spans: IndexArray) -> int:
     """Split each span where the highest bit that differs in its Morton codes turns (the
     halves of an octree cell; in the middle where the codes are all equal) down to leaves of
-    at most ``_LEAF`` faces; the number of nodes made."""
+    at most ``_LEAF`` faces; the number of nodes made. Each node made gets its children (-1
+    for a leaf) and its span; the rows past them are left as they were."""
     spans[0, 0], spans[0, 1] = 0, len(codes)
     used = 1
     node = 0
@@ -310,6 +313,8 @@ def _split(codes: IndexArray, children: IndexArray, spans: IndexArray) -> int:
             spans[used, 0], spans[used, 1] = lo, mid
             spans[used + 1, 0], spans[used + 1, 1] = mid, hi
             used += 2
+        else:
+            children[node, 0], children[node, 1] = -1, -1  # a leaf
         node += 1
     return used
 

@@ -183,3 +183,29 @@ def test_the_hierarchy_order_is_the_stable_sort_of_the_morton_codes(count: int) 
     np.testing.assert_array_equal(codes, expected[order])
     corners = visibility._corners(unit, faces, order)
     np.testing.assert_array_equal(corners, unit[faces[order]].reshape(-1, 9))
+
+
+@pytest.mark.parametrize("python", [False, True])
+def test_the_split_writes_every_node_it_makes(python: bool) -> None:
+    """The nodes' rows start as garbage (np.empty): each node made gets its children, -1 for a
+    leaf, and its span, so the hierarchy does not depend on what the memory held."""
+    from mesh_normal.kernels import load_numba
+
+    rng = np.random.default_rng(3)
+    codes = np.sort(rng.integers(0, 2**30, 5000)).astype(np.int64)
+    codes[1000:1400] = codes[1000]  # a run of equal codes: split in the middle
+    codes.sort()
+    run = visibility._split.py_func if python else visibility._split
+    if not python:
+        load_numba()
+    made = []
+    for fill in (-1, 12345):
+        children = np.full((2 * len(codes), 2), fill, dtype=np.intp)
+        spans = np.full((2 * len(codes), 2), fill, dtype=np.intp)
+        used = run(codes, children, spans)
+        made.append((used, children[:used].copy(), spans[:used].copy()))
+    assert made[0][0] == made[1][0] > 1
+    assert np.array_equal(made[0][1], made[1][1]) and np.array_equal(made[0][2], made[1][2])
+    leaves = made[0][1][:, 0] == -1
+    assert np.all((made[0][2][leaves, 1] - made[0][2][leaves, 0]) <= visibility._LEAF)
+    assert np.all(made[0][1][~leaves] > 0)
