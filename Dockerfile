@@ -65,8 +65,9 @@ COPY app ./app
 COPY templates ./templates
 COPY static ./static
 RUN python -m compileall -q mesh_normal app \
+    && python -m app.web.templating \
     && python -c "import mesh_normal as mn; mn.compile_kernels()" \
-    && chmod -R a+rX,go-w /var/cache/numba
+    && chmod -R a+rX,go-w /var/cache/numba templates/__pycache__
 
 USER 10001:10001
 

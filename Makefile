@@ -32,9 +32,10 @@ PORT ?= 8000
 
 env: .venv/.test
 
-# The checkout's own modules (installed editable, so uv does not compile them); quick when the
-# bytecode is current, and run again by `make run` since the sources change between runs.
-COMPILE_SOURCES = .venv/bin/python -m compileall -q mesh_normal app
+# The checkout's own modules (installed editable, so uv does not compile them) and its page
+# templates (app/web/templating.py); quick when the bytecode is current, and run again by
+# `make run` since the sources change between runs.
+COMPILE_SOURCES = .venv/bin/python -m compileall -q mesh_normal app && .venv/bin/python -m app.web.templating
 
 # The server's limits, as in the Dockerfile's CMD (see the README's "Running it in public").
 SERVER_LIMITS := --http h11 --h11-max-incomplete-event-size 16384 --timeout-keep-alive 5 \
