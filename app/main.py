@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib
 import threading
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
@@ -15,17 +16,29 @@ from app.calculator import pages
 from app.calculator.lane import NormalFastLane
 from app.mesh import api as mesh_api
 from app.mesh import page as mesh_page
-from app.mesh import warmup
 from app.points import api as points_api
 from app.points import page as points_page
-from app.points import work as points_work
 from app.web import handlers, health
 from app.web.jobs import Jobs
 from app.web.jsonio import FastJSONResponse
 from app.web.middleware import BodyLimit, HeadAsGet, PageCompression, SecurityHeaders
 from app.web.static import STATIC_DIR, CompressedStaticFiles
 from app.web.workers import tune_allocator
-from mesh_normal.precompile import compile_kernels
+
+#: The modules of the heavy work: the jobs with their readers, kernels and NumPy, and the
+#: warm-up that names the small jobs a starting server may run itself. The server answers its
+#: first page without them, and imports them in a thread once it is up (:func:`lifespan`), so
+#: that neither the first page nor the first upload waits for them.
+HEAVY_MODULES = ("app.mesh.warmup", "app.points.work")
+#: What the fork server imports once, before it forks each worker (so that a worker, the first
+#: or a replacement, starts without importing them itself, and the pages they touch are shared
+#: until written): the jobs, trimesh's glTF loader, which takes seconds to import, and numba
+#: (the library imports it only for a kernel's first compiled call).
+PRELOAD = (*HEAVY_MODULES, "trimesh.exchange.gltf", "mesh_normal._numba_cache")
+#: Seconds after start-up before :data:`HEAVY_MODULES` load: the first page, which a
+#: supervisor's health check or a reader often asks for at once, does not share the CPU with
+#: them.
+HEAVY_IMPORT_DELAY = 0.25
 
 DESCRIPTION = """
 Surface normals of triangles, exact to the last bit.
@@ -52,8 +65,9 @@ async def lifespan(app: FastAPI) -> AsyncIterator[None]:
     ``MESH_IN_PROCESS``, load the kernels here, in the background, so that the first mesh
     upload does not wait for them."""
     jobs: Jobs = app.state.jobs
-    if jobs.pool is None:
-        threading.Thread(target=compile_kernels, name="compile-kernels", daemon=True).start()
+    heavy = threading.Timer(HEAVY_IMPORT_DELAY, load_heavy_modules, (jobs.pool is None,))
+    heavy.daemon = True
+    heavy.start()
     jobs.start()
     try:
         yield
@@ -61,8 +75,22 @@ async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         jobs.close()
 
 
+def load_heavy_modules(compile_kernels: bool) -> None:
+    """Import :data:`HEAVY_MODULES`; with ``compile_kernels`` (no workers: the jobs run in the
+    server), load the kernels too."""
+    for name in HEAVY_MODULES:
+        importlib.import_module(name)
+    if compile_kernels:
+        from mesh_normal.precompile import compile_kernels as load_kernels
+
+        load_kernels()
+
+
 def warm_workers() -> None:
     """What a worker runs as it starts: every mesh job, then every point job, on small files."""
+    from app.mesh import warmup
+    from app.points import work as points_work
+
     warmup.warm()
     points_work.warm()
 
@@ -95,7 +123,7 @@ def create_app(upload_limit: int | None = None, settings: config.Settings | None
     app.add_middleware(PageCompression)
     app.state.upload_limit = settings.upload_limit if upload_limit is None else upload_limit
     # The heavy mesh work: worker processes, started by the lifespan (or at the first job).
-    app.state.jobs = Jobs(settings, warm=warm_workers, preload=(*warmup.PRELOAD, "app.points.work"))
+    app.state.jobs = Jobs(settings, warm=warm_workers, preload=PRELOAD)
     app.add_middleware(BodyLimit, upload_limit=app.state.upload_limit)
     app.add_middleware(SecurityHeaders)
     app.add_middleware(HeadAsGet)

@@ -10,13 +10,13 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic_core import to_json
 
+from mesh_normal.choices import NormalsKind as NormalsKind
 from mesh_normal.corners import CornerBlocks, corner_blocks
 from mesh_normal.faces import face_geometry
 from mesh_normal.files import LoadedMesh
 from mesh_normal.files.ply import ply_bytes
 from mesh_normal.vertices import Weighting, vertex_normals
 
-NormalsKind = Literal["face", "vertex", "corner"]
 NormalsFormat = Literal["json", "csv", "npy"]
 KINDS: tuple[NormalsKind, ...] = ("face", "vertex", "corner")
 FORMATS: tuple[NormalsFormat, ...] = ("json", "csv", "npy")

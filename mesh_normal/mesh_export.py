@@ -10,10 +10,12 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import Literal, get_args
+from typing import get_args
 
 import numpy as np
 
+from mesh_normal.choices import NormalsChoice as NormalsChoice
+from mesh_normal.choices import Winding as Winding
 from mesh_normal.exports import NormalsKind, compute_normals
 from mesh_normal.files.formats import (
     HOLDS_COLORS,
@@ -30,11 +32,9 @@ from mesh_normal.vertices import Weighting
 
 #: ``keep`` the faces as they are, ``fix`` them with :func:`~mesh_normal.orient`, ``flip``
 #: every face.
-Winding = Literal["keep", "fix", "flip"]
 WINDINGS: tuple[Winding, ...] = get_args(Winding)
 #: The normals to write: a kind, ``none``, or ``auto``: the kind the file had (see
 #: :func:`file_normals`), recomputed.
-NormalsChoice = Literal["auto", "none", "face", "vertex", "corner"]
 NORMALS_CHOICES: tuple[NormalsChoice, ...] = get_args(NormalsChoice)
 
 

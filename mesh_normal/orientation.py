@@ -67,11 +67,13 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
-from typing import Literal, overload
+from typing import overload
 
 import numpy as np
 from numpy.typing import ArrayLike
 
+from mesh_normal.choices import Method as Method
+from mesh_normal.choices import Verdict as Verdict
 from mesh_normal.faces import FaceGeometry, MeshInput, checked_input, face_geometry
 from mesh_normal.kernels import announce_compiling, kernel
 from mesh_normal.tolerances import (
@@ -85,9 +87,6 @@ from mesh_normal.topology import MeshTopology as MeshTopology  # re-exported: Or
 from mesh_normal.types import BoolArray, FloatArray, IndexArray, ParityArray
 from mesh_normal.visibility import MARGIN as VISIBILITY_MARGIN
 from mesh_normal.visibility import visible_sides
-
-Verdict = Literal["outward", "inward", "mixed", "undetermined"]
-Method = Literal["volume", "visibility", "none"]
 
 VERDICTS: tuple[Verdict, ...] = ("outward", "inward", "mixed", "undetermined")
 METHODS: tuple[Method, ...] = ("volume", "visibility", "none")

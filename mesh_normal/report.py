@@ -13,14 +13,14 @@ float as ``null``, so their JSON never holds ``NaN`` or ``Infinity``.
 from __future__ import annotations
 
 import math
+from numbers import Integral, Real
 from typing import Annotated, Literal
 
-import numpy as np
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
 
-from mesh_normal.orientation import Method, Verdict
+# The models import no NumPy and no kernels (the app declares its routes with them at start).
+from mesh_normal.choices import Method, Verdict, Weighting
 from mesh_normal.tolerances import WELD_LIMIT
-from mesh_normal.vertices import Weighting
 
 #: How many face indices (or components) a list in the report holds at most; counts are full.
 INDEX_LIST_LIMIT = 100
@@ -36,7 +36,8 @@ StoredKind = Literal["face", "corner", "vertex"]
 
 def finite(value: object) -> object:
     """``value`` unchanged, or ``None`` when it is a float that is not finite."""
-    if isinstance(value, float | np.floating) and not math.isfinite(value):
+    # NumPy's floats are Real (np.float64 is also a float); integers are always finite.
+    if isinstance(value, Real) and not isinstance(value, Integral) and not math.isfinite(value):
         return None
     return value
 

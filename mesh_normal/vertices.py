@@ -22,12 +22,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from mesh_normal.checks import CheckedMesh
+from mesh_normal.choices import Weighting as Weighting
 from mesh_normal.faces import FaceGeometry, MeshInput, checked_input
 from mesh_normal.kernels import (
     BLOCK,
@@ -45,8 +45,6 @@ from mesh_normal.kernels import (
 )
 from mesh_normal.tolerances import MESH_CANCELLED_SUM
 from mesh_normal.types import BoolArray, Edges, FloatArray, IndexArray, Vector
-
-Weighting = Literal["uniform", "area", "angle", "max"]
 
 WEIGHTINGS: tuple[Weighting, ...] = ("uniform", "area", "angle", "max")
 _UNIFORM, _AREA, _ANGLE, _MAX = range(4)

@@ -5,7 +5,6 @@ from __future__ import annotations
 import re
 from typing import Any
 
-import numpy as np
 from fastapi import APIRouter, Request
 from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import Response
@@ -27,7 +26,6 @@ from app.web.jsonio import (
 )
 from app.web.routes import RequestRoute
 from mesh_normal.triangle import triangle_normal
-from mesh_normal.triangle_batch import triangle_normals
 
 router = APIRouter(
     prefix="/api",
@@ -113,6 +111,12 @@ async def post_normals(request: Request) -> FastJSONResponse:
 
 
 def _batch(raw: bytes) -> dict[str, Any]:
+    # Imported here, not at the top: NumPy is for batches only, and importing it would add
+    # to every start-up of the server (the calculator page and /api/normal never need it).
+    import numpy as np
+
+    from mesh_normal.triangle_batch import triangle_normals
+
     refuse_oversized_batch(raw)
     body = parse_body(raw, BatchRequest)
     triangles = np.array(body.triangles, dtype=np.float64).reshape(-1, 3, 3)

@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import csv
 import io
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from mesh_normal.triangle import TriangleNormal
-from mesh_normal.triangle_batch import BatchNormals
+
+if TYPE_CHECKING:  # for the annotation only: mesh_normal.triangle_batch imports NumPy
+    from mesh_normal.triangle_batch import BatchNormals
 
 
 def normal_payload(result: TriangleNormal) -> dict[str, Any]:

@@ -14,7 +14,6 @@ from typing import Annotated, Any, Literal, TypeVar
 from fastapi import APIRouter, Path, Query, Request
 from fastapi.responses import Response, StreamingResponse
 
-from app.mesh import work
 from app.mesh.estimates import Task, estimate
 from app.mesh.samples import SAMPLES, sample
 from app.mesh.uploads import (
@@ -28,12 +27,14 @@ from app.mesh.uploads import (
 from app.web.errors import ERROR_RESPONSES
 from app.web.jobs import Jobs
 from app.web.jsonio import FastJSONResponse
-from mesh_normal.exports import NormalsKind, normals_blocks
+from mesh_normal.choices import NormalsChoice, NormalsKind, Weighting, Winding
 from mesh_normal.files.formats import FORMATS, WRITABLE
-from mesh_normal.mesh_export import NormalsChoice, Winding
 from mesh_normal.report import MeshReport
 from mesh_normal.tolerances import WELD_LIMIT
-from mesh_normal.vertices import Weighting
+
+# The jobs (app.mesh.work: the readers, the kernels, NumPy) are imported by the routes that run
+# them, not here: the server answers its first page without loading them, and loads them in the
+# background once it is up (app.main's lifespan), before the first upload comes.
 
 Value = TypeVar("Value")
 
@@ -95,6 +96,8 @@ def attachment(name: str) -> dict[str, str]:
 )
 async def post_mesh(request: Request, weld: WeldQuery = None) -> FastJSONResponse:
     """Report on a mesh file: counts, area, volume, winding, orientation and problems."""
+    from app.mesh import work
+
     upload = await read_upload(request)
     tolerance = upload_weld(upload, weld)
     # The model is rendered once, by pydantic-core, with non-finite floats as null; returning
@@ -120,6 +123,8 @@ SampleName = Annotated[
 )
 async def get_mesh_sample(request: Request, name: SampleName) -> FastJSONResponse:
     """The report on one of the mesh page's samples: what POST /api/mesh answers for its file."""
+    from app.mesh import work
+
     upload = sample(name).upload()
     return FastJSONResponse(await run_job(request, "report", upload, work.report, None))
 
@@ -153,12 +158,16 @@ async def post_mesh_normals(
     file_format: Annotated[Literal["json", "csv", "npy"], Query(alias="format")] = "json",
 ) -> Response:
     """The face, vertex or corner normals of a mesh file, in the file's order."""
+    from app.mesh import work
+
     upload = await read_upload(request)
     normals, missing = await run_job(
         request, kind, upload, work.normals, kind, weighting, crease_angle
     )
     name = f"{stem(upload.filename)}-{kind}-normals.{file_format}"
     # Written in blocks as the client reads: the text of millions of normals is never whole.
+    from mesh_normal.exports import normals_blocks
+
     blocks = normals_blocks(normals, missing, kind, weighting, crease_angle, file_format)
     return StreamingResponse(blocks, media_type=MEDIA_TYPES[file_format], headers=attachment(name))
 
@@ -200,6 +209,8 @@ async def post_mesh_fix(
     weld: WeldQuery = None,
 ) -> Response:
     """The mesh file with consistent, outward winding (the vertices untouched)."""
+    from app.mesh import work
+
     upload = await read_upload(request)
     tolerance = upload_weld(upload, weld)
     body, chosen, headers = await run_job(request, "fix", upload, work.fix, file_format, tolerance)
@@ -262,6 +273,8 @@ async def post_mesh_export(
     weld: WeldQuery = None,
 ) -> Response:
     """The mesh file in any writable format, with face, vertex or corner normals."""
+    from app.mesh import work
+
     upload = await read_upload(request)
     tolerance = upload_weld(upload, weld)
     body, chosen, headers = await run_job(

@@ -17,7 +17,6 @@ from typing import Literal
 from app.mesh.uploads import Upload
 from mesh_normal.files.archive import is_zip, unpack_limit
 from mesh_normal.files.formats import suffix_format
-from mesh_normal.files.read import sniff
 
 #: Peak memory of reading and analysing a mesh, per byte of its file, by format (the larger
 #: of its binary and ASCII figures, plus a margin). glTF and 3MF were not measured: they keep
@@ -65,6 +64,8 @@ def estimate(upload: Upload, task: Task) -> int:
 
 def _size_and_factor(name: str | None, data: bytes) -> tuple[int, float]:
     """The bytes to read and their factor; for a .zip, its members' unpacked sizes."""
+    from mesh_normal.files.read import sniff  # here: the readers and NumPy load after start-up
+
     if is_zip(data) and sniff(data) != "3mf":
         return _zip_size(data), UNKNOWN_PER_BYTE
     found = sniff(data) or suffix_format(name)

@@ -15,20 +15,21 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Query, Request
 from fastapi.responses import HTMLResponse, Response
 
-from app.mesh import work
 from app.mesh.api import MEDIA_TYPES, FixFormat, attachment, run_job, stem
 from app.mesh.samples import SAMPLES, sample
 from app.mesh.uploads import read_upload
-from app.mesh.work import FIX_FORMATS
 from app.web.errors import ApiError
 from app.web.links import public_url
 from app.web.middleware import size_text
 from app.web.templating import templates
+from mesh_normal.choices import NormalsChoice
 from mesh_normal.files.formats import ACCEPTED_SUFFIXES, COMPANION_SUFFIXES
-from mesh_normal.mesh_export import NormalsChoice
+from mesh_normal.files.formats import WRITABLE as FIX_FORMATS  # app.mesh.work's
 from mesh_normal.tolerances import WELD_LIMIT
 
 __all__ = ["FIX_FORMATS", "router"]
+
+# The jobs (app.mesh.work) are imported by the routes that run them: see app.mesh.api.
 
 router = APIRouter(include_in_schema=False)
 
@@ -60,6 +61,8 @@ async def mesh_upload(request: Request) -> HTMLResponse:
     """The report on an uploaded mesh: the whole page, or with ``?part=report`` the report."""
     fragment = request.query_params.get("part") == "report"
     context = _form_context(request)
+    from app.mesh import work
+
     try:
         upload = await read_upload(request)
         context.update(
@@ -80,6 +83,8 @@ async def mesh_upload(request: Request) -> HTMLResponse:
 @router.get("/mesh/sample/{name}", response_class=HTMLResponse)
 async def mesh_sample(request: Request, name: str) -> HTMLResponse:
     """The page with the report on a sample, as the upload of its file would show it."""
+    from app.mesh import work
+
     chosen = sample(name)
     upload = chosen.upload()
     context = _form_context(request)
@@ -119,6 +124,8 @@ async def mesh_sample_file(
     if flip and fix:
         raise ApiError(422, "flip and fix cannot both be asked for: choose one.", "flip")
     winding = "flip" if flip else "fix" if fix else "keep"
+    from app.mesh import work
+
     args = (file_format, normals or "auto", "angle", 30.0, winding, None)
     body, written, headers = await run_job(request, "fix", chosen.upload(), work.export, *args)
     headers.update(attachment(f"{chosen.name}-{'fixed' if fix else 'export'}.{written}"))

@@ -9,18 +9,30 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from functools import cache
-
-import numpy as np
-from numpy.typing import NDArray
+from typing import TYPE_CHECKING
 
 from app.mesh.uploads import Upload
 from app.web.errors import ApiError
 
-Faces = list[tuple[int, int, int]]
-Points = NDArray[np.float64]
+if TYPE_CHECKING:  # NumPy is imported by the functions that make a file, not at start-up
+    import numpy as np
+    from numpy.typing import NDArray
 
-#: The unit cube: corner (x, y, z) is vertex x + 2 y + 4 z.
-CUBE_POINTS = np.array([[x, y, z] for z in (0, 1) for y in (0, 1) for x in (0, 1)], dtype=float)
+    Points = NDArray[np.float64]
+
+Faces = list[tuple[int, int, int]]
+
+
+@cache
+def cube_points() -> Points:
+    """The unit cube: corner (x, y, z) is vertex x + 2 y + 4 z."""
+    import numpy as np
+
+    points = np.array([[x, y, z] for z in (0, 1) for y in (0, 1) for x in (0, 1)], dtype=float)
+    points.flags.writeable = False
+    return points
+
+
 #: Its sides (bottom, top, -y, +y, -x, +x), counter-clockwise seen from outside.
 CUBE_QUADS = ((0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5))
 #: Each side cut into two triangles: 12 faces, wound outward; the top is faces 2 and 3.
@@ -34,6 +46,8 @@ def reversed_faces(faces: Sequence[tuple[int, int, int]]) -> Faces:
 
 def icosphere() -> tuple[Points, Faces]:
     """The icosahedron split once (42 vertices, 80 faces) on the unit sphere, wound outward."""
+    import numpy as np
+
     t = (1 + 5**0.5) / 2
     points = [
         *[(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0)],
@@ -68,12 +82,14 @@ def sliver_cube() -> tuple[Points, Faces]:
     """The cube with two faces of no area: each of two edges gets a point at its middle, the
     triangle beside it is cut in two there, and a flat triangle (the edge's ends and its
     middle) closes the gap, so that the mesh stays closed and consistently wound."""
-    points = [*CUBE_POINTS.tolist()]
+    import numpy as np
+
+    points = [*cube_points().tolist()]
     faces = list(CUBE_FACES)
     for index in (0, 4):  # bottom (0, 2, 3): edge 0-2; top (4, 5, 7): edge 4-5
         a, b, c = faces[index]
         m = len(points)
-        points.append(((CUBE_POINTS[a] + CUBE_POINTS[b]) / 2).tolist())
+        points.append(((cube_points()[a] + cube_points()[b]) / 2).tolist())
         faces[index] = (a, m, c)
         faces += [(m, b, c), (b, m, a)]
     return np.array(points, dtype=float), faces
@@ -107,11 +123,11 @@ def ply_file(points: Points, faces: Faces) -> bytes:
 
 
 def _cube() -> bytes:
-    return obj_file([("cube", CUBE_POINTS, CUBE_FACES)])
+    return obj_file([("cube", cube_points(), CUBE_FACES)])
 
 
 def _inside_out() -> bytes:
-    return obj_file([("cube", CUBE_POINTS, reversed_faces(CUBE_FACES))])
+    return obj_file([("cube", cube_points(), reversed_faces(CUBE_FACES))])
 
 
 def _some_flipped() -> bytes:
@@ -123,7 +139,7 @@ def _some_flipped() -> bytes:
 
 
 def _open() -> bytes:
-    return obj_file([("box", CUBE_POINTS, CUBE_FACES[:2] + CUBE_FACES[4:])])
+    return obj_file([("box", cube_points(), CUBE_FACES[:2] + CUBE_FACES[4:])])
 
 
 def _degenerate() -> bytes:
@@ -131,10 +147,12 @@ def _degenerate() -> bytes:
 
 
 def _two_pieces() -> bytes:
+    right = cube_points().copy()
+    right[:, 0] += 2.0
     return obj_file(
         [
-            ("left", CUBE_POINTS, CUBE_FACES),
-            ("right", CUBE_POINTS + np.array([2.0, 0.0, 0.0]), reversed_faces(CUBE_FACES)),
+            ("left", cube_points(), CUBE_FACES),
+            ("right", right, reversed_faces(CUBE_FACES)),
         ]
     )
 

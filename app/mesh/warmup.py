@@ -27,21 +27,15 @@ from typing import get_args
 
 import numpy as np
 
+from app.mesh.early import SMALL_FILE_BYTES as SMALL_FILE_BYTES
+from app.mesh.early import small_face_normals as small_face_normals
+from app.mesh.early import small_file as small_file
 from app.mesh.uploads import Upload
 from app.mesh.work import FIX_FORMATS, fix, normals, page, report
-from app.web.workers import run_in_server_while_starting
 from mesh_normal.exports import KINDS
 from mesh_normal.files import write_mesh
-from mesh_normal.files.formats import suffix_format
-from mesh_normal.files.read import sniff
 from mesh_normal.precompile import compile_kernels
 from mesh_normal.vertices import Weighting
-
-#: What the fork server imports once, before it forks each worker (so that a worker, the first
-#: or a replacement, starts without importing them itself, and the pages they touch are shared
-#: until written): the jobs, trimesh's glTF loader, which takes seconds to import, and numba
-#: (the library imports it only for a kernel's first compiled call).
-PRELOAD = ("app.mesh.warmup", "trimesh.exchange.gltf", "mesh_normal._numba_cache")
 
 #: A closed tetrahedron, wound outward.
 VERTICES = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
@@ -72,41 +66,6 @@ MODEL_3MF = (
     b'<triangle v1="0" v2="1" v3="2"/></triangles></mesh></object></resources>'
     b'<build><item objectid="1"/></build></model>'
 )
-
-
-#: The largest file a job may read in the server while the workers start: its arrays stay
-#: within the kernels' Python path (mesh_normal.kernels.PYTHON_ELEMENTS, 6,000 elements a
-#: call: 4 KB are at most about 500 lines of OBJ or 80 triangles of binary STL).
-SMALL_FILE_BYTES = 4096
-
-
-def small_file(upload: Upload, *_args: object) -> bool:
-    """Whether a job on ``upload`` may run in the server while the workers start: a small STL,
-    or a small OBJ of triangles. Polygons (a triangulation kernel that always loads numba) and
-    the other formats (PLY and OFF may hold polygons too; glTF and 3MF need trimesh) wait."""
-    if not isinstance(upload, Upload) or upload.parts or len(upload.data) > SMALL_FILE_BYTES:
-        return False
-    found = sniff(upload.data) or suffix_format(upload.filename)
-    return found == "stl" or (found == "obj" and _triangles_only(upload.data))
-
-
-def _triangles_only(obj: bytes) -> bool:
-    """Whether every face of an OBJ text has three corners."""
-    for line in obj.splitlines():
-        words = line.split()
-        if words and words[0] == b"f" and len(words) != 4:
-            return False
-    return True
-
-
-def small_face_normals(upload: Upload, kind: str, *_args: object) -> bool:
-    """Face normals (no vertex sums, whose kernel loads numba) of a small file."""
-    return kind == "face" and small_file(upload)
-
-
-run_in_server_while_starting(report, small_file)
-run_in_server_while_starting(fix, small_file)
-run_in_server_while_starting(normals, small_face_normals)
 
 
 def warm() -> None:

@@ -8,22 +8,26 @@ from __future__ import annotations
 
 import math
 import re
-from typing import Annotated, Any, Literal
+from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 from fastapi import APIRouter, Query, Request
 from fastapi.responses import Response, StreamingResponse
 
-from app.points import work
-from app.points.downloads import normals_blocks
 from app.points.estimates import estimate
 from app.web.errors import ERROR_RESPONSES, ApiError, clip
 from app.web.jobs import Jobs
 from app.web.jsonio import FastJSONResponse
 from app.web.uploads import read_files
+from mesh_normal.choices import OrientMode
 from mesh_normal.files.formats import SUFFIXES as MESH_SUFFIXES
-from mesh_normal.points.orient import OrientMode
-from mesh_normal.points.read import POINT_SUFFIXES
-from mesh_normal.points.report import PointReport
+from mesh_normal.points.formats import POINT_SUFFIXES
+from mesh_normal.points.models import PointReport
+
+if TYPE_CHECKING:
+    from app.points import work
+
+# The jobs (app.points.work: the readers, the k-d tree, NumPy) are imported by the routes that
+# run them, not here: see app.mesh.api.
 
 #: Every file suffix the routes take: the point formats' and the mesh formats' (as vertices).
 POINT_FILE_SUFFIXES: tuple[str, ...] = tuple(sorted({*POINT_SUFFIXES, *MESH_SUFFIXES}))
@@ -143,6 +147,8 @@ def options(
     if orient == "direction" and (along is None or not any(along)):
         given = "must not be zero" if along is not None else "is needed with orient=direction"
         raise ApiError(422, f"direction {given}, e.g. direction=0,0,1.", "direction")
+    from app.points import work
+
     return work.Options(k, radius, orient, sensor, along)
 
 
@@ -191,6 +197,8 @@ async def post_points(
     direction: VectorQuery = None,
 ) -> FastJSONResponse:
     """Report on a point cloud: spacing, normals by status, orientation and a diagnosis."""
+    from app.points import work
+
     checked = options(k, radius, orient, viewpoint, direction)
     data, filename = await read_point_file(request)
     jobs: Jobs = request.app.state.jobs
@@ -227,6 +235,8 @@ async def post_points_normals(
     file_format: Annotated[NormalsFormat, Query(alias="format")] = "json",
 ) -> Response:
     """The normals of a point cloud, in the file's order, or the points with their normals."""
+    from app.points import work
+
     checked = options(k, radius, orient, viewpoint, direction)
     data, filename = await read_point_file(request)
     jobs: Jobs = request.app.state.jobs
@@ -239,5 +249,7 @@ async def post_points_normals(
     if body is not None:
         return Response(body, media_type=media_type, headers=headers)
     # Written in blocks as the client reads: the text of millions of normals is never whole.
+    from app.points.downloads import normals_blocks
+
     blocks = normals_blocks(normals, missing, orient, file_format)
     return StreamingResponse(blocks, media_type=media_type, headers=headers)

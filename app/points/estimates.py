@@ -13,7 +13,7 @@ Lower them here, in this one table, when they are measured per format.
 
 from __future__ import annotations
 
-from mesh_normal.points.read import POINT_SUFFIXES, sniff_points
+from mesh_normal.points.formats import POINT_SUFFIXES
 
 #: Bytes of memory per byte of the file, by the format read from the bytes (else the name).
 MEMORY_PER_BYTE: dict[str, float] = {
@@ -37,6 +37,8 @@ def estimate(data: bytes, filename: str | None) -> int:
 
 def per_byte(data: bytes, filename: str | None) -> float:
     """The factor of the format the bytes show, else the name's (LAZ is told by its name)."""
+    from mesh_normal.points.read import sniff_points  # here: the readers load after start-up
+
     suffix = "." + filename.rsplit(".", 1)[-1].lower() if filename and "." in filename else ""
     found = "laz" if suffix == ".laz" else sniff_points(data) or POINT_SUFFIXES.get(suffix)
     return MEMORY_PER_BYTE.get(found or "", UNKNOWN_PER_BYTE)

@@ -11,13 +11,12 @@ from __future__ import annotations
 
 import math
 import shlex
-from typing import Any, get_args
+from typing import TYPE_CHECKING, Any, get_args
 from urllib.parse import urlencode
 
 from fastapi import APIRouter, Request
 from fastapi.responses import HTMLResponse
 
-from app.points import work
 from app.points.api import K_LIMIT, POINT_FILE_SUFFIXES, options, read_point_upload
 from app.points.estimates import estimate
 from app.web.errors import ApiError, clip
@@ -25,7 +24,10 @@ from app.web.jobs import Jobs
 from app.web.links import public_url
 from app.web.middleware import size_text
 from app.web.templating import templates
-from mesh_normal.points.orient import OrientMode
+from mesh_normal.choices import OrientMode
+
+if TYPE_CHECKING:
+    from app.points import work  # imported by the route that runs it (see app.mesh.api)
 
 router = APIRouter(include_in_schema=False)
 
@@ -114,6 +116,8 @@ def points_form(request: Request) -> HTMLResponse:
 @router.post("/points", response_class=HTMLResponse)
 async def points_upload(request: Request) -> HTMLResponse:
     """The report on an uploaded cloud: the whole page, or with ``?part=report`` the report."""
+    from app.points import work
+
     fragment = request.query_params.get("part") == "report"
     context = _form_context(request)
     try:

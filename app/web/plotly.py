@@ -7,10 +7,12 @@ dark scheme (static/js/view3d.js holds the same table; a test keeps the two equa
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
 
-import numpy as np
-from numpy.typing import NDArray
+if TYPE_CHECKING:
+    import numpy as np
+    from numpy.typing import NDArray
 
 Trace = dict[str, Any]
 
@@ -42,25 +44,38 @@ CONE_LIGHTING = {"ambient": 0.9, "diffuse": 0.3, "specular": 0.1}
 
 
 def cone_trace(
-    name: str, tips: NDArray[np.float64], vectors: NDArray[np.float64], color: str
+    name: str,
+    tips: NDArray[np.float64] | Sequence[Sequence[float]],
+    vectors: NDArray[np.float64] | Sequence[Sequence[float]],
+    color: str,
 ) -> Trace:
     """Arrowheads in one colour, each with its tip at ``tips[i]`` and as long as ``vectors[i]``.
 
     Parameters
     ----------
-    tips, vectors : (k, 3) float64
+    tips, vectors : (k, 3) float64, or lists of k points (x, y, z)
         Where each head ends, and its direction and length (Plotly's ``sizemode="raw"``).
+        The mesh views pass arrays; the calculator's view passes lists, and this module
+        imports NumPy only when it is given an array, so the calculator's page never does.
     """
-    tips, vectors = np.asarray(tips, dtype=np.float64), np.asarray(vectors, dtype=np.float64)
+    if isinstance(tips, list | tuple) and isinstance(vectors, list | tuple):
+        x, y, z = _columns(tips)
+        u, v, w = _columns(vectors)
+    else:
+        import numpy as np  # for arrays only (already imported by whoever made them)
+
+        tips, vectors = np.asarray(tips, dtype=np.float64), np.asarray(vectors, dtype=np.float64)
+        x, y, z = tips[:, 0].tolist(), tips[:, 1].tolist(), tips[:, 2].tolist()
+        u, v, w = vectors[:, 0].tolist(), vectors[:, 1].tolist(), vectors[:, 2].tolist()
     return {
         "type": "cone",
         "name": name,
-        "x": tips[:, 0].tolist(),
-        "y": tips[:, 1].tolist(),
-        "z": tips[:, 2].tolist(),
-        "u": vectors[:, 0].tolist(),
-        "v": vectors[:, 1].tolist(),
-        "w": vectors[:, 2].tolist(),
+        "x": x,
+        "y": y,
+        "z": z,
+        "u": u,
+        "v": v,
+        "w": w,
         "anchor": "tip",
         "sizemode": "raw",
         "sizeref": 1,
@@ -68,6 +83,18 @@ def cone_trace(
         "showscale": False,
         "lighting": CONE_LIGHTING,
     }
+
+
+def _columns(points: Sequence[Sequence[float]]) -> tuple[list[float], list[float], list[float]]:
+    """The x, y and z of each point as floats, as ``np.asarray(points, float)[:, i].tolist()``."""
+    for point in points:
+        if len(point) != 3:
+            raise ValueError(f"a point has 3 coordinates, not {len(point)}")
+    return (
+        [float(point[0]) for point in points],
+        [float(point[1]) for point in points],
+        [float(point[2]) for point in points],
+    )
 
 
 def histogram_layout(xaxis: dict[str, Any], counted: str, grid: str) -> dict[str, Any]:

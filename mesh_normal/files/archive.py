@@ -23,13 +23,16 @@ import struct
 import zipfile
 import zlib
 from collections.abc import Callable, Iterable, Iterator, Sequence
+from typing import TYPE_CHECKING
 
 from mesh_normal.files.errors import MeshFileError, failure_reason
 from mesh_normal.files.formats import suffix_format
-from mesh_normal.files.loaded import LoadedMesh
 
-#: ``read_mesh(data, name)``, passed in because ``read_mesh`` calls this module.
-ReadFile = Callable[[bytes, str | None], LoadedMesh]
+if TYPE_CHECKING:  # not NumPy at import: the app checks archives' names and sizes without it
+    from mesh_normal.files.loaded import LoadedMesh
+
+    #: ``read_mesh(data, name)``, passed in because ``read_mesh`` calls this module.
+    ReadFile = Callable[[bytes, str | None], LoadedMesh]
 
 #: Most members an archive may hold.
 MAX_MEMBERS = 1000

@@ -4,18 +4,18 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Literal, TypeVar
+from typing import TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from mesh_normal.choices import SourceKind as SourceKind
 from mesh_normal.files.errors import MeshFileError
 from mesh_normal.files.loaded import first_bad_vertex
 from mesh_normal.types import FloatArray
 
 #: ``(origin (3,) float64, orientation (4,) float64 as w x y z)``: a PCD ``VIEWPOINT``.
 Viewpoint = tuple[FloatArray, FloatArray]
-SourceKind = Literal["points", "mesh vertices"]
 _Item = TypeVar("_Item", bound=np.generic)
 
 #: Describes row ``i`` (0-based) of the arrays for an error sentence, e.g. "the point on line 12".

@@ -29,16 +29,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from mesh_normal.choices import OrientMode as OrientMode
 from mesh_normal.points._kernels import graph_edges, propagate_signs
 from mesh_normal.tolerances import ORIENT_POINT_COSINE, ORIENT_SEED_COSINE
 from mesh_normal.types import BoolArray, FloatArray, IndexArray
 
-OrientMode = Literal["mst", "riemannian", "viewpoint", "direction", "file", "none"]
 ORIENT_MODES: tuple[OrientMode, ...] = (
     "mst",
     "riemannian",

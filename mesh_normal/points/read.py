@@ -30,18 +30,9 @@ from mesh_normal.points.cloud import SourceKind as SourceKind
 from mesh_normal.points.cloud import Viewpoint as Viewpoint
 from mesh_normal.points.cloud import colors_uint8 as colors_uint8
 from mesh_normal.points.cloud import make_cloud as make_cloud
+from mesh_normal.points.formats import POINT_SUFFIXES as POINT_SUFFIXES
 
 # --- which format -------------------------------------------------------------------------
-
-#: Extension (lower case, with the dot) to the point format it names.
-POINT_SUFFIXES: dict[str, str] = {
-    ".ply": "ply",
-    ".pcd": "pcd",
-    ".las": "las",
-    ".laz": "las",
-    **dict.fromkeys((".xyz", ".xyzn", ".xyzrgb", ".pts", ".txt", ".csv", ".asc"), "xyz"),
-}
-
 
 _PCD = re.compile(rb"\s*(?:#[^\n]*\n\s*)*(?:VERSION|FIELDS)\b")
 _NUMBER_ROW = re.compile(rb"\s*[-+.\d]")

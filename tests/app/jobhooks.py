@@ -35,7 +35,9 @@ def held(upload: Upload, weld: float | None) -> MeshReport:
     """Say ``started`` (with this process's id), then hold the GIL in pure Python until the
     file ``release`` appears; then write ``finished`` and report as usual."""
     here = folder(upload)
-    (here / "started").write_text(str(os.getpid()))
+    # Written whole, then named: a test that sees ``started`` reads the id, never an empty file.
+    (here / "started.part").write_text(str(os.getpid()))
+    (here / "started.part").rename(here / "started")
     spins = 0
     while not (here / "release").exists():
         spins += sum(range(10_000))  # GIL-holding work, as a regex pass over a big file is

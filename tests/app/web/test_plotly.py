@@ -22,6 +22,16 @@ def test_cone_trace_puts_each_tip_where_asked() -> None:
     json.dumps(trace, allow_nan=False)
 
 
+def test_cone_trace_takes_lists_as_it_takes_arrays() -> None:
+    """The calculator passes lists (it imports no NumPy); the mesh views pass arrays."""
+    tips = [[1.0, 2.0, 3.0], [0.0, -0.0, 1e-300]]
+    heads = [(0.0, 0.0, 0.5), (0.1, 0, 2)]
+    from_lists = cone_trace("normals", tips, heads, "#123456")
+    from_arrays = cone_trace("normals", np.array(tips), np.array(heads, dtype=float), "#123456")
+    assert json.dumps(from_lists) == json.dumps(from_arrays)  # -0.0 and 2.0 (not 2) included
+    assert cone_trace("none", [], [], "#123456")["x"] == []
+
+
 def test_font_uses_the_ink_colour() -> None:
     assert FONT["color"] == INK
 
