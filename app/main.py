@@ -25,16 +25,16 @@ from app.web.middleware import BodyLimit, HeadAsGet, PageCompression, SecurityHe
 from app.web.static import STATIC_DIR, CompressedStaticFiles
 from app.web.workers import tune_allocator
 
-#: The modules of the heavy work: the jobs with their readers, kernels and NumPy, and the
-#: warm-up that names the small jobs a starting server may run itself. The server answers its
+#: The modules of the heavy work: the jobs with their readers, kernels and NumPy (the mesh
+#: jobs also name the small ones a starting server may run itself). The server answers its
 #: first page without them, and imports them in a thread once it is up (:func:`lifespan`), so
 #: that neither the first page nor the first upload waits for them.
-HEAVY_MODULES = ("app.mesh.warmup", "app.points.work")
+HEAVY_MODULES = ("app.mesh.work", "app.points.work")
 #: What the fork server imports once, before it forks each worker (so that a worker, the first
 #: or a replacement, starts without importing them itself, and the pages they touch are shared
-#: until written): the jobs, trimesh's glTF loader, which takes seconds to import, and numba
-#: (the library imports it only for a kernel's first compiled call).
-PRELOAD = (*HEAVY_MODULES, "trimesh.exchange.gltf", "mesh_normal._numba_cache")
+#: until written): the jobs, the warm-up each worker runs, trimesh's glTF loader, which takes
+#: seconds to import, and numba (the library imports it only for a kernel's first compiled call).
+PRELOAD = (*HEAVY_MODULES, "app.mesh.warmup", "trimesh.exchange.gltf", "mesh_normal._numba_cache")
 #: Seconds after start-up before :data:`HEAVY_MODULES` load: the first page, which a
 #: supervisor's health check or a reader often asks for at once, does not share the CPU with
 #: them.
