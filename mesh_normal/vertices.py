@@ -10,9 +10,10 @@ Each corner (one vertex of one face) gives its face's unit normal a weight:
   "Weights for computing vertex normals from facet normals"), exact when the vertex and
   its neighbours lie on a sphere.
 
-The sums are one pass over the faces compiled with numba (see :mod:`mesh_normal.kernels`)
-that adds each face's weighted normal, from its :class:`~mesh_normal.faces.FaceGeometry`, into
-its three vertices; each sum is normalised once. Degenerate faces (see
+The sums are compiled with numba (see :mod:`mesh_normal.kernels`): chunk by chunk, every core
+takes the faces' weighted normals, from their :class:`~mesh_normal.faces.FaceGeometry`, and then
+one thread adds them into their three vertices in face order, so the bits are the same on any
+number of cores; each sum is normalised once. Degenerate faces (see
 :mod:`mesh_normal.faces`) weigh nothing. A vertex in no usable face, or whose sum cancels (at
 most ``MESH_CANCELLED_SUM`` of its total weight), gets a zero row and ``True`` in the
 ``missing`` mask; nothing is NaN.
@@ -30,6 +31,7 @@ from mesh_normal.checks import CheckedMesh
 from mesh_normal.choices import Weighting as Weighting
 from mesh_normal.faces import FaceGeometry, MeshInput, checked_input
 from mesh_normal.kernels import (
+    AHEAD,
     BLOCK,
     DEGENERATE,
     PARALLEL_KERNELS,
@@ -41,6 +43,7 @@ from mesh_normal.kernels import (
     gather,
     kernel,
     prange,
+    prefetch,
     workers,
 )
 from mesh_normal.tolerances import MESH_CANCELLED_SUM
@@ -98,49 +101,17 @@ def face_weights(code: int, edges: Edges, length: float) -> Vector:
     return length / (s2 * s0), length / (s0 * s1), length / (s1 * s2)
 
 
-#: The faces are summed in two halves (in whole blocks), each into its own (n, 4) buffer, and
-#: the buffers are added in a fixed order: the result has the same bits on every machine,
-#: whatever its number of cores. The halves are two tasks that the workers claim (see
-#: :func:`mesh_normal.kernels.claim`): one thread alone, or a second one late, takes both.
-_HALVES = 2
+#: Faces per chunk of the sums. Each chunk's terms are taken on every core (the products,
+#: the weights: most of the arithmetic), then one thread adds them into the vertices in face
+#: order, so each vertex's sum is added in the same order on any number of cores and has the
+#: same bits. A chunk is the whole of any mesh up to 4 million faces: measured at the Dragon
+#: size, chunks of 16 to 262 thousand faces took 1.5 to 2 times as long as one (the terms and
+#: the sums evict each other's rows). The terms are 32 or 48 bytes a face, 192 MiB at most.
+CHUNK = 1 << 22
 
 
 @kernel(parallel=True)
-def _vertex_sums_kernel(
-    code: int,
-    points: FloatArray,
-    factor: float,
-    faces: IndexArray,
-    crosses: FloatArray,
-    lengths: FloatArray,
-    degenerate: BoolArray,
-    fused: bool,
-    sums: FloatArray,
-    spare: FloatArray,
-    counter: IndexArray,
-    workers: int,
-) -> None:
-    """Add each usable face's weighted unit normal and its weight into its vertices' rows.
-
-    ``sums`` and ``spare`` are (n, 4) zeros: the sum of weighted normals and the sum of
-    weights side by side, so that each corner updates one cache line. The first half of the
-    faces (in whole blocks) goes into ``sums``, the rest into ``spare``. ``fused``: the cross
-    products are taken here, as ``geometry_kernel`` takes them (``crosses``, ``lengths`` and
-    ``degenerate`` are not read), else they are read from those arrays.
-    """
-    half = (len(faces) + 2 * BLOCK - 1) // (2 * BLOCK) * BLOCK
-    for _ in prange(min(workers, _HALVES)):
-        task = claim(counter)
-        while task < _HALVES:
-            first, stop, into = (0, half, sums) if task == 0 else (half, len(faces), spare)
-            _accumulate(
-                code, points, factor, faces, crosses, lengths, degenerate, fused, first, stop, into
-            )
-            task = claim(counter)
-
-
-@kernel()
-def _accumulate(
+def _face_terms_kernel(
     code: int,
     points: FloatArray,
     factor: float,
@@ -150,105 +121,181 @@ def _accumulate(
     degenerate: BoolArray,
     fused: bool,
     first: int,
-    stop: int,
-    sums: FloatArray,
+    terms: FloatArray,
+    counter: IndexArray,
+    workers: int,
 ) -> None:
-    """The sums of faces ``first`` to ``stop`` (``first`` a multiple of the block size).
+    """The terms of faces ``first`` to ``first + len(terms)`` (or the last), in whole blocks
+    claimed by the workers, into row ``face - first`` of ``terms``: a vector, then its weight
+    (4 columns) or its corners' weights (6 columns).
 
-    The corners are gathered where the products are taken here or the weights need the
-    edges (angle, max). The adds are written out: a view per corner (``sums[v]``) measured
-    13-29 % slower.
+    ``"area"``: the cross product and its length; ``"uniform"``: the unit normal and 1.0; the
+    others: the unit normal and each corner's weight. A
+    degenerate face's row is zeros: adding them changes no sum (a sum that starts at 0.0 is
+    never -0.0). ``fused``: the cross products are taken here, as ``geometry_kernel`` takes
+    them, else read from ``crosses`` and ``lengths``; the corners are gathered where they are
+    taken or the weights need the edges.
     """
-    corners = np.empty((BLOCK, 9))
-    stop = min(stop, len(faces))  # the first half may be rounded up past the end
-    for start in range(first, stop, BLOCK):
-        if fused or code >= _ANGLE:
-            gather(points, factor, faces[:stop], start, corners)
-        for face in range(start, min(start + BLOCK, stop)):
-            if fused:
-                (nx, ny, nz), square, found = face_cross(face_edges(corners, face - start))
-                if found == DEGENERATE:
-                    continue
-                length = math.sqrt(square)
-            else:
-                if degenerate[face]:
-                    continue
-                length = lengths[face]
-                nx, ny, nz = crosses[face, 0], crosses[face, 1], crosses[face, 2]
-            a, b, c = faces[face, 0], faces[face, 1], faces[face, 2]
-            if code == _AREA:  # the cross product itself is the unit normal times |n|
-                # n, not weight * n / |n|, which would round twice more
-                sums[a, 0] += nx
-                sums[a, 1] += ny
-                sums[a, 2] += nz
-                sums[a, 3] += length
-                sums[b, 0] += nx
-                sums[b, 1] += ny
-                sums[b, 2] += nz
-                sums[b, 3] += length
-                sums[c, 0] += nx
-                sums[c, 1] += ny
-                sums[c, 2] += nz
-                sums[c, 3] += length
-                continue
-            x, y, z = nx / length, ny / length, nz / length
-            w0, w1, w2 = (
-                face_weights(code, face_edges(corners, face - start), length)
-                if code >= _ANGLE
-                else (1.0, 1.0, 1.0)
-            )
-            sums[a, 0] += w0 * x
-            sums[a, 1] += w0 * y
-            sums[a, 2] += w0 * z
-            sums[a, 3] += w0
-            sums[b, 0] += w1 * x
-            sums[b, 1] += w1 * y
-            sums[b, 2] += w1 * z
-            sums[b, 3] += w1
-            sums[c, 0] += w2 * x
-            sums[c, 1] += w2 * y
-            sums[c, 2] += w2 * z
-            sums[c, 3] += w2
+    stop = min(first + len(terms), len(faces))
+    blocks = (stop - first + BLOCK - 1) // BLOCK
+    for _ in prange(workers):  # blocks write disjoint rows: any worker may take any block
+        corners = np.empty((BLOCK, 9))
+        block = claim(counter)
+        while block < blocks:
+            start = first + block * BLOCK
+            _block_terms(
+                code, points, factor, faces[:stop], crosses, lengths, degenerate, fused,
+                first, start, corners, terms,
+            )  # fmt: skip
+            block = claim(counter)
 
 
 @kernel()
-def _normalise(
-    sums: FloatArray, spare: FloatArray, halves: bool, normals: FloatArray, missing: BoolArray
+def _block_terms(
+    code: int,
+    points: FloatArray,
+    factor: float,
+    faces: IndexArray,
+    crosses: FloatArray,
+    lengths: FloatArray,
+    degenerate: BoolArray,
+    fused: bool,
+    first: int,
+    start: int,
+    corners: FloatArray,
+    terms: FloatArray,
 ) -> None:
-    """Unit rows of ``sums[:, :3]`` (plus ``spare``'s, added row by row, if ``halves``), or
-    zero where they cancel against their fourth column; see :func:`normalise_kernel`."""
-    for row in range(len(sums)):
-        x, y, z, total = sums[row, 0], sums[row, 1], sums[row, 2], sums[row, 3]
-        if halves:  # the same bits as ``sums += spare`` first, without that pass
-            x, y, z, total = (
-                x + spare[row, 0],
-                y + spare[row, 1],
-                z + spare[row, 2],
-                total + spare[row, 3],
-            )
-        square = x * x + y * y + z * z
-        cancel = _CANCELLED * total
-        missing[row] = square <= cancel * cancel
-        length = math.inf if missing[row] else math.sqrt(square)  # x / inf is an exact zero
-        normals[row, 0] = x / length + 0.0  # -0.0 becomes 0.0
-        normals[row, 1] = y / length + 0.0
-        normals[row, 2] = z / length + 0.0
+    """The terms of the block of faces from ``start`` (see :func:`_face_terms_kernel`)."""
+    if fused or code >= _ANGLE:
+        gather(points, factor, faces, start, corners)
+    for face in range(start, min(start + BLOCK, len(faces))):
+        row = face - first
+        if fused:
+            (nx, ny, nz), square, found = face_cross(face_edges(corners, face - start))
+            usable = found != DEGENERATE
+            length = math.sqrt(square)
+        else:
+            usable = not degenerate[face]
+            length = lengths[face]
+            nx, ny, nz = crosses[face, 0], crosses[face, 1], crosses[face, 2]
+        if not usable:
+            for column in range(terms.shape[1]):
+                terms[row, column] = 0.0
+        elif code == _AREA:  # the cross product itself is the unit normal times |n|
+            # n, not weight * n / |n|, which would round twice more
+            terms[row, 0], terms[row, 1], terms[row, 2], terms[row, 3] = nx, ny, nz, length
+        else:
+            terms[row, 0], terms[row, 1], terms[row, 2] = nx / length, ny / length, nz / length
+            if code == _UNIFORM:
+                terms[row, 3] = 1.0
+            else:
+                w0, w1, w2 = face_weights(code, face_edges(corners, face - start), length)
+                terms[row, 3], terms[row, 4], terms[row, 5] = w0, w1, w2
 
 
+@kernel()
+def _add_terms(faces: IndexArray, first: int, terms: FloatArray, sums: FloatArray) -> None:
+    """Add the terms of faces ``first`` on (see :func:`_face_terms_kernel`) into their
+    vertices' rows of ``sums``, (n, 4): the weighted normal, then the weight, so that each
+    corner updates one cache line. With one weight, each corner adds the vector and the
+    weight as they are (area: the cross product; uniform: the unit normal, times 1.0 exactly);
+    with three, the weight of its own corner times the unit normal.
+
+    In face order, on one thread; the vertices' rows of the face ``AHEAD`` faces on are asked
+    for in advance (each is a cache miss on a large mesh). The adds are written out: a view
+    per corner (``sums[v]``) measured 13-29 % slower.
+    """
+    stop = min(first + len(terms), len(faces))
+    shared = terms.shape[1] == 4
+    for face in range(first, stop):
+        ahead = face + AHEAD
+        if ahead < stop:
+            prefetch(sums, faces[ahead, 0])
+            prefetch(sums, faces[ahead, 1])
+            prefetch(sums, faces[ahead, 2])
+        row = face - first
+        x, y, z = terms[row, 0], terms[row, 1], terms[row, 2]
+        a, b, c = faces[face, 0], faces[face, 1], faces[face, 2]
+        if shared:
+            w = terms[row, 3]
+            sums[a, 0] += x
+            sums[a, 1] += y
+            sums[a, 2] += z
+            sums[a, 3] += w
+            sums[b, 0] += x
+            sums[b, 1] += y
+            sums[b, 2] += z
+            sums[b, 3] += w
+            sums[c, 0] += x
+            sums[c, 1] += y
+            sums[c, 2] += z
+            sums[c, 3] += w
+            continue
+        w0, w1, w2 = terms[row, 3], terms[row, 4], terms[row, 5]
+        sums[a, 0] += w0 * x
+        sums[a, 1] += w0 * y
+        sums[a, 2] += w0 * z
+        sums[a, 3] += w0
+        sums[b, 0] += w1 * x
+        sums[b, 1] += w1 * y
+        sums[b, 2] += w1 * z
+        sums[b, 3] += w1
+        sums[c, 0] += w2 * x
+        sums[c, 1] += w2 * y
+        sums[c, 2] += w2 * z
+        sums[c, 3] += w2
+
+
+@kernel()
 def normalise_kernel(sums: FloatArray, normals: FloatArray, missing: BoolArray) -> None:
     """Unit rows of ``sums[:, :3]``, or zero where they cancel against ``sums[:, 3]``.
 
     ``normals`` may share memory with ``sums``: row i is read before rows up to i are
     written, as (n, 3) is packed more densely than (n, 4).
     """
-    _normalise(sums, sums, False, normals, missing)
+    for row in range(len(sums)):
+        _unit_row(sums, row, normals, missing)
+
+
+@kernel()
+def _unit_row(sums: FloatArray, row: int, normals: FloatArray, missing: BoolArray) -> None:
+    """Row ``row`` of :func:`normalise_kernel`."""
+    x, y, z, total = sums[row, 0], sums[row, 1], sums[row, 2], sums[row, 3]
+    square = x * x + y * y + z * z
+    cancel = _CANCELLED * total
+    missing[row] = square <= cancel * cancel
+    length = math.inf if missing[row] else math.sqrt(square)  # x / inf is an exact zero
+    normals[row, 0] = x / length + 0.0  # -0.0 becomes 0.0
+    normals[row, 1] = y / length + 0.0
+    normals[row, 2] = z / length + 0.0
+
+
+#: Rows per block of :func:`_normalise_kernel`.
+_ROWS = 4096
+
+
+@kernel(parallel=True)
+def _normalise_kernel(
+    sums: FloatArray, normals: FloatArray, missing: BoolArray, counter: IndexArray, workers: int
+) -> None:
+    """:func:`normalise_kernel` into separate ``normals``, in blocks of rows claimed by the
+    workers (rows are independent: the same bits on any number of cores). A division and a
+    square root a row: measured 2.8 ms of the Dragon size's 20 on one core."""
+    blocks = (len(sums) + _ROWS - 1) // _ROWS
+    for _ in prange(workers):
+        block = claim(counter)
+        while block < blocks:
+            for row in range(block * _ROWS, min((block + 1) * _ROWS, len(sums))):
+                _unit_row(sums, row, normals, missing)
+            block = claim(counter)
 
 
 def smooth(geometry: FaceGeometry | CheckedMesh, weighting: str) -> tuple[FloatArray, BoolArray]:
-    """Vertex normals and their mask, from the face geometry, or from a checked mesh in one
-    pass that takes the cross products as it goes (the same bits, none of them kept).
+    """Vertex normals and their mask, from the face geometry, or from a checked mesh whose
+    cross products are taken as they are needed (the same bits, none of them kept).
 
-    The sums are (n, 4) and the normals are packed into the same memory as (n, 3).
+    Chunk by chunk, the faces' terms are taken on every core and then added in face order
+    (:data:`CHUNK`). The sums are (n, 4), normalised on every core into (n, 3).
     """
     code = weighting_code(weighting)
     if isinstance(geometry, FaceGeometry):
@@ -257,26 +304,19 @@ def smooth(geometry: FaceGeometry | CheckedMesh, weighting: str) -> tuple[FloatA
     else:
         mesh, fused = geometry, True
         crosses, lengths, degenerate = _NO_CROSSES, _NO_LENGTHS, _NO_FLAGS
-    count = len(mesh.vertices)
-    sums, spare = np.zeros((count, 4)), np.zeros((count, 4))
+    count, faces = len(mesh.vertices), mesh.faces
+    sums = np.zeros((count, 4))
+    terms = np.empty((min(CHUNK, len(faces)), 6 if code >= _ANGLE else 4))
     announce_compiling()
     with PARALLEL_KERNELS:
-        _vertex_sums_kernel(
-            code,
-            mesh.points,
-            mesh.factor,
-            mesh.faces,
-            crosses,
-            lengths,
-            degenerate,
-            fused,
-            sums,
-            spare,
-            *workers(),
-        )
-    normals = sums.reshape(-1)[: 3 * count].reshape(count, 3)
-    missing = np.empty(count, dtype=bool)
-    _normalise(sums, spare, True, normals, missing)
+        for first in range(0, len(faces), CHUNK):
+            _face_terms_kernel(
+                code, mesh.points, mesh.factor, faces, crosses, lengths, degenerate, fused,
+                first, terms, *workers(),
+            )  # fmt: skip
+            _add_terms(faces, first, terms, sums)
+        normals, missing = np.empty((count, 3)), np.empty(count, dtype=bool)
+        _normalise_kernel(sums, normals, missing, *workers())
     return normals, missing
 
 

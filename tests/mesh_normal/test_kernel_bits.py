@@ -95,8 +95,8 @@ def _libm_atan2(y: np.ndarray, x: np.ndarray) -> np.ndarray:
 
 
 def reference_vertex_normals(vertices: np.ndarray, indices: np.ndarray, weighting: str) -> tuple:
-    """The documented sums in NumPy: each half of the faces (in whole blocks) summed in face
-    order (``np.add.at`` is unbuffered and in order), the halves added, then normalised."""
+    """The documented sums in NumPy: summed in face order (``np.add.at`` is unbuffered and in
+    order), then normalised."""
     geometry = face_geometry(vertices, indices)
     usable = ~geometry.degenerate
     lengths = np.where(usable, geometry.lengths, 1.0)
@@ -123,15 +123,9 @@ def reference_vertex_normals(vertices: np.ndarray, indices: np.ndarray, weightin
         terms = np.repeat(geometry.crosses[:, None, :], 3, axis=1)
     else:
         terms = weights[:, :, None] * units[:, None, :]
-    half = (len(indices) + 2 * BLOCK - 1) // (2 * BLOCK) * BLOCK
-    halves = []
-    for rows in (slice(0, half), slice(half, None)):
-        sums = np.zeros((len(vertices), 4))
-        keep = usable[rows]
-        np.add.at(sums[:, :3], indices[rows][keep].ravel(), terms[rows][keep].reshape(-1, 3))
-        np.add.at(sums[:, 3], indices[rows][keep].ravel(), weights[rows][keep].ravel())
-        halves.append(sums)
-    total = halves[0] + halves[1]
+    total = np.zeros((len(vertices), 4))
+    np.add.at(total[:, :3], indices[usable].ravel(), terms[usable].reshape(-1, 3))
+    np.add.at(total[:, 3], indices[usable].ravel(), weights[usable].ravel())
     square = dot(total[:, :3], total[:, :3])
     cancel = MESH_CANCELLED_SUM * total[:, 3]
     missing = square <= cancel * cancel
@@ -204,3 +198,21 @@ def test_the_bits_do_not_depend_on_the_number_of_threads() -> None:
     assert len(set(digests.values())) == 1, digests
     assert len(next(iter(digests.values()))) == 64
     assert hashlib.sha256(b"").hexdigest() not in digests.values()
+
+
+@pytest.mark.parametrize("chunk", [1, 700, BLOCK])
+def test_the_vertex_sums_do_not_depend_on_the_chunk_size(
+    chunk: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # The terms are taken chunk by chunk and added in face order: any chunk, the same bits.
+    from mesh_normal import vertices as vertices_module
+
+    points, indices = soup(seed=3)
+    expected = {w: vertex_normals(points, indices, weighting=w) for w in WEIGHTINGS}
+    monkeypatch.setattr(vertices_module, "CHUNK", chunk)
+    geometry = face_geometry(points, indices)
+    for weighting, reference in expected.items():
+        for source in ((points, indices), (geometry, None)):
+            result = vertex_normals(*source, weighting=weighting)  # type: ignore[arg-type]
+            assert result.normals.tobytes() == reference.normals.tobytes()
+            assert result.missing.tobytes() == reference.missing.tobytes()
