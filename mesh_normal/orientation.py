@@ -75,7 +75,15 @@ from numpy.typing import ArrayLike
 from mesh_normal.choices import Method as Method
 from mesh_normal.choices import Verdict as Verdict
 from mesh_normal.faces import FaceGeometry, MeshInput, checked_input, face_geometry
-from mesh_normal.kernels import announce_compiling, kernel
+from mesh_normal.kernels import (
+    BLOCK,
+    PARALLEL_KERNELS,
+    announce_compiling,
+    claim,
+    kernel,
+    prange,
+    workers,
+)
 from mesh_normal.tolerances import (
     EPSILON,
     FLOAT32_UNIT,
@@ -411,16 +419,31 @@ def _cone_terms(geometry: FaceGeometry, group: IndexArray, groups: int) -> _Cone
     """
     mesh = geometry.mesh
     count = len(mesh.faces)
+    crosses, recomputed = geometry.crosses, geometry.recomputed
     terms = np.empty(count)
     # Per group: the area-weighted centroid sums, the area, the largest |x|, and the sums of
     # the bounds and the sensitivities (summed in face order, as np.bincount sums them: the
     # same bits, without two arrays of 8 bytes a face).
     sums = np.zeros((groups, 7))
     announce_compiling()
-    _cone_kernel(
-        mesh.points, mesh.factor, mesh.faces, geometry.crosses, geometry.recomputed, group,
-        sums, terms,
-    )  # fmt: skip
+    # Chunk by chunk, each face's share is taken on every core and then added into its group
+    # in face order on one (the same bits on any number of cores); first the centroids, then
+    # the terms and their bounds, which need them.
+    scratch = np.empty((min(_CONE_CHUNK, count), 5))
+    with PARALLEL_KERNELS:
+        for first in range(0, count, _CONE_CHUNK):
+            _cone_shares(
+                mesh.points, mesh.factor, mesh.faces, crosses, recomputed, group, sums, False,
+                first, terms, scratch, *workers(),
+            )  # fmt: skip
+            _add_shares(group, False, first, scratch, sums)
+        _centroids(sums)
+        for first in range(0, count, _CONE_CHUNK):
+            _cone_shares(
+                mesh.points, mesh.factor, mesh.faces, crosses, recomputed, group, sums, True,
+                first, terms, scratch, *workers(),
+            )  # fmt: skip
+            _add_shares(group, True, first, scratch, sums)
     unit = FLOAT32_UNIT if _single(mesh.vertices) else EPSILON
     return _Cone(terms, sums[:, 5].copy(), sums[:, 6].copy(), sums[:, 4].copy(), unit, mesh.scale)
 
@@ -504,8 +527,13 @@ def _cone_face(
     return ax, ay, az, ux, uy, uz, vx, vy, vz, nx, ny, nz, largest
 
 
-@kernel(python=True)
-def _cone_kernel(
+#: Faces per chunk of :func:`_cone_terms`: their shares (40 bytes a face) stay in the cache
+#: between being taken and being added.
+_CONE_CHUNK = 1 << 16
+
+
+@kernel(parallel=True, python=True)
+def _cone_shares(
     points: FloatArray,
     factor: float,
     faces: IndexArray,
@@ -513,44 +541,92 @@ def _cone_kernel(
     recomputed: BoolArray,
     group: IndexArray,
     sums: FloatArray,
+    second: bool,
+    first: int,
     terms: FloatArray,
+    shares: FloatArray,
+    counter: IndexArray,
+    workers: int,
 ) -> None:
-    """Two passes over the faces: the groups' centroids, then each face's term, with its
-    bounds summed by group."""
-    for face in range(len(faces)):
-        ax, ay, az, ux, uy, uz, vx, vy, vz, nx, ny, nz, largest = _cone_face(
-            points, factor, faces, crosses, recomputed, face
-        )
-        area = math.sqrt(nx * nx + ny * ny + nz * nz)
-        row = sums[group[face]]
-        row[0] += area * ((ux + vx) / 3 + ax)
-        row[1] += area * ((uy + vy) / 3 + ay)
-        row[2] += area * ((uz + vz) / 3 + az)
-        row[3] += area
-        row[4] = max(row[4], largest)
+    """Each face's share of its group's sums, for faces ``first`` on, into row ``face - first``
+    of ``shares``, in blocks claimed by the workers.
+
+    First pass: its area times its centroid (x, y, z), its area and its largest |coordinate|.
+    Second (``second``, the centroids in ``sums``): its term, into ``terms``, and its bound
+    and sensitivity (see :func:`_cone_terms`). The loops are written out here: a call per
+    face to a function of this many arrays measured twice as slow.
+    """
+    stop = min(first + len(shares), len(faces))
+    blocks = (stop - first + BLOCK - 1) // BLOCK
+    for _ in prange(workers):  # blocks write disjoint rows: any worker may take any block
+        block = claim(counter)
+        while block < blocks:
+            start = first + block * BLOCK
+            end = min(start + BLOCK, stop)
+            if not second:
+                for face in range(start, end):
+                    ax, ay, az, ux, uy, uz, vx, vy, vz, nx, ny, nz, largest = _cone_face(
+                        points, factor, faces, crosses, recomputed, face
+                    )
+                    area = math.sqrt(nx * nx + ny * ny + nz * nz)
+                    row = face - first
+                    shares[row, 0] = area * ((ux + vx) / 3 + ax)
+                    shares[row, 1] = area * ((uy + vy) / 3 + ay)
+                    shares[row, 2] = area * ((uz + vz) / 3 + az)
+                    shares[row, 3] = area
+                    shares[row, 4] = largest
+            else:
+                for face in range(start, end):
+                    ax, ay, az, ux, uy, uz, vx, vy, vz, nx, ny, nz, _largest = _cone_face(
+                        points, factor, faces, crosses, recomputed, face
+                    )
+                    centre = group[face]
+                    dx, dy, dz = ax - sums[centre, 0], ay - sums[centre, 1], az - sums[centre, 2]
+                    terms[face] = nx * dx + ny * dy + nz * dz
+                    normal = math.sqrt(nx * nx + ny * ny + nz * nz)
+                    to_a = math.sqrt(dx * dx + dy * dy + dz * dz)
+                    # Squares as products: numba compiles x ** 2 to x * x, NumPy's scalar
+                    # power may not.
+                    bx, by, bz = dx + ux, dy + uy, dz + uz
+                    cx, cy, cz = dx + vx, dy + vy, dz + vz
+                    ex, ey, ez = vx - ux, vy - uy, vz - uz
+                    to_b = math.sqrt(bx * bx + by * by + bz * bz)
+                    to_c = math.sqrt(cx * cx + cy * cy + cz * cz)
+                    ab = math.sqrt(ux * ux + uy * uy + uz * uz)
+                    ac = math.sqrt(vx * vx + vy * vy + vz * vz)
+                    bc = math.sqrt(ex * ex + ey * ey + ez * ez)
+                    row = face - first
+                    shares[row, 0] = normal * to_a
+                    shares[row, 1] = 4 * normal + to_a * bc + to_b * ac + to_c * ab
+            block = claim(counter)
+
+
+@kernel(python=True)
+def _add_shares(
+    group: IndexArray, second: bool, first: int, shares: FloatArray, sums: FloatArray
+) -> None:
+    """Add the shares of faces ``first`` on into their groups' sums, in face order: the
+    centroid sums, the area and the largest |coordinate| (columns 0-4), or the bounds and the
+    sensitivities (columns 5, 6)."""
+    for face in range(first, min(first + len(shares), len(group))):
+        row, at = group[face], face - first
+        if second:
+            sums[row, 5] += shares[at, 0]
+            sums[row, 6] += shares[at, 1]
+        else:
+            sums[row, 0] += shares[at, 0]
+            sums[row, 1] += shares[at, 1]
+            sums[row, 2] += shares[at, 2]
+            sums[row, 3] += shares[at, 3]
+            sums[row, 4] = max(sums[row, 4], shares[at, 4])
+
+
+@kernel(python=True)
+def _centroids(sums: FloatArray) -> None:
+    """Each group's area-weighted centroid from its sums (columns 0-2; 0 for no area)."""
     for row in sums:
         total = row[3] if row[3] != 0.0 else 1.0
         row[0], row[1], row[2] = row[0] / total, row[1] / total, row[2] / total
-    for face in range(len(faces)):
-        ax, ay, az, ux, uy, uz, vx, vy, vz, nx, ny, nz, _ = _cone_face(
-            points, factor, faces, crosses, recomputed, face
-        )
-        row = sums[group[face]]
-        dx, dy, dz = ax - row[0], ay - row[1], az - row[2]
-        terms[face] = nx * dx + ny * dy + nz * dz
-        normal = math.sqrt(nx * nx + ny * ny + nz * nz)
-        to_a = math.sqrt(dx * dx + dy * dy + dz * dz)
-        # Squares as products: numba compiles x ** 2 to x * x, NumPy's scalar power may not.
-        bx, by, bz = dx + ux, dy + uy, dz + uz
-        cx, cy, cz = dx + vx, dy + vy, dz + vz
-        ex, ey, ez = vx - ux, vy - uy, vz - uz
-        to_b = math.sqrt(bx * bx + by * by + bz * bz)
-        to_c = math.sqrt(cx * cx + cy * cy + cz * cz)
-        ab = math.sqrt(ux * ux + uy * uy + uz * uz)
-        ac = math.sqrt(vx * vx + vy * vy + vz * vz)
-        bc = math.sqrt(ex * ex + ey * ey + ez * ez)
-        row[5] += normal * to_a
-        row[6] += 4 * normal + to_a * bc + to_b * ac + to_c * ab
 
 
 # --- shells inside shells ----------------------------------------------------------------------

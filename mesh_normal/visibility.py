@@ -212,33 +212,71 @@ def _hierarchy(
 
 def _morton_order(unit: FloatArray, faces: IndexArray) -> tuple[IndexArray, IndexArray]:
     """The faces' Morton codes (:func:`_morton`) in increasing order, and the order: that of a
-    stable sort. Each code and its face number are one int64 key (the code above, the number
-    below ``_FACE_BITS``), so a plain sort of distinct keys gives the stable order (measured
-    7 times faster than ``argsort(kind="stable")`` at 871k faces)."""
-    keys = np.empty(len(faces), dtype=np.int64)
-    counter, threads = workers()
-    if len(faces) > 2**_FACE_BITS:  # never in memory (about 200 GB of faces): the plain way
-        _morton(unit, faces, 0, keys, counter, threads)
-        order = np.argsort(keys, kind="stable").astype(np.intp)
-        return keys[order], order
-    _morton(unit, faces, _FACE_BITS, keys, counter, threads)
-    keys.sort()
-    order = keys & (2**_FACE_BITS - 1)
-    keys >>= _FACE_BITS
-    return keys, order
+    stable sort, by three passes of a compiled radix sort (:func:`_radix_order`; measured 5
+    times faster than NumPy's sort of code-and-number keys at 871k faces, itself 7 times
+    faster than ``argsort(kind="stable")``)."""
+    codes = np.empty(len(faces), dtype=np.int64)
+    _morton(unit, faces, codes, *workers())
+    order = np.empty(len(faces), dtype=np.intp)
+    ordered = np.empty(len(faces), dtype=np.int64)
+    _radix_order(codes, order, ordered)
+    return ordered, order
 
 
-#: The bits of a face's number below its Morton code (30 bits) in a sort key.
-_FACE_BITS = 33
+#: Bits of a Morton code sorted per pass of :func:`_radix_order`: three passes of 10 (1024
+#: buckets each, whose write positions stay in the cache).
+_DIGIT = 10
+
+
+@kernel(python=PYTHON_RAYS)
+def _radix_order(codes: IndexArray, order: IndexArray, ordered: IndexArray) -> None:
+    """``order``: the stable order of ``codes`` (30-bit, non-negative); ``ordered``: the codes
+    in that order. A least-significant-digit radix sort, its three counts taken in one pass;
+    each pass is stable, so equal codes keep their faces in file order. ``codes`` is used as
+    scratch space (it ends up holding the codes in the order of two passes)."""
+    count = len(codes)
+    buckets = 1 << _DIGIT
+    mask = buckets - 1
+    starts = np.zeros((3, buckets), dtype=np.int64)
+    for face in range(count):
+        code = codes[face]
+        starts[0, code & mask] += 1
+        starts[1, (code >> _DIGIT) & mask] += 1
+        starts[2, (code >> (2 * _DIGIT)) & mask] += 1
+    for digit in range(3):
+        total = 0
+        for bucket in range(buckets):
+            size = starts[digit, bucket]
+            starts[digit, bucket] = total
+            total += size
+    # Pass 1 reads the codes in file order and writes them and their faces into ordered and
+    # order; pass 2 moves them back into codes and a scratch order; pass 3 into the results.
+    scratch = np.empty(count, dtype=np.int64)
+    for face in range(count):
+        code = codes[face]
+        bucket = code & mask
+        at = starts[0, bucket]
+        starts[0, bucket] = at + 1
+        ordered[at], order[at] = code, face
+    for k in range(count):
+        code = ordered[k]
+        bucket = (code >> _DIGIT) & mask
+        at = starts[1, bucket]
+        starts[1, bucket] = at + 1
+        codes[at], scratch[at] = code, order[k]
+    for k in range(count):
+        code = codes[k]
+        bucket = (code >> (2 * _DIGIT)) & mask
+        at = starts[2, bucket]
+        starts[2, bucket] = at + 1
+        ordered[at], order[at] = code, scratch[k]
 
 
 @kernel(parallel=True, python=PYTHON_RAYS)
 def _morton(
-    unit: FloatArray, faces: IndexArray, shift: int, keys: IndexArray, counter: IndexArray,
-    workers: int,
-) -> None:  # fmt: skip
-    """The Morton code of each face's centroid on a 1024**3 grid over [-1, 1]**3, shifted
-    left by ``shift`` bits and the face's number added (when ``shift`` is not 0)."""
+    unit: FloatArray, faces: IndexArray, codes: IndexArray, counter: IndexArray, workers: int
+) -> None:
+    """The Morton code of each face's centroid on a 1024**3 grid over [-1, 1]**3."""
     blocks = (len(faces) + BLOCK - 1) // BLOCK
     for _ in prange(workers):  # blocks write disjoint rows: any worker may take any block
         block = claim(counter)
@@ -255,7 +293,7 @@ def _morton(
                     cell = (cell | (cell << 4)) & 0x30C30C3
                     cell = (cell | (cell << 2)) & 0x9249249
                     value |= cell << axis
-                keys[face] = (value << shift) | face if shift else value
+                codes[face] = value
             block = claim(counter)
 
 
