@@ -131,6 +131,7 @@ def kernel(
     error_model: Literal["python", "numpy"] = "numpy",
     python: bool | int = False,
     named: bool = False,
+    nogil: bool = False,
 ) -> Callable[[Function], Function]:
     """``numba.njit(cache=True, ...)`` with :class:`~mesh_normal._numba_cache.KernelCache`
     (which also reads a read-only cache), made when numba is loaded; remember the kernel for
@@ -142,10 +143,13 @@ def kernel(
     ``named``: one of several kernels for the same work, of which a call runs one (the face
     normals from a mesh or from a geometry): left out of the look-up of every kernel defined,
     which would otherwise find the other one never compiled, and named by its caller instead.
+
+    ``nogil``: the compiled kernel releases the GIL while it runs, for callers that run it on
+    several threads at once (one OBJ chunk each).
     """
 
     def compiled(function: Function) -> Function:
-        options = {"error_model": error_model, "parallel": parallel}
+        options = {"error_model": error_model, "parallel": parallel, "nogil": nogil}
         made: Any = _dispatcher(function, options) if _numba_loaded else None
         if made is None:
             made = Kernel(function, options, int(python))

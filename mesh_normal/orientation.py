@@ -762,27 +762,9 @@ def _twinned(faces: IndexArray) -> BoolArray:
     if len(faces) == 0:
         return np.zeros(0, dtype=bool)
     width = int(faces.max()) + 1
-    if width**3 * 2 >= KEY_LIMIT:
-        if width * width * 2 < KEY_LIMIT:
-            return _twinned_wide(faces, width)
-        return _twinned_lexsorted(faces, _even(faces))
-    key = _twin_keys(faces, width)
-    key.sort()  # in place: whether any triangle repeats needs no order
-    if not np.any((key[1:] ^ key[:-1]) < 2):  # no triangle twice (the common case)
-        return np.zeros(len(faces), dtype=bool)
-    key = _twin_keys(faces, width)
-    order = np.argsort(key)
-    key = key[order]
-    new = np.ones(len(key), dtype=bool)
-    np.not_equal(key[1:] >> 1, key[:-1] >> 1, out=new[1:])
-    # A run of keys of one triangle holds both windings when its first and last bits differ.
-    starts = np.flatnonzero(new)
-    del new
-    ends = np.r_[starts[1:], len(key)] - 1
-    both = ((key[starts] & 1) == 0) & ((key[ends] & 1) == 1)
-    twinned = np.empty(len(faces), dtype=bool)
-    twinned[order] = np.repeat(both, ends - starts + 1)
-    return twinned
+    if width * width * 2 < KEY_LIMIT:
+        return _twinned_wide(faces, width)
+    return _twinned_lexsorted(faces, _even(faces))
 
 
 def _even(faces: IndexArray) -> BoolArray:
@@ -795,31 +777,15 @@ def _even(faces: IndexArray) -> BoolArray:
     return even
 
 
-def _twin_keys(faces: IndexArray, width: int) -> IndexArray:
-    """(m,) int64, one key a face: its sorted points, then whether it is wound as they are."""
-    a, b, c = faces.T
-    low = np.minimum(np.minimum(a, b), c)
-    high = np.maximum(np.maximum(a, b), c)
-    key = a + b
-    key += c
-    key -= low
-    key -= high  # the middle point
-    key += low * width
-    del low
-    key *= width
-    key += high
-    del high
-    key <<= 1
-    key |= _even(faces)
-    keys: IndexArray = key
-    return keys
+#: Groups of :func:`_twin_groups` up to this many faces compare each pair, in a buffer made once.
+_FEW_TWINS = 32
 
 
 def _twinned_wide(faces: IndexArray, width: int) -> BoolArray:
-    """:func:`_twinned` where the points are too many to pack a face into one key (the Lucy
-    size: 7M points), but two of them fit: the faces grouped by their smallest point with a
-    counting sort, then compared within each group (a face's group holds two faces on average;
-    a lexsort of the rows took 10.9 s on 14M faces)."""
+    """:func:`_twinned` where two points fit one key: the faces grouped by their smallest
+    point with a counting sort, then compared within each group (a face's group holds two
+    faces on average). At the Lucy size a lexsort of the rows took 10.9 s on 14M faces; at
+    the Dragon size a sort of one key a face took 57 ms (147 ms with a twin) against 49."""
     starts = np.zeros(width + 1, dtype=np.intp)
     order: IndexArray = np.empty(len(faces), dtype=np.int32 if len(faces) < 2**31 else np.intp)
     twinned = np.zeros(len(faces), dtype=bool)
@@ -845,12 +811,13 @@ def _twin_groups(
         order[starts[low]] = face
         starts[low] += 1
     first = 0
+    few = np.empty(_FEW_TWINS, dtype=np.int64)  # the keys of a small group: no allocation each
     for point in range(width):
         last = starts[point]
         if last - first > 1:
             # Each face of the group as (middle * width + highest) * 2 + even, even meaning
             # wound as its sorted points: twins share all but the last bit.
-            keys = np.empty(last - first, dtype=np.int64)
+            keys = few if last - first <= _FEW_TWINS else np.empty(last - first, dtype=np.int64)
             for row in range(first, last):
                 a, b, c = faces[order[row], 0], faces[order[row], 1], faces[order[row], 2]
                 low, high = min(a, min(b, c)), max(a, max(b, c))
@@ -859,7 +826,7 @@ def _twin_groups(
                 keys[row - first] = ((a + b + c - low - high) * width + high) * 2 + (
                     1 if even else 0
                 )
-            if last - first <= 32:
+            if last - first <= _FEW_TWINS:
                 for i in range(last - first):
                     for j in range(i + 1, last - first):
                         if keys[i] ^ keys[j] == 1:

@@ -21,8 +21,12 @@ is always given the same normal vector.
 
 from __future__ import annotations
 
-from collections import Counter
-from collections.abc import Iterator, Mapping
+import os
+import threading
+from collections import Counter, deque
+from collections.abc import Callable, Iterator, Mapping
+from concurrent.futures import Future, ThreadPoolExecutor
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
@@ -33,7 +37,7 @@ from mesh_normal.files.errors import MeshFileError
 from mesh_normal.files.formats import MAKER
 from mesh_normal.files.loaded import LoadedMesh, build
 from mesh_normal.files.polygons import triangulate
-from mesh_normal.files.text_kernels import ObjScanner
+from mesh_normal.files.text_kernels import ObjChunk, ObjScanner
 
 _IGNORED = {
     "s",
@@ -214,23 +218,22 @@ def _scan(data: bytes) -> _Statements:
     ignored: Counter[str] = Counter()
     chunks: list[_Chunk] = []
     offset = vertices = normals = 0
-    scanner = ObjScanner() if len(data) >= FAST_BYTES else None
-    for start, end in _text_chunks(data):
-        chunk = None
-        if scanner is not None:
-            chunk = _scan_fast(
-                scanner, data, start, end, offset, vertices, normals, groups, other, ignored
+    spans = list(_text_chunks(data))
+    with _prescans(data, spans) as scans:
+        for (start, end), read in zip(spans, scans, strict=True):
+            chunk = None
+            if read is not None:
+                chunk = _scan_fast(read, offset, vertices, normals, groups, other, ignored)
+            if chunk is None:
+                text = data[start:end].decode("latin-1")
+                chunk = _scan_chunk(text, offset, vertices, normals, groups, other, ignored)
+                del text
+            offset, vertices, normals = (
+                chunk.lines_after,
+                vertices + len(chunk.vertices),
+                normals + len(chunk.normals),
             )
-        if chunk is None:
-            text = data[start:end].decode("latin-1")
-            chunk = _scan_chunk(text, offset, vertices, normals, groups, other, ignored)
-            del text
-        offset, vertices, normals = (
-            chunk.lines_after,
-            vertices + len(chunk.vertices),
-            normals + len(chunk.normals),
-        )
-        chunks.append(chunk)
+            chunks.append(chunk)
     faced = [chunk for chunk in chunks if len(chunk.counts)]
     colored = [chunk.colors for chunk in chunks if len(chunk.vertices)]
     normal_fields = [chunk.normal_fields for chunk in faced]
@@ -357,11 +360,66 @@ def _split_kind(line: str, other: Counter[str], unkept: Counter[str]) -> int:
     return kind
 
 
+#: The most threads that scan an OBJ file's chunks at once (:func:`_prescans`).
+SCAN_THREADS = 4
+
+
+@contextmanager
+def _prescans(data: bytes, spans: list[tuple[int, int]]) -> Iterator[Iterator[ObjChunk | None]]:
+    """What the compiled kernel reads in each chunk, in order (``None`` for a chunk it
+    declines, or for every chunk of a file under ``FAST_BYTES``: those are read in Python).
+
+    The chunks are scanned ahead on up to ``SCAN_THREADS`` threads, one scanner each (the
+    kernel releases the GIL), while the caller takes each result in turn: a chunk depends on
+    the ones before only for its line and vertex numbers, which the caller adds. Measured on a
+    31 MB OBJ on two cores: 0.11 s against 0.17 s on one. At most twice as many chunks as
+    threads are scanned ahead of the caller, so the scans' results cost no more memory than
+    the chunks they replace."""
+    if len(data) < FAST_BYTES:
+        yield iter([None] * len(spans))
+        return
+    threads = max(1, min(SCAN_THREADS, len(spans), len(os.sched_getaffinity(0))))
+    local = threading.local()
+
+    def scan(span: tuple[int, int]) -> ObjChunk | None:
+        scanner = getattr(local, "scanner", None)
+        if scanner is None:
+            scanner = local.scanner = ObjScanner()
+        return _prescan(scanner, data, *span)
+
+    if threads == 1:
+        yield map(scan, spans)
+        return
+    with ThreadPoolExecutor(threads, thread_name_prefix="mesh-normal-obj") as pool:
+        yield _ahead(pool, scan, spans, 2 * threads)
+
+
+def _prescan(scanner: ObjScanner, data: bytes, start: int, end: int) -> ObjChunk | None:
+    """What the compiled kernel reads in ``data[start:end]``, or ``None`` where it declines
+    (or the chunk holds a continued line, which the Python path joins)."""
+    if data.find(b"\\", start, end) >= 0:
+        return None
+    return scanner.scan(data, start, end)
+
+
+def _ahead(
+    pool: ThreadPoolExecutor,
+    scan: Callable[[tuple[int, int]], ObjChunk | None],
+    spans: list[tuple[int, int]],
+    depth: int,
+) -> Iterator[ObjChunk | None]:
+    """The results of ``scan`` over ``spans`` in order, with ``depth`` of them running ahead."""
+    waiting: deque[Future[ObjChunk | None]] = deque()
+    for span in spans:
+        waiting.append(pool.submit(scan, span))
+        if len(waiting) >= depth:
+            yield waiting.popleft().result()
+    while waiting:
+        yield waiting.popleft().result()
+
+
 def _scan_fast(
-    scanner: ObjScanner,
-    data: bytes,
-    start: int,
-    end: int,
+    read: ObjChunk,
     offset: int,
     vertex_total: int,
     normal_total: int,
@@ -369,16 +427,12 @@ def _scan_fast(
     other: Counter[str],
     ignored: Counter[str],
 ) -> _Chunk | None:
-    """What :func:`_scan_chunk` finds in ``data[start:end]``, read by the compiled kernel
+    """What :func:`_scan_chunk` finds in a chunk, read by the compiled kernel
     (:func:`~mesh_normal.files.text_kernels.scan_obj`); ``None`` (nothing counted, nothing
     changed) where it cannot certify the chunk: a line continued, a number or corner it does
     not read exactly as the Python path does, an indented ``v``, a character that Python
-    splits lines or words at and the kernel does not."""
-    if data.find(b"\\", start, end) >= 0:
-        return None
-    read = scanner.scan(data, start, end)
-    if read is None:
-        return None
+    splits lines or words at and the kernel does not. ``read`` is what the kernel read there
+    (see :func:`_prescans`)."""
     kinds, vertices, colors, normals, vertex_fields, normal_fields, counts, texts = read
     chunk_other: Counter[str] = Counter()
     chunk_ignored: Counter[str] = Counter()

@@ -109,7 +109,7 @@ def integer(data: NDArray[np.uint8], start: int, end: int) -> tuple[int, int]:
     return i, -value if negative else value
 
 
-@kernel()
+@kernel(nogil=True)
 def scan_obj(
     data: NDArray[np.uint8],
     kinds: NDArray[np.int8],
