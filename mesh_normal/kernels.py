@@ -275,7 +275,7 @@ def is_cached(dispatcher: Any) -> bool:
 AHEAD = 16
 
 
-def prefetch(array: FloatArray, row: int) -> None:
+def prefetch(array: np.ndarray, row: int) -> None:
     """Ask the CPU to bring row ``row`` of a 2-D array into its cache, for a write. The
     stand-in for a kernel's Python source does nothing (a hint, not a step: the bits are the
     same); :func:`load_numba` puts :func:`_prefetch_intrinsic`'s in its place."""

@@ -38,6 +38,7 @@ def test_hash_collisions_are_split_exactly(
     monkeypatch: pytest.MonkeyPatch, rows: int, dtype: type, hash_bits: int, most: int
 ) -> None:
     index_bits = (rows - 1).bit_length()
+    monkeypatch.setattr(weld_module, "_MOST_PROBES", -1)  # the table gives way to the sort
     monkeypatch.setattr(weld_module, "_HASH_MASK", (1 << index_bits + hash_bits) - 1)
     monkeypatch.setattr(weld_module, "_MOST_DISTINCT", most)
     corners = np.random.default_rng(5).integers(0, 4, (rows, 3)).astype(dtype)
@@ -48,9 +49,32 @@ def test_hash_collisions_are_split_exactly(
     np.testing.assert_array_equal(index, expected_index)
 
 
+@pytest.mark.parametrize("rows", [500, 20_000])  # the Python source, and compiled
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+@pytest.mark.parametrize(("slot_bits", "probes"), [(2, 200), (0, 200), (0, 8)])
+def test_points_that_share_slots_are_told_apart(
+    monkeypatch: pytest.MonkeyPatch, rows: int, dtype: type, slot_bits: int, probes: int
+) -> None:
+    # 64 points into 4 slots or one: found by their bits along the run of slots; a run longer
+    # than the probes allowed gives the table up for the sort, with the same answer.
+    calls = []
+    sort_way = weld_module._hash_keys
+    monkeypatch.setattr(weld_module, "_SLOT_MASK", (1 << slot_bits) - 1)
+    monkeypatch.setattr(weld_module, "_MOST_PROBES", probes)
+    monkeypatch.setattr(weld_module, "_hash_keys", lambda *args: calls.append(1) or sort_way(*args))
+    corners = np.random.default_rng(6).integers(0, 4, (rows, 3)).astype(dtype)
+    corners[::5] *= -1.0  # -0.0 among them
+    vertices, index = weld(corners)
+    expected_vertices, expected_index = reference(corners)
+    np.testing.assert_array_equal(vertices, expected_vertices)
+    np.testing.assert_array_equal(index, expected_index)
+    assert calls == ([1] if probes < 64 else [])  # 64 points: 8 probes are too few
+
+
 def test_the_numpy_way_splits_its_own_collisions(monkeypatch: pytest.MonkeyPatch) -> None:
     calls = []
     numpy_way = weld_module._weld_sorted
+    monkeypatch.setattr(weld_module, "_MOST_PROBES", -1)  # the table gives way to the sort
     monkeypatch.setattr(weld_module, "_HASH_MASK", 0)  # one group of every point: too many
     monkeypatch.setattr(
         weld_module, "_weld_sorted", lambda *args: calls.append(1) or numpy_way(*args)
