@@ -202,10 +202,30 @@ def test_the_split_writes_every_node_it_makes(python: bool) -> None:
     for fill in (-1, 12345):
         children = np.full((2 * len(codes), 2), fill, dtype=np.intp)
         spans = np.full((2 * len(codes), 2), fill, dtype=np.intp)
-        used = run(codes, children, spans)
+        used = run(codes, visibility._LEAF, children, spans)
         made.append((used, children[:used].copy(), spans[:used].copy()))
     assert made[0][0] == made[1][0] > 1
     assert np.array_equal(made[0][1], made[1][1]) and np.array_equal(made[0][2], made[1][2])
     leaves = made[0][1][:, 0] == -1
     assert np.all((made[0][2][leaves, 1] - made[0][2][leaves, 0]) <= visibility._LEAF)
     assert np.all(made[0][1][~leaves] > 0)
+
+
+@pytest.mark.parametrize("name", ["teapot.stl", "soup.stl", "scan fragments"])
+def test_any_leaf_size_gives_the_same_scores(monkeypatch: pytest.MonkeyPatch, name: str) -> None:
+    # A ray meets the same faces whatever the hierarchy's leaves hold: leaf_size only trades
+    # the time to build it against the time to cast through it.
+    vertices, faces = scan_fragments() if name == "scan fragments" else load(name)
+    found = {}
+    for leaf in (1, visibility._LEAF, 16, visibility._WIDEST_LEAF, 4096):
+        monkeypatch.setattr(visibility, "leaf_size", lambda *_, size=leaf: size)
+        found[leaf] = scores(vertices, faces)
+    assert not np.isnan(found[visibility._LEAF]).all()
+    for score in found.values():
+        np.testing.assert_array_equal(score, found[visibility._LEAF])
+
+
+def test_the_leaves_grow_where_the_rays_are_few() -> None:
+    assert visibility.leaf_size(1000, 2**19) == visibility._LEAF
+    assert visibility.leaf_size(871_414, 1024) == visibility._WIDEST_LEAF
+    assert visibility._LEAF < visibility.leaf_size(871_414, 2**12) < visibility._WIDEST_LEAF
