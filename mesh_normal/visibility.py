@@ -210,9 +210,11 @@ def _hierarchy(
     centroids; per node its box, children (-1 for a leaf) and span of that order; and the
     faces' corners in that order (see :func:`_corners`).
 
-    About 140 bytes a face are kept (the corners 72, the order 8, the nodes about 0.7 a face
-    at 80 bytes each: a leaf holds up to ``leaf`` faces, 4 here), and 70 more for a moment while the
-    nodes are made (measured on 328k faces: 149 bytes a face kept, with the vertices).
+    With leaves of 4 faces, about 140 bytes a face are kept (the corners 72, the order 8, the
+    nodes about 0.7 a face at 80 bytes each), and 70 more for a moment while the nodes are
+    made (measured on 328k faces: 149 bytes a face kept, with the vertices). With larger
+    leaves (few rays), the order and a few bytes a face for the nodes: the rays read the
+    corners from the points.
     """
     announce_compiling()
     codes, order = _morton_order(unit, faces)
@@ -224,10 +226,16 @@ def _hierarchy(
     used = _split(codes, leaf, children, spans)
     del codes
     children, spans = children[:used].copy(), spans[:used].copy()
-    corners = _corners(unit, faces, order)
+    # The corners in the hierarchy's order where many rays read them; where they are few,
+    # read from the points as they are needed (72 bytes a face of fresh memory fewer).
+    corners = _corners(unit, faces, order) if leaf <= _LEAF else _NO_CORNERS
     boxes = np.empty((used, 6))
-    _boxes(corners, children, spans, boxes, *workers())
+    _boxes(unit, faces, order, corners, children, spans, boxes, *workers())
     return order, boxes, children, spans, corners
+
+
+#: What :func:`_hierarchy` gives for the corners where they are read from the points.
+_NO_CORNERS = np.empty((0, 9))
 
 
 def _morton_order(unit: FloatArray, faces: IndexArray) -> tuple[IndexArray, IndexArray]:
@@ -379,12 +387,14 @@ def _split(codes: IndexArray, leaf: int, children: IndexArray, spans: IndexArray
 
 @kernel(parallel=True, python=PYTHON_RAYS)
 def _boxes(
-    corners: FloatArray, children: IndexArray, spans: IndexArray, boxes: FloatArray,
-    counter: IndexArray, workers: int,
+    unit: FloatArray, faces: IndexArray, order: IndexArray, corners: FloatArray,
+    children: IndexArray, spans: IndexArray, boxes: FloatArray, counter: IndexArray,
+    workers: int,
 ) -> None:  # fmt: skip
     """Each node's box, a little larger than its faces' (by 2**-26, more than an unsure hit
     can lie outside a face: 2 ``_UNSURE_BAND`` times its longest edge, at most 4): the
-    leaves' on every core, then the others from the leaves up."""
+    leaves' on every core, then the others from the leaves up. The corners are read from
+    ``corners`` (in the hierarchy's order), or from ``unit`` where it is empty."""
     pad = 2.0**-26
     nodes = len(children)
     blocks = (nodes + BLOCK - 1) // BLOCK
@@ -399,7 +409,11 @@ def _boxes(
                 for k in range(spans[node, 0], spans[node, 1]):
                     for corner in range(3):
                         for axis in range(3):
-                            value = corners[k, 3 * corner + axis]
+                            value = (
+                                corners[k, 3 * corner + axis]
+                                if len(corners)
+                                else unit[faces[order[k], corner], axis]
+                            )
                             boxes[node, axis] = min(boxes[node, axis], value - pad)
                             boxes[node, axis + 3] = max(boxes[node, axis + 3], value + pad)
             block = claim(counter)
@@ -437,6 +451,8 @@ def _entry(
 
 @kernel(python=PYTHON_RAYS)
 def _blocked(
+    unit: FloatArray,
+    faces: IndexArray,
     corners: FloatArray,
     order: IndexArray,
     boxes: FloatArray,
@@ -460,6 +476,7 @@ def _blocked(
     if math.isinf(_entry(boxes, 0, origin, inverse, t_min)):
         return _CLEAR
     unsure = False
+    gathered = len(corners) > 0
     band = _UNSURE_BAND
     top = 0
     stack[0] = 0
@@ -484,9 +501,17 @@ def _blocked(
         for k in range(spans[node, 0], spans[node, 1]):
             if order[k] == own:
                 continue
-            ax, ay, az = corners[k, 0], corners[k, 1], corners[k, 2]
-            e1x, e1y, e1z = corners[k, 3] - ax, corners[k, 4] - ay, corners[k, 5] - az
-            e2x, e2y, e2z = corners[k, 6] - ax, corners[k, 7] - ay, corners[k, 8] - az
+            if gathered:
+                ax, ay, az = corners[k, 0], corners[k, 1], corners[k, 2]
+                bx, by, bz = corners[k, 3], corners[k, 4], corners[k, 5]
+                cx, cy, cz = corners[k, 6], corners[k, 7], corners[k, 8]
+            else:  # the same values, from the points
+                a, b, c = faces[order[k], 0], faces[order[k], 1], faces[order[k], 2]
+                ax, ay, az = unit[a, 0], unit[a, 1], unit[a, 2]
+                bx, by, bz = unit[b, 0], unit[b, 1], unit[b, 2]
+                cx, cy, cz = unit[c, 0], unit[c, 1], unit[c, 2]
+            e1x, e1y, e1z = bx - ax, by - ay, bz - az
+            e2x, e2y, e2z = cx - ax, cy - ay, cz - az
             px, py, pz = dy * e2z - dz * e2y, dz * e2x - dx * e2z, dx * e2y - dy * e2x
             det = e1x * px + e1y * py + e1z * pz
             # det = -d . (e1 x e2): the sine of the angle between the ray and the face's plane,
@@ -575,8 +600,9 @@ def _cast(
                 direction[1] = a * uy + b * wy + c * my
                 direction[2] = a * uz + b * wz + c * mz
                 met = _blocked(
-                    corners, order, boxes, children, spans, face, origin, direction, t_min, stack
-                )
+                    unit, faces, corners, order, boxes, children, spans, face, origin,
+                    direction, t_min, stack,
+                )  # fmt: skip
                 if met == _CLEAR:
                     free += 1
                 elif met == _UNSURE:
