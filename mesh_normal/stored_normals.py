@@ -166,12 +166,17 @@ def best_match(
 ) -> Angles | None:
     """The candidate that matches best (see the module's rule), computing no more than needed."""
     best: Angles | None = None
-    best_rank = (1, math.inf)  # worse than any candidate's
+    best_rank: tuple[int, float] | None = None  # taken once a second candidate comes
     for candidate in candidates:
         angles = angles_between(unit, usable, candidate)
-        rank = angles.rank()
-        if best is None or rank < best_rank:
-            best, best_rank = angles, rank
+        if best is None:
+            best = angles
+        else:
+            if best_rank is None:
+                best_rank = best.rank()
+            rank = angles.rank()  # a median each: not taken for a lone candidate (face normals)
+            if rank < best_rank:
+                best, best_rank = angles, rank
         if best.exact():
             break
     return best
