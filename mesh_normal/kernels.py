@@ -276,15 +276,15 @@ AHEAD = 16
 
 
 def prefetch(array: np.ndarray, row: int) -> None:
-    """Ask the CPU to bring row ``row`` of a 2-D array into its cache, for a write. The
+    """Ask the CPU to bring row ``row`` of a 1-D or 2-D array into its cache, for a write. The
     stand-in for a kernel's Python source does nothing (a hint, not a step: the bits are the
     same); :func:`load_numba` puts :func:`_prefetch_intrinsic`'s in its place."""
 
 
 def _prefetch_intrinsic() -> Any:
     """numba's ``prefetch``: LLVM's ``llvm.prefetch`` (write, keep in every cache level) of the
-    address of ``array[row, 0]``. An address past the array is harmless: a prefetch never
-    faults."""
+    address of ``array[row]`` or ``array[row, 0]``. An address past the array is harmless: a
+    prefetch never faults."""
     from llvmlite import ir  # type: ignore[import-untyped]
     from numba import types
     from numba.core import cgutils
@@ -292,7 +292,7 @@ def _prefetch_intrinsic() -> Any:
 
     @intrinsic
     def _prefetch(typingctx: Any, array: Any, row: Any) -> Any:  # noqa: ARG001
-        if not (isinstance(array, types.Array) and array.ndim == 2):
+        if not (isinstance(array, types.Array) and array.ndim in (1, 2)):
             return None
         if not isinstance(row, types.Integer):
             return None
@@ -301,9 +301,9 @@ def _prefetch_intrinsic() -> Any:
             array_type, row_type = signature.args
             made = context.make_array(array_type)(context, builder, arguments[0])
             index = context.cast(builder, arguments[1], row_type, types.intp)
-            zero = context.get_constant(types.intp, 0)
+            indices = [index] + [context.get_constant(types.intp, 0)] * (array_type.ndim - 1)
             address = cgutils.get_item_pointer(  # type: ignore[no-untyped-call]
-                context, builder, array_type, made, [index, zero], wraparound=False
+                context, builder, array_type, made, indices, wraparound=False
             )
             byte = ir.IntType(8).as_pointer()
             word = ir.IntType(32)

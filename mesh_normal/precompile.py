@@ -24,7 +24,7 @@ from mesh_normal.corners import corner_normals, corner_weights
 from mesh_normal.faces import face_geometry, face_normals
 from mesh_normal.files.polygons import triangulate
 from mesh_normal.files.text_kernels import ObjScanner, binary_items
-from mesh_normal.files.weld import weld
+from mesh_normal.files.weld import weld, weld_by_sort
 from mesh_normal.kernels import load_numba
 from mesh_normal.orientation import _twinned_wide, orient
 from mesh_normal.points import point_normals
@@ -73,7 +73,9 @@ def compile_kernels() -> None:
     for frozen in (False, True):  # a report's bounds, of the vertices as read
         column_bounds(_kept(points, frozen))
     for dtype in (np.float32, np.float64):  # binary STL corners, and text ones
-        weld(np.array([[0.0, 0, 0], [1, 0, 0], [0, 0, 0]], dtype))
+        corners = np.array([[0.0, 0, 0], [1, 0, 0], [0, 0, 0]], dtype)
+        weld(corners)
+        weld_by_sort(corners)  # where a file crowds the table's slots
     binary_items(
         np.frombuffer(bytes(13), np.uint8), 1, 13, 4, True, True, np.empty((1, 3), np.int64)
     )

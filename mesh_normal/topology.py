@@ -47,7 +47,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from mesh_normal.checks import CheckedMesh, check_faces, read_only
 from mesh_normal.faces import FaceGeometry
-from mesh_normal.kernels import announce_compiling, kernel
+from mesh_normal.kernels import AHEAD, announce_compiling, kernel, prefetch
 from mesh_normal.types import BoolArray, FloatArray, IndexArray, ParityArray
 
 #: Sort keys (edge * 3m + half-edge, vertex * 3m + corner) must stay below this to fit int64
@@ -460,6 +460,10 @@ def _union_find(
     for node in range(count):
         parent[node], relation[node] = node, 0
     for edge in range(len(one)):
+        ahead = edge + AHEAD
+        if ahead < len(one):  # the nodes of a later edge: far apart in a large mesh
+            prefetch(parent, one[ahead])
+            prefetch(parent, two[ahead])
         a, a_parity = _find(parent, relation, one[edge])
         b, b_parity = _find(parent, relation, two[edge])
         if a == b:

@@ -217,6 +217,14 @@ def _hierarchy(
     corners from the points.
     """
     announce_compiling()
+    with PARALLEL_KERNELS:  # the Morton codes, the corners and the boxes run on every core
+        return _built(unit, faces, leaf)
+
+
+def _built(
+    unit: FloatArray, faces: IndexArray, leaf: int
+) -> tuple[IndexArray, FloatArray, IndexArray, IndexArray, FloatArray]:
+    """:func:`_hierarchy`, with ``PARALLEL_KERNELS`` held."""
     codes, order = _morton_order(unit, faces)
     nodes = max(1, 2 * len(faces))  # at least one face per leaf: fewer than 2 m nodes
     # Room for every node there can be, written by _split only as far as it makes them (at

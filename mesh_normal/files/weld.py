@@ -45,17 +45,24 @@ def weld(corners: NDArray[np.floating]) -> tuple[NDArray[np.float64], NDArray[np
     if count < 2**31:
         # The coordinates' bits, as 4 or 8 byte integers (one kernel for each); the table
         # takes -0.0 as 0.0 itself, without a copy of the corners.
-        bits: IndexArray = points.view(np.int32 if points.itemsize == 4 else np.int64)
+        words: IndexArray = points.view(np.int32 if points.itemsize == 4 else np.int64)
         is_leader = np.zeros(count, dtype=bool)
         index = np.empty(count, dtype=np.intp)
-        found = _table_weld(bits, _SLOT_MASK, _MOST_PROBES, is_leader, index)
+        found = _table_weld(words, _SLOT_MASK, _MOST_PROBES, is_leader, index)
         if found >= 0:
             vertices = np.empty((found, 3))
             _leaders(points, is_leader, vertices)
             return vertices, index
         del is_leader, index
+    return weld_by_sort(points)
+
+
+def weld_by_sort(points: NDArray[np.floating]) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
+    """:func:`weld` of C-contiguous ``points`` (at least one row) by the sort of hashes, where
+    the table gives way (and in ``compile_kernels``, whose meshes never need it)."""
+    count = len(points)
     points = points + points.dtype.type(0)  # -0.0 + 0.0 is +0.0: one bit pattern for zero
-    bits = points.view(np.int32 if points.itemsize == 4 else np.int64)
+    bits: IndexArray = points.view(np.int32 if points.itemsize == 4 else np.int64)
     index_bits = max(1, (count - 1).bit_length())
     keys = np.empty(count, dtype=np.int64)
     _hash_keys(bits, index_bits, _HASH_MASK, keys)
