@@ -101,13 +101,21 @@ def face_weights(code: int, edges: Edges, length: float) -> Vector:
     return length / (s2 * s0), length / (s0 * s1), length / (s1 * s2)
 
 
-#: Faces per chunk of the sums. Each chunk's terms are taken on every core (the products,
-#: the weights: most of the arithmetic), then one thread adds them into the vertices in face
-#: order, so each vertex's sum is added in the same order on any number of cores and has the
-#: same bits. A chunk is the whole of any mesh up to 4 million faces: measured at the Dragon
-#: size, chunks of 16 to 262 thousand faces took 1.5 to 2 times as long as one (the terms and
-#: the sums evict each other's rows). The terms are 32 or 48 bytes a face, 192 MiB at most.
+#: Faces per chunk of the sums, at most. Each chunk's terms are taken on every core (the
+#: products, the weights: most of the arithmetic), then one thread adds them into the vertices
+#: in face order, so each vertex's sum is added in the same order on any number of cores and
+#: has the same bits. Fewer, larger chunks are faster (the terms and the sums evict each
+#: other's rows from the cache between chunks: at the Dragon size, one chunk 25 ms, two 27,
+#: four 32), but a chunk's terms (32 or 48 bytes a face) are kept within 1.5 times the size of
+#: the normals returned (24 bytes a vertex), so that the extra memory stays under twice it.
 CHUNK = 1 << 22
+
+
+def chunk_faces(faces: int, vertices: int, columns: int) -> int:
+    """The faces per chunk of :func:`smooth` for terms of ``columns`` doubles (see
+    :data:`CHUNK`): at least a block, at most every face."""
+    within = 36 * vertices // (8 * columns)  # 1.5 times the normals' 24 bytes a vertex
+    return min(faces, max(BLOCK, min(CHUNK, within)))
 
 
 @kernel(parallel=True)
@@ -283,10 +291,12 @@ def smooth(geometry: FaceGeometry | CheckedMesh, weighting: str) -> tuple[FloatA
         crosses, lengths, degenerate = _NO_CROSSES, _NO_LENGTHS, _NO_FLAGS
     count, faces = len(mesh.vertices), mesh.faces
     sums = np.zeros((count, 4))
-    terms = np.empty((min(CHUNK, len(faces)), 6 if code >= _ANGLE else 4))
+    columns = 6 if code >= _ANGLE else 4
+    chunk = chunk_faces(len(faces), count, columns)
+    terms = np.empty((chunk, columns))
     announce_compiling()
     with PARALLEL_KERNELS:
-        for first in range(0, len(faces), CHUNK):
+        for first in range(0, len(faces), chunk):
             _face_terms_kernel(
                 code, mesh.points, mesh.factor, faces, crosses, lengths, degenerate, fused,
                 first, terms, *workers(),

@@ -209,10 +209,20 @@ def test_the_vertex_sums_do_not_depend_on_the_chunk_size(
 
     points, indices = soup(seed=3)
     expected = {w: vertex_normals(points, indices, weighting=w) for w in WEIGHTINGS}
-    monkeypatch.setattr(vertices_module, "CHUNK", chunk)
+    monkeypatch.setattr(vertices_module, "chunk_faces", lambda *_: chunk)
     geometry = face_geometry(points, indices)
     for weighting, reference in expected.items():
         for source in ((points, indices), (geometry, None)):
             result = vertex_normals(*source, weighting=weighting)  # type: ignore[arg-type]
             assert result.normals.tobytes() == reference.normals.tobytes()
             assert result.missing.tobytes() == reference.missing.tobytes()
+
+
+def test_a_chunk_s_terms_stay_within_one_and_a_half_times_the_normals() -> None:
+    from mesh_normal.vertices import CHUNK, chunk_faces
+
+    assert chunk_faces(871_414, 436_260, 4) == 490_792  # two chunks at the Dragon size
+    assert chunk_faces(871_414, 436_260, 6) == 327_195  # three
+    assert chunk_faces(100, 60, 4) == 100  # never more than the faces
+    assert chunk_faces(5000, 10, 6) == BLOCK  # nor fewer than a block
+    assert chunk_faces(28_000_000, 14_000_000, 4) == CHUNK
