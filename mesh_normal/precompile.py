@@ -23,6 +23,7 @@ from mesh_normal.bounds import column_bounds
 from mesh_normal.corners import corner_normals, corner_weights
 from mesh_normal.faces import face_geometry, face_normals
 from mesh_normal.files.polygons import triangulate
+from mesh_normal.files.stl import RECORD as STL_RECORD
 from mesh_normal.files.text_kernels import ObjScanner, binary_items
 from mesh_normal.files.weld import weld, weld_by_sort
 from mesh_normal.kernels import load_numba
@@ -76,6 +77,8 @@ def compile_kernels() -> None:
         corners = np.array([[0.0, 0, 0], [1, 0, 0], [0, 0, 0]], dtype)
         weld(corners)
         weld_by_sort(corners)  # where a file crowds the table's slots
+    # A binary STL's corners, read where they lie in its records (a read-only view).
+    weld(np.frombuffer(bytes(2 * STL_RECORD.itemsize), STL_RECORD)["corners"])
     binary_items(
         np.frombuffer(bytes(13), np.uint8), 1, 13, 4, True, True, np.empty((1, 3), np.int64)
     )

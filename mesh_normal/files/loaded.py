@@ -171,10 +171,11 @@ def _nth(kind: str) -> Describe:
 
 
 def first_bad_vertex(points: NDArray[np.floating]) -> int | None:
-    """The index of the first row with a NaN or infinite coordinate, or ``None``."""
+    """The index of the first row (of 3 coordinates, in order) with a NaN or infinite
+    coordinate, or ``None``. ``points`` is (k, 3), or (f, c, 3) (its f * c rows in order)."""
     if not points.size or (np.isfinite(points.min()) and np.isfinite(points.max())):
         return None  # NaN propagates through min and max: two fast passes settle most files
-    finite = np.isfinite(points).all(axis=1)
+    finite = np.isfinite(points).all(axis=-1).ravel()
     return None if finite.all() else int(np.argmin(finite))
 
 

@@ -98,7 +98,8 @@ def _read_binary(data: bytes) -> LoadedMesh:
             f"last of the {count:,} triangles the header announces."
         )
     records = np.frombuffer(data, RECORD, count, HEADER)
-    return _welded(records["corners"].reshape(-1, 3), records["normal"], notes)
+    # The corners where they lie in the 50-byte records, (count, 3, 3): no copy for the weld.
+    return _welded(records["corners"], records["normal"], notes)
 
 
 def _read_ascii(data: bytes) -> LoadedMesh:
@@ -261,7 +262,7 @@ def _welded(
         )
     vertices, index = weld(corners)
     notes.append(
-        f"Welded {len(corners):,} STL corners into {len(vertices):,} vertices "
+        f"Welded {len(index):,} STL corners into {len(vertices):,} vertices "
         "(identical coordinates merged, in order of first appearance)."
     )
     face_normals: NDArray[np.floating] | None = normals

@@ -27,34 +27,35 @@ def weld(corners: NDArray[np.floating]) -> tuple[NDArray[np.float64], NDArray[np
 
     Parameters
     ----------
-    corners : (k, 3) float32 or float64
-        Finite points (NaN would compare unequal to itself).
+    corners : (k, 3) or (f, c, 3) float32 or float64
+        Finite points (NaN would compare unequal to itself), in any layout: a binary STL's
+        (f, 3, 3) corners are read where they lie in its 50-byte records, without a copy.
 
     Returns
     -------
     vertices : (n, 3) float64
         The distinct points, in order of first appearance.
-    index : (k,) intp
-        ``vertices[index]`` equals ``corners`` (as float64).
+    index : (k,) or (f * c,) intp
+        ``vertices[index]`` equals the corners' rows in order (as float64).
     """
-    points = np.ascontiguousarray(corners)
-    count = len(points)
+    grid = corners if corners.ndim == 3 else corners.reshape(-1, 1, 3)
+    count = grid.shape[0] * grid.shape[1]
     if count == 0:
         return np.empty((0, 3)), np.empty(0, dtype=np.intp)
     announce_compiling()
     if count < 2**31:
         # The coordinates' bits, as 4 or 8 byte integers (one kernel for each); the table
         # takes -0.0 as 0.0 itself, without a copy of the corners.
-        words: IndexArray = points.view(np.int32 if points.itemsize == 4 else np.int64)
+        words: IndexArray = grid.view(np.int32 if grid.itemsize == 4 else np.int64)
         is_leader = np.zeros(count, dtype=bool)
         index = np.empty(count, dtype=np.intp)
         found = _table_weld(words, _SLOT_MASK, _MOST_PROBES, is_leader, index)
         if found >= 0:
             vertices = np.empty((found, 3))
-            _leaders(points, is_leader, vertices)
+            _leaders(grid, is_leader, vertices)
             return vertices, index
         del is_leader, index
-    return weld_by_sort(points)
+    return weld_by_sort(np.ascontiguousarray(grid.reshape(count, 3)))
 
 
 def weld_by_sort(points: NDArray[np.floating]) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
@@ -130,10 +131,10 @@ _LOWEST_32, _LOWEST_64 = -(2**31), -(2**63)
 
 
 @kernel(python=True)
-def _row_words(bits: IndexArray, row: int) -> tuple[int, int, int]:
-    """A row's three integers, with -0.0's bits (the lowest integer) as 0.0's."""
+def _row_words(bits: IndexArray, face: int, corner: int) -> tuple[int, int, int]:
+    """A corner's three integers, with -0.0's bits (the lowest integer) as 0.0's."""
     lowest = _LOWEST_32 if bits.itemsize == 4 else _LOWEST_64
-    x, y, z = int(bits[row, 0]), int(bits[row, 1]), int(bits[row, 2])
+    x, y, z = int(bits[face, corner, 0]), int(bits[face, corner, 1]), int(bits[face, corner, 2])
     return (0 if x == lowest else x), (0 if y == lowest else y), (0 if z == lowest else z)
 
 
@@ -153,10 +154,11 @@ def _words_hash(x: int, y: int, z: int, wide: bool) -> int:
 def _table_weld(
     bits: IndexArray, mask: int, most: int, is_leader: BoolArray, index: IndexArray
 ) -> int:
-    """Number each row's point by first appearance, through a hash table of the points: mark
-    each point's first row in ``is_leader`` and give every row its point's number in
-    ``index``; the number of points, or -1 (and the arrays half written) when a row had to
-    look more than ``most`` slots on. -0.0 counts as 0.0 (see :func:`_row_words`).
+    """Number each row's point by first appearance, through a hash table of the points (the
+    rows of ``bits`` (f, c, 3) in order, ``f * c`` of them): mark each point's first row in
+    ``is_leader`` and give every row its point's number in ``index``; the number of points, or
+    -1 (and the arrays half written) when a row had to look more than ``most`` slots on.
+    -0.0 counts as 0.0 (see :func:`_row_words`).
 
     One pass in row order: a row whose bits are in the table takes that point's number,
     another starts a new point. Each slot holds a point's bits and its number (-1 when
@@ -164,53 +166,62 @@ def _table_weld(
     point is in about 6 corners) and doubles when half full. The slot of the row ``AHEAD``
     rows on is asked for in advance: the table is larger than the cache on a large mesh.
     """
-    count = len(bits)
+    faces, per = bits.shape[0], bits.shape[1]
+    count = faces * per
     wide = bits.itemsize == 8
     size = 16
     while size < count // 4:
         size *= 2
     table = np.full((size, 4), -1, dtype=bits.dtype)
     points = 0
-    for row in range(count):
-        ahead = row + AHEAD
-        if ahead < count:
-            a, b, c = _row_words(bits, ahead)
-            prefetch(table, _words_hash(a, b, c, wide) & mask & (size - 1))
-        x, y, z = _row_words(bits, row)
-        slot = _words_hash(x, y, z, wide) & mask & (size - 1)
-        probes = 0
-        while True:
-            number = table[slot, 3]
-            if number < 0:
-                table[slot, 0], table[slot, 1], table[slot, 2], table[slot, 3] = x, y, z, points
-                is_leader[row] = True
-                index[row] = points
-                points += 1
-                break
-            if table[slot, 0] == x and table[slot, 1] == y and table[slot, 2] == z:
-                index[row] = number
-                break
-            probes += 1
-            if probes > most:
-                return -1
-            slot = (slot + 1) & (size - 1)
-        if 2 * points > size:  # half full: twice the slots, every point placed again
-            size *= 2
-            larger = np.full((size, 4), -1, dtype=bits.dtype)
-            for old in range(len(table)):
-                if table[old, 3] < 0:
-                    continue
-                a, b, c = int(table[old, 0]), int(table[old, 1]), int(table[old, 2])
-                slot = _words_hash(a, b, c, wide) & mask & (size - 1)
-                probes = 0
-                while larger[slot, 3] >= 0:
-                    probes += 1
-                    if probes > most:
-                        return -1
-                    slot = (slot + 1) & (size - 1)
-                for column in range(4):
-                    larger[slot, column] = table[old, column]
-            table = larger
+    row = 0
+    # The corner AHEAD rows on, as (face, corner): no division a row.
+    ahead_face, ahead_corner = AHEAD // per, AHEAD % per
+    for face in range(faces):
+        for corner in range(per):
+            if ahead_face < faces:
+                a, b, c = _row_words(bits, ahead_face, ahead_corner)
+                prefetch(table, _words_hash(a, b, c, wide) & mask & (size - 1))
+                ahead_corner += 1
+                if ahead_corner == per:
+                    ahead_face, ahead_corner = ahead_face + 1, 0
+            x, y, z = _row_words(bits, face, corner)
+            slot = _words_hash(x, y, z, wide) & mask & (size - 1)
+            probes = 0
+            while True:
+                number = table[slot, 3]
+                if number < 0:
+                    table[slot, 0], table[slot, 1], table[slot, 2] = x, y, z
+                    table[slot, 3] = points
+                    is_leader[row] = True
+                    index[row] = points
+                    points += 1
+                    break
+                if table[slot, 0] == x and table[slot, 1] == y and table[slot, 2] == z:
+                    index[row] = number
+                    break
+                probes += 1
+                if probes > most:
+                    return -1
+                slot = (slot + 1) & (size - 1)
+            row += 1
+            if 2 * points > size:  # half full: twice the slots, every point placed again
+                size *= 2
+                larger = np.full((size, 4), -1, dtype=bits.dtype)
+                for old in range(len(table)):
+                    if table[old, 3] < 0:
+                        continue
+                    a, b, c = int(table[old, 0]), int(table[old, 1]), int(table[old, 2])
+                    slot = _words_hash(a, b, c, wide) & mask & (size - 1)
+                    probes = 0
+                    while larger[slot, 3] >= 0:
+                        probes += 1
+                        if probes > most:
+                            return -1
+                        slot = (slot + 1) & (size - 1)
+                    for column in range(4):
+                        larger[slot, column] = table[old, column]
+                table = larger
     return points
 
 
@@ -218,14 +229,18 @@ def _table_weld(
 def _leaders(
     points: NDArray[np.floating], is_leader: BoolArray, vertices: NDArray[np.float64]
 ) -> None:
-    """The leading rows of ``points`` in turn, as float64 and with -0.0 as 0.0 (plus 0.0), into
-    ``vertices`` (one pass: NumPy's mask and conversion took 1.4 s at the Lucy size)."""
+    """The leading rows of ``points`` (f, c, 3) in turn, as float64 and with -0.0 as 0.0 (plus
+    0.0), into ``vertices`` (one pass: NumPy's mask and conversion took 1.4 s at the Lucy
+    size)."""
     point = 0
-    for row in range(len(points)):
-        if is_leader[row]:
-            for axis in range(3):
-                vertices[point, axis] = float(points[row, axis]) + 0.0
-            point += 1
+    row = 0
+    for face in range(points.shape[0]):
+        for corner in range(points.shape[1]):
+            if is_leader[row]:
+                for axis in range(3):
+                    vertices[point, axis] = float(points[face, corner, axis]) + 0.0
+                point += 1
+            row += 1
 
 
 @kernel(python=True)

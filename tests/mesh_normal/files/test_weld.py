@@ -102,3 +102,22 @@ def test_a_large_mesh_matches_a_dictionary(dtype: type) -> None:
 def test_empty() -> None:
     vertices, index = weld(np.zeros((0, 3)))
     assert vertices.shape == (0, 3) and index.shape == (0,)
+
+
+@pytest.mark.parametrize("faces", [40, 20_000])  # the Python source, and compiled
+def test_corners_read_in_their_records_weld_as_rows(faces: int) -> None:
+    # A binary STL's (f, 3, 3) corners, strided through 50-byte records: the same answer as
+    # the same corners as a (3 f, 3) array, -0.0 and all.
+    from mesh_normal.files.stl import RECORD
+
+    rng = np.random.default_rng(faces)
+    records = np.zeros(faces, RECORD)
+    records["corners"] = rng.integers(-3, 4, (faces, 3, 3)).astype(np.float32) / 2
+    records["corners"][::7, 1] *= -0.0
+    view = np.frombuffer(records.tobytes(), RECORD)["corners"]
+    assert not view.flags.c_contiguous
+    vertices, index = weld(view)
+    expected_vertices, expected_index = reference(view.reshape(-1, 3))
+    np.testing.assert_array_equal(vertices, expected_vertices)
+    np.testing.assert_array_equal(index, expected_index)
+    assert not np.signbit(vertices).any() or (vertices[np.signbit(vertices)] != 0).all()
