@@ -113,9 +113,9 @@ CHUNK = 1 << 22
 
 def chunk_faces(faces: int, vertices: int, columns: int) -> int:
     """The faces per chunk of :func:`smooth` for terms of ``columns`` doubles (see
-    :data:`CHUNK`): at least a block, at most every face."""
+    :data:`CHUNK`): at least a block, at most every face (and 1 for no faces)."""
     within = 36 * vertices // (8 * columns)  # 1.5 times the normals' 24 bytes a vertex
-    return min(faces, max(BLOCK, min(CHUNK, within)))
+    return max(1, min(faces, max(BLOCK, min(CHUNK, within))))
 
 
 @kernel(parallel=True)

@@ -225,4 +225,5 @@ def test_a_chunk_s_terms_stay_within_one_and_a_half_times_the_normals() -> None:
     assert chunk_faces(871_414, 436_260, 6) == 327_195  # three
     assert chunk_faces(100, 60, 4) == 100  # never more than the faces
     assert chunk_faces(5000, 10, 6) == BLOCK  # nor fewer than a block
+    assert chunk_faces(0, 10, 4) == 1  # a mesh without faces: a step of one
     assert chunk_faces(28_000_000, 14_000_000, 4) == CHUNK
