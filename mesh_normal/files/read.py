@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import io
+import mmap
 import os
 import re
 from collections.abc import Callable, Iterable
@@ -15,7 +16,7 @@ from mesh_normal.files.archive import is_zip
 from mesh_normal.files.errors import MeshFileError, failure_reason, unsupported
 from mesh_normal.files.formats import FORMATS, SUFFIXES, suffix_format
 from mesh_normal.files.loaded import LoadedMesh
-from mesh_normal.files.stl import is_binary, looks_ascii
+from mesh_normal.files.stl import HEADER, RECORD, is_binary, looks_ascii
 
 
 class BinaryReadable(Protocol):
@@ -54,6 +55,9 @@ def read_mesh(source: MeshSource, filename: str | None = None) -> LoadedMesh:
     TypeError
         A source of another type, or a file object opened in text mode.
     """
+    mapped = _mapped_binary_stl(source)
+    if mapped is not None:
+        return _read_mapped(mapped, filename or Path(source).name)  # type: ignore[arg-type]
     data, filename = source_bytes(source, filename)
     if not data:
         raise MeshFileError("The file is empty (0 bytes).")
@@ -83,6 +87,57 @@ def read_mesh(source: MeshSource, filename: str | None = None) -> LoadedMesh:
     if named is not None and named != found:
         named_as, holds = FORMATS[named].title, FORMATS[found].title
         note = f"The file is named as {named_as} but holds {holds}; it was read as {holds}."
+        mesh = dataclasses.replace(mesh, notes=(note, *mesh.notes))
+    return mesh
+
+
+#: A path to a binary STL of this many bytes or more is mapped rather than read: its pages come
+#: from the system's file cache as the reader touches them, instead of a copy in fresh memory
+#: (measured for 700 MB on this machine: 0.05 s against 0.7-1.9 s, and 700 MB less memory).
+MAPPED_BYTES = 1 << 26
+
+
+def _mapped_binary_stl(source: MeshSource) -> mmap.mmap | None:
+    """The file of a path, mapped read-only, when it is a large binary STL (its length is what
+    its header's triangle count calls for, and nothing else claims its first bytes); else
+    ``None``, and :func:`read_mesh` reads the bytes as ever (raising the path's own errors)."""
+    if not isinstance(source, str | os.PathLike):
+        return None
+    try:
+        with open(source, "rb") as file:
+            size = os.fstat(file.fileno()).st_size
+            if size < MAPPED_BYTES:
+                return None
+            head = file.read(4096)
+            # What the bytes would be read as: a zip, a BOM or another format's start wins.
+            if is_zip(head) or head.startswith(b"\xef\xbb\xbf") or sniff(head) not in ("stl", None):
+                return None
+            count = int.from_bytes(head[80:HEADER], "little")
+            if size != HEADER + RECORD.itemsize * count:
+                return None
+            return mmap.mmap(file.fileno(), 0, access=mmap.ACCESS_READ)
+    except (OSError, ValueError):
+        return None
+
+
+def _read_mapped(mapped: mmap.mmap, filename: str) -> LoadedMesh:
+    """:func:`read_mesh` of a mapped binary STL (see :func:`_mapped_binary_stl`): the same mesh
+    and notes as from its bytes. The map closes when the last array over it goes (the reader
+    keeps none: the weld and the facet normals are copies). A file cut short by another program
+    while it is being read ends the process (SIGBUS), as with any mapped file."""
+    from mesh_normal.files.stl import read_stl
+
+    try:
+        mesh = read_stl(mapped)  # type: ignore[arg-type]
+    except (MeshFileError, MemoryError):
+        raise
+    except Exception as error:  # never a 500, as for bytes
+        raise MeshFileError(
+            f"The file could not be read as STL: {failure_reason(error)}."
+        ) from error
+    named = suffix_format(filename)
+    if named is not None and named != "stl":
+        note = f"The file is named as {FORMATS[named].title} but holds STL; it was read as STL."
         mesh = dataclasses.replace(mesh, notes=(note, *mesh.notes))
     return mesh
 

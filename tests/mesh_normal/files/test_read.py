@@ -1,5 +1,8 @@
 from __future__ import annotations
 
+from collections.abc import Callable
+from pathlib import Path
+
 import numpy as np
 import pytest
 import trimesh
@@ -156,3 +159,52 @@ def test_memory_error_in_draco_propagates(monkeypatch: pytest.MonkeyPatch) -> No
     monkeypatch.setattr(DracoPy, "decode", _out_of_memory)
     with pytest.raises(MemoryError):
         read_mesh(data, "box.glb")
+
+
+def _same_mesh(one: LoadedMesh, two: LoadedMesh) -> None:
+    assert one.notes == two.notes and one.format == two.format
+    for name in ("vertices", "faces", "file_face_normals"):
+        first, second = getattr(one, name), getattr(two, name)
+        assert (first is None) == (second is None)
+        if first is not None:
+            assert first.dtype == second.dtype and first.tobytes() == second.tobytes()
+
+
+@pytest.mark.parametrize("name", ["teapot.stl", "soup.stl"])
+@pytest.mark.parametrize("suffix", [".stl", ".obj"])
+def test_a_large_binary_stl_path_is_mapped_and_reads_as_its_bytes(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path, name: str, suffix: str
+) -> None:
+    from mesh_normal.files import read as read_module
+
+    data = (DATA / name).read_bytes()
+    assert read_module.is_binary(data)
+    path = tmp_path / f"mesh{suffix}"
+    path.write_bytes(data)
+    mapped = []
+    real = read_module._read_mapped
+    monkeypatch.setattr(read_module, "MAPPED_BYTES", 1)
+    monkeypatch.setattr(read_module, "_read_mapped", lambda *a: mapped.append(1) or real(*a))
+    _same_mesh(read_mesh(path), read_mesh(data, path.name))
+    assert mapped == [1]
+
+
+@pytest.mark.parametrize(
+    "change",
+    [
+        lambda data: data + b"\0",  # the length is not the header's count
+        lambda data: b"PK\x03\x04" + data[4:],  # a zip's start: read as bytes
+        lambda data: b"\xef\xbb\xbf" + data[3:],  # a byte order mark
+    ],
+)
+def test_a_path_that_is_not_plainly_a_binary_stl_is_read_as_bytes(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path, change: Callable[[bytes], bytes]
+) -> None:
+    from mesh_normal.files import read as read_module
+
+    data = change((DATA / "soup.stl").read_bytes())
+    path = tmp_path / "mesh.stl"
+    path.write_bytes(data)
+    monkeypatch.setattr(read_module, "MAPPED_BYTES", 1)
+    assert read_module._mapped_binary_stl(path) is None
+    assert read_module._mapped_binary_stl(tmp_path / "missing.stl") is None
