@@ -85,7 +85,13 @@ class Progress:
 
 def load(path: str, progress: Progress) -> tuple[LoadedMesh, int]:
     from mesh_normal.files import read_mesh
+    from mesh_normal.files.read import mapped_binary_stl, read_mapped
 
+    mapped = mapped_binary_stl(path)  # a large binary STL: mapped, not copied into memory
+    if mapped is not None:
+        progress.step(f"reading {path}")
+        size = len(mapped)
+        return _parsed(path, lambda: read_mapped(mapped, Path(path).name)), size
     data = read_input(path, progress)
     return _parsed(path, lambda: read_mesh(data, Path(path).name)), len(data)
 

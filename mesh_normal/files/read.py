@@ -55,9 +55,9 @@ def read_mesh(source: MeshSource, filename: str | None = None) -> LoadedMesh:
     TypeError
         A source of another type, or a file object opened in text mode.
     """
-    mapped = _mapped_binary_stl(source)
+    mapped = mapped_binary_stl(source)
     if mapped is not None:
-        return _read_mapped(mapped, filename or Path(source).name)  # type: ignore[arg-type]
+        return read_mapped(mapped, filename or Path(source).name)  # type: ignore[arg-type]
     data, filename = source_bytes(source, filename)
     if not data:
         raise MeshFileError("The file is empty (0 bytes).")
@@ -97,7 +97,7 @@ def read_mesh(source: MeshSource, filename: str | None = None) -> LoadedMesh:
 MAPPED_BYTES = 1 << 26
 
 
-def _mapped_binary_stl(source: MeshSource) -> mmap.mmap | None:
+def mapped_binary_stl(source: MeshSource) -> mmap.mmap | None:
     """The file of a path, mapped read-only, when it is a large binary STL (its length is what
     its header's triangle count calls for, and nothing else claims its first bytes); else
     ``None``, and :func:`read_mesh` reads the bytes as ever (raising the path's own errors)."""
@@ -120,8 +120,8 @@ def _mapped_binary_stl(source: MeshSource) -> mmap.mmap | None:
         return None
 
 
-def _read_mapped(mapped: mmap.mmap, filename: str) -> LoadedMesh:
-    """:func:`read_mesh` of a mapped binary STL (see :func:`_mapped_binary_stl`): the same mesh
+def read_mapped(mapped: mmap.mmap, filename: str) -> LoadedMesh:
+    """:func:`read_mesh` of a mapped binary STL (see :func:`mapped_binary_stl`): the same mesh
     and notes as from its bytes. The map closes when the last array over it goes (the reader
     keeps none: the weld and the facet normals are copies). A file cut short by another program
     while it is being read ends the process (SIGBUS), as with any mapped file."""

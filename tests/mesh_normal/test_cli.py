@@ -306,3 +306,21 @@ def test_the_weld_option_is_explained(capsys: pytest.CaptureFixture[str]) -> Non
         main(["fix", "--help"])
     help_text = " ".join(capsys.readouterr().out.split())
     assert "--weld FRACTION" in help_text and "of the bounding-box diagonal" in help_text
+
+
+def test_a_large_binary_stl_is_mapped_and_reported_as_from_its_bytes(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from mesh_normal.files import read as read_module
+    from tests.paths import DATA
+
+    path = tmp_path / "teapot.stl"
+    shutil.copy(DATA / "teapot.stl", path)
+    assert main(["analyze", "--json", str(path)]) == 0
+    from_bytes = capsys.readouterr().out
+    mapped: list[int] = []
+    real = read_module.read_mapped
+    monkeypatch.setattr(read_module, "MAPPED_BYTES", 1)
+    monkeypatch.setattr(read_module, "read_mapped", lambda *a: mapped.append(1) or real(*a))
+    assert main(["analyze", "--json", str(path)]) == 0
+    assert capsys.readouterr().out == from_bytes and mapped == [1]

@@ -182,9 +182,9 @@ def test_a_large_binary_stl_path_is_mapped_and_reads_as_its_bytes(
     path = tmp_path / f"mesh{suffix}"
     path.write_bytes(data)
     mapped = []
-    real = read_module._read_mapped
+    real = read_module.read_mapped
     monkeypatch.setattr(read_module, "MAPPED_BYTES", 1)
-    monkeypatch.setattr(read_module, "_read_mapped", lambda *a: mapped.append(1) or real(*a))
+    monkeypatch.setattr(read_module, "read_mapped", lambda *a: mapped.append(1) or real(*a))
     _same_mesh(read_mesh(path), read_mesh(data, path.name))
     assert mapped == [1]
 
@@ -206,5 +206,5 @@ def test_a_path_that_is_not_plainly_a_binary_stl_is_read_as_bytes(
     path = tmp_path / "mesh.stl"
     path.write_bytes(data)
     monkeypatch.setattr(read_module, "MAPPED_BYTES", 1)
-    assert read_module._mapped_binary_stl(path) is None
-    assert read_module._mapped_binary_stl(tmp_path / "missing.stl") is None
+    assert read_module.mapped_binary_stl(path) is None
+    assert read_module.mapped_binary_stl(tmp_path / "missing.stl") is None
