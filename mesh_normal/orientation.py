@@ -431,19 +431,15 @@ def _cone_terms(geometry: FaceGeometry, group: IndexArray, groups: int) -> _Cone
     # the terms and their bounds, which need them.
     scratch = np.empty((min(_CONE_CHUNK, count), 5))
     with PARALLEL_KERNELS:
-        for first in range(0, count, _CONE_CHUNK):
-            _cone_shares(
-                mesh.points, mesh.factor, mesh.faces, crosses, recomputed, group, sums, False,
-                first, terms, scratch, *workers(),
-            )  # fmt: skip
-            _add_shares(group, False, first, scratch, sums)
-        _centroids(sums)
-        for first in range(0, count, _CONE_CHUNK):
-            _cone_shares(
-                mesh.points, mesh.factor, mesh.faces, crosses, recomputed, group, sums, True,
-                first, terms, scratch, *workers(),
-            )  # fmt: skip
-            _add_shares(group, True, first, scratch, sums)
+        for second in (False, True):
+            if second:
+                _centroids(sums)
+            for first in range(0, count, _CONE_CHUNK):
+                _cone_shares(
+                    mesh.points, mesh.factor, mesh.faces, crosses, recomputed, group, sums,
+                    second, first, terms, scratch, *workers(),
+                )  # fmt: skip
+                _add_shares(group, second, first, scratch, sums)
     unit = FLOAT32_UNIT if _single(mesh.vertices) else EPSILON
     return _Cone(terms, sums[:, 5].copy(), sums[:, 6].copy(), sums[:, 4].copy(), unit, mesh.scale)
 
