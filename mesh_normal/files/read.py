@@ -71,6 +71,13 @@ def read_mesh(source: MeshSource, filename: str | None = None) -> LoadedMesh:
     found = sniff(data) or named
     if found is None:
         raise unknown_format(filename)
+    return _read_as(found, named, data, source)
+
+
+def _read_as(found: str, named: str | None, data: bytes, source: object = None) -> LoadedMesh:
+    """``data`` read as the format ``found``; a library's exception becomes a
+    :class:`MeshFileError`, and a note says so where the name (``named``) gave another format.
+    ``source``: the path a glTF was read from, to find the files beside it."""
     try:
         if found == "gltf" and isinstance(source, str | os.PathLike):
             from mesh_normal.files.gltf import read_gltf
@@ -125,21 +132,7 @@ def read_mapped(mapped: mmap.mmap, filename: str) -> LoadedMesh:
     and notes as from its bytes. The map closes when the last array over it goes (the reader
     keeps none: the weld and the facet normals are copies). A file cut short by another program
     while it is being read ends the process (SIGBUS), as with any mapped file."""
-    from mesh_normal.files.stl import read_stl
-
-    try:
-        mesh = read_stl(mapped)  # type: ignore[arg-type]
-    except (MeshFileError, MemoryError):
-        raise
-    except Exception as error:  # never a 500, as for bytes
-        raise MeshFileError(
-            f"The file could not be read as STL: {failure_reason(error)}."
-        ) from error
-    named = suffix_format(filename)
-    if named is not None and named != "stl":
-        note = f"The file is named as {FORMATS[named].title} but holds STL; it was read as STL."
-        mesh = dataclasses.replace(mesh, notes=(note, *mesh.notes))
-    return mesh
+    return _read_as("stl", suffix_format(filename), mapped)  # type: ignore[arg-type]
 
 
 def read_mesh_files(files: Iterable[tuple[str | None, bytes]]) -> LoadedMesh:
