@@ -138,11 +138,10 @@ def _face_terms_kernel(
     (4 columns) or its corners' weights (6 columns).
 
     ``"area"``: the cross product and its length; ``"uniform"``: the unit normal and 1.0; the
-    others: the unit normal and each corner's weight. A
-    degenerate face's row is zeros: adding them changes no sum (a sum that starts at 0.0 is
-    never -0.0). ``fused``: the cross products are taken here, as ``geometry_kernel`` takes
-    them, else read from ``crosses`` and ``lengths``; the corners are gathered where they are
-    taken or the weights need the edges.
+    others: the unit normal and each corner's weight. A degenerate face's row is zeros: adding
+    them changes no sum (a sum that starts at 0.0 is never -0.0). ``fused``: the cross products
+    are taken here, as ``geometry_kernel`` takes them, else read from ``crosses`` and
+    ``lengths``; the corners are gathered where they are taken or the weights need the edges.
     """
     stop = min(first + len(terms), len(faces))
     blocks = (stop - first + BLOCK - 1) // BLOCK

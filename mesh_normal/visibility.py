@@ -404,6 +404,7 @@ def _boxes(
     leaves' on every core, then the others from the leaves up. The corners are read from
     ``corners`` (in the hierarchy's order), or from ``unit`` where it is empty."""
     pad = 2.0**-26
+    gathered = len(corners) > 0
     nodes = len(children)
     blocks = (nodes + BLOCK - 1) // BLOCK
     for _ in prange(workers):  # each leaf writes its own row
@@ -419,7 +420,7 @@ def _boxes(
                         for axis in range(3):
                             value = (
                                 corners[k, 3 * corner + axis]
-                                if len(corners)
+                                if gathered
                                 else unit[faces[order[k], corner], axis]
                             )
                             boxes[node, axis] = min(boxes[node, axis], value - pad)
