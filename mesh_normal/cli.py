@@ -961,6 +961,10 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_USAGE
     enabled = sys.stderr.isatty() if args.progress is None else args.progress
     progress = Progress(sys.stderr, enabled)
+    if argv is None:  # a process of its own: one job, so keep freed memory for its next step
+        from mesh_normal import allocator
+
+        allocator.keep_freed()
     try:
         return int(args.run(args, progress))
     except Failure as failure:

@@ -26,7 +26,8 @@ from starlette.requests import Request
 from app.config import RETRY_AFTER_SECONDS, Settings
 from app.web.errors import ApiError
 from app.web.handlers import temp_dir_problem
-from app.web.workers import WorkerCrashed, WorkerDied, WorkerOutOfMemory, WorkerPool, give_back
+from app.web.workers import WorkerCrashed, WorkerDied, WorkerOutOfMemory, WorkerPool
+from mesh_normal.allocator import give_back
 
 logger = logging.getLogger(__name__)
 

@@ -27,8 +27,6 @@ go out of band as raw bytes, so a 200 MB upload is not copied into a pickle on i
 from __future__ import annotations
 
 import asyncio
-import ctypes
-import functools
 import logging
 import multiprocessing
 import pickle
@@ -42,6 +40,8 @@ from multiprocessing.process import BaseProcess
 from typing import Any
 
 from app.web.errors import ApiError
+from mesh_normal import allocator
+from mesh_normal.allocator import give_back
 
 #: How a worker's job ended: its value, a refusal (an ApiError's status, sentence and field),
 #: memory exhausted, or a crash (the traceback, for the log).
@@ -128,8 +128,7 @@ def serve(
         return
 
 
-#: glibc's ``mallopt`` parameter: blocks of at least this many bytes get their own mapping.
-_M_MMAP_THRESHOLD = -3
+#: Blocks of at least this many bytes get their own mapping, returned to the system when freed.
 _MAPPED_FROM = 2**20
 
 
@@ -137,27 +136,7 @@ def tune_allocator() -> None:
     """Give every block of 1 MB or more its own mapping (glibc's ``mallopt``), returned to the
     system when freed. glibc otherwise raises that threshold (up to 32 MB) after large frees,
     and then keeps what a large upload once took resident for good. Nothing elsewhere."""
-    mallopt = _libc("mallopt")
-    if mallopt is not None:
-        mallopt(_M_MMAP_THRESHOLD, _MAPPED_FROM)
-
-
-def give_back() -> None:
-    """Return the memory a finished job freed to the system (glibc's ``malloc_trim``): the
-    allocator otherwise keeps it resident for the next job, and a worker that once read a
-    large file would hold that much for good. Nothing where the C library has no such call."""
-    trim = _libc("malloc_trim")
-    if trim is not None:
-        trim(0)
-
-
-@functools.cache
-def _libc(name: str) -> Any:
-    """The C library's function ``name``, or None where there is none (not glibc)."""
-    try:
-        return getattr(ctypes.CDLL(None), name)
-    except (OSError, AttributeError):
-        return None
+    allocator.map_from(_MAPPED_FROM)
 
 
 def run(function: Callable[..., Any], args: Sequence[Any]) -> tuple[str, Any]:

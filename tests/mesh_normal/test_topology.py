@@ -112,7 +112,8 @@ def test_the_wide_sort_gives_what_a_lexsort_gives(vertex_count, faces, fan, pyth
         run = run.py_func
     else:
         load_numba()
-    run(faces, valid, vertex_count, key, face, forward, starts)
+    bits = len(faces).bit_length() + 1
+    run(faces, valid, vertex_count, bits, key, face, forward, starts)
     expected = lexsorted(faces, valid, vertex_count)
     for got, want in zip((key, face, forward), expected, strict=True):
         assert np.array_equal(got, want)

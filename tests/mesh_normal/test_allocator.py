@@ -1,0 +1,72 @@
+"""The allocator settings: they take effect on glibc, keep freed memory in the process for the
+command line's one job, and give it back when asked."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+from mesh_normal import allocator, cli
+
+GLIBC = allocator.libc("mallopt") is not None
+
+
+def run(code: str) -> str:
+    done = subprocess.run(
+        [sys.executable, "-c", textwrap.dedent(code)], capture_output=True, text=True, check=True
+    )
+    return done.stdout
+
+
+@pytest.mark.skipif(not GLIBC, reason="the settings are glibc's")
+def test_freed_memory_is_kept_then_given_back() -> None:
+    """After a freed 256 MB block, the process still holds it (kept for the next), and
+    ``give_back`` returns it; without ``keep_freed`` glibc unmaps it at once."""
+    code = """
+        import numpy as np
+        from mesh_normal import allocator
+
+        def resident():
+            with open("/proc/self/statm") as statm:
+                return int(statm.read().split()[1]) * 4096 >> 20
+
+        if KEEP:
+            assert allocator.keep_freed()
+        block = np.ones(2**28, dtype=np.uint8)
+        held = resident()
+        del block
+        kept = resident()
+        allocator.give_back()
+        print(held, kept, resident())
+    """
+    held, kept, after = map(int, run("KEEP = True\n" + textwrap.dedent(code)).split())
+    assert kept > held - 16 and after < held - 200
+    held, kept, after = map(int, run("KEEP = False\n" + textwrap.dedent(code)).split())
+    assert kept < held - 200
+
+
+def test_the_command_line_keeps_freed_memory_only_in_its_own_process(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    calls: list[bool] = []
+
+    def keep_freed() -> bool:
+        calls.append(True)
+        return True
+
+    monkeypatch.setattr(allocator, "keep_freed", keep_freed)
+    monkeypatch.setattr(sys, "argv", ["mesh-normal", "normals", "--help"])
+    with pytest.raises(SystemExit):
+        cli.main()
+    assert calls == []  # --help ends before any work
+    path = tmp_path / "one.obj"
+    path.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    monkeypatch.setattr(sys, "argv", ["mesh-normal", "analyze", str(path)])
+    assert cli.main() == 0
+    assert calls == [True]
+    assert cli.main(["analyze", str(path)]) == 0  # called in a host's process: left alone
+    assert calls == [True]
