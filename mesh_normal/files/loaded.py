@@ -80,6 +80,10 @@ class LoadedMesh:
     from_reader : bool
         True when :func:`~mesh_normal.files.read_mesh` built it: its arrays passed the checks
         and are read-only, so :meth:`checked` need not check them again.
+    distinct_points : bool
+        True when the reader made every vertex a different position (an STL's weld of its
+        corners), so that looking for vertices at one position again finds none. A mesh with
+        other vertices (``dataclasses.replace``) must not keep it.
     """
 
     vertices: FloatArray
@@ -97,6 +101,7 @@ class LoadedMesh:
     unkept: tuple[str, ...] = ()
     files: tuple[str, ...] = ()
     from_reader: bool = field(default=False, repr=False, compare=False)
+    distinct_points: bool = field(default=False, repr=False, compare=False)
 
     def checked(self) -> CheckedMesh:
         """The mesh as the core takes it (:class:`~mesh_normal.checks.CheckedMesh`).
@@ -129,12 +134,14 @@ def build(
     unkept: Sequence[str] = (),
     vertex: Describe | None = None,
     face: Describe | None = None,
+    distinct_points: bool = False,
 ) -> LoadedMesh:
     """Check the arrays a reader produced and freeze them into a :class:`LoadedMesh`.
 
     Raises :class:`MeshFileError` for the first non-finite vertex, the first face with an index
     outside ``0 .. n - 1``, or a mesh without faces. ``vertex`` and ``face`` describe an item
-    for that sentence (with a line number where the reader knows it).
+    for that sentence (with a line number where the reader knows it). ``distinct_points``:
+    the reader made no two vertices equal (see :class:`LoadedMesh`).
     """
     points = np.ascontiguousarray(vertices, dtype=np.float64).reshape(-1, 3)
     triangles = np.ascontiguousarray(faces, dtype=np.intp).reshape(-1, 3)
@@ -163,6 +170,7 @@ def build(
         notes=tuple(notes),
         unkept=tuple(unkept),
         from_reader=True,
+        distinct_points=distinct_points,
     )
 
 

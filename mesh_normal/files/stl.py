@@ -281,6 +281,7 @@ def _welded(
         face_groups=groups,
         group_names=group_names,
         notes=notes,
+        distinct_points=True,  # the weld's points: no two equal (-0.0 counts as 0.0 in both)
     )
 
 

@@ -8,6 +8,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from mesh_normal.files import MeshFileError, read_mesh
+from mesh_normal.topology import same_points
 from tests.meshes import (
     CUBE_FACES,
     CUBE_VERTICES,
@@ -261,3 +262,30 @@ def test_trimesh_two_cubes_with_bare_endsolid() -> None:
     mesh = read_mesh(DATA / "two_objects_mixed_case_names.stl")
     assert mesh.group_names == ("CubeExportedFromCAD", "TranslatedCubeExportedFromCAD")
     assert np.bincount(mesh.face_groups).tolist() == [12, 12]
+
+
+@given(
+    corners=st.lists(
+        st.sampled_from([0.0, -0.0, 1.0, 2.5, -3.0, 1e-30, 3.4e38]), min_size=9, max_size=90
+    ).map(lambda values: np.array(values[: len(values) // 9 * 9]).reshape(-1, 3, 3)),
+    as_text=st.booleans(),
+)
+def test_the_welded_points_are_distinct_as_the_analysis_takes_them(
+    corners: np.ndarray, as_text: bool
+) -> None:
+    """An STL's vertices say they are distinct points (the analysis then skips looking for
+    equal ones), and they are: the topology's own search finds none, -0.0 and 0.0 included."""
+    data = ascii_stl(corners, np.zeros((len(corners), 3))) if as_text else binary_stl(corners)
+    mesh = read_mesh(data, "t.stl")
+    assert mesh.distinct_points
+    assert same_points(mesh.vertices) is None
+
+
+@pytest.mark.parametrize("name", ["multibody.stl", "soup.stl", "teapot.stl"])
+def test_real_stl_points_are_distinct(name: str) -> None:
+    mesh = read_mesh(DATA / name)
+    assert mesh.distinct_points and same_points(mesh.vertices) is None
+
+
+def test_other_formats_do_not_claim_distinct_points() -> None:
+    assert not read_mesh(DATA / "cube.obj").distinct_points
