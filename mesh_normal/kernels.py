@@ -337,6 +337,16 @@ def index_range(faces: IndexArray) -> tuple[int, int]:
 
 
 @kernel(python=True)
+def prefetch_corners(points: np.ndarray, faces: IndexArray, face: int) -> None:
+    """Ask for the rows of ``points`` at ``face``'s three corners, if there is such a face
+    (a loop over faces in file order reads points far apart in a large, shuffled mesh)."""
+    if face < len(faces):
+        prefetch(points, faces[face, 0])
+        prefetch(points, faces[face, 1])
+        prefetch(points, faces[face, 2])
+
+
+@kernel(python=True)
 def gather(
     points: FloatArray, factor: float, faces: IndexArray, start: int, corners: FloatArray
 ) -> int:
@@ -347,11 +357,7 @@ def gather(
     """
     count = min(len(corners), len(faces) - start)
     for row in range(count):
-        ahead = start + row + AHEAD
-        if ahead < len(faces):
-            prefetch(points, faces[ahead, 0])
-            prefetch(points, faces[ahead, 1])
-            prefetch(points, faces[ahead, 2])
+        prefetch_corners(points, faces, start + row + AHEAD)
         for k in range(3):
             vertex = faces[start + row, k]
             corners[row, 3 * k] = points[vertex, 0] * factor

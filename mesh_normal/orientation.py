@@ -76,12 +76,15 @@ from mesh_normal.choices import Method as Method
 from mesh_normal.choices import Verdict as Verdict
 from mesh_normal.faces import FaceGeometry, MeshInput, checked_input, face_geometry
 from mesh_normal.kernels import (
+    AHEAD,
     BLOCK,
     PARALLEL_KERNELS,
     announce_compiling,
     claim,
     kernel,
     prange,
+    prefetch,
+    prefetch_corners,
     workers,
 )
 from mesh_normal.tolerances import (
@@ -561,6 +564,7 @@ def _cone_shares(
             end = min(start + BLOCK, stop)
             if not second:
                 for face in range(start, end):
+                    prefetch_corners(points, faces, face + AHEAD)
                     ax, ay, az, ux, uy, uz, vx, vy, vz, nx, ny, nz, largest = _cone_face(
                         points, factor, faces, crosses, recomputed, face
                     )
@@ -573,6 +577,7 @@ def _cone_shares(
                     shares[row, 4] = largest
             else:
                 for face in range(start, end):
+                    prefetch_corners(points, faces, face + AHEAD)
                     ax, ay, az, ux, uy, uz, vx, vy, vz, nx, ny, nz, _largest = _cone_face(
                         points, factor, faces, crosses, recomputed, face
                     )
@@ -796,14 +801,16 @@ def _twin_groups(
 ) -> None:
     """Mark in ``twinned`` (m zeros) the faces whose three points another face has, wound the
     other way; ``starts`` (width + 1 zeros) and ``order`` (m) are scratch space."""
+    # A counting sort, asking for the places of faces ahead (far apart in a large mesh).
     for face in range(len(faces)):
-        a, b, c = faces[face, 0], faces[face, 1], faces[face, 2]
-        starts[min(a, min(b, c)) + 1] += 1
+        _ask_lowest(faces, face + AHEAD, starts, 1)
+        starts[_lowest(faces, face) + 1] += 1
     for point in range(width):
         starts[point + 1] += starts[point]
     for face in range(len(faces)):
-        a, b, c = faces[face, 0], faces[face, 1], faces[face, 2]
-        low = min(a, min(b, c))
+        _ask_lowest(faces, face + 2 * AHEAD, starts, 0)
+        _ask_place(faces, face + AHEAD, starts, order)
+        low = _lowest(faces, face)
         order[starts[low]] = face
         starts[low] += 1
     first = 0
@@ -815,6 +822,7 @@ def _twin_groups(
             # wound as its sorted points: twins share all but the last bit.
             keys = few if last - first <= _FEW_TWINS else np.empty(last - first, dtype=np.int64)
             for row in range(first, last):
+                _ask_row(order, row + AHEAD, faces)
                 a, b, c = faces[order[row], 0], faces[order[row], 1], faces[order[row], 2]
                 low, high = min(a, min(b, c)), max(a, max(b, c))
                 ascents = (1 if a < b else 0) + (1 if b < c else 0) + (1 if c < a else 0)
@@ -840,6 +848,33 @@ def _twin_groups(
                             twinned[order[first + ranked[row]]] = True
                     start = end
         first = last
+
+
+@kernel(python=True)
+def _lowest(faces: IndexArray, face: int) -> int:
+    """The smallest of ``face``'s three points."""
+    return int(min(faces[face, 0], min(faces[face, 1], faces[face, 2])))
+
+
+@kernel(python=True)
+def _ask_lowest(faces: IndexArray, face: int, starts: IndexArray, offset: int) -> None:
+    """Ask for ``starts[lowest + offset]`` of row ``face`` of ``faces``, if there is one."""
+    if face < len(faces):
+        prefetch(starts, _lowest(faces, face) + offset)
+
+
+@kernel(python=True)
+def _ask_place(faces: IndexArray, face: int, starts: IndexArray, placed: IndexArray) -> None:
+    """Ask for ``placed[starts[lowest]]`` of row ``face`` of ``faces``, if there is one."""
+    if face < len(faces):
+        prefetch(placed, starts[_lowest(faces, face)])
+
+
+@kernel(python=True)
+def _ask_row(order: IndexArray, at: int, faces: IndexArray) -> None:
+    """Ask for the row ``order[at]`` of ``faces``, if there is such an entry."""
+    if at < len(order):
+        prefetch(faces, order[at])
 
 
 def _twinned_lexsorted(faces: IndexArray, even: BoolArray) -> BoolArray:

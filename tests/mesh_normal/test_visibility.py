@@ -4,10 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
 
 from mesh_normal import visibility
 from mesh_normal.checks import checked_mesh
 from mesh_normal.faces import face_geometry
+from mesh_normal.kernels import load_numba
 from mesh_normal.orientation import orient
 from mesh_normal.topology import by_position, structure
 from tests.meshes import (
@@ -229,3 +232,46 @@ def test_the_leaves_grow_where_the_rays_are_few() -> None:
     assert visibility.leaf_size(1000, 2**19) == visibility._LEAF
     assert visibility.leaf_size(871_414, 1024) == visibility._WIDEST_LEAF
     assert visibility._LEAF < visibility.leaf_size(871_414, 2**12) < visibility._WIDEST_LEAF
+
+
+def _samples_by_sorting(
+    group: np.ndarray, chosen: np.ndarray, per: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The samples as they were taken before the one-pass pick: each patch's members by a
+    stable sort, then evenly spread picks."""
+    wanted = np.zeros(int(group.max(initial=0)) + 1, dtype=bool)
+    wanted[chosen] = True
+    members = np.flatnonzero(wanted[group])
+    members = members[np.argsort(group[members], kind="stable")]
+    starts = np.searchsorted(group[members], chosen)
+    counts = np.searchsorted(group[members], chosen, side="right") - starts
+    take = np.minimum(counts, per)
+    owner = np.repeat(np.arange(len(chosen)), take)
+    rank = np.arange(int(take.sum())) - np.repeat(np.cumsum(take) - take, take)
+    picks = np.repeat(starts, take) + (rank * np.repeat(counts, take)) // np.repeat(
+        np.maximum(take, 1), take
+    )
+    return members[picks], owner
+
+
+@given(
+    group=st.lists(st.integers(0, 6), min_size=1, max_size=400).map(np.array),
+    picked=st.sets(st.integers(0, 6), min_size=1),
+    per=st.integers(1, 40),
+    compiled=st.booleans(),
+)
+@settings(max_examples=200, deadline=None)
+def test_samples_are_the_sorted_picks(
+    group: np.ndarray, picked: set[int], per: int, compiled: bool
+) -> None:
+    """One pass picks the same faces as sorting each patch's members did (a patch of no
+    faces, the group past the patches and patches left out included)."""
+    chosen = np.array(sorted(value for value in picked if value <= group.max()))
+    assume(len(chosen))  # as the casting chooses them: patches that the groups number
+    if compiled:  # past the faces that run the kernel's Python source
+        load_numba()
+        group = np.tile(group, visibility.PYTHON_RAYS // len(group) + 1)
+    samples, owner = visibility._samples(group, chosen, per)
+    expected, expected_owner = _samples_by_sorting(group, chosen, per)
+    np.testing.assert_array_equal(samples, expected)
+    np.testing.assert_array_equal(owner, expected_owner)
