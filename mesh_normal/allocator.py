@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import ctypes
 import functools
+import threading
 from typing import Any
 
 #: glibc's ``mallopt`` parameters (malloc.h).
@@ -24,14 +25,57 @@ M_MMAP_THRESHOLD = -3
 _KEPT = 2**31 - 1
 
 
+#: Linux's ``madvise`` advice (5.14 on): fault a range in as if written, leaving its bytes.
+MADV_POPULATE_WRITE = 23
+#: The most :func:`prefault` reserves: below the kept free top (``_KEPT``), so not returned.
+PREFAULT_LIMIT = 7 * 2**28
+_PAGE = 4096
+
+_keeping = False
+
+
 def keep_freed() -> bool:
     """Serve every block from the heap and keep freed memory for reuse (until
     :func:`give_back`): no block gets its own mapping, and the heap's free top is not returned
     while under 2 GiB. True where it took effect (glibc)."""
+    global _keeping
     mallopt = libc("mallopt")
     if mallopt is None:
         return False
-    return bool(mallopt(M_MMAP_MAX, 0)) and bool(mallopt(M_TRIM_THRESHOLD, _KEPT))
+    _keeping = bool(mallopt(M_MMAP_MAX, 0)) and bool(mallopt(M_TRIM_THRESHOLD, _KEPT))
+    return _keeping
+
+
+def prefault(size: int) -> threading.Thread | None:
+    """Grow the heap by ``size`` bytes (at most ``PREFAULT_LIMIT``) for the arrays to come,
+    and fault those pages in on a thread of their own, a batch per call to the kernel
+    (``MADV_POPULATE_WRITE``), while this thread goes on. Only after :func:`keep_freed` took
+    effect (so the block freed here stays in the heap, where the next arrays are cut from it).
+
+    Faulting in new memory one page at a time, as arrays first write it, is what a large mesh
+    spends most on here: 1.5 GiB measured 5.4-6.7 s written by NumPy, 0.5-1.3 s populated by
+    the kernel. The bytes are never written here, so the allocator's own use of the block
+    (the heap's headers) is safe meanwhile; a range the heap no longer holds is refused by
+    the kernel (ENOMEM) and left. Returns the thread, or None where nothing was done.
+    """
+    malloc, free, madvise = libc("malloc"), libc("free"), libc("madvise")
+    size = min(size, PREFAULT_LIMIT)
+    if not _keeping or size < 2 * _PAGE or None in (malloc, free, madvise):
+        return None
+    malloc.restype, malloc.argtypes = ctypes.c_void_p, [ctypes.c_size_t]
+    free.argtypes = [ctypes.c_void_p]
+    madvise.argtypes = [ctypes.c_void_p, ctypes.c_size_t, ctypes.c_int]
+    block = malloc(size)
+    if not block:
+        return None
+    free(block)  # the heap's free top now: the arrays to come are cut from it
+    start = (block + _PAGE - 1) // _PAGE * _PAGE
+    length = (block + size - start) // _PAGE * _PAGE
+    thread = threading.Thread(
+        target=madvise, args=(start, length, MADV_POPULATE_WRITE), name="prefault", daemon=True
+    )
+    thread.start()
+    return thread
 
 
 def map_from(size: int) -> bool:

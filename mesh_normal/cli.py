@@ -21,6 +21,7 @@ import argparse
 import importlib
 import json
 import math
+import os
 import sys
 import time
 from collections.abc import Callable, Collection, Iterator
@@ -88,12 +89,33 @@ def load(path: str, progress: Progress) -> tuple[LoadedMesh, int]:
     from mesh_normal.files.read import mapped_binary_stl, read_mapped
 
     mapped = mapped_binary_stl(path)  # a large binary STL: mapped, not copied into memory
+    _prefault(path, mapped is not None)
     if mapped is not None:
         progress.step(f"reading {path}")
         size = len(mapped)
         return _parsed(path, lambda: read_mapped(mapped, Path(path).name)), size
     data = read_input(path, progress)
     return _parsed(path, lambda: read_mesh(data, Path(path).name)), len(data)
+
+
+#: The memory a large file's work takes, per byte of the file, as first faulted in ahead of it
+#: (:func:`~mesh_normal.allocator.prefault`): a binary STL of 14M faces measured 3 (2.1 GB
+#: besides its mapped 700 MB); text formats hold fewer faces a byte.
+PREFAULT_PER_BYTE = {True: 3, False: 2}
+
+
+def _prefault(path: str, binary_stl: bool) -> None:
+    """For a large file, in a process of the command's own: the memory its arrays will take,
+    faulted in on another thread while this one reads (see ``mesh_normal.allocator``)."""
+    from mesh_normal import allocator
+    from mesh_normal.files.read import MAPPED_BYTES
+
+    try:
+        size = os.path.getsize(path)
+    except OSError:
+        return  # reading it says why
+    if size >= MAPPED_BYTES:
+        allocator.prefault(PREFAULT_PER_BYTE[binary_stl] * size)
 
 
 def read_input(path: str, progress: Progress) -> bytes:

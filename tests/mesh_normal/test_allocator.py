@@ -70,3 +70,46 @@ def test_the_command_line_keeps_freed_memory_only_in_its_own_process(
     assert calls == [True]
     assert cli.main(["analyze", str(path)]) == 0  # called in a host's process: left alone
     assert calls == [True]
+
+
+@pytest.mark.skipif(not GLIBC, reason="the settings are glibc's")
+def test_prefault_brings_in_the_memory_the_next_arrays_use() -> None:
+    """The prefaulted block is resident once the thread ends, and the next array is cut from
+    it (the process does not grow again); without ``keep_freed`` nothing is done."""
+    code = """
+        import numpy as np
+        from mesh_normal import allocator
+
+        def resident():
+            with open("/proc/self/statm") as statm:
+                return int(statm.read().split()[1]) * 4096 >> 20
+
+        assert allocator.prefault(2**28) is None  # the heap would not keep it
+        assert allocator.keep_freed()
+        before = resident()
+        thread = allocator.prefault(2**28)
+        thread.join()
+        faulted = resident()
+        block = np.ones(2**27, dtype=np.uint8)
+        print(before, faulted, resident(), int(block.sum()) >> 20)
+    """
+    before, faulted, after, total = map(int, run(code).split())
+    assert faulted > before + 200  # 256 MB in
+    assert after < faulted + 16  # the 128 MB array took no new memory
+    assert total == 128
+
+
+def test_the_command_line_prefaults_for_large_files_only(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    from mesh_normal.files import read
+
+    asked: list[int] = []
+    monkeypatch.setattr(allocator, "prefault", lambda size: asked.append(size))
+    path = tmp_path / "one.obj"
+    path.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    assert cli.main(["analyze", str(path)]) == 0
+    assert asked == []  # a small file: nothing to gain
+    monkeypatch.setattr(read, "MAPPED_BYTES", 10)
+    assert cli.main(["analyze", str(path)]) == 0
+    assert asked == [cli.PREFAULT_PER_BYTE[False] * path.stat().st_size]
