@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import os
+import pickle
 import signal
 import threading
 from collections.abc import Awaitable, Callable
@@ -191,3 +192,21 @@ def test_a_small_job_marked_so_runs_in_the_server_until_a_worker_is_ready(
         assert pid != os.getpid()
 
     with_pool(scenario)
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/self/statm"), reason="reads /proc")
+def test_a_large_upload_has_its_memory_faulted_in_and_given_back_after() -> None:
+    """A job of 16 MB of upload finds 3 times that faulted in for its arrays; the next job
+    finds it given back (the prefaulting ended before the trim)."""
+    large = bytes(workers.PREFAULT_FROM * 2)
+
+    async def scenario(pool: WorkerPool) -> tuple[int, int, int]:
+        before = await call(pool, jobhooks.resident, b"x")
+        during = await call(pool, jobhooks.resident, pickle.PickleBuffer(large))  # as uploads
+        after = await call(pool, jobhooks.resident, b"x")
+        return before, during, after
+
+    before, during, after = with_pool(scenario)
+    faulted = workers.PREFAULT_PER_BYTE * len(large) >> 20
+    assert during > before + faulted - 8
+    assert after < during - faulted + 8
