@@ -27,8 +27,11 @@ _KEPT = 2**31 - 1
 
 #: Linux's ``madvise`` advice (5.14 on): fault a range in as if written, leaving its bytes.
 MADV_POPULATE_WRITE = 23
-#: The most :func:`prefault` reserves: below the kept free top (``_KEPT``), so not returned.
+#: The largest block :func:`prefault` reserves at once: below the kept free top (``_KEPT``), so
+#: not returned; and the most it reserves in all.
 PREFAULT_LIMIT = 7 * 2**28
+PREFAULT_MOST = 2**32
+_SPACER = 64
 _PAGE = 4096
 
 _keeping = False
@@ -47,33 +50,51 @@ def keep_freed() -> bool:
 
 
 def prefault(size: int) -> threading.Thread | None:
-    """Grow the heap by ``size`` bytes (at most ``PREFAULT_LIMIT``) for the arrays to come,
+    """Grow the heap by ``size`` bytes (at most ``PREFAULT_MOST``) for the arrays to come,
     and fault those pages in on a thread of their own, a batch per call to the kernel
     (``MADV_POPULATE_WRITE``), while this thread goes on. Only after :func:`keep_freed` took
-    effect (so the block freed here stays in the heap, where the next arrays are cut from it).
+    effect (so the blocks freed here stay in the heap, where the next arrays are cut from them).
 
     Faulting in new memory one page at a time, as arrays first write it, is what a large mesh
     spends most on here: 1.5 GiB measured 5.4-6.7 s written by NumPy, 0.5-1.3 s populated by
-    the kernel. The bytes are never written here, so the allocator's own use of the block
+    the kernel. The bytes are never written here, so the allocator's own use of the blocks
     (the heap's headers) is safe meanwhile; a range the heap no longer holds is refused by
     the kernel (ENOMEM) and left. Returns the thread, or None where nothing was done.
     """
     malloc, free, madvise = libc("malloc"), libc("free"), libc("madvise")
-    size = min(size, PREFAULT_LIMIT)
     if not _keeping or size < 2 * _PAGE or None in (malloc, free, madvise):
         return None
     malloc.restype, malloc.argtypes = ctypes.c_void_p, [ctypes.c_size_t]
     free.argtypes = [ctypes.c_void_p]
     madvise.argtypes = [ctypes.c_void_p, ctypes.c_size_t, ctypes.c_int]
-    block = malloc(size)
-    if not block:
+    # Blocks of at most PREFAULT_LIMIT, each followed by a small one that stays allocated
+    # (64 bytes): freed, they stay apart instead of merging into a free top larger than the
+    # allocator keeps (it would return it to the system at once).
+    blocks: list[tuple[int, int]] = []
+    left = min(size, PREFAULT_MOST)
+    while left >= 2 * _PAGE:
+        part = min(left, PREFAULT_LIMIT)
+        block = malloc(part)
+        if not block:
+            break
+        blocks.append((block, part))
+        left -= part
+        if left >= 2 * _PAGE and not malloc(_SPACER):
+            break
+    for block, _ in blocks:
+        free(block)
+    if not blocks:
         return None
-    free(block)  # the heap's free top now: the arrays to come are cut from it
-    start = (block + _PAGE - 1) // _PAGE * _PAGE
-    length = (block + size - start) // _PAGE * _PAGE
-    thread = threading.Thread(
-        target=madvise, args=(start, length, MADV_POPULATE_WRITE), name="prefault", daemon=True
-    )
+    ranges = []
+    for block, part in blocks:
+        start = (block + _PAGE - 1) // _PAGE * _PAGE
+        ranges.append((start, (block + part - start) // _PAGE * _PAGE))
+
+    def populate() -> None:
+        for start, length in ranges:
+            madvise(start, length, MADV_POPULATE_WRITE)
+
+    thread = threading.Thread(target=populate, name="prefault", daemon=True)
     thread.start()
     return thread
 

@@ -113,3 +113,28 @@ def test_the_command_line_prefaults_for_large_files_only(
     monkeypatch.setattr(read, "MAPPED_BYTES", 10)
     assert cli.main(["analyze", str(path)]) == 0
     assert asked == [cli.PREFAULT_PER_BYTE[False] * path.stat().st_size]
+
+
+@pytest.mark.skipif(not GLIBC, reason="the settings are glibc's")
+def test_prefault_past_one_block_keeps_every_block() -> None:
+    """More than the largest block: several, kept apart, all faulted in and all kept (none
+    merges into a free top that the allocator would return)."""
+    code = """
+        import numpy as np
+        from mesh_normal import allocator
+
+        def resident():
+            with open("/proc/self/statm") as statm:
+                return int(statm.read().split()[1]) * 4096 >> 20
+
+        allocator.PREFAULT_LIMIT = 2**26
+        assert allocator.keep_freed()
+        before = resident()
+        allocator.prefault(5 * 2**26).join()
+        faulted = resident()
+        arrays = [np.ones(50 * 2**20, dtype=np.uint8) for _ in range(4)]
+        print(before, faulted, resident())
+    """
+    before, faulted, after = map(int, run(code).split())
+    assert faulted > before + 5 * 64 - 8
+    assert after < faulted + 16  # 200 MB of arrays in the blocks
