@@ -7,7 +7,9 @@ triangles; STL repeats them per corner as STL does). Each (format, path) runs in
 process: after the imports, ``compile_kernels()`` and a warm-up run of the same path on a small
 torus (so numba's kernels are loaded and Python's caches are warm, as in the server's job
 workers) and with the allocator set as the server's job workers set it (``tune_allocator``:
-blocks of 1 MB or more mapped on their own), the peak resident set is reset
+blocks of 1 MB or more mapped on their own; for a large binary STL, freed memory kept within the
+job and its memory faulted in ahead, ``app.mesh.work.ahead``, whose pages count), the peak
+resident set is reset
 (``/proc/self/clear_refs``), the file's bytes are read into memory as an upload is, and the path
 runs once. The figure is the peak resident memory above that baseline (``VmHWM`` minus
 ``VmRSS`` before the upload was read), divided by the file's size: the upload's own bytes count
@@ -180,17 +182,22 @@ def _status(field: str) -> int:
 
 def child(path_name: str, file: Path, small: Path) -> None:
     """Measure one path in this (fresh) process and print its peak in bytes."""
-    from app.web.workers import tune_allocator
+    from app.mesh.work import ahead
+    from app.web.workers import _MAPPED_FROM, tune_allocator
+    from mesh_normal import allocator
     from mesh_normal.precompile import compile_kernels
 
     tune_allocator()  # as the server's job workers do when they start
+    allocator.enable_jobs()
     compile_kernels()  # so do they (app/mesh/warmup.py): every kernel, a large file's too
     run_path(path_name, small.read_bytes(), small.name)  # warm-up: kernels loaded
     gc.collect()
     Path("/proc/self/clear_refs").write_text("5")  # reset the peak to the current size
     baseline = _status("VmRSS")
     data = file.read_bytes()
+    ahead(data)  # as a worker's job does before it reads the upload
     run_path(path_name, data, file.name)
+    allocator.end_job(_MAPPED_FROM)  # its prefaulting ended (its pages counted), as a worker's
     print(json.dumps({"peak": _status("VmHWM") - baseline, "size": len(data)}))
 
 

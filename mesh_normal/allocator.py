@@ -99,6 +99,45 @@ def prefault(size: int) -> threading.Thread | None:
     return thread
 
 
+#: glibc's defaults, put back by :func:`end_job`.
+_DEFAULT_MMAP_MAX = 65536
+_DEFAULT_TRIM_THRESHOLD = 128 * 1024
+
+_jobs: dict[str, Any] = {"enabled": False, "faulting": None}
+
+
+def enable_jobs() -> None:
+    """In a process that runs one job after another (a job worker): let :func:`start_job`
+    act. Elsewhere (a server's own threads, a host's process) it does nothing."""
+    _jobs["enabled"] = True
+
+
+def start_job(size: int) -> None:
+    """For the job about to run, in a process that :func:`enable_jobs`: keep freed memory
+    (:func:`keep_freed`) and fault ``size`` bytes in ahead (:func:`prefault`), until
+    :func:`end_job`."""
+    if _jobs["enabled"] and _jobs["faulting"] is None and keep_freed():
+        _jobs["faulting"] = prefault(size)
+
+
+def end_job(mapped_from: int) -> None:
+    """After a job: wait for its prefaulting (so no page is faulted back in after the trim),
+    put glibc's mapping and trimming back (blocks of ``mapped_from`` bytes or more mapped on
+    their own), and return what the job freed (:func:`give_back`)."""
+    global _keeping
+    faulting = _jobs["faulting"]
+    if isinstance(faulting, threading.Thread):
+        faulting.join()
+    _jobs["faulting"] = None
+    mallopt = libc("mallopt")
+    if _keeping and mallopt is not None:
+        mallopt(M_MMAP_MAX, _DEFAULT_MMAP_MAX)
+        mallopt(M_TRIM_THRESHOLD, _DEFAULT_TRIM_THRESHOLD)
+        _keeping = False
+    map_from(mapped_from)
+    give_back()
+
+
 def map_from(size: int) -> bool:
     """Give every block of ``size`` bytes or more its own mapping, returned to the system when
     freed. glibc otherwise raises that threshold (up to 32 MB) after large frees, and then keeps

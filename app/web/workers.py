@@ -41,7 +41,6 @@ from typing import Any
 
 from app.web.errors import ApiError
 from mesh_normal import allocator
-from mesh_normal.allocator import give_back
 
 #: How a worker's job ended: its value, a refusal (an ApiError's status, sentence and field),
 #: memory exhausted, or a crash (the traceback, for the log).
@@ -101,11 +100,10 @@ def send(connection: Connection, value: Any) -> None:
         connection.send_bytes(buffer.raw())
 
 
-def receive(connection: Connection) -> tuple[Any, int]:
-    """The value :func:`send` sent, and the bytes of its large buffers (an upload's)."""
+def receive(connection: Connection) -> Any:
     header, count = connection.recv()
     buffers = [connection.recv_bytes() for _ in range(count)]
-    return pickle.loads(header, buffers=buffers), sum(len(buffer) for buffer in buffers)
+    return pickle.loads(header, buffers=buffers)
 
 
 def serve(
@@ -114,33 +112,24 @@ def serve(
     """A worker's life: warm up, say so, then run one job after another until the pipe closes."""
     if memory_limit is not None:
         resource.setrlimit(resource.RLIMIT_AS, (memory_limit, memory_limit))
-    allocator.keep_freed()  # within a job; give_back() returns it all after each
+    tune_allocator()
+    allocator.enable_jobs()  # a job may keep freed memory while it runs (allocator.start_job)
     try:
         if warm is not None:
             warm()
         connection.send("ready")
         while True:
-            (function, args), size = receive(connection)
-            faulting = (
-                allocator.prefault(PREFAULT_PER_BYTE * size) if size >= PREFAULT_FROM else None
-            )
+            function, args = receive(connection)
             outcome = run(function, args)
             send(connection, outcome)
             del function, args, outcome
-            if faulting is not None:
-                faulting.join()  # before the trim: no page faulted back in after it
-            give_back()
+            allocator.end_job(_MAPPED_FROM)  # the allocator as it was, and the memory back
     except (EOFError, OSError):  # the server closed the pipe: it no longer needs this worker
         return
 
 
 #: Blocks of at least this many bytes get their own mapping, returned to the system when freed.
 _MAPPED_FROM = 2**20
-#: A job's memory faulted in ahead of it (:func:`mesh_normal.allocator.prefault`), per byte of
-#: its upload: a binary STL's arrays measured 3 times its bytes (the command line's figure);
-#: from uploads of ``PREFAULT_FROM`` bytes on (a small job has little to gain).
-PREFAULT_PER_BYTE = 3
-PREFAULT_FROM = 8 * 2**20
 
 
 def tune_allocator() -> None:
@@ -191,9 +180,7 @@ class Worker:
         await self.waited()
         try:
             # The message may be large: read it in a thread, not in the event loop.
-            loop = asyncio.get_running_loop()
-            value, _ = await loop.run_in_executor(None, receive, self.connection)
-            return value
+            return await asyncio.get_running_loop().run_in_executor(None, receive, self.connection)
         except (EOFError, OSError):
             self.process.join()
             raise WorkerDied(self.process.exitcode) from None

@@ -59,8 +59,11 @@ def refuse(*_args: Any) -> None:
     raise ApiError(400, "No.", "file")
 
 
-def resident(_data: bytes) -> int:
-    """The worker's resident memory in MB once its prefaulting (if any) has ended."""
+def resident(upload: Upload | None) -> int:
+    """The worker's resident memory in MB after reading ``upload`` as its jobs do (if one is
+    given), once the prefaulting (if any) has ended."""
+    if upload is not None:
+        work.load(upload)
     for thread in threading.enumerate():
         if thread.name == "prefault":
             thread.join()

@@ -4,18 +4,21 @@ from __future__ import annotations
 
 import asyncio
 import os
-import pickle
 import signal
 import threading
 from collections.abc import Awaitable, Callable
 from typing import Any
 
+import numpy as np
 import pytest
 
+from app.mesh import work
+from app.mesh.uploads import Upload
 from app.web import workers
 from app.web.errors import ApiError
 from app.web.workers import Worker, WorkerDied, WorkerOutOfMemory, WorkerPool
 from tests.app import jobhooks
+from tests.meshes import binary_stl
 
 #: How long a test waits for something that should happen at once (only a failure waits).
 PATIENCE_S = 30
@@ -195,18 +198,19 @@ def test_a_small_job_marked_so_runs_in_the_server_until_a_worker_is_ready(
 
 
 @pytest.mark.skipif(not os.path.exists("/proc/self/statm"), reason="reads /proc")
-def test_a_large_upload_has_its_memory_faulted_in_and_given_back_after() -> None:
-    """A job of 16 MB of upload finds 3 times that faulted in for its arrays; the next job
-    finds it given back (the prefaulting ended before the trim)."""
-    large = bytes(workers.PREFAULT_FROM * 2)
+def test_a_large_binary_stl_has_its_memory_faulted_in_and_given_back_after() -> None:
+    """A job reading a 10 MB binary STL finds 3 times that faulted in for its arrays; the next
+    job finds it given back (the prefaulting ended before the trim)."""
+    corners = np.random.default_rng(7).random((200_000, 3, 3))
+    stl = Upload(binary_stl(corners), "big.stl")
+    faulted = work.PREFAULT_PER_BYTE * len(stl.data) >> 20
 
     async def scenario(pool: WorkerPool) -> tuple[int, int, int]:
-        before = await call(pool, jobhooks.resident, b"x")
-        during = await call(pool, jobhooks.resident, pickle.PickleBuffer(large))  # as uploads
-        after = await call(pool, jobhooks.resident, b"x")
+        before = await call(pool, jobhooks.resident, None)
+        during = await call(pool, jobhooks.resident, stl)
+        after = await call(pool, jobhooks.resident, None)
         return before, during, after
 
     before, during, after = with_pool(scenario)
-    faulted = workers.PREFAULT_PER_BYTE * len(large) >> 20
-    assert during > before + faulted - 8
+    assert during > before + faulted
     assert after < during - faulted + 8
