@@ -337,16 +337,6 @@ def index_range(faces: IndexArray) -> tuple[int, int]:
 
 
 @kernel(python=True)
-def prefetch_corners(points: np.ndarray, faces: IndexArray, face: int) -> None:
-    """Ask for the rows of ``points`` at ``face``'s three corners, if there is such a face
-    (a loop over faces in file order reads points far apart in a large, shuffled mesh)."""
-    if face < len(faces):
-        prefetch(points, faces[face, 0])
-        prefetch(points, faces[face, 1])
-        prefetch(points, faces[face, 2])
-
-
-@kernel(python=True)
 def gather(
     points: FloatArray, factor: float, faces: IndexArray, start: int, corners: FloatArray
 ) -> int:

@@ -84,7 +84,6 @@ from mesh_normal.kernels import (
     kernel,
     prange,
     prefetch,
-    prefetch_corners,
     workers,
 )
 from mesh_normal.tolerances import (
@@ -97,7 +96,7 @@ from mesh_normal.topology import KEY_LIMIT, Structure, by_position, structure
 from mesh_normal.topology import MeshTopology as MeshTopology  # re-exported: Orientation has one
 from mesh_normal.types import BoolArray, FloatArray, IndexArray, ParityArray
 from mesh_normal.visibility import MARGIN as VISIBILITY_MARGIN
-from mesh_normal.visibility import visible_sides
+from mesh_normal.visibility import prefetch_corners, visible_sides
 
 VERDICTS: tuple[Verdict, ...] = ("outward", "inward", "mixed", "undetermined")
 METHODS: tuple[Method, ...] = ("volume", "visibility", "none")

@@ -47,7 +47,6 @@ from mesh_normal.kernels import (
     kernel,
     prange,
     prefetch,
-    prefetch_corners,
     workers,
 )
 from mesh_normal.types import BoolArray, FloatArray, IndexArray, ParityArray
@@ -89,6 +88,17 @@ def _directions() -> FloatArray:
     turn = i * math.pi * (3.0 - math.sqrt(5.0))
     around = np.sqrt(1.0 - up * up)
     return np.column_stack([around * np.cos(turn), around * np.sin(turn), up])
+
+
+@kernel(python=True)  # here, not in kernels: the face normals never compile it
+def prefetch_corners(points: np.ndarray, faces: IndexArray, face: int) -> None:
+    """Ask for the rows of ``points`` at ``face``'s three corners, if there is such a face
+    (a loop over faces in file order reads points far apart in a large, shuffled mesh). The
+    orientation's cone terms use it too."""
+    if face < len(faces):
+        prefetch(points, faces[face, 0])
+        prefetch(points, faces[face, 1])
+        prefetch(points, faces[face, 2])
 
 
 def visible_sides(
