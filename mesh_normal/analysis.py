@@ -124,9 +124,8 @@ def analyse_mesh(
     # One pass: the reader checked the arrays, and the cross products are taken once here for
     # the face normals, the orientation's volumes and the file-normal comparison alike.
     checked = mesh.checked()
-    if weld is None:  # a welded STL's vertices are its points already
-        summary = None
-        points = checked.faces if mesh.distinct_points else by_position(checked)
+    if weld is None:
+        summary, points = None, by_position(checked)
     else:
         summary, point = _welded(mesh.vertices, weld)
         points = checked.faces if point is None else point[checked.faces]

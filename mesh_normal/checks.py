@@ -40,6 +40,9 @@ class CheckedMesh:
         The kernels multiply each coordinate they read by this (exact).
     scale : int
         The power of two that brings the largest |coordinate| into [0.5, 1).
+    distinct_points : bool
+        True when no two vertices are at one position (a reader's weld made them so; see
+        :class:`~mesh_normal.files.LoadedMesh`): the search for equal points is skipped.
     """
 
     vertices: FloatArray
@@ -47,6 +50,7 @@ class CheckedMesh:
     points: FloatArray
     factor: float
     scale: int
+    distinct_points: bool = False
 
     def __post_init__(self) -> None:
         # Read-only views (the caller's arrays stay as they were): numba compiles a kernel

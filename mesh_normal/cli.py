@@ -98,12 +98,6 @@ def load(path: str, progress: Progress) -> tuple[LoadedMesh, int]:
     return _parsed(path, lambda: read_mesh(data, Path(path).name)), len(data)
 
 
-#: The memory a large file's work takes, per byte of the file, as first faulted in ahead of it
-#: (:func:`~mesh_normal.allocator.prefault`): a binary STL of 14M faces measured 3 (2.1 GB
-#: besides its mapped 700 MB); text formats hold fewer faces a byte.
-PREFAULT_PER_BYTE = {True: 3, False: 2}
-
-
 def _prefault(path: str, binary_stl: bool) -> None:
     """For a large file, in a process of the command's own: the memory its arrays will take,
     faulted in on another thread while this one reads (see ``mesh_normal.allocator``)."""
@@ -115,7 +109,8 @@ def _prefault(path: str, binary_stl: bool) -> None:
     except OSError:
         return  # reading it says why
     if size >= MAPPED_BYTES:
-        allocator.prefault(PREFAULT_PER_BYTE[binary_stl] * size)
+        per_byte = allocator.ARRAYS_PER_FILE_BYTE["binary stl" if binary_stl else "other"]
+        allocator.prefault(per_byte * size)
 
 
 def read_input(path: str, progress: Progress) -> bytes:

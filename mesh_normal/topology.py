@@ -154,6 +154,8 @@ def mesh_topology(
 
 def by_position(mesh: CheckedMesh, weld: float | None = None) -> IndexArray:
     """(m, 3) intp: the faces with each vertex replaced by the first at its position."""
+    if mesh.distinct_points and not weld:  # a welded STL's vertices are its points already
+        return mesh.faces
     point = same_points(mesh.vertices, weld)
     return mesh.faces if point is None else point[mesh.faces]
 

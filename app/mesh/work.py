@@ -41,10 +41,9 @@ EXPORT_NORMALS: tuple[NormalsKind, ...] = ("vertex", "face", "corner")
 FIXED_BY_ORIENT = frozenset({"winding", "inward", "mixed"})
 
 
-#: A large binary STL's memory faulted in ahead of its job, per byte of it (its arrays measured
-#: 3 times its bytes), from ``PREFAULT_FROM`` bytes on: see ``mesh_normal.allocator``. Only
-#: binary STL: the text formats' jobs measured more memory with freed blocks kept in the heap.
-PREFAULT_PER_BYTE = 3
+#: A binary STL's memory is faulted in ahead of its job from this many bytes on (see
+#: ``mesh_normal.allocator``). Only binary STL: the text formats' jobs measured more memory
+#: with freed blocks kept in the heap.
 PREFAULT_FROM = 8 * 2**20
 
 
@@ -53,7 +52,7 @@ def ahead(data: bytes) -> None:
     freed memory for this job and fault its arrays' memory in on another thread (the
     worker undoes both when the job ends). Nothing for other uploads, or outside a worker."""
     if len(data) >= PREFAULT_FROM and stl.is_binary(data):
-        allocator.start_job(PREFAULT_PER_BYTE * len(data))
+        allocator.start_job(allocator.ARRAYS_PER_FILE_BYTE["binary stl"] * len(data))
 
 
 def load(upload: Upload) -> LoadedMesh:

@@ -114,7 +114,7 @@ class LoadedMesh:
 
         if not self.from_reader:
             return checked_mesh(self.vertices, self.faces)
-        return CheckedMesh(self.vertices, self.faces, *scaling(self.vertices))
+        return CheckedMesh(self.vertices, self.faces, *scaling(self.vertices), self.distinct_points)
 
 
 def build(

@@ -112,7 +112,7 @@ def test_the_command_line_prefaults_for_large_files_only(
     assert asked == []  # a small file: nothing to gain
     monkeypatch.setattr(read, "MAPPED_BYTES", 10)
     assert cli.main(["analyze", str(path)]) == 0
-    assert asked == [cli.PREFAULT_PER_BYTE[False] * path.stat().st_size]
+    assert asked == [allocator.ARRAYS_PER_FILE_BYTE["other"] * path.stat().st_size]
 
 
 @pytest.mark.skipif(not GLIBC, reason="the settings are glibc's")

@@ -12,11 +12,11 @@ from typing import Any
 import numpy as np
 import pytest
 
-from app.mesh import work
 from app.mesh.uploads import Upload
 from app.web import workers
 from app.web.errors import ApiError
 from app.web.workers import Worker, WorkerDied, WorkerOutOfMemory, WorkerPool
+from mesh_normal import allocator
 from tests.app import jobhooks
 from tests.meshes import binary_stl
 
@@ -203,7 +203,7 @@ def test_a_large_binary_stl_has_its_memory_faulted_in_and_given_back_after() -> 
     job finds it given back (the prefaulting ended before the trim)."""
     corners = np.random.default_rng(7).random((200_000, 3, 3))
     stl = Upload(binary_stl(corners), "big.stl")
-    faulted = work.PREFAULT_PER_BYTE * len(stl.data) >> 20
+    faulted = allocator.ARRAYS_PER_FILE_BYTE["binary stl"] * len(stl.data) >> 20
 
     async def scenario(pool: WorkerPool) -> tuple[int, int, int]:
         before = await call(pool, jobhooks.resident, None)

@@ -8,7 +8,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from mesh_normal.files import MeshFileError, read_mesh
-from mesh_normal.topology import same_points
+from mesh_normal.topology import by_position, same_points
 from tests.meshes import (
     CUBE_FACES,
     CUBE_VERTICES,
@@ -285,6 +285,8 @@ def test_the_welded_points_are_distinct_as_the_analysis_takes_them(
 def test_real_stl_points_are_distinct(name: str) -> None:
     mesh = read_mesh(DATA / name)
     assert mesh.distinct_points and same_points(mesh.vertices) is None
+    checked = mesh.checked()  # the core takes the flag along, and skips the search
+    assert checked.distinct_points and by_position(checked) is checked.faces
 
 
 def test_other_formats_do_not_claim_distinct_points() -> None:
