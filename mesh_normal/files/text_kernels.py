@@ -5,8 +5,11 @@ with their exact Python path. A decimal token (``[+-]digits[.digits][e[+-]digits
 significant digits make an integer of at most 2**53 and whose power of ten is at most 22 is
 read as that integer times or over the power of ten, both exact doubles: one rounding, so the
 correctly rounded double, the bits of Python's ``float()`` (Clinger's fast path). Any other
-decimal token (17 significant digits, a large exponent) is marked *hard*: its bytes are copied
-out for :func:`hard_values`, which reads them with Python's own conversion.
+with at most 18 significant digits (17 digits, a large exponent) goes through
+:func:`~mesh_normal.files.eisel_lemire.eisel_lemire`, also correctly rounded. What that
+declines (a subnormal or infinite result) and a token of more than 18 significant digits that
+are not all zeros after the 18th are marked *hard*: their bytes are copied out for
+:func:`hard_values`, which reads them with Python's own conversion.
 """
 
 from __future__ import annotations
@@ -16,6 +19,7 @@ import warnings
 import numpy as np
 from numpy.typing import NDArray
 
+from mesh_normal.files.eisel_lemire import eisel_lemire
 from mesh_normal.kernels import kernel
 
 #: 10**0 to 10**22: every one an exact double.
@@ -84,10 +88,15 @@ def decimal(data: NDArray[np.uint8], start: int, end: int) -> tuple[int, float]:
         return -1, 0.0
     if not mantissa:
         return i, -0.0 if negative else 0.0
-    if not exact or mantissa > EXACT or exponent > 22 or exponent < -22:
+    if not exact:
         return -2 - i, 0.0
-    value = float(mantissa)
-    value = value * POWERS[exponent] if exponent >= 0 else value / POWERS[-exponent]
+    if mantissa <= EXACT and -22 <= exponent <= 22:
+        value = float(mantissa)
+        value = value * POWERS[exponent] if exponent >= 0 else value / POWERS[-exponent]
+    else:
+        found, value = eisel_lemire(mantissa, exponent)
+        if not found:
+            return -2 - i, 0.0
     return i, -value if negative else value
 
 
