@@ -94,7 +94,7 @@ def eisel_lemire(w: int, q: int) -> tuple[bool, float]:
     full = np.uint64(0xFFFFFFFFFFFFFFFF)
     if low == full and (q < -27 or q > 55) and high & precision == precision:
         return False, 0.0  # undecided in the paper's first version: left to Python
-    upper = np.int64(high >> np.uint64(63))
+    upper = 1 if high >> np.uint64(63) else 0
     shift = np.uint64(upper + 9)
     mantissa = high >> shift
     power = (((152170 + 65536) * q) >> 16) + 63 + upper - zeros + 1023
