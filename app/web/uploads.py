@@ -4,15 +4,23 @@ The middleware counts the bytes as they arrive (see :class:`app.web.middleware.B
 Starlette spools a large multipart file to an anonymous temporary file, which is gone when
 it is closed. We close it as soon as its bytes are read, so no upload outlives its request.
 The features (:mod:`app.mesh.uploads`, :mod:`app.points.api`) say what the files are.
+
+Starlette's multipart parser writes each piece of the body that the server received (64 KB
+from uvicorn) to that file in a thread of its pool: a hop to the thread and back for every
+64 KB, 0.15-0.2 s for a 42 MB STL. Its parser here is given the body a megabyte at a time
+(:func:`coalesced`): the same parser and the same answers, 0.08-0.11 s.
 """
 
 from __future__ import annotations
 
+from collections.abc import AsyncGenerator, AsyncIterator
+from contextlib import aclosing
 from dataclasses import dataclass
 
 from fastapi import Request
-from starlette.datastructures import UploadFile
+from starlette.datastructures import FormData, UploadFile
 from starlette.exceptions import HTTPException
+from starlette.formparsers import MultiPartException, MultiPartParser
 
 from app.config import UPLOAD_FILES
 from app.web.errors import ApiError
@@ -48,7 +56,7 @@ async def read_files(request: Request, what: str, text_fields: tuple[str, ...] =
 
 async def _multipart(request: Request, what: str, text_fields: tuple[str, ...]) -> Received:
     try:
-        form = await request.form(max_files=UPLOAD_FILES, max_fields=16)
+        form = await _form(request)
     except HTTPException as error:  # Starlette's words for a malformed multipart body
         if str(error.detail).startswith("Too many files"):
             raise ApiError(
@@ -82,3 +90,32 @@ async def _multipart(request: Request, what: str, text_fields: tuple[str, ...]) 
         empty = parts[0][0] or ""
         raise ApiError(422, f"The uploaded file {empty} is empty.".replace("  ", " "), "file")
     return Received(parts, fields)
+
+
+#: The body is handed to the multipart parser in pieces of at least this many bytes.
+PIECE = 2**20
+
+
+async def _form(request: Request) -> FormData:
+    """``request.form(max_files=UPLOAD_FILES, max_fields=16)`` as Starlette does it (its
+    parser, its limits, its 400 for a malformed body), with the body in larger pieces."""
+    try:
+        async with aclosing(request.stream()) as body, aclosing(coalesced(body)) as stream:
+            parser = MultiPartParser(request.headers, stream, max_files=UPLOAD_FILES, max_fields=16)
+            return await parser.parse()
+    except MultiPartException as error:
+        raise HTTPException(status_code=400, detail=error.message) from None
+
+
+async def coalesced(stream: AsyncIterator[bytes], size: int = PIECE) -> AsyncGenerator[bytes, None]:
+    """The bytes of ``stream`` in pieces of at least ``size`` (the last may be shorter)."""
+    pieces: list[bytes] = []
+    held = 0
+    async for piece in stream:
+        pieces.append(piece)
+        held += len(piece)
+        if held >= size:
+            yield b"".join(pieces)
+            pieces, held = [], 0
+    if pieces:
+        yield b"".join(pieces)
