@@ -23,7 +23,7 @@ from numba.core.caching import (
 # temporary file there. On a read-only root filesystem (``docker run --read-only``) every one
 # refuses, even for a NUMBA_CACHE_DIR that holds every kernel compiled while the image was
 # built (or a mount the app's user may not write), and ``njit(cache=True)`` then raises at
-# import: "cannot cache function 'index_range': no locator available". The locators below are
+# import: "cannot cache function 'index_range_kernel': no locator available". The locators below are
 # tried after numba's writable ones: they read the same folder and never write it. A kernel
 # that is not in such a cache (another CPU, another signature) is compiled in memory, as
 # without a cache, and kept for the process.

@@ -88,9 +88,9 @@ def checked_mesh(vertices: ArrayLike, faces: ArrayLike) -> CheckedMesh:
         The converted arrays and their scaling; the input arrays themselves where they were
         already float64 and intp in C order, so they must not change while it is in use.
     """
-    points = _as_vertices(vertices)
+    points, extremes = _as_vertices(vertices)
     indices = check_faces(faces, len(points))
-    return CheckedMesh(points, indices, *scaling(points))
+    return CheckedMesh(points, indices, *scaling(points, extremes))
 
 
 def as_checked(vertices: ArrayLike | CheckedMesh, faces: ArrayLike | None) -> CheckedMesh:
@@ -124,11 +124,13 @@ def check_mesh(vertices: ArrayLike, faces: ArrayLike) -> tuple[FloatArray, Index
     faces : (m, 3) intp
         C-contiguous.
     """
-    points = _as_vertices(vertices)
+    points, _ = _as_vertices(vertices)
     return points, check_faces(faces, len(points))
 
 
-def _as_vertices(vertices: ArrayLike) -> FloatArray:
+def _as_vertices(vertices: ArrayLike) -> tuple[FloatArray, tuple[float, float]]:
+    """The vertices as C-contiguous float64, checked, and their smallest and largest
+    coordinate (and 0): :func:`scaling` takes them instead of a second pass."""
     array = np.asarray(vertices)
     if array.size == 0 and array.ndim <= 2:
         array = array.reshape(0, 3)
@@ -138,10 +140,12 @@ def _as_vertices(vertices: ArrayLike) -> FloatArray:
         raise ValueError(f"vertices must have shape (n, 3), not {array.shape}.")
     points = np.ascontiguousarray(array, dtype=np.float64)
     # min and max carry a NaN or an infinity through: two passes, no temporary array.
-    if points.size and not (math.isfinite(points.min()) and math.isfinite(points.max())):
+    low = float(points.min(initial=0.0))
+    high = float(points.max(initial=0.0))
+    if not (math.isfinite(low) and math.isfinite(high)):
         row = int(np.flatnonzero(~np.isfinite(points).all(axis=1))[0])
         raise ValueError(f"vertices[{row}] has a coordinate that is not a finite number.")
-    return points
+    return points, (low, high)
 
 
 def check_faces(faces: ArrayLike, vertex_count: int) -> IndexArray:
@@ -192,7 +196,9 @@ def _index_range(array: np.ndarray) -> tuple[int, int]:
     return index_range(array)
 
 
-def scaling(vertices: FloatArray) -> tuple[FloatArray, float, int]:
+def scaling(
+    vertices: FloatArray, extremes: tuple[float, float] | None = None
+) -> tuple[FloatArray, float, int]:
     """The power of two 2**scale that brings the largest |coordinate| into [0.5, 1).
 
     Products of up to four edge coordinates then neither over- nor underflow unless the
@@ -202,8 +208,11 @@ def scaling(vertices: FloatArray) -> tuple[FloatArray, float, int]:
     which rounds exactly as ``ldexp`` does; only when that factor is not a double (all
     coordinates below 2**-1022) are the points scaled here, into a copy.
     """
-    # max(-min, max) is the largest |coordinate|, without the temporary of np.abs.
-    largest = max(-float(vertices.min(initial=0.0)), float(vertices.max(initial=0.0)))
+    # max(-min, max) is the largest |coordinate|, without the temporary of np.abs; the
+    # extremes (with 0) come from the check when it took them.
+    if extremes is None:
+        extremes = float(vertices.min(initial=0.0)), float(vertices.max(initial=0.0))
+    largest = max(-extremes[0], extremes[1])
     if largest == 0.0:
         return vertices, 1.0, 0
     scale = math.frexp(largest)[1]

@@ -207,3 +207,31 @@ def test_a_checked_mesh_holds_converted_arrays_and_their_scale() -> None:
     tiny = checked_mesh(TETRA_VERTICES * 2.0**-1040, TETRA_FACES)
     assert tiny.factor == 1.0 and tiny.scale == -1039
     assert np.array_equal(tiny.points, TETRA_VERTICES / 2)
+
+
+@pytest.mark.parametrize("planted", [0, 1, 16383, 16384, 40000, 49156])
+def test_the_index_range_over_many_blocks_finds_any_bad_index(planted: int) -> None:
+    # Faces over several of the parallel pass's blocks (the last one partial): a negative or
+    # too large index in any block, even the last row, is found, as NumPy finds it.
+    from mesh_normal.kernels import RANGE_BLOCK, index_range
+
+    rng = np.random.default_rng(planted)
+    count = 3 * RANGE_BLOCK + 5
+    faces = rng.integers(0, 1000, (count, 3))
+    assert index_range(faces) == (0, int(faces.max()))
+    for bad, words in ((-7, "negative vertex index, -7"), (5000, "refers to vertex 5000")):
+        broken = faces.copy()
+        broken[min(planted, count - 1), 2] = bad
+        assert index_range(broken) == (min(0, bad), max(int(faces.max()), bad))
+        with pytest.raises(ValueError, match=re.escape(f"faces[{min(planted, count - 1)}]")):
+            checked_mesh(rng.random((1000, 3)), broken)
+        with pytest.raises(ValueError, match=words):
+            checked_mesh(rng.random((1000, 3)), broken)
+
+
+def test_the_scale_from_the_check_is_the_scale_of_the_vertices() -> None:
+    rng = np.random.default_rng(1)
+    for size in (1e-300, 3e-5, 1.0, 7e200):
+        vertices = size * rng.standard_normal((50, 3))
+        mesh = checked_mesh(vertices, [[0, 1, 2]])
+        assert (mesh.factor, mesh.scale) == checks.scaling(vertices)[1:]
