@@ -30,6 +30,7 @@ from mesh_normal.kernels import load_numba
 from mesh_normal.orientation import _twinned_wide, orient
 from mesh_normal.points import point_normals
 from mesh_normal.points.pcd import lzf_decompress
+from mesh_normal.stored_normals import Candidate, angles_between, unit_rows
 from mesh_normal.topology import _wide_half_edges
 from mesh_normal.types import FloatArray, IndexArray
 from mesh_normal.vertices import vertex_normals
@@ -82,6 +83,9 @@ def compile_kernels() -> None:
     binary_items(
         np.frombuffer(bytes(13), np.uint8), 1, 13, 4, True, True, np.empty((1, 3), np.int64)
     )
+    # A file's stored normals against ours (every row compared, and some).
+    unit, usable = unit_rows(np.eye(3))
+    angles_between(unit, usable, Candidate(np.eye(3), np.array([False, True, False])))
     point_normals(np.random.default_rng(0).normal(size=(40, 3)), k=10)
     lzf_decompress(b"\x00a", 1)
 

@@ -375,3 +375,39 @@ def test_zero_vertex_normals_are_unusable_and_the_json_has_no_nan() -> None:
     assert none is not None and (none.compared, none.unusable) == (0, len(vertices))
     assert none.median_angle_degrees is None and none.max_angle_degrees is None
     assert strict(everything)["file_normals"]["median_angle_degrees"] is None
+
+
+def test_unit_rows_and_angles_over_many_blocks_match_numpy() -> None:
+    # The compiled passes (blocks claimed by every core) against NumPy's formulas, with rows
+    # that are not usable (zero, NaN, infinite) and rows near the ends of the double range.
+    rng = np.random.default_rng(11)
+    count = 3 * (1 << 14) + 7
+    stored = rng.standard_normal((count, 3)) * np.exp(rng.uniform(-700, 700, (count, 1)))
+    stored[5] = 0.0
+    stored[20000, 1] = np.nan
+    stored[-1, 2] = np.inf
+    stored[40000] = [1e-320, 0.0, -3e-321]
+    unit, usable = unit_rows(stored)
+    largest = np.abs(stored).max(axis=1)
+    expected_usable = np.isfinite(stored).all(axis=1) & (largest > 0)
+    assert usable.tolist() == expected_usable.tolist()
+    scaled = stored[usable] / largest[usable, None]
+    expected = scaled / np.sqrt((scaled**2).sum(axis=1))[:, None]
+    np.testing.assert_allclose(unit[usable], expected, rtol=0, atol=4e-16)
+    np.testing.assert_array_equal(unit[~usable], stored[~usable])  # divided by 1.0 twice
+
+    ours = rng.standard_normal((count, 3))
+    ours /= np.linalg.norm(ours, axis=1)[:, None]
+    missing = rng.random(count) < 0.1
+    nearby = ours + 1e-3 * rng.standard_normal((count, 3))
+    every_row = unit_rows(nearby)  # all usable: with nothing missing, every row is compared
+    for lacking in (missing, np.zeros(count, dtype=bool)):
+        for theirs, fine in ((unit, usable), every_row):
+            found = angles_between(theirs, fine, Candidate(ours, lacking))
+            rows = fine & ~lacking
+            a, b = theirs[rows], ours[rows]
+            norms = np.linalg.norm(a - b, axis=1), np.linalg.norm(a + b, axis=1)
+            assert len(found.radians) == int(rows.sum())
+            np.testing.assert_allclose(
+                found.radians, 2 * np.arctan2(*norms), rtol=1e-12, atol=1e-15
+            )
