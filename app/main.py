@@ -6,6 +6,7 @@ import importlib
 import threading
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
+from typing import Any
 
 from fastapi import FastAPI
 
@@ -128,7 +129,26 @@ def create_app(upload_limit: int | None = None, settings: config.Settings | None
     app.add_middleware(SecurityHeaders)
     app.add_middleware(HeadAsGet)
     app.add_middleware(NormalFastLane)  # outermost of ours: the common POST /api/normal
+    build_routes(app.router.routes)
     return app
+
+
+def build_routes(routes: list[Any]) -> None:
+    """Build every included router's routes now, as the app is made, instead of at the first
+    request that reaches them (FastAPI builds them lazily).
+
+    Building one creates its parameters' pydantic adapters inside ``warnings.catch_warnings``,
+    which swaps the process's warning filters: at a request, with other threads in their own
+    ``catch_warnings`` (the background imports, the workers' launchers), one thread's exit can
+    put back filters that drop FastAPI's ignore of pydantic's ``UnsupportedFieldAttributeWarning``
+    while it is still building (a CI run failed on exactly that, with warnings as errors). Built
+    here, before the lifespan starts any thread, and the first request no longer pays for it.
+    """
+    for route in routes:
+        candidates = getattr(route, "effective_candidates", None)
+        if callable(candidates):
+            build_routes(candidates())
+            route.effective_low_priority_routes()
 
 
 app = create_app()

@@ -51,3 +51,26 @@ print(page.status_code, mesh.status_code, before, "numpy" in sys.modules)
 """
     # The calculator's and the mesh form's pages load none of them; the timer loads the jobs.
     assert run(code).splitlines()[-1] == "200 200 [] True"
+
+
+def test_every_route_is_built_with_the_app_not_at_a_request(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """FastAPI builds an included router's routes lazily, at the first request, inside a
+    ``warnings.catch_warnings`` that other threads can undo; ``create_app`` builds them first."""
+    import fastapi.routing
+    from fastapi.testclient import TestClient
+
+    import app.main
+
+    built = app.main.create_app()
+
+    def refuse(*_args, **_kwargs):  # type: ignore[no-untyped-def]
+        raise AssertionError("a route was built at a request")
+
+    monkeypatch.setattr(fastapi.routing._EffectiveRouteContext, "from_api_route", refuse)
+    client = TestClient(built, raise_server_exceptions=True)  # no lifespan: no workers
+    assert client.get("/").status_code == 200
+    assert client.get("/mesh").status_code == 200
+    answer = client.post("/api/points?k=2", content=b"")
+    assert answer.status_code == 422
+    assert answer.json()["field"] == "k"
+    assert client.get("/api/normal", params={"ax": "x"}).status_code in (405, 422)
