@@ -18,7 +18,16 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from mesh_normal.kernels import AHEAD, announce_compiling, kernel, prefetch
+from mesh_normal.kernels import (
+    AHEAD,
+    PARALLEL_KERNELS,
+    announce_compiling,
+    claim,
+    kernel,
+    prange,
+    prefetch,
+    workers,
+)
 from mesh_normal.types import BoolArray, IndexArray
 
 
@@ -49,7 +58,18 @@ def weld(corners: NDArray[np.floating]) -> tuple[NDArray[np.float64], NDArray[np
         words: IndexArray = grid.view(np.int32 if grid.itemsize == 4 else np.int64)
         is_leader = np.zeros(count, dtype=bool)
         index = np.empty(count, dtype=np.intp)
-        found = _table_weld(words, _SLOT_MASK, _MOST_PROBES, is_leader, index)
+        digests = np.empty(count, dtype=np.uint32)
+        with PARALLEL_KERNELS:
+            _row_hashes(words, digests, *workers())
+        # A quarter as many slots as rows (a point is in about 6 corners), made here: NumPy
+        # asks for huge pages for a large array, and with 4 KB pages the probes waited on the
+        # page tables (the table's pass at the Dragon size 150 -> 87 ms).
+        size = 16
+        while size < count // 4:
+            size *= 2
+        table = np.full((size, 4), -1, dtype=words.dtype)
+        found = _table_weld(words, digests, table, _SLOT_MASK, _MOST_PROBES, is_leader, index)
+        del digests, table
         if found >= 0:
             vertices = np.empty((found, 3))
             _leaders(grid, is_leader, vertices)
@@ -150,78 +170,99 @@ def _words_hash(x: int, y: int, z: int, wide: bool) -> int:
     return _final(state)
 
 
+@kernel(parallel=True, python=True)
+def _row_hashes(
+    bits: IndexArray, digests: NDArray[np.uint32], counter: IndexArray, workers: int
+) -> None:
+    """Each row's 32-bit hash (:func:`_words_hash` of :func:`_row_words`), in blocks of
+    ``HASH_BLOCK`` faces claimed by every core."""
+    faces, per = bits.shape[0], bits.shape[1]
+    wide = bits.itemsize == 8
+    blocks = (faces + HASH_BLOCK - 1) // HASH_BLOCK
+    for _ in prange(workers):
+        block = claim(counter)
+        while block < blocks:
+            for face in range(block * HASH_BLOCK, min((block + 1) * HASH_BLOCK, faces)):
+                for corner in range(per):
+                    x, y, z = _row_words(bits, face, corner)
+                    digests[face * per + corner] = _words_hash(x, y, z, wide)
+            block = claim(counter)
+
+
+#: Faces per task of :func:`_row_hashes`.
+HASH_BLOCK = 1 << 13
+
+
 @kernel(python=True)
 def _table_weld(
-    bits: IndexArray, mask: int, most: int, is_leader: BoolArray, index: IndexArray
+    bits: IndexArray,
+    digests: NDArray[np.uint32],
+    table: IndexArray,
+    mask: int,
+    most: int,
+    is_leader: BoolArray,
+    index: IndexArray,
 ) -> int:
     """Number each row's point by first appearance, through a hash table of the points (the
-    rows of ``bits`` (f, c, 3) in order, ``f * c`` of them): mark each point's first row in
-    ``is_leader`` and give every row its point's number in ``index``; the number of points, or
-    -1 (and the arrays half written) when a row had to look more than ``most`` slots on.
-    -0.0 counts as 0.0 (see :func:`_row_words`).
+    rows of ``bits`` (f, c, 3) in order, ``f * c`` of them, with their hashes ``digests``):
+    mark each point's first row in ``is_leader`` and give every row its point's number in
+    ``index``; the number of points, or -1 (and the arrays half written) when a row had to
+    look more than ``most`` slots on. -0.0 counts as 0.0 (see :func:`_row_words`).
 
     One pass in row order: a row whose bits are in the table takes that point's number,
-    another starts a new point. Each slot holds a point's bits and its number (-1 when
-    free); the table starts at a power of two of at least a quarter as many slots as rows (a
-    point is in about 6 corners) and doubles when half full. The slot of the row ``AHEAD``
-    rows on is asked for in advance: the table is larger than the cache on a large mesh.
+    another starts a new point. Each slot of ``table`` (a power of two of them, all -1) holds
+    a point's bits and its number (-1 when free); the table doubles when half full. The slot
+    of the row ``AHEAD`` rows on is asked for in advance: the table is larger than the cache
+    on a large mesh.
     """
     faces, per = bits.shape[0], bits.shape[1]
     count = faces * per
     wide = bits.itemsize == 8
-    size = 16
-    while size < count // 4:
-        size *= 2
-    table = np.full((size, 4), -1, dtype=bits.dtype)
+    size = len(table)
     points = 0
-    row = 0
-    # The corner AHEAD rows on, as (face, corner): no division a row.
-    ahead_face, ahead_corner = AHEAD // per, AHEAD % per
-    for face in range(faces):
-        for corner in range(per):
-            if ahead_face < faces:
-                a, b, c = _row_words(bits, ahead_face, ahead_corner)
-                prefetch(table, _words_hash(a, b, c, wide) & mask & (size - 1))
-                ahead_corner += 1
-                if ahead_corner == per:
-                    ahead_face, ahead_corner = ahead_face + 1, 0
-            x, y, z = _row_words(bits, face, corner)
-            slot = _words_hash(x, y, z, wide) & mask & (size - 1)
-            probes = 0
-            while True:
-                number = table[slot, 3]
-                if number < 0:
-                    table[slot, 0], table[slot, 1], table[slot, 2] = x, y, z
-                    table[slot, 3] = points
-                    is_leader[row] = True
-                    index[row] = points
-                    points += 1
-                    break
-                if table[slot, 0] == x and table[slot, 1] == y and table[slot, 2] == z:
-                    index[row] = number
-                    break
-                probes += 1
-                if probes > most:
-                    return -1
-                slot = (slot + 1) & (size - 1)
-            row += 1
-            if 2 * points > size:  # half full: twice the slots, every point placed again
-                size *= 2
-                larger = np.full((size, 4), -1, dtype=bits.dtype)
-                for old in range(len(table)):
-                    if table[old, 3] < 0:
-                        continue
-                    a, b, c = int(table[old, 0]), int(table[old, 1]), int(table[old, 2])
-                    slot = _words_hash(a, b, c, wide) & mask & (size - 1)
-                    probes = 0
-                    while larger[slot, 3] >= 0:
-                        probes += 1
-                        if probes > most:
-                            return -1
-                        slot = (slot + 1) & (size - 1)
-                    for column in range(4):
-                        larger[slot, column] = table[old, column]
-                table = larger
+    face, corner = 0, -1  # the row's, counted on: no division a row
+    for row in range(count):
+        corner += 1
+        if corner == per:
+            face, corner = face + 1, 0
+        if row + AHEAD < count:
+            prefetch(table, int(digests[row + AHEAD]) & mask & (size - 1))
+        x, y, z = _row_words(bits, face, corner)
+        slot = int(digests[row]) & mask & (size - 1)
+        probes = 0
+        while True:
+            number = table[slot, 3]
+            if number < 0:
+                table[slot, 0], table[slot, 1], table[slot, 2] = x, y, z
+                table[slot, 3] = points
+                is_leader[row] = True
+                index[row] = points
+                points += 1
+                break
+            if table[slot, 0] == x and table[slot, 1] == y and table[slot, 2] == z:
+                index[row] = number
+                break
+            probes += 1
+            if probes > most:
+                return -1
+            slot = (slot + 1) & (size - 1)
+        if 2 * points > size:  # half full: twice the slots, every point placed again
+            size *= 2
+            larger = np.full((size, 4), -1, dtype=table.dtype)
+            for old in range(len(table)):
+                if table[old, 3] < 0:
+                    continue
+                a, b, c = int(table[old, 0]), int(table[old, 1]), int(table[old, 2])
+                slot = _words_hash(a, b, c, wide) & mask & (size - 1)
+                probes = 0
+                while larger[slot, 3] >= 0:
+                    probes += 1
+                    if probes > most:
+                        return -1
+                    slot = (slot + 1) & (size - 1)
+                for column in range(4):
+                    larger[slot, column] = table[old, column]
+            table = larger
     return points
 
 

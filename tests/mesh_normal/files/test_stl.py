@@ -4,7 +4,7 @@ import itertools
 
 import numpy as np
 import pytest
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from mesh_normal.files import MeshFileError, read_mesh
@@ -270,6 +270,7 @@ def test_trimesh_two_cubes_with_bare_endsolid() -> None:
     ).map(lambda values: np.array(values[: len(values) // 9 * 9]).reshape(-1, 3, 3)),
     as_text=st.booleans(),
 )
+@settings(deadline=None)  # the first example may compile the weld's kernels (seconds)
 def test_the_welded_points_are_distinct_as_the_analysis_takes_them(
     corners: np.ndarray, as_text: bool
 ) -> None:
