@@ -72,7 +72,7 @@ def read_only(array: ArrayType) -> ArrayType:
     return view
 
 
-def checked_mesh(vertices: ArrayLike, faces: ArrayLike) -> CheckedMesh:
+def checked_mesh(vertices: ArrayLike, faces: ArrayLike, *, ranged: bool = True) -> CheckedMesh:
     """Convert and check a mesh once (see :func:`check_mesh` for the rules).
 
     Parameters
@@ -81,6 +81,11 @@ def checked_mesh(vertices: ArrayLike, faces: ArrayLike) -> CheckedMesh:
         Finite coordinates (any real dtype).
     faces : (m, 3) int
         Indices into ``vertices`` (any integer dtype).
+    ranged : bool
+        False: the faces' indices are not checked against the vertices here. Only for a
+        caller whose kernel checks every index it reads before it reads the vertex, and
+        calls :func:`check_faces` for the error when one is out of range (one pass over the
+        faces fewer).
 
     Returns
     -------
@@ -89,7 +94,7 @@ def checked_mesh(vertices: ArrayLike, faces: ArrayLike) -> CheckedMesh:
         already float64 and intp in C order, so they must not change while it is in use.
     """
     points, extremes = _as_vertices(vertices)
-    indices = check_faces(faces, len(points))
+    indices = check_faces(faces, len(points), ranged=ranged)
     return CheckedMesh(points, indices, *scaling(points, extremes))
 
 
@@ -148,7 +153,7 @@ def _as_vertices(vertices: ArrayLike) -> tuple[FloatArray, tuple[float, float]]:
     return points, (low, high)
 
 
-def check_faces(faces: ArrayLike, vertex_count: int) -> IndexArray:
+def check_faces(faces: ArrayLike, vertex_count: int, *, ranged: bool = True) -> IndexArray:
     """Convert and check faces alone, for ``vertex_count`` vertices (see :func:`check_mesh`).
 
     Parameters
@@ -157,6 +162,8 @@ def check_faces(faces: ArrayLike, vertex_count: int) -> IndexArray:
         Indices, each in ``0 .. vertex_count - 1`` (any integer dtype).
     vertex_count : int
         n, the number of vertices.
+    ranged : bool
+        False: the dtype and shape only, not the range (see :func:`checked_mesh`).
 
     Returns
     -------
@@ -170,6 +177,8 @@ def check_faces(faces: ArrayLike, vertex_count: int) -> IndexArray:
         raise ValueError(f"faces must hold integer vertex indices, not {array.dtype}.")
     if array.ndim != 2 or array.shape[1] != 3:
         raise ValueError(f"faces must have shape (m, 3), not {array.shape}.")
+    if not ranged and array.dtype == np.intp:
+        return np.ascontiguousarray(array)
     low, high = _index_range(read_only(array))  # one signature (see CheckedMesh)
     if low < 0:
         row, column = np.argwhere(array < 0)[0]

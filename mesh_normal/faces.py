@@ -38,7 +38,7 @@ from typing import TypeAlias
 import numpy as np
 from numpy.typing import ArrayLike
 
-from mesh_normal.checks import CheckedMesh, as_checked
+from mesh_normal.checks import CheckedMesh, as_checked, check_faces, checked_mesh
 from mesh_normal.kernels import (
     PARALLEL_KERNELS,
     announce_compiling,
@@ -182,6 +182,15 @@ def checked_input(vertices: MeshInput, faces: ArrayLike | None) -> CheckedMesh |
     return as_checked(vertices, faces)
 
 
+def kernel_ranged_input(vertices: MeshInput, faces: ArrayLike | None) -> CheckedMesh | FaceGeometry:
+    """:func:`checked_input`, for a caller whose kernel checks each index of raw faces as it
+    reads it (``gather_checked``) and then calls ``check_faces`` for the error: raw intp faces
+    are not checked against the vertices here (one pass over them fewer)."""
+    if faces is not None and not isinstance(vertices, (CheckedMesh, FaceGeometry)):
+        return checked_mesh(vertices, faces, ranged=False)
+    return checked_input(vertices, faces)
+
+
 def face_normals(vertices: MeshInput, faces: ArrayLike | None = None) -> FaceNormals:
     """Return the unit normal and the area of every face.
 
@@ -204,13 +213,14 @@ def face_normals(vertices: MeshInput, faces: ArrayLike | None = None) -> FaceNor
     >>> face_normals([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]]).normals
     array([[0., 0., 1.]])
     """
-    mesh = checked_input(vertices, faces)
+    mesh = kernel_ranged_input(vertices, faces)
     if isinstance(mesh, FaceGeometry):
         return FaceNormals(mesh.normals, geometry_areas(mesh), mesh.degenerate)
     # From the mesh, one pass (no cross products kept): the same bits, a third of the traffic.
     count = len(mesh.faces)
     normals, areas = np.empty((count, 3)), np.empty(count)
     degenerate = np.empty(count, dtype=bool)
+    bad = np.zeros(1, dtype=np.int64)
     announce_compiling(face_normals_kernel)
     with PARALLEL_KERNELS:
         face_normals_kernel(
@@ -221,8 +231,12 @@ def face_normals(vertices: MeshInput, faces: ArrayLike | None = None) -> FaceNor
             normals,
             areas,
             degenerate,
+            bad,
             *workers(),
         )
+    if bad[0]:
+        check_faces(mesh.faces, len(mesh.points))  # the ValueError naming the first such face
+        raise AssertionError("the kernel found an index out of range that the check did not")
     return FaceNormals(normals, areas, degenerate)
 
 

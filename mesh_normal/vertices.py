@@ -27,9 +27,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from mesh_normal.checks import CheckedMesh
+from mesh_normal.checks import CheckedMesh, check_faces
 from mesh_normal.choices import Weighting as Weighting
-from mesh_normal.faces import FaceGeometry, MeshInput, checked_input
+from mesh_normal.faces import FaceGeometry, MeshInput, kernel_ranged_input
 from mesh_normal.kernels import (
     AHEAD,
     BLOCK,
@@ -40,7 +40,7 @@ from mesh_normal.kernels import (
     dot,
     face_cross,
     face_edges,
-    gather,
+    gather_checked,
     kernel,
     prange,
     prefetch,
@@ -130,12 +130,15 @@ def _face_terms_kernel(
     fused: bool,
     first: int,
     terms: FloatArray,
+    bad: IndexArray,
     counter: IndexArray,
     workers: int,
 ) -> None:
     """The terms of faces ``first`` to ``first + len(terms)`` (or the last), in whole blocks
     claimed by the workers, into row ``face - first`` of ``terms``: a vector, then its weight
-    (4 columns) or its corners' weights (6 columns).
+    (4 columns) or its corners' weights (6 columns). Where the corners are gathered, each
+    index is checked as it is read (:func:`gather_checked`): one out of range sets
+    ``bad[0]``, and the caller must not add these terms.
 
     ``"area"``: the cross product and its length; ``"uniform"``: the unit normal and 1.0; the
     others: the unit normal and each corner's weight. A degenerate face's row is zeros: adding
@@ -150,10 +153,11 @@ def _face_terms_kernel(
         block = claim(counter)
         while block < blocks:
             start = first + block * BLOCK
-            _block_terms(
+            if not _block_terms(
                 code, points, factor, faces[:stop], crosses, lengths, degenerate, fused,
                 first, start, corners, terms,
-            )  # fmt: skip
+            ):  # fmt: skip
+                bad[0] = 1
             block = claim(counter)
 
 
@@ -171,10 +175,11 @@ def _block_terms(
     start: int,
     corners: FloatArray,
     terms: FloatArray,
-) -> None:
-    """The terms of the block of faces from ``start`` (see :func:`_face_terms_kernel`)."""
-    if fused or code >= _ANGLE:
-        gather(points, factor, faces, start, corners)
+) -> bool:
+    """The terms of the block of faces from ``start`` (see :func:`_face_terms_kernel`);
+    False (and the block left) at an index out of range."""
+    if (fused or code >= _ANGLE) and gather_checked(points, factor, faces, start, corners) < 0:
+        return False
     for face in range(start, min(start + BLOCK, len(faces))):
         row = face - first
         if fused:
@@ -198,6 +203,7 @@ def _block_terms(
             else:
                 w0, w1, w2 = face_weights(code, face_edges(corners, face - start), length)
                 terms[row, 3], terms[row, 4], terms[row, 5] = w0, w1, w2
+    return True
 
 
 @kernel()
@@ -284,14 +290,20 @@ def smooth(geometry: FaceGeometry | CheckedMesh, weighting: str) -> tuple[FloatA
     columns = 6 if code >= _ANGLE else 4
     chunk = chunk_faces(len(faces), count, columns)
     terms = np.empty((chunk, columns))
+    bad = np.zeros(1, dtype=np.int64)
     announce_compiling()
     with PARALLEL_KERNELS:
         for first in range(0, len(faces), chunk):
             _face_terms_kernel(
                 code, mesh.points, mesh.factor, faces, crosses, lengths, degenerate, fused,
-                first, terms, *workers(),
+                first, terms, bad, *workers(),
             )  # fmt: skip
+            if bad[0]:  # raw faces, whose range was left to this check
+                break
             _add_terms(faces, first, terms, sums)
+    if bad[0]:
+        check_faces(faces, count)  # the ValueError naming the first such face
+        raise AssertionError("the kernel found an index out of range that the check did not")
     normals = sums.reshape(-1)[: 3 * count].reshape(count, 3)
     missing = np.empty(count, dtype=bool)
     normalise_kernel(sums, normals, missing)
@@ -324,6 +336,6 @@ def vertex_normals(
         ``normals`` (n, 3) float64 and the ``missing`` (n,) bool mask, for every vertex,
         used or not.
     """
-    source = checked_input(vertices, faces)
+    source = kernel_ranged_input(vertices, faces)  # the terms' kernel checks the indices
     weighting_code(weighting)  # refused before the kernels run
     return VertexNormals(*smooth(source, weighting))

@@ -229,6 +229,30 @@ def test_the_index_range_over_many_blocks_finds_any_bad_index(planted: int) -> N
             checked_mesh(rng.random((1000, 3)), broken)
 
 
+@pytest.mark.parametrize("planted", [0, 511, 512, 16384, 40000, 49156])
+def test_normals_find_a_bad_index_as_their_kernel_reads_it(planted: int) -> None:
+    # Raw intp faces skip the range pass: the one-pass kernel checks each index it reads, in
+    # any of its blocks, and the check then names the face, as it would have up front.
+    from mesh_normal.kernels import RANGE_BLOCK
+
+    rng = np.random.default_rng(planted)
+    vertices = rng.random((1000, 3))
+    faces = rng.integers(0, 1000, (3 * RANGE_BLOCK + 5, 3))
+    assert faces.dtype == np.intp
+    expected = face_normals(checked_mesh(vertices, faces))
+    assert np.array_equal(face_normals(vertices, faces).normals, expected.normals)
+    for bad, words in ((-7, "negative vertex index, -7"), (1000, "refers to vertex 1000")):
+        broken = faces.copy()
+        broken[planted, planted % 3] = bad
+        for call in (face_normals, vertex_normals):
+            with pytest.raises(ValueError, match=re.escape(f"faces[{planted}] ") + ".*" + words):
+                call(vertices, broken)  # type: ignore[operator]
+    assert np.array_equal(
+        vertex_normals(vertices, faces, "area").normals,
+        vertex_normals(checked_mesh(vertices, faces), weighting="area").normals,
+    )
+
+
 def test_the_scale_from_the_check_is_the_scale_of_the_vertices() -> None:
     rng = np.random.default_rng(1)
     for size in (1e-300, 3e-5, 1.0, 7e200):
