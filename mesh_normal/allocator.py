@@ -122,8 +122,8 @@ def enable_jobs() -> None:
 
 def start_job(size: int) -> None:
     """For the job about to run, in a process that :func:`enable_jobs`: keep freed memory
-    (:func:`keep_freed`) and fault ``size`` bytes in ahead (:func:`prefault`), until
-    :func:`end_job`."""
+    (:func:`keep_freed`) and fault ``size`` bytes in ahead (:func:`prefault`; none for 0),
+    until :func:`end_job`."""
     global _faulting
     if _jobs_enabled and _faulting is None and keep_freed():
         _faulting = prefault(size)

@@ -59,11 +59,18 @@ def refuse(*_args: Any) -> None:
     raise ApiError(400, "No.", "file")
 
 
-def resident(upload: Upload | None) -> int:
+def resident(upload: Upload | None, fault_ahead_from: int | None = None) -> int:
     """The worker's resident memory in MB after reading ``upload`` as its jobs do (if one is
-    given), once the prefaulting (if any) has ended."""
+    given; with ``work.FAULT_AHEAD_FROM`` set to ``fault_ahead_from`` if that is given), once
+    the prefaulting (if any) has ended."""
     if upload is not None:
-        work.load(upload)
+        usual = work.FAULT_AHEAD_FROM
+        if fault_ahead_from is not None:
+            work.FAULT_AHEAD_FROM = fault_ahead_from
+        try:
+            work.load(upload)
+        finally:
+            work.FAULT_AHEAD_FROM = usual
     for thread in threading.enumerate():
         if thread.name == "prefault":
             thread.join()

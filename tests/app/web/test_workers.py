@@ -199,15 +199,16 @@ def test_a_small_job_marked_so_runs_in_the_server_until_a_worker_is_ready(
 
 @pytest.mark.skipif(not os.path.exists("/proc/self/statm"), reason="reads /proc")
 def test_a_large_binary_stl_has_its_memory_faulted_in_and_given_back_after() -> None:
-    """A job reading a 10 MB binary STL finds 3 times that faulted in for its arrays; the next
-    job finds it given back (the prefaulting ended before the trim)."""
+    """A job reading a 10 MB binary STL (faulted in ahead from that size on, here) finds 3
+    times that faulted in for its arrays; the next job finds it given back (the prefaulting
+    ended before the trim)."""
     corners = np.random.default_rng(7).random((200_000, 3, 3))
     stl = Upload(binary_stl(corners), "big.stl")
     faulted = allocator.ARRAYS_PER_FILE_BYTE["binary stl"] * len(stl.data) >> 20
 
     async def scenario(pool: WorkerPool) -> tuple[int, int, int]:
         before = await call(pool, jobhooks.resident, None)
-        during = await call(pool, jobhooks.resident, stl)
+        during = await call(pool, jobhooks.resident, stl, len(stl.data))
         after = await call(pool, jobhooks.resident, None)
         return before, during, after
 
