@@ -846,16 +846,16 @@ def _twin_groups(
                             twinned[order[first + i]] = True
                             twinned[order[first + j]] = True
             else:
-                ranked = np.argsort(keys)
-                start = 0
-                while start < len(ranked):
-                    end = start + 1
-                    while end < len(ranked) and keys[ranked[end]] >> 1 == keys[ranked[start]] >> 1:
-                        end += 1
-                    if keys[ranked[start]] != keys[ranked[end - 1]]:  # both windings in the run
-                        for row in range(start, end):
-                            twinned[order[first + ranked[row]]] = True
-                    start = end
+                # A face is twinned when its key with the last bit flipped is in the group:
+                # looked up in the sorted keys. Not np.argsort: its compiled code, loaded from
+                # numba's cache into a process that had loaded the half-edge sort's (their
+                # sorts' symbols share names), ranked these keys wrongly.
+                ranked = np.sort(keys)
+                for row in range(last - first):
+                    other = keys[row] ^ 1
+                    at = np.searchsorted(ranked, other)
+                    if at < len(ranked) and ranked[at] == other:
+                        twinned[order[first + row]] = True
         first = last
 
 

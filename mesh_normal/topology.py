@@ -181,20 +181,16 @@ def structure(faces: IndexArray, vertex_count: int) -> Structure:
     nonmanifold_edge_list = _edge_list(key[nonmanifold], None, vertex_count)
     del key
     # The two faces of each manifold edge, and whether they run along it the same way.
-    one = face[paired]
-    paired += 1
-    two = face[paired]
-    same = forward[paired]
-    paired -= 1
-    same ^= forward[paired]
-    same ^= 1  # 1 where the two run along the edge the same way
+    one, two = np.empty(len(paired), dtype=face.dtype), np.empty(len(paired), dtype=face.dtype)
+    same = np.empty(len(paired), dtype=np.int8)
+    _pair_faces(face, forward, paired, one, two, same)
     del paired, forward
     root, parity = _connected(len(faces), one, two, same)
     patch, firsts = _numbered(root, valid)
     del root
     patches = len(firsts)
     orientable = np.ones(patches, dtype=bool)
-    orientable[patch[one[(parity[one] ^ parity[two]) != same]]] = False
+    _mark_unorientable(one, two, same, parity, patch, orientable)
     del one, two
     face_component, components = _merged(patch, patches, face, nonmanifold, uses)
     closed = np.ones(components, dtype=bool)
@@ -213,6 +209,42 @@ def structure(faces: IndexArray, vertex_count: int) -> Structure:
     # Every face valid (the common case): the groups are the patches, not a copy of them.
     group = read_only(patch) if valid.all() else np.where(valid, patch, patches)
     return Structure(topology, group, patches, parity, orientable, face_component[firsts], closed)
+
+
+@kernel(python=True)
+def _pair_faces(
+    face: IndexArray,
+    forward: NDArray[np.int8],
+    paired: IndexArray,
+    one: IndexArray,
+    two: IndexArray,
+    same: NDArray[np.int8],
+) -> None:
+    """For each manifold edge (its first half-edge at ``paired[i]`` of the sorted half-edges,
+    the second just after): its two faces, and 1 in ``same`` where they run along it the same
+    way. One pass instead of NumPy's six over the edges (0.34 s at the Lucy size)."""
+    for i in range(len(paired)):
+        first = paired[i]
+        one[i], two[i] = face[first], face[first + 1]
+        same[i] = forward[first] ^ forward[first + 1] ^ 1
+
+
+@kernel(python=True)
+def _mark_unorientable(
+    one: IndexArray,
+    two: IndexArray,
+    same: NDArray[np.int8],
+    parity: ParityArray,
+    patch: IndexArray,
+    orientable: BoolArray,
+) -> None:
+    """Mark False the patch of every edge whose two faces' parities disagree with how they
+    run along it: a patch that cannot be wound consistently (no temporaries of an edge's
+    size, as NumPy's gathers and mask made: 0.26 s at the Lucy size)."""
+    for i in range(len(one)):
+        first = one[i]
+        if parity[first] ^ parity[two[i]] != same[i]:
+            orientable[patch[first]] = False
 
 
 def _edge_list(key: IndexArray, forward: NDArray[np.int8] | None, vertex_count: int) -> IndexArray:

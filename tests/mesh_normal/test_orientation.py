@@ -414,6 +414,39 @@ def test_reversing_every_face_negates_the_volume(name: str) -> None:
     assert r.orientation == "inward" and r.flipped.all()
 
 
+TWINS_AFTER_THE_TOPOLOGY = """
+import numpy as np
+from mesh_normal import kernels, topology
+from mesh_normal.orientation import _twinned
+kernels.load_numba()
+topology.structure(topology.read_only(np.array([[0, 1, 2], [2, 1, 3]])), 4)
+rng = np.random.default_rng(7)
+faces = rng.integers(0, 3, (400, 3))  # groups of over _FEW_TWINS faces: the sorted way
+print(int(_twinned(faces).sum()))
+"""
+
+
+def test_twins_are_right_with_the_kernels_loaded_from_the_cache() -> None:
+    """The topology's kernels first, then the twins' from numba's cache, as a worker loads
+    them: twice, so that the second process loads what the first compiled. (With np.argsort
+    in the twins' kernel, a process like the second counted too few twinned faces.)"""
+    import subprocess
+    import sys
+
+    from tests.paths import ROOT
+
+    faces = np.random.default_rng(7).integers(0, 3, (400, 3))
+    expected = int(orientation._twinned_lexsorted(faces, orientation._even(faces)).sum())
+    assert expected > 0
+    for _ in range(2):
+        done = subprocess.run(
+            [sys.executable, "-c", TWINS_AFTER_THE_TOPOLOGY],
+            cwd=ROOT, capture_output=True, text=True, timeout=300, check=False,
+        )  # fmt: skip
+        assert done.returncode == 0, done.stderr[-2000:]
+        assert int(done.stdout.split()[-1]) == expected
+
+
 def test_twinned_faces_match_the_rotations_definition() -> None:
     """A face is twinned when another has its points wound the other way: by rotations of the
     sorted points, as it was computed before (without the rolled copies)."""
