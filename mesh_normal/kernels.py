@@ -409,6 +409,71 @@ def gather_checked(
     return count
 
 
+# --- sorting and searching, ours ----------------------------------------------------------
+#
+# The kernels sort and search with these instead of numba's ``.sort()``, ``np.sort``,
+# ``np.argsort`` and ``np.searchsorted``. numba generates its sort and its argsort from one
+# quicksort whose functions have the same names, and compiled code of each, saved in numba's
+# cache by different processes, can carry the same symbol: a process that loads both from the
+# cache runs whichever it loaded first for both (measured with numba 0.68.1: a cached argsort
+# loaded after a cached ``.sort()`` of int64 returned the sorted values as indices, and the
+# reverse order broke the sort). Our own functions have names of their own, so no other code
+# in the process (a user's cached argsort) can take their place, nor they its.
+
+
+@kernel(python=True)
+def sort_run(values: IndexArray, first: int, last: int) -> None:
+    """Sort ``values[first:last]`` in place, ascending: an insertion sort for up to 16 values
+    (a few, mostly in order: a vertex's half-edges), a heapsort beyond (no recursion, no
+    scratch). Integers, so any correct sort gives the same array."""
+    if last - first <= 16:
+        for row in range(first + 1, last):
+            value = values[row]
+            place = row
+            while place > first and values[place - 1] > value:
+                values[place] = values[place - 1]
+                place -= 1
+            values[place] = value
+        return
+    count = last - first
+    for start in range(count // 2 - 1, -1, -1):
+        _sift_down(values, first, start, count)
+    for end in range(count - 1, 0, -1):
+        values[first], values[first + end] = values[first + end], values[first]
+        _sift_down(values, first, 0, end)
+
+
+@kernel(python=True)
+def _sift_down(values: IndexArray, first: int, root: int, count: int) -> None:
+    """Move ``values[first + root]`` down the max-heap of ``count`` values from ``first``."""
+    value = values[first + root]
+    while True:
+        child = 2 * root + 1
+        if child >= count:
+            break
+        if child + 1 < count and values[first + child + 1] > values[first + child]:
+            child += 1
+        if values[first + child] <= value:
+            break
+        values[first + root] = values[first + child]
+        root = child
+    values[first + root] = value
+
+
+@kernel(python=True)
+def lower_bound(values: IndexArray, first: int, last: int, target: int) -> int:
+    """The first place in the sorted ``values[first:last]`` whose value is at least
+    ``target`` (``last`` if none): ``first + np.searchsorted(values[first:last], target)``."""
+    low, high = first, last
+    while low < high:
+        middle = (low + high) // 2
+        if values[middle] < target:
+            low = middle + 1
+        else:
+            high = middle
+    return low
+
+
 @kernel(python=True)
 def dot(p: Vector, q: Vector) -> float:
     return p[0] * q[0] + p[1] * q[1] + p[2] * q[2]

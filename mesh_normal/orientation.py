@@ -82,8 +82,10 @@ from mesh_normal.kernels import (
     announce_compiling,
     claim,
     kernel,
+    lower_bound,
     prange,
     prefetch,
+    sort_run,
     workers,
 )
 from mesh_normal.tolerances import (
@@ -847,14 +849,16 @@ def _twin_groups(
                             twinned[order[first + j]] = True
             else:
                 # A face is twinned when its key with the last bit flipped is in the group:
-                # looked up in the sorted keys. Not np.argsort: its compiled code, loaded from
-                # numba's cache into a process that had loaded the half-edge sort's (their
-                # sorts' symbols share names), ranked these keys wrongly.
-                ranked = np.sort(keys)
-                for row in range(last - first):
+                # looked up in a sorted copy of the keys (our sort and search, not numba's:
+                # its argsort here, loaded from the cache into a process that had loaded a
+                # sort, ranked these keys wrongly; see mesh_normal.kernels).
+                size = last - first
+                ranked = keys[:size].copy()
+                sort_run(ranked, 0, size)
+                for row in range(size):
                     other = keys[row] ^ 1
-                    at = np.searchsorted(ranked, other)
-                    if at < len(ranked) and ranked[at] == other:
+                    at = lower_bound(ranked, 0, size, other)
+                    if at < size and ranked[at] == other:
                         twinned[order[first + row]] = True
         first = last
 

@@ -47,7 +47,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from mesh_normal.checks import CheckedMesh, check_faces, read_only
 from mesh_normal.faces import FaceGeometry
-from mesh_normal.kernels import AHEAD, announce_compiling, kernel, prefetch
+from mesh_normal.kernels import AHEAD, announce_compiling, kernel, prefetch, sort_run
 from mesh_normal.types import BoolArray, FloatArray, IndexArray, ParityArray
 
 #: Sort keys (edge * 3m + half-edge, vertex * 3m + corner) must stay below this to fit int64
@@ -363,16 +363,7 @@ def _sort_wide_half_edges(
     first = 0
     for vertex in range(vertex_count):
         last = starts[vertex]
-        if last - first > 16:
-            key[first:last].sort()
-        else:
-            for row in range(first + 1, last):
-                value = key[row]
-                place = row
-                while place > first and key[place - 1] > value:
-                    key[place] = key[place - 1]
-                    place -= 1
-                key[place] = value
+        sort_run(key, first, last)  # numba's own sort: see mesh_normal.kernels
         for row in range(first, last):
             value = key[row]
             forward[row] = value & 1
@@ -448,16 +439,7 @@ def _pack_half_edges(
     first = 0
     for vertex in range(vertex_count):
         last = starts[vertex]
-        if last - first > 16:
-            packed[first:last].sort()
-        else:  # an insertion sort: a few values, mostly in order already (faces in turn)
-            for row in range(first + 1, last):
-                value = packed[row]
-                place = row
-                while place > first and packed[place - 1] > value:
-                    packed[place] = packed[place - 1]
-                    place -= 1
-                packed[place] = value
+        sort_run(packed, first, last)  # a few values, mostly in order already (faces in turn)
         first = last
 
 

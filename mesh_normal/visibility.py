@@ -45,6 +45,7 @@ from mesh_normal.kernels import (
     announce_compiling,
     claim,
     kernel,
+    lower_bound,
     prange,
     prefetch,
     workers,
@@ -419,7 +420,7 @@ def _split(codes: IndexArray, leaf: int, children: IndexArray, spans: IndexArray
                 while differ >> (bit + 1):
                     bit += 1
                 # The codes of the span share every bit above ``bit``: the first with it set.
-                mid = lo + np.searchsorted(codes[lo:hi], (codes[hi - 1] >> bit) << bit)
+                mid = lower_bound(codes, lo, hi, (codes[hi - 1] >> bit) << bit)
             children[node, 0], children[node, 1] = used, used + 1
             spans[used, 0], spans[used, 1] = lo, mid
             spans[used + 1, 0], spans[used + 1, 1] = mid, hi
