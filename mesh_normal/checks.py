@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TypeVar
+from typing import NoReturn, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -84,7 +84,7 @@ def checked_mesh(vertices: ArrayLike, faces: ArrayLike, *, ranged: bool = True) 
     ranged : bool
         False: the faces' indices are not checked against the vertices here. Only for a
         caller whose kernel checks every index it reads before it reads the vertex, and
-        calls :func:`check_faces` for the error when one is out of range (one pass over the
+        calls :func:`refuse_faces` for the error when one is out of range (one pass over the
         faces fewer).
 
     Returns
@@ -192,6 +192,13 @@ def check_faces(faces: ArrayLike, vertex_count: int, *, ranged: bool = True) -> 
         )
         raise ValueError(f"faces[{row}] refers to vertex {array[row, column]}, but {there}.")
     return np.ascontiguousarray(array, dtype=np.intp)
+
+
+def refuse_faces(faces: IndexArray, vertex_count: int) -> NoReturn:
+    """The ``ValueError`` of :func:`check_faces` naming the first face with an index out of
+    range: for a kernel that found one as it read raw faces (see :func:`checked_mesh`)."""
+    check_faces(faces, vertex_count)
+    raise AssertionError("a kernel found an index out of range that the check did not")
 
 
 def _index_range(array: np.ndarray) -> tuple[int, int]:

@@ -38,7 +38,7 @@ from typing import TypeAlias
 import numpy as np
 from numpy.typing import ArrayLike
 
-from mesh_normal.checks import CheckedMesh, as_checked, check_faces, checked_mesh
+from mesh_normal.checks import CheckedMesh, as_checked, checked_mesh, refuse_faces
 from mesh_normal.kernels import (
     PARALLEL_KERNELS,
     announce_compiling,
@@ -184,7 +184,7 @@ def checked_input(vertices: MeshInput, faces: ArrayLike | None) -> CheckedMesh |
 
 def kernel_ranged_input(vertices: MeshInput, faces: ArrayLike | None) -> CheckedMesh | FaceGeometry:
     """:func:`checked_input`, for a caller whose kernel checks each index of raw faces as it
-    reads it (``gather_checked``) and then calls ``check_faces`` for the error: raw intp faces
+    reads it (``gather``) and then calls ``refuse_faces`` for the error: raw intp faces
     are not checked against the vertices here (one pass over them fewer)."""
     if faces is not None and not isinstance(vertices, (CheckedMesh, FaceGeometry)):
         return checked_mesh(vertices, faces, ranged=False)
@@ -235,8 +235,7 @@ def face_normals(vertices: MeshInput, faces: ArrayLike | None = None) -> FaceNor
             *workers(),
         )
     if bad[0]:
-        check_faces(mesh.faces, len(mesh.points))  # the ValueError naming the first such face
-        raise AssertionError("the kernel found an index out of range that the check did not")
+        refuse_faces(mesh.faces, len(mesh.points))
     return FaceNormals(normals, areas, degenerate)
 
 

@@ -368,34 +368,16 @@ def gather(
 ) -> int:
     """Copy A, B, C of faces ``start`` on, times ``factor``, into the rows of ``corners``.
 
-    ``corners`` is (block, 9); returns how many rows were filled. The points of the face
-    ``AHEAD`` rows on are asked for in advance (:func:`prefetch`).
+    ``corners`` is (block, 9); returns how many rows were filled, or -1 (and the rows half
+    filled) at the first index that is not a row of ``points``: the face kernels of raw faces
+    check their indices here, as they read them (a checked mesh's never are). The points of
+    the face ``AHEAD`` rows on are asked for in advance (:func:`prefetch`; an address asked
+    for is never read, so it needs no check).
     """
     count = min(len(corners), len(faces) - start)
     for row in range(count):
         ahead = start + row + AHEAD  # written out: the call measured 7% slower here
         if ahead < len(faces):
-            prefetch(points, faces[ahead, 0])
-            prefetch(points, faces[ahead, 1])
-            prefetch(points, faces[ahead, 2])
-        for k in range(3):
-            vertex = faces[start + row, k]
-            corners[row, 3 * k] = points[vertex, 0] * factor
-            corners[row, 3 * k + 1] = points[vertex, 1] * factor
-            corners[row, 3 * k + 2] = points[vertex, 2] * factor
-    return count
-
-
-@kernel(python=True)
-def gather_checked(
-    points: FloatArray, factor: float, faces: IndexArray, start: int, corners: FloatArray
-) -> int:
-    """:func:`gather`, for faces whose indices were not checked: -1 (and the rows half
-    filled) at the first index that is not a row of ``points``."""
-    count = min(len(corners), len(faces) - start)
-    for row in range(count):
-        ahead = start + row + AHEAD
-        if ahead < len(faces):  # an address asked for in advance is never read: no check
             prefetch(points, faces[ahead, 0])
             prefetch(points, faces[ahead, 1])
             prefetch(points, faces[ahead, 2])
@@ -621,8 +603,8 @@ def face_normals_kernel(
     double (the same single rounding, without a call per face; measured a third of the
     kernel's time).
 
-    The faces' indices are checked as they are read (:func:`gather_checked`): one out of
-    range sets ``bad[0]`` and its block is left, so the caller raises instead of returning.
+    The faces' indices are checked as they are read (:func:`gather`): one out of range sets
+    ``bad[0]`` and its block is left, so the caller raises instead of returning.
     """
     blocks = (len(faces) + BLOCK - 1) // BLOCK
     power = math.ldexp(1.0, exponent) if -1022 <= exponent <= 1023 else 0.0
@@ -631,7 +613,7 @@ def face_normals_kernel(
         block = claim(counter)
         while block < blocks:
             start = block * BLOCK
-            filled = gather_checked(points, factor, faces, start, corners)
+            filled = gather(points, factor, faces, start, corners)
             if filled < 0:
                 bad[0], filled = 1, 0
             for row in range(filled):

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from mesh_normal.checks import CheckedMesh, check_faces
+from mesh_normal.checks import CheckedMesh, refuse_faces
 from mesh_normal.choices import Weighting as Weighting
 from mesh_normal.faces import FaceGeometry, MeshInput, kernel_ranged_input
 from mesh_normal.kernels import (
@@ -40,7 +40,7 @@ from mesh_normal.kernels import (
     dot,
     face_cross,
     face_edges,
-    gather_checked,
+    gather,
     kernel,
     prange,
     prefetch,
@@ -137,7 +137,7 @@ def _face_terms_kernel(
     """The terms of faces ``first`` to ``first + len(terms)`` (or the last), in whole blocks
     claimed by the workers, into row ``face - first`` of ``terms``: a vector, then its weight
     (4 columns) or its corners' weights (6 columns). Where the corners are gathered, each
-    index is checked as it is read (:func:`gather_checked`): one out of range sets
+    index is checked as it is read (``gather``): one out of range sets
     ``bad[0]``, and the caller must not add these terms.
 
     ``"area"``: the cross product and its length; ``"uniform"``: the unit normal and 1.0; the
@@ -178,7 +178,7 @@ def _block_terms(
 ) -> bool:
     """The terms of the block of faces from ``start`` (see :func:`_face_terms_kernel`);
     False (and the block left) at an index out of range."""
-    if (fused or code >= _ANGLE) and gather_checked(points, factor, faces, start, corners) < 0:
+    if (fused or code >= _ANGLE) and gather(points, factor, faces, start, corners) < 0:
         return False
     for face in range(start, min(start + BLOCK, len(faces))):
         row = face - first
@@ -302,8 +302,7 @@ def smooth(geometry: FaceGeometry | CheckedMesh, weighting: str) -> tuple[FloatA
                 break
             _add_terms(faces, first, terms, sums)
     if bad[0]:
-        check_faces(faces, count)  # the ValueError naming the first such face
-        raise AssertionError("the kernel found an index out of range that the check did not")
+        refuse_faces(faces, count)
     normals = sums.reshape(-1)[: 3 * count].reshape(count, 3)
     missing = np.empty(count, dtype=bool)
     normalise_kernel(sums, normals, missing)
