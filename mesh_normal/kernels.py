@@ -188,6 +188,8 @@ def load_numba() -> None:
 
         python_claim, atomic_claim = claim, _claim_intrinsic()
         python_prefetch, llvm_prefetch = prefetch, _prefetch_intrinsic()
+        python_peek, atomic_peek = peek, _peek_intrinsic()
+        python_bump, atomic_bump = bump, _bump_intrinsic()
         waiting = [made for made in _KERNELS if isinstance(made, Kernel)]
         for made in waiting:
             made.dispatcher = _dispatcher(made.py_func, made.options)
@@ -202,6 +204,10 @@ def load_numba() -> None:
                     namespace[name] = atomic_claim
                 elif name == "prefetch" and value is python_prefetch:
                     namespace[name] = llvm_prefetch
+                elif name == "peek" and value is python_peek:
+                    namespace[name] = atomic_peek
+                elif name == "bump" and value is python_bump:
+                    namespace[name] = atomic_bump
         _numba_loaded = True
 
 
@@ -541,6 +547,63 @@ def _claim_intrinsic() -> Any:
         return types.int64(counter), codegen
 
     return _claim
+
+
+def peek(counter: IndexArray) -> int:
+    """``counter[0]``, read as one atomic step that later reads do not pass (an acquire): what
+    a worker waits on while another one finishes a task (:func:`bump`). The stand-in for a
+    kernel's Python source reads it; :func:`load_numba` puts :func:`_peek_intrinsic` in its
+    place."""
+    return int(counter[0])
+
+
+def bump(counter: IndexArray) -> None:
+    """``counter[0] += 1`` as one atomic step that earlier writes do not pass (a release): a
+    worker says that a task's results are written (see :func:`peek`). The stand-in for a
+    kernel's Python source adds; :func:`load_numba` puts :func:`_bump_intrinsic` in its
+    place."""
+    counter[0] += 1
+
+
+def _peek_intrinsic() -> Any:
+    """numba's ``peek``: an atomic load (acquire) of ``counter[0]``, never hoisted out of the
+    loop that waits on it."""
+    from numba import types
+    from numba.extending import intrinsic
+
+    @intrinsic
+    def _peek(typingctx: Any, counter: Any) -> Any:  # noqa: ARG001 (numba's typing context)
+        if not (isinstance(counter, types.Array) and counter.dtype == types.int64):
+            return None
+
+        def codegen(context: Any, builder: Any, signature: Any, arguments: Any) -> Any:
+            array = context.make_array(signature.args[0])(context, builder, arguments[0])
+            return builder.load_atomic(array.data, "acquire", 8)
+
+        return types.int64(counter), codegen
+
+    return _peek
+
+
+def _bump_intrinsic() -> Any:
+    """numba's ``bump``: ``counter[0] += 1`` as one atomic add (release)."""
+    from numba import types
+    from numba.extending import intrinsic
+
+    @intrinsic
+    def _bump(typingctx: Any, counter: Any) -> Any:  # noqa: ARG001 (numba's typing context)
+        if not (isinstance(counter, types.Array) and counter.dtype == types.int64):
+            return None
+
+        def codegen(context: Any, builder: Any, signature: Any, arguments: Any) -> Any:
+            array = context.make_array(signature.args[0])(context, builder, arguments[0])
+            one = context.get_constant(types.int64, 1)
+            builder.atomic_rmw("add", array.data, one, "release")
+            return context.get_dummy_value()
+
+        return types.none(counter), codegen
+
+    return _bump
 
 
 def workers() -> tuple[IndexArray, int]:

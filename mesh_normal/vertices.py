@@ -11,9 +11,9 @@ Each corner (one vertex of one face) gives its face's unit normal a weight:
   its neighbours lie on a sphere.
 
 The sums are compiled with numba (see :mod:`mesh_normal.kernels`): chunk by chunk, every core
-takes the faces' weighted normals, from their :class:`~mesh_normal.faces.FaceGeometry`, and then
-one thread adds them into their three vertices in face order, so the bits are the same on any
-number of cores; each sum is normalised once. Degenerate faces (see
+takes the faces' weighted normals, from their :class:`~mesh_normal.faces.FaceGeometry`, while
+one thread adds the chunks already taken into their three vertices in face order, so the bits
+are the same on any number of cores; each sum is normalised once. Degenerate faces (see
 :mod:`mesh_normal.faces`) weigh nothing. A vertex in no usable face, or whose sum cancels (at
 most ``MESH_CANCELLED_SUM`` of its total weight), gets a zero row and ``True`` in the
 ``missing`` mask; nothing is NaN.
@@ -36,12 +36,14 @@ from mesh_normal.kernels import (
     DEGENERATE,
     PARALLEL_KERNELS,
     announce_compiling,
+    bump,
     claim,
     dot,
     face_cross,
     face_edges,
     gather,
     kernel,
+    peek,
     prange,
     prefetch,
     workers,
@@ -101,64 +103,18 @@ def face_weights(code: int, edges: Edges, length: float) -> Vector:
     return length / (s2 * s0), length / (s0 * s1), length / (s1 * s2)
 
 
-#: Faces per chunk of the sums, at most. Each chunk's terms are taken on every core (the
-#: products, the weights: most of the arithmetic), then one thread adds them into the vertices
-#: in face order, so each vertex's sum is added in the same order on any number of cores and
-#: has the same bits. Fewer, larger chunks are faster (the terms and the sums evict each
-#: other's rows from the cache between chunks: at the Dragon size, one chunk 25 ms, two 27,
-#: four 32), but a chunk's terms (32 or 48 bytes a face) are kept within 1.5 times the size of
-#: the normals returned (24 bytes a vertex), so that the extra memory stays under twice it.
-CHUNK = 1 << 22
-
-
-def chunk_faces(faces: int, vertices: int, columns: int) -> int:
-    """The faces per chunk of :func:`smooth` for terms of ``columns`` doubles (see
-    :data:`CHUNK`): at least a block, at most every face (and 1 for no faces)."""
-    within = 36 * vertices // (8 * columns)  # 1.5 times the normals' 24 bytes a vertex
-    return max(1, min(faces, max(BLOCK, min(CHUNK, within))))
-
-
-@kernel(parallel=True)
-def _face_terms_kernel(
-    code: int,
-    points: FloatArray,
-    factor: float,
-    faces: IndexArray,
-    crosses: FloatArray,
-    lengths: FloatArray,
-    degenerate: BoolArray,
-    fused: bool,
-    first: int,
-    terms: FloatArray,
-    bad: IndexArray,
-    counter: IndexArray,
-    workers: int,
-) -> None:
-    """The terms of faces ``first`` to ``first + len(terms)`` (or the last), in whole blocks
-    claimed by the workers, into row ``face - first`` of ``terms``: a vector, then its weight
-    (4 columns) or its corners' weights (6 columns). Where the corners are gathered, each
-    index is checked as it is read (``gather``): one out of range sets
-    ``bad[0]``, and the caller must not add these terms.
-
-    ``"area"``: the cross product and its length; ``"uniform"``: the unit normal and 1.0; the
-    others: the unit normal and each corner's weight. A degenerate face's row is zeros: adding
-    them changes no sum (a sum that starts at 0.0 is never -0.0). ``fused``: the cross products
-    are taken here, as ``geometry_kernel`` takes them, else read from ``crosses`` and
-    ``lengths``; the corners are gathered where they are taken or the weights need the edges.
-    """
-    stop = min(first + len(terms), len(faces))
-    blocks = (stop - first + BLOCK - 1) // BLOCK
-    for _ in prange(workers):  # blocks write disjoint rows: any worker may take any block
-        corners = np.empty((BLOCK, 9))
-        block = claim(counter)
-        while block < blocks:
-            start = first + block * BLOCK
-            if not _block_terms(
-                code, points, factor, faces[:stop], crosses, lengths, degenerate, fused,
-                first, start, corners, terms,
-            ):  # fmt: skip
-                bad[0] = 1
-            block = claim(counter)
+#: Faces per chunk of the sums. The workers take the terms of a chunk's blocks (the products,
+#: the weights: most of the arithmetic) while one of them adds the chunks already taken into
+#: their vertices, in face order, so each vertex's sum is added in the same order on any number
+#: of cores and has the same bits (:func:`_sums_kernel`). At the Dragon size this took the
+#: area-weighted sums from 31 to 21 ms (best of 15), and 1.20 to 0.81 s at the Lucy size, against
+#: taking each chunk's terms on every core and then adding them on one (64, 16 and 256 blocks a
+#: chunk measured alike; 256 with 3 slots slower).
+CHUNK = 64 * BLOCK
+#: Chunks whose terms are held at once: the workers run up to three chunks ahead of the adder.
+#: The terms of ``SLOTS * CHUNK`` faces (32 or 48 bytes a face: 6 MiB at most) are all the
+#: memory the sums take beyond their own.
+SLOTS = 4
 
 
 @kernel()
@@ -176,8 +132,17 @@ def _block_terms(
     corners: FloatArray,
     terms: FloatArray,
 ) -> bool:
-    """The terms of the block of faces from ``start`` (see :func:`_face_terms_kernel`);
-    False (and the block left) at an index out of range."""
+    """The terms of the block of faces from ``start`` into row ``face - first`` of ``terms``:
+    a vector, then its weight (4 columns) or its corners' weights (6 columns); False (and the
+    block left) at an index out of range. Where the corners are gathered, each index is
+    checked as it is read (``gather``).
+
+    ``"area"``: the cross product and its length; ``"uniform"``: the unit normal and 1.0; the
+    others: the unit normal and each corner's weight. A degenerate face's row is zeros: adding
+    them changes no sum (a sum that starts at 0.0 is never -0.0). ``fused``: the cross products
+    are taken here, as ``geometry_kernel`` takes them, else read from ``crosses`` and
+    ``lengths``; the corners are gathered where they are taken or the weights need the edges.
+    """
     if (fused or code >= _ANGLE) and gather(points, factor, faces, start, corners) < 0:
         return False
     for face in range(start, min(start + BLOCK, len(faces))):
@@ -206,9 +171,72 @@ def _block_terms(
     return True
 
 
+@kernel(parallel=True)
+def _sums_kernel(
+    code: int,
+    points: FloatArray,
+    factor: float,
+    faces: IndexArray,
+    crosses: FloatArray,
+    lengths: FloatArray,
+    degenerate: BoolArray,
+    fused: bool,
+    terms: FloatArray,
+    chunk: int,
+    sums: FloatArray,
+    progress: IndexArray,
+    bad: IndexArray,
+    workers: int,
+) -> None:
+    """Every vertex's sum, chunk by chunk of ``chunk`` faces: the workers take the terms of a
+    chunk's blocks (:func:`_block_terms`) into one of the ``len(terms) // chunk`` slots of
+    ``terms``, and one of them, the adder, adds each chunk's terms into ``sums`` in face order
+    (:func:`_add_terms`) as soon as all its blocks are written, while the others go on to the
+    next chunks' terms. The adder takes terms too when it waits for none.
+
+    ``progress`` (int64, zeros, 2 + 2 chunks): the ticket that makes the first worker the
+    adder, the number of chunks added, then each chunk's next block to take and its blocks
+    written. A worker takes a chunk's blocks only once the chunk that last used its slot has
+    been added. An index out of range sets ``bad[0]`` (the sums are then not to be used).
+    """
+    count = len(faces)
+    chunks = (count + chunk - 1) // chunk
+    slots = len(terms) // chunk
+    added = progress[1:2]
+    for _ in prange(workers):
+        corners = np.empty((BLOCK, 9))
+        adder = claim(progress[0:1]) == 0
+        for c in range(chunks):
+            first = c * chunk
+            stop = min(first + chunk, count)
+            blocks = (stop - first + BLOCK - 1) // BLOCK
+            at = (c % slots) * chunk
+            slot = terms[at : at + chunk]
+            taken = progress[2 + c : 3 + c]
+            written = progress[2 + chunks + c : 3 + chunks + c]
+            while peek(added) < c - slots + 1:  # the slot's last chunk is still being added
+                pass
+            block = claim(taken)
+            while block < blocks:
+                start = first + block * BLOCK
+                if not _block_terms(
+                    code, points, factor, faces[:stop], crosses, lengths, degenerate, fused,
+                    first, start, corners, slot,
+                ):  # fmt: skip
+                    bad[0] = 1
+                bump(written)
+                block = claim(taken)
+            if adder:
+                while peek(written) < blocks:  # another worker's last blocks of the chunk
+                    pass
+                if bad[0] == 0:
+                    _add_terms(faces[:stop], first, slot, sums)
+                bump(added)
+
+
 @kernel()
 def _add_terms(faces: IndexArray, first: int, terms: FloatArray, sums: FloatArray) -> None:
-    """Add the terms of faces ``first`` on (see :func:`_face_terms_kernel`) into their
+    """Add the terms of faces ``first`` on (see :func:`_block_terms`) into their
     vertices' rows of ``sums``, (n, 4): the weighted normal, then the weight, so that each
     corner updates one cache line. With one weight, each corner adds the vector and the
     weight as they are (area: the cross product; uniform: the unit normal, times 1.0 exactly);
@@ -274,9 +302,9 @@ def smooth(geometry: FaceGeometry | CheckedMesh, weighting: str) -> tuple[FloatA
     """Vertex normals and their mask, from the face geometry, or from a checked mesh whose
     cross products are taken as they are needed (the same bits, none of them kept).
 
-    Chunk by chunk, the faces' terms are taken on every core and then added in face order
-    (:data:`CHUNK`). The sums are (n, 4) and the normals are packed into the same memory as
-    (n, 3).
+    Chunk by chunk, the faces' terms are taken on every core while one of them adds the
+    chunks taken in face order (:data:`CHUNK`, :func:`_sums_kernel`). The sums are (n, 4) and
+    the normals are packed into the same memory as (n, 3).
     """
     code = weighting_code(weighting)
     if isinstance(geometry, FaceGeometry):
@@ -288,19 +316,16 @@ def smooth(geometry: FaceGeometry | CheckedMesh, weighting: str) -> tuple[FloatA
     count, faces = len(mesh.vertices), mesh.faces
     sums = np.zeros((count, 4))
     columns = 6 if code >= _ANGLE else 4
-    chunk = chunk_faces(len(faces), count, columns)
-    terms = np.empty((chunk, columns))
     bad = np.zeros(1, dtype=np.int64)
     announce_compiling()
+    chunk = max(1, min(len(faces), CHUNK))
+    terms = np.empty((SLOTS * chunk, columns))
+    progress = np.zeros(2 + 2 * ((len(faces) + chunk - 1) // chunk), dtype=np.int64)
     with PARALLEL_KERNELS:
-        for first in range(0, len(faces), chunk):
-            _face_terms_kernel(
-                code, mesh.points, mesh.factor, faces, crosses, lengths, degenerate, fused,
-                first, terms, bad, *workers(),
-            )  # fmt: skip
-            if bad[0]:  # raw faces, whose range was left to this check
-                break
-            _add_terms(faces, first, terms, sums)
+        _sums_kernel(
+            code, mesh.points, mesh.factor, faces, crosses, lengths, degenerate, fused, terms,
+            chunk, sums, progress, bad, workers()[1],
+        )  # fmt: skip
     if bad[0]:
         refuse_faces(faces, count)
     normals = sums.reshape(-1)[: 3 * count].reshape(count, 3)

@@ -172,11 +172,9 @@ def test_a_checked_mesh_is_checked_once_and_its_cross_products_computed_once(
 
     # The one-pass kernels take the cross products too: of faces from a mesh, and the vertex
     # sums' terms when fused (their eighth argument).
-    real_faces, real_sums = faces_module.face_normals_kernel, vertices_module._face_terms_kernel
+    real_faces, real_sums = faces_module.face_normals_kernel, vertices_module._sums_kernel
     monkeypatch.setattr(faces_module, "face_normals_kernel", counting(real_faces, lambda *_: True))
-    monkeypatch.setattr(
-        vertices_module, "_face_terms_kernel", counting(real_sums, lambda *a: bool(a[7]))
-    )
+    monkeypatch.setattr(vertices_module, "_sums_kernel", counting(real_sums, lambda *a: bool(a[7])))
     monkeypatch.setattr(checks, "_as_vertices", counted_check)
     monkeypatch.setattr(faces_module, "geometry_kernel", counted_kernel)
     geometry = face_geometry(vertices, faces)
