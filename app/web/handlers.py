@@ -92,16 +92,17 @@ NO_TEMP_DIR = "No usable temporary directory"
 
 #: The answer then: the server's own state, said as such (not a 500, not the user's fault).
 NO_TEMP_DIR_SENTENCE = (
-    "The server has no writable temporary folder to hold an upload over 1 MB; "
+    "The server has no writable temporary folder for this request; "
     "its operator must give it one (a tmpfs at /tmp)."
 )
 
 
 def temp_dir_problem() -> str | None:
-    """Why uploads over 1 MB cannot be spooled (no writable temporary folder), or None.
+    """Why no temporary file can be made (no writable temporary folder), or None.
 
-    Starlette spools every multipart file over 1 MB to a temporary file; on a read-only
-    filesystem without a tmpfs at /tmp there is none to make.
+    On a read-only filesystem without a tmpfs at /tmp there is none to make: the worker
+    processes cannot start (:mod:`app.web.jobs` says so). Uploads need none: they are kept in
+    memory (:mod:`app.web.uploads`).
     """
     try:
         tempfile.gettempdir()
@@ -128,18 +129,8 @@ async def on_crash(request: Request, _exc: Exception) -> Response:
 
 
 def install(app: FastAPI) -> None:
-    """Register the one set of handlers that turns every failure into an ApiError.
-
-    At start-up, say in the log when there is no writable temporary folder: uploads over 1 MB
-    are then refused with 503 until one is mounted.
-    """
-    problem = temp_dir_problem()
-    if problem is not None:
-        logger.warning(
-            "%s: uploads over 1 MB will be refused (503) until a writable temporary folder "
-            "is mounted, e.g. `docker run --read-only --tmpfs /tmp ...`",
-            problem,
-        )
+    """Register the one set of handlers that turns every failure into an ApiError (a missing
+    temporary folder, where something needs one, into a 503 that says so)."""
     app.add_exception_handler(FileNotFoundError, on_file_not_found)
     app.add_exception_handler(ApiError, on_api_error)
     app.add_exception_handler(RequestValidationError, on_validation)

@@ -526,7 +526,7 @@ def test_mesh_work_runs_off_the_event_loop(monkeypatch: pytest.MonkeyPatch) -> N
 
 @pytest.mark.skipif(not Path("/proc/self/fd").exists(), reason="needs /proc")
 def test_no_upload_outlives_its_request(client: TestClient) -> None:
-    """A large upload is spooled to a temporary file; it is closed (and so gone) afterwards."""
+    """A large upload leaves no file open afterwards (none is made: it is kept in memory)."""
     import os
 
     big = CUBE_OBJ + "# padding to pass the 1 MB spooling threshold\n" * 40_000

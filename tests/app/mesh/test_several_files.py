@@ -147,7 +147,7 @@ def test_the_upload_limit_counts_every_file_together(small_limit: TestClient) ->
 
 @pytest.mark.skipif(not Path("/proc/self/fd").exists(), reason="needs /proc")
 def test_no_file_outlives_its_request(client: TestClient) -> None:
-    """Files beyond 1 MB are spooled to temporary files; every one is closed afterwards."""
+    """Files beyond 1 MB (Starlette's default spool) leave no file open afterwards."""
     big = ("file", ("big.txt", b"# padding past the spooling threshold\n" * 30_000))
     client.post("/api/mesh", files=obj_with_mtl())  # warm up
     before = set(os.listdir("/proc/self/fd"))
