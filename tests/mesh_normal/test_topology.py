@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from mesh_normal import topology
-from mesh_normal.kernels import load_numba
+from mesh_normal.kernels import PARALLEL_KERNELS, load_numba, workers
 
 
 def reference(faces: np.ndarray, valid: np.ndarray, vertex_count: int) -> np.ndarray:
@@ -31,6 +31,8 @@ def packed_sorted(faces: np.ndarray, valid: np.ndarray, vertex_count: int, pytho
     if not python:
         load_numba()
     run(faces, valid, vertex_count, bits, packed, starts)
+    with PARALLEL_KERNELS:  # each run sorted on every core (as Python too, before numba loads)
+        topology._sort_runs(packed, starts, *workers())
     return packed
 
 
@@ -113,7 +115,25 @@ def test_the_wide_sort_gives_what_a_lexsort_gives(vertex_count, faces, fan, pyth
     else:
         load_numba()
     bits = len(faces).bit_length() + 1
-    run(faces, valid, vertex_count, bits, key, face, forward, starts)
+    run(faces, valid, vertex_count, bits, key, starts)
+    with PARALLEL_KERNELS:
+        topology._split_runs(key, face, forward, starts, bits, *workers())
     expected = lexsorted(faces, valid, vertex_count)
     for got, want in zip((key, face, forward), expected, strict=True):
+        assert np.array_equal(got, want)
+
+
+def test_runs_of_many_vertex_blocks_are_each_sorted() -> None:
+    """More vertices than one task of the run sorts takes (``RUN_BLOCK``): the blocks claimed
+    by every core join up, in the packed sort and in the wide one."""
+    rng = np.random.default_rng(11)
+    vertex_count = 3 * topology.RUN_BLOCK + 5
+    faces = rng.integers(0, vertex_count, size=(40_000, 3))
+    valid = valid_of(faces)
+    load_numba()
+    assert np.array_equal(
+        packed_sorted(faces, valid, vertex_count, False), reference(faces, valid, vertex_count)
+    )
+    key, face, forward = topology._wide_half_edges(faces, valid, vertex_count)
+    for got, want in zip((key, face, forward), lexsorted(faces, valid, vertex_count), strict=True):
         assert np.array_equal(got, want)
