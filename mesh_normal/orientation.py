@@ -792,16 +792,17 @@ def _twinned_wide(faces: IndexArray, width: int) -> BoolArray:
     order: IndexArray = np.empty(len(faces), dtype=np.int32 if len(faces) < 2**31 else np.intp)
     twinned = np.zeros(len(faces), dtype=bool)
     announce_compiling()
-    _twin_groups(faces, width, starts, order, twinned)
+    _twin_groups(faces, width, starts, order)
+    with PARALLEL_KERNELS:
+        _twin_runs(faces, width, starts, order, twinned, *workers())
     return twinned
 
 
 @kernel(python=True)
-def _twin_groups(
-    faces: IndexArray, width: int, starts: IndexArray, order: IndexArray, twinned: BoolArray
-) -> None:
-    """Mark in ``twinned`` (m zeros) the faces whose three points another face has, wound the
-    other way; ``starts`` (width + 1 zeros) and ``order`` (m) are scratch space."""
+def _twin_groups(faces: IndexArray, width: int, starts: IndexArray, order: IndexArray) -> None:
+    """Group the faces by their smallest point for :func:`_twin_runs`, which marks the faces
+    whose three points another face has, wound the other way: ``order`` (m) the faces by
+    group, ``starts`` (width + 1 zeros) then each group's end."""
     # A counting sort, asking for the places of faces ahead (far apart in a large mesh). The
     # smallest point of a face is written out at each use: called as a helper kernel (one for
     # the smallest point, one for each request) the sort took three times as long (at the
@@ -823,44 +824,84 @@ def _twin_groups(
         low = min(faces[face, 0], min(faces[face, 1], faces[face, 2]))
         order[starts[low]] = face
         starts[low] += 1
-    first = 0
-    few = np.empty(_FEW_TWINS, dtype=np.int64)  # the keys of a small group: no allocation each
-    for point in range(width):
-        last = starts[point]
-        if last - first > 1:
-            # Each face of the group as (middle * width + highest) * 2 + even, even meaning
-            # wound as its sorted points: twins share all but the last bit.
-            keys = few if last - first <= _FEW_TWINS else np.empty(last - first, dtype=np.int64)
-            for row in range(first, last):
-                if row + AHEAD < count:
-                    prefetch(faces, order[row + AHEAD])
-                a, b, c = faces[order[row], 0], faces[order[row], 1], faces[order[row], 2]
-                low, high = min(a, min(b, c)), max(a, max(b, c))
-                ascents = (1 if a < b else 0) + (1 if b < c else 0) + (1 if c < a else 0)
-                even = ascents == 2 or a == b or b == c or c == a
-                keys[row - first] = ((a + b + c - low - high) * width + high) * 2 + (
-                    1 if even else 0
-                )
-            if last - first <= _FEW_TWINS:
-                for i in range(last - first):
-                    for j in range(i + 1, last - first):
-                        if keys[i] ^ keys[j] == 1:
-                            twinned[order[first + i]] = True
-                            twinned[order[first + j]] = True
-            else:
-                # A face is twinned when its key with the last bit flipped is in the group:
-                # looked up in a sorted copy of the keys (our sort and search, not numba's:
-                # its argsort here, loaded from the cache into a process that had loaded a
-                # sort, ranked these keys wrongly; see mesh_normal.kernels).
-                size = last - first
-                ranked = keys[:size].copy()
-                sort_run(ranked, 0, size)
-                for row in range(size):
-                    other = keys[row] ^ 1
-                    at = lower_bound(ranked, 0, size, other)
-                    if at < size and ranked[at] == other:
-                        twinned[order[first + row]] = True
-        first = last
+    # ``starts`` now holds each point's end: _twin_runs compares the groups, on every core.
+
+
+#: Points per task of :func:`_twin_runs`.
+_TWIN_BLOCK = 4096
+
+
+@kernel(parallel=True, python=True)
+def _twin_runs(
+    faces: IndexArray,
+    width: int,
+    ends: IndexArray,
+    order: IndexArray,
+    twinned: BoolArray,
+    counter: IndexArray,
+    workers: int,
+) -> None:
+    """The comparisons of :func:`_twin_groups`: each group of faces (those whose smallest point
+    is the group's, in ``order``, ending at ``ends``), blocks of points claimed by every core.
+    A face is in one group, so each writes only its own faces' marks."""
+    count = len(faces)
+    blocks = (width + _TWIN_BLOCK - 1) // _TWIN_BLOCK
+    for _ in prange(workers):
+        few = np.empty(_FEW_TWINS, dtype=np.int64)  # a small group's keys: no allocation each
+        block = claim(counter)
+        while block < blocks:
+            low_point = block * _TWIN_BLOCK
+            first = ends[low_point - 1] if low_point > 0 else 0
+            for point in range(low_point, min(width, low_point + _TWIN_BLOCK)):
+                last = ends[point]
+                if last - first > 1:
+                    _compare_group(faces, width, order, first, last, count, few, twinned)
+                first = last
+            block = claim(counter)
+
+
+@kernel(python=True)
+def _compare_group(
+    faces: IndexArray,
+    width: int,
+    order: IndexArray,
+    first: int,
+    last: int,
+    count: int,
+    few: IndexArray,
+    twinned: BoolArray,
+) -> None:
+    """Mark the twins among the faces ``order[first:last]``, which share their smallest point."""
+    # Each face of the group as (middle * width + highest) * 2 + even, even meaning wound as
+    # its sorted points: twins share all but the last bit.
+    keys = few if last - first <= _FEW_TWINS else np.empty(last - first, dtype=np.int64)
+    for row in range(first, last):
+        if row + AHEAD < count:
+            prefetch(faces, order[row + AHEAD])
+        a, b, c = faces[order[row], 0], faces[order[row], 1], faces[order[row], 2]
+        low, high = min(a, min(b, c)), max(a, max(b, c))
+        ascents = (1 if a < b else 0) + (1 if b < c else 0) + (1 if c < a else 0)
+        even = ascents == 2 or a == b or b == c or c == a
+        keys[row - first] = ((a + b + c - low - high) * width + high) * 2 + (1 if even else 0)
+    if last - first <= _FEW_TWINS:
+        for i in range(last - first):
+            for j in range(i + 1, last - first):
+                if keys[i] ^ keys[j] == 1:
+                    twinned[order[first + i]] = True
+                    twinned[order[first + j]] = True
+    else:
+        # A face is twinned when its key with the last bit flipped is in the group: looked up
+        # in a sorted copy of the keys (our sort and search, not numba's: its argsort here,
+        # loaded from the cache into a process that had loaded a sort, ranked these keys
+        # wrongly; see mesh_normal.kernels).
+        size = last - first
+        ranked = keys[:size].copy()
+        sort_run(ranked, 0, size)
+        for row in range(size):
+            other = keys[row] ^ 1
+            at = lower_bound(ranked, 0, size, other)
+            if at < size and ranked[at] == other:
+                twinned[order[first + row]] = True
 
 
 def _twinned_lexsorted(faces: IndexArray, even: BoolArray) -> BoolArray:

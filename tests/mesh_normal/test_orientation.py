@@ -473,18 +473,34 @@ def test_twinned_faces_match_the_rotations_definition() -> None:
     np.testing.assert_array_equal(_twinned(faces), by_rotations(faces))
     # Too many for one key, but a pair fits: groups by the smallest point (a few, many).
     from mesh_normal.kernels import load_numba
-    from mesh_normal.orientation import _even, _twin_groups, _twinned_lexsorted
+    from mesh_normal.orientation import (
+        _compare_group,
+        _even,
+        _twin_groups,
+        _twin_runs,
+        _twinned_lexsorted,
+    )
+
+    def python_claim(counter: np.ndarray) -> int:
+        counter[0] += 1
+        return int(counter[0]) - 1
 
     load_numba()
-    for top in (3, 6, 30, 300):
-        faces = rng.integers(0, top, (600, 3)).astype(np.intp)
-        for run in (_twin_groups, _twin_groups.py_func):
+    for top in (3, 6, 30, 300, 9000):  # 9000: more points than one task of _twin_runs
+        faces = rng.integers(0, top, (600 if top < 9000 else 30_000, 3)).astype(np.intp)
+        for python in (False, True):
             twinned = np.zeros(len(faces), dtype=bool)
             order = np.empty(len(faces), dtype=np.int32)
+            starts = np.zeros(top + 1, dtype=np.intp)
             with pytest.MonkeyPatch.context() as patch:
-                if run is _twin_groups.py_func:  # numba's prefetch is only for compiled code
+                groups, runs = _twin_groups, _twin_runs
+                if python:  # the kernels' Python source (numba's intrinsics are compiled only)
                     patch.setattr(orientation, "prefetch", lambda *_: None)
-                run(faces, top, np.zeros(top + 1, dtype=np.intp), order, twinned)
+                    patch.setattr(orientation, "claim", python_claim)
+                    patch.setattr(orientation, "_compare_group", _compare_group.py_func)
+                    groups, runs = _twin_groups.py_func, _twin_runs.py_func
+                groups(faces, top, starts, order)
+                runs(faces, top, starts, order, twinned, np.zeros(1, dtype=np.int64), 2)
             np.testing.assert_array_equal(twinned, by_rotations(faces))
     faces = rng.integers(0, 6, (400, 3)).astype(np.intp) * 2**21 + 2**22
     np.testing.assert_array_equal(_twinned_lexsorted(faces, _even(faces)), by_rotations(faces))
