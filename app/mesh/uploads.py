@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import copy
 import math
+import mmap
 from dataclasses import dataclass
 from pickle import PickleBuffer
 from typing import Any, SupportsIndex
@@ -95,6 +96,9 @@ class Upload:
     filename: str | None
     parts: tuple[tuple[str | None, bytes], ...] = ()
     weld: float | None = None  # the multipart field weld, checked
+    #: In a job worker: the one file as it came from the server in shared memory, a read-only
+    #: map of it (:func:`app.web.workers.send`), instead of ``data`` (then empty).
+    mapped: mmap.mmap | None = None
 
     @classmethod
     def several(cls, parts: tuple[tuple[str | None, bytes], ...], weld: float | None) -> Upload:
@@ -110,11 +114,14 @@ class Upload:
         if int(protocol) < 5:
             return object.__reduce_ex__(self, protocol)
         parts = tuple((name, PickleBuffer(data)) for name, data in self.parts)
-        return (_rebuilt, (PickleBuffer(self.data), self.filename, parts, self.weld))
+        data = PickleBuffer(self.data if self.mapped is None else self.mapped)
+        return (_rebuilt, (data, self.filename, parts, self.weld))
 
     @property
     def size(self) -> int:
         """Bytes sent: the file's, or all the files' together."""
+        if self.mapped is not None:
+            return len(self.mapped)
         return sum(len(data) for _, data in self.parts) if self.parts else len(self.data)
 
     @property
@@ -126,12 +133,15 @@ class Upload:
 
 
 def _rebuilt(
-    data: bytes,
+    data: bytes | mmap.mmap,
     filename: str | None,
     parts: tuple[tuple[str | None, bytes], ...],
     weld: float | None,
 ) -> Upload:
-    return Upload(bytes(data), filename, tuple((name, bytes(part)) for name, part in parts), weld)
+    files = tuple((name, bytes(part)) for name, part in parts)
+    if isinstance(data, mmap.mmap):  # one file, in shared memory: kept as it is, not copied
+        return Upload(b"", filename, files, weld, mapped=data)
+    return Upload(bytes(data), filename, files, weld)
 
 
 def weld_field(text: str) -> float | None:

@@ -27,6 +27,7 @@ from mesh_normal.exports import FORMATS, KINDS, Normals, NormalsKind, normals_to
 from mesh_normal.files import LoadedMesh, MeshFileError, read_mesh, read_mesh_files, stl
 from mesh_normal.files.formats import FORMATS as MESH_FORMATS
 from mesh_normal.files.formats import WRITABLE
+from mesh_normal.files.read import read_mapped, reads_as_binary_stl
 from mesh_normal.files.write import unkept
 from mesh_normal.mesh_export import NormalsChoice, Winding, export_mesh, file_normals
 from mesh_normal.report import MeshReport
@@ -52,24 +53,31 @@ PREFAULT_FROM = 8 * 2**20
 FAULT_AHEAD_FROM = 256 * 2**20
 
 
-def ahead(data: bytes) -> None:
-    """In a job worker, before a binary STL of ``PREFAULT_FROM`` bytes or more is read: keep
-    freed memory for this job and, from ``FAULT_AHEAD_FROM`` bytes, fault its arrays' memory
-    in on another thread (the worker undoes both when the job ends). Nothing for other
-    uploads, or outside a worker."""
-    if len(data) >= PREFAULT_FROM and stl.is_binary(data):
-        size = allocator.ARRAYS_PER_FILE_BYTE["binary stl"] * len(data)
-        allocator.start_job(size if len(data) >= FAULT_AHEAD_FROM else 0)
+def ahead(size: int) -> None:
+    """In a job worker, before a binary STL of ``size`` bytes is read: from ``PREFAULT_FROM``
+    bytes, keep freed memory for this job and, from ``FAULT_AHEAD_FROM`` bytes, fault its
+    arrays' memory in on another thread (the worker undoes both when the job ends). Nothing
+    outside a worker."""
+    if size >= PREFAULT_FROM:
+        arrays = allocator.ARRAYS_PER_FILE_BYTE["binary stl"] * size
+        allocator.start_job(arrays if size >= FAULT_AHEAD_FROM else 0)
 
 
 def load(upload: Upload) -> LoadedMesh:
     """Read the uploaded file (or files); a broken or unknown file becomes a 4xx naming the
-    problem."""
-    if not upload.parts:
-        ahead(upload.data)
+    problem. A file that came in shared memory (``upload.mapped``) is read from the map where
+    it is a binary STL (the reader copies only what it keeps), else from a copy of its bytes."""
     try:
         if upload.parts:
             return read_mesh_files(upload.parts)
+        if upload.mapped is not None:
+            mapped = upload.mapped
+            if reads_as_binary_stl(mapped[:4096], len(mapped)):
+                ahead(len(mapped))
+                return read_mapped(mapped, upload.filename or "")
+            return read_mesh(bytes(mapped), upload.filename)
+        if stl.is_binary(upload.data):
+            ahead(len(upload.data))
         return read_mesh(upload.data, upload.filename)
     except MeshFileError as error:
         raise ApiError(error.status_code, str(error), "file") from None

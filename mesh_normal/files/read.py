@@ -115,16 +115,24 @@ def mapped_binary_stl(source: MeshSource) -> mmap.mmap | None:
             size = os.fstat(file.fileno()).st_size
             if size < MAPPED_BYTES:
                 return None
-            head = file.read(4096)
-            # What the bytes would be read as: a zip, a BOM or another format's start wins.
-            if is_zip(head) or head.startswith(b"\xef\xbb\xbf") or sniff(head) not in ("stl", None):
-                return None
-            count = int.from_bytes(head[80:HEADER], "little")
-            if size != HEADER + RECORD.itemsize * count:
+            if not reads_as_binary_stl(file.read(4096), size):
                 return None
             return mmap.mmap(file.fileno(), 0, access=mmap.ACCESS_READ)
     except (OSError, ValueError):
         return None
+
+
+def reads_as_binary_stl(head: bytes, size: int) -> bool:
+    """Whether a file of ``size`` bytes that starts with ``head`` (its first 4096 bytes, or all
+    of it) is read by :func:`read_mesh` as a binary STL: its length is what the header's
+    triangle count calls for, and a zip, a byte order mark or another format's start does not
+    claim it first. Such a file can be read from a map of it (:func:`read_mapped`)."""
+    if is_zip(head) or head.startswith(b"\xef\xbb\xbf") or sniff(head[:4096]) not in ("stl", None):
+        return False
+    if len(head) < HEADER:
+        return False
+    count = int.from_bytes(head[80:HEADER], "little")
+    return size == HEADER + RECORD.itemsize * count
 
 
 def read_mapped(mapped: mmap.mmap, filename: str) -> LoadedMesh:

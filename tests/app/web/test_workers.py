@@ -215,3 +215,60 @@ def test_a_large_binary_stl_has_its_memory_faulted_in_and_given_back_after() -> 
     before, during, after = with_pool(scenario)
     assert during > before + faulted
     assert after < during - faulted + 8
+
+
+def _sent_and_received(value: Any) -> Any:
+    """``value`` through a pipe as a job goes to its worker (the sending in a thread, as the
+    pipe's buffer may fill)."""
+    import multiprocessing
+
+    ours, theirs = multiprocessing.Pipe()
+    sender = threading.Thread(target=workers.send, args=(ours, value, workers.SHARED_FROM))
+    sender.start()
+    try:
+        return workers.receive(theirs)
+    finally:
+        sender.join()
+        ours.close()
+        theirs.close()
+
+
+@pytest.mark.skipif(not hasattr(os, "memfd_create"), reason="shared memory needs memfd_create")
+def test_a_large_upload_travels_in_shared_memory_and_reads_the_same() -> None:
+    import mmap
+
+    from app.mesh import work
+    from benchmarks.mesh_kernels import torus_mesh
+    from mesh_normal.files import write_mesh
+
+    vertices, faces = torus_mesh(42_000)
+    stl = write_mesh(vertices, faces, "stl")
+    obj = write_mesh(vertices, faces, "obj")
+    assert len(stl) >= workers.SHARED_FROM and len(obj) >= workers.SHARED_FROM
+    small = write_mesh(vertices[:3], np.array([[0, 1, 2]]), "stl")
+    descriptors = set(os.listdir("/proc/self/fd"))
+    for upload in (Upload(stl, "torus.stl"), Upload(obj, "torus.obj"), Upload(small, "t.stl")):
+        function, (received, weld) = _sent_and_received((work.report, (upload, None)))
+        assert function is work.report and weld is None
+        assert received.filename == upload.filename and received.size == upload.size
+        if len(upload.data) >= workers.SHARED_FROM:
+            assert isinstance(received.mapped, mmap.mmap) and received.data == b""
+            assert received.mapped[:] == upload.data
+        else:
+            assert received.mapped is None and received.data == upload.data
+        assert work.report(received, None) == work.report(upload, None)
+        del received
+    assert set(os.listdir("/proc/self/fd")) <= descriptors  # no descriptor left open
+
+
+def test_a_job_s_buffers_without_shared_memory_come_through_the_pipe() -> None:
+    import multiprocessing
+
+    value = (np.arange(300_000), b"x" * 10, Upload(b"y" * (workers.SHARED_FROM + 1), "y.stl"))
+    ours, theirs = multiprocessing.Pipe()
+    sender = threading.Thread(target=workers.send, args=(ours, value))  # no shared_from
+    sender.start()
+    array, text, upload = workers.receive(theirs)
+    sender.join()
+    np.testing.assert_array_equal(array, value[0])
+    assert text == value[1] and upload.data == value[2].data and upload.mapped is None
