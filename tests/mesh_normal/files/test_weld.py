@@ -121,3 +121,27 @@ def test_corners_read_in_their_records_weld_as_rows(faces: int) -> None:
     np.testing.assert_array_equal(vertices, expected_vertices)
     np.testing.assert_array_equal(index, expected_index)
     assert not np.signbit(vertices).any() or (vertices[np.signbit(vertices)] != 0).all()
+
+
+@pytest.mark.parametrize("rows", [900, 60_000])  # the Python source, and compiled
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_a_table_that_fills_grows_and_goes_on_where_it_stopped(rows: int, dtype: type) -> None:
+    # Mostly distinct points: the table (a quarter as many slots as rows) is half full within
+    # the first rows and doubles several times, each time going on from the row it reached.
+    rng = np.random.default_rng(9)
+    corners = rng.standard_normal((rows, 3)).astype(dtype)
+    corners[rows // 2 :: 3] = corners[: rows - rows // 2 : 3][: len(corners[rows // 2 :: 3])]
+    calls = []
+    real = weld_module._regrown
+
+    def counted(*arguments: object) -> bool:
+        calls.append(1)
+        return bool(real(*arguments))
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(weld_module, "_regrown", counted)
+        vertices, index = weld(corners)
+    assert len(calls) >= 2
+    expected_vertices, expected_index = reference(corners)
+    np.testing.assert_array_equal(vertices, expected_vertices)
+    np.testing.assert_array_equal(index, expected_index)
