@@ -21,7 +21,8 @@ end in milliseconds in the kernels' Python path, with nothing to cancel and no m
 out of) runs in a thread of the server instead of waiting; any other job waits for a worker.
 
 Jobs travel as pickles of protocol 5: large buffers (``pickle.PickleBuffer``, NumPy arrays)
-go out of band as raw bytes, so a 200 MB upload is not copied into a pickle on its way.
+go out of band, so a 200 MB upload is not copied into a pickle on its way; to a worker, those of
+a megabyte or more go in shared memory (:func:`send`), and answers come back as raw bytes.
 """
 
 from __future__ import annotations
