@@ -185,6 +185,7 @@ def child(path_name: str, file: Path, small: Path) -> None:
     from app.mesh.work import ahead
     from app.web.workers import _MAPPED_FROM, tune_allocator
     from mesh_normal import allocator
+    from mesh_normal.files import stl
     from mesh_normal.precompile import compile_kernels
 
     tune_allocator()  # as the server's job workers do when they start
@@ -195,7 +196,8 @@ def child(path_name: str, file: Path, small: Path) -> None:
     Path("/proc/self/clear_refs").write_text("5")  # reset the peak to the current size
     baseline = _status("VmRSS")
     data = file.read_bytes()
-    ahead(data)  # as a worker's job does before it reads the upload
+    if stl.is_binary(data):  # as a worker's job does before it reads a binary STL
+        ahead(len(data))
     run_path(path_name, data, file.name)
     allocator.end_job(_MAPPED_FROM)  # its prefaulting ended (its pages counted), as a worker's
     print(json.dumps({"peak": _status("VmHWM") - baseline, "size": len(data)}))

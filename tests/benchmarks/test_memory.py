@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import math
+from pathlib import Path
+
 import numpy as np
 import pytest
 
-from benchmarks.memory import FORMATS, PATHS, file_bytes, run_path, torus
+from benchmarks.memory import FORMATS, PATHS, file_bytes, measure, run_path, torus
 from mesh_normal.files import read_mesh
 from mesh_normal.topology import mesh_topology
 
@@ -23,3 +26,13 @@ def test_each_format_holds_the_closed_torus(kind: str) -> None:
 @pytest.mark.parametrize("path_name", PATHS)
 def test_each_path_runs(path_name: str) -> None:
     run_path(path_name, file_bytes("ply", *torus(6, 5)), "torus.ply")
+
+
+@pytest.mark.skipif(not Path("/proc/self/clear_refs").exists(), reason="needs Linux's /proc")
+def test_a_measurement_runs_in_its_child_process(tmp_path: Path) -> None:
+    # The child does what a job worker does before a binary STL (keeps freed memory, prefaults):
+    # a figure, not the NaN that a failed child gives.
+    file, small = tmp_path / "torus.stl", tmp_path / "small.stl"
+    file.write_bytes(file_bytes("stl", *torus(60, 50)))
+    small.write_bytes(file_bytes("stl", *torus(6, 5)))
+    assert math.isfinite(measure("read", file, small))
