@@ -78,7 +78,7 @@ def compile_kernels() -> None:
         corners = np.array([[0.0, 0, 0], [1, 0, 0], [0, 0, 0]], dtype)
         weld(corners)
         weld_by_sort(corners)  # where a file crowds the table's slots
-        weld(np.arange(3 * 64, dtype=dtype).reshape(64, 3))  # distinct points: the table grows
+        weld(np.array(np.arange(192.0).reshape(64, 3), dtype))  # distinct points: it grows
     # A binary STL's corners, read where they lie in its records (a read-only view).
     weld(np.frombuffer(bytes(2 * STL_RECORD.itemsize), STL_RECORD)["corners"])
     binary_items(
