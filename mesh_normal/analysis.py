@@ -23,7 +23,7 @@ from mesh_normal.faces import FaceGeometry, FaceNormals, face_geometry, geometry
 from mesh_normal.files import LoadedMesh, read_mesh
 from mesh_normal.files.read import MeshSource, source_bytes
 from mesh_normal.objects import object_reports
-from mesh_normal.orientation import Orientation, oriented
+from mesh_normal.orientation import HeadStart, Orientation, oriented
 from mesh_normal.report import (
     INDEX_LIST_LIMIT,
     Bounds,
@@ -131,9 +131,10 @@ def analyse_mesh(
         points = checked.faces if point is None else point[checked.faces]
     # The edges first: their sort is the largest working set, and the products are not
     # held yet while it runs (peak memory a face, not the sum of the two).
-    found = structure(points, len(checked.vertices))
+    ahead = HeadStart(checked, points)  # an open mesh's twins and rays, while this runs
+    found = structure(points, len(checked.vertices), ahead.start)
     geometry = face_geometry(checked)
-    orientation = oriented(geometry, points, found)  # the vertices matched once, for both
+    orientation = oriented(geometry, points, found, ahead)  # the vertices matched once
     used = np.zeros(len(mesh.vertices), dtype=bool)
     used[mesh.faces.ravel()] = True
     return MeshAnalysis(

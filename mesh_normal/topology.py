@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import math
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -173,7 +174,12 @@ def by_position(mesh: CheckedMesh, weld: float | None = None) -> IndexArray:
 # --- edges, patches and components -----------------------------------------------------------
 
 
-def structure(faces: IndexArray, vertex_count: int) -> Structure:
+def structure(
+    faces: IndexArray, vertex_count: int, on_open: Callable[[], object] | None = None
+) -> Structure:
+    """The edges, patches and components of ``faces`` (by position) over ``vertex_count``
+    points; ``on_open`` is called as soon as a boundary edge is known (the mesh is open), so
+    that what only an open mesh needs can start ahead (``orientation.HeadStart``)."""
     faces = read_only(faces)  # one signature for the kernels (see CheckedMesh)
     valid = (faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2])
     valid &= faces[:, 2] != faces[:, 0]
@@ -184,6 +190,8 @@ def structure(faces: IndexArray, vertex_count: int) -> Structure:
     counts = np.zeros(3, dtype=np.intp)
     announce_compiling()
     _count_runs(key, counts)
+    if counts[0] and on_open is not None:  # a boundary edge: what an open mesh needs, ahead
+        on_open()
     boundary, nonmanifold, uses = (np.empty(counts[i], dtype=np.intp) for i in (0, 2, 2))
     paired = np.empty(counts[1], dtype=np.int32 if len(key) < 2**31 else np.intp)
     _find_runs(key, boundary, paired, nonmanifold, uses)
@@ -221,7 +229,7 @@ def structure(faces: IndexArray, vertex_count: int) -> Structure:
     return Structure(topology, group, patches, parity, orientable, face_component[firsts], closed)
 
 
-@kernel(python=True)
+@kernel(python=True, nogil=True)
 def _pair_faces(
     face: IndexArray,
     forward: NDArray[np.int8],
@@ -239,7 +247,7 @@ def _pair_faces(
         same[i] = forward[first] ^ forward[first + 1] ^ 1
 
 
-@kernel(python=True)
+@kernel(python=True, nogil=True)
 def _mark_unorientable(
     one: IndexArray,
     two: IndexArray,
@@ -542,7 +550,7 @@ def _find(parent: IndexArray, relation: ParityArray, node: int) -> tuple[int, in
     return top, parity
 
 
-@kernel(error_model="python", python=True)
+@kernel(error_model="python", python=True, nogil=True)
 def _union_find(
     count: int,
     one: IndexArray,
@@ -607,7 +615,7 @@ def _count_runs(key: IndexArray, counts: IndexArray) -> None:
         start = end
 
 
-@kernel(python=True)
+@kernel(python=True, nogil=True)
 def _find_runs(
     key: IndexArray,
     boundary: IndexArray,

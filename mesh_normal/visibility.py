@@ -34,6 +34,7 @@ and scaled (up to rounding, which only a ray grazing an edge can feel):
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -109,6 +110,7 @@ def visible_sides(
     parity: ParityArray,
     candidates: BoolArray,
     area: FloatArray,
+    ahead: Callable[[], Framed | None] | None = None,
 ) -> FloatArray:
     """The visibility score of each of the ``candidates`` (open, orientable patches).
 
@@ -125,6 +127,9 @@ def visible_sides(
         The patches to score.
     area : (p,) float64
         Each patch's area (any common scale): past the budget the largest are scored.
+    ahead : callable, optional
+        Gives :func:`framed` of ``points`` and ``faces``, taken ahead on another thread (see
+        ``mesh_normal.orientation.HeadStart``); else it is taken here.
 
     Returns
     -------
@@ -139,20 +144,18 @@ def visible_sides(
     chosen = np.flatnonzero(candidates)
     if len(chosen) == 0:
         return score
-    # The box of the vertices the faces use (never the origin's: a mesh far from it is
-    # tested at its own size).
-    low, high = column_bounds(points, faces)
-    centre, half = low / 2 + high / 2, float(np.max(high / 2 - low / 2))  # no overflow
-    if not half > 0 or not math.isfinite(half):
+    frame = ahead() if ahead is not None else framed(points, faces)
+    if frame is None:
         return score
+    unit, ordered = frame
     most = RAYS // (2 * DIRECTIONS * FEWEST)
     if len(chosen) > most:
         chosen = np.sort(chosen[np.argsort(-area[chosen], kind="stable")[:most]])
     per = int(np.clip(RAYS // (2 * DIRECTIONS * len(chosen)), FEWEST, SAMPLES))
     samples, owner = _samples(group, chosen, per)
-    unit = (points - centre) / half
     leaf = leaf_size(len(faces), 2 * DIRECTIONS * len(samples))
-    order, boxes, children, spans, corners = _hierarchy(unit, faces, leaf)
+    order, boxes, children, spans, corners = _hierarchy(unit, faces, leaf, ordered)
+    del frame, ordered
     escaped = np.zeros((len(samples), 2))  # share of escaping rays: + side, - side of the plane
     unsure = np.zeros((len(samples), 2))  # share of rays that may escape or not
     weights = np.zeros(len(samples))
@@ -240,8 +243,31 @@ def leaf_size(faces: int, rays: int) -> int:
     return leaf
 
 
+#: The vertices scaled into [-1, 1] about their box's centre, and the faces' Morton codes in
+#: increasing order with that order (:func:`framed`).
+Framed = tuple[FloatArray, tuple[IndexArray, IndexArray]]
+
+
+def framed(points: FloatArray, faces: IndexArray) -> Framed | None:
+    """What the rays need before their patches are known: the vertices that the faces use,
+    scaled into [-1, 1] about their box's centre (never the origin's: a mesh far from it is
+    tested at its own size), and the faces' Morton order (:func:`_morton_order`); None for a
+    box of no size."""
+    low, high = column_bounds(points, faces)
+    centre, half = low / 2 + high / 2, float(np.max(high / 2 - low / 2))  # no overflow
+    if not half > 0 or not math.isfinite(half):
+        return None
+    unit = (points - centre) / half
+    announce_compiling()
+    with PARALLEL_KERNELS:
+        return unit, _morton_order(unit, faces)
+
+
 def _hierarchy(
-    unit: FloatArray, faces: IndexArray, leaf: int = _LEAF
+    unit: FloatArray,
+    faces: IndexArray,
+    leaf: int = _LEAF,
+    ordered: tuple[IndexArray, IndexArray] | None = None,
 ) -> tuple[IndexArray, FloatArray, IndexArray, IndexArray, FloatArray]:
     """A bounding-volume hierarchy over the faces: their order along a Morton curve of their
     centroids; per node its box, children (-1 for a leaf) and span of that order; and the
@@ -255,14 +281,19 @@ def _hierarchy(
     """
     announce_compiling()
     with PARALLEL_KERNELS:  # the Morton codes, the corners and the boxes run on every core
-        return _built(unit, faces, leaf)
+        return _built(unit, faces, leaf, ordered)
 
 
 def _built(
-    unit: FloatArray, faces: IndexArray, leaf: int
+    unit: FloatArray,
+    faces: IndexArray,
+    leaf: int,
+    ordered: tuple[IndexArray, IndexArray] | None = None,
 ) -> tuple[IndexArray, FloatArray, IndexArray, IndexArray, FloatArray]:
-    """:func:`_hierarchy`, with ``PARALLEL_KERNELS`` held."""
-    codes, order = _morton_order(unit, faces)
+    """:func:`_hierarchy`, with ``PARALLEL_KERNELS`` held; ``ordered``: the Morton order, if
+    it was taken already."""
+    codes, order = _morton_order(unit, faces) if ordered is None else ordered
+    del ordered
     nodes = max(1, 2 * len(faces))  # at least one face per leaf: fewer than 2 m nodes
     # Room for every node there can be, written by _split only as far as it makes them (at
     # the Lucy size, filling 2m rows with -1 first cost about 1 s of page faults).
@@ -301,7 +332,7 @@ def _morton_order(unit: FloatArray, faces: IndexArray) -> tuple[IndexArray, Inde
 _DIGIT = 10
 
 
-@kernel(python=PYTHON_RAYS)
+@kernel(python=PYTHON_RAYS, nogil=True)
 def _radix_order(codes: IndexArray, order: IndexArray, ordered: IndexArray) -> None:
     """``order``: the stable order of ``codes`` (30-bit, non-negative); ``ordered``: the codes
     in that order. A least-significant-digit radix sort, its three counts taken in one pass;

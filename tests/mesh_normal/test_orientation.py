@@ -3,6 +3,7 @@ volume and orient()."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -504,3 +505,57 @@ def test_twinned_faces_match_the_rotations_definition() -> None:
             np.testing.assert_array_equal(twinned, by_rotations(faces))
     faces = rng.integers(0, 6, (400, 3)).astype(np.intp) * 2**21 + 2**22
     np.testing.assert_array_equal(_twinned_lexsorted(faces, _even(faces)), by_rotations(faces))
+
+
+def test_an_open_mesh_s_head_start_gives_what_taking_it_in_turn_gives(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A large open mesh takes its twins and its rays' Morton order on another thread while the
+    topology runs (orientation.HeadStart); the answer is the one taken in turn."""
+    from benchmarks.mesh_kernels import torus_mesh
+
+    vertices, faces = torus_mesh(70_001)  # a torus grid with faces left out: open
+    faces = np.concatenate([faces, faces[:500, ::-1]])  # and some twinned faces
+    started = []
+    real_run = orientation.HeadStart._run
+
+    def run(self: orientation.HeadStart) -> None:
+        started.append(True)
+        real_run(self)
+
+    monkeypatch.setattr(orientation.HeadStart, "_run", run)
+    ahead = orient(vertices, faces)
+    assert started == [True]
+    monkeypatch.setattr(orientation, "HEAD_START_FACES", 10**9)  # in turn
+    in_turn = orient(vertices, faces)
+    assert started == [True]
+    assert ahead.orientation == in_turn.orientation
+    for field in dataclasses.fields(ahead.components):  # the open patches' volumes are NaN
+        np.testing.assert_array_equal(
+            getattr(ahead.components, field.name), getattr(in_turn.components, field.name)
+        )
+    np.testing.assert_array_equal(ahead.flipped, in_turn.flipped)
+    np.testing.assert_array_equal(ahead.faces, in_turn.faces)
+
+
+def test_a_head_start_s_failure_is_raised_where_its_result_is_needed(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    from benchmarks.mesh_kernels import torus_mesh
+
+    vertices, faces = torus_mesh(70_001)
+
+    def failing(_points: np.ndarray) -> np.ndarray:
+        raise MemoryError("no room for the twins")
+
+    monkeypatch.setattr(orientation, "_twinned", failing)
+    with pytest.raises(MemoryError, match="no room for the twins"):
+        orient(vertices, faces)
+
+
+def test_a_closed_mesh_starts_no_head_start(monkeypatch: pytest.MonkeyPatch) -> None:
+    from benchmarks.mesh_kernels import torus_mesh
+
+    vertices, faces = torus_mesh(2 * 200 * 200)  # every face of the grid: closed
+    monkeypatch.setattr(orientation.HeadStart, "start", lambda _self: pytest.fail("started"))
+    assert orient(vertices, faces).topology.watertight
