@@ -529,24 +529,43 @@ def claim(counter: IndexArray) -> int:
     return value
 
 
-def _claim_intrinsic() -> Any:
-    """numba's ``claim``: ``counter[0] += 1`` as one atomic step, returning the value before."""
+def _counter_intrinsic(step: Callable[[Any, Any, Any], Any], returns: bool) -> Any:
+    """A numba intrinsic on ``counter[0]`` of an int64 array: ``step(context, builder,
+    address)`` emits its one atomic step, whose value the intrinsic returns where ``returns``."""
     from numba import types
     from numba.extending import intrinsic
 
     @intrinsic
-    def _claim(typingctx: Any, counter: Any) -> Any:  # noqa: ARG001 (numba's typing context)
+    def _on_counter(typingctx: Any, counter: Any) -> Any:  # noqa: ARG001 (numba's typing context)
         if not (isinstance(counter, types.Array) and counter.dtype == types.int64):
             return None
 
         def codegen(context: Any, builder: Any, signature: Any, arguments: Any) -> Any:
             array = context.make_array(signature.args[0])(context, builder, arguments[0])
-            one = context.get_constant(types.int64, 1)
-            return builder.atomic_rmw("add", array.data, one, "monotonic")
+            value = step(context, builder, array.data)
+            return value if returns else context.get_dummy_value()
 
-        return types.int64(counter), codegen
+        return (types.int64 if returns else types.none)(counter), codegen
 
-    return _claim
+    return _on_counter
+
+
+def _add_one(ordering: str) -> Callable[[Any, Any, Any], Any]:
+    """The step ``counter[0] += 1`` as one atomic add with LLVM's ``ordering``, giving the
+    value before."""
+
+    def step(context: Any, builder: Any, address: Any) -> Any:
+        from numba import types
+
+        one = context.get_constant(types.int64, 1)
+        return builder.atomic_rmw("add", address, one, ordering)
+
+    return step
+
+
+def _claim_intrinsic() -> Any:
+    """numba's ``claim``: ``counter[0] += 1`` as one atomic step, returning the value before."""
+    return _counter_intrinsic(_add_one("monotonic"), returns=True)
 
 
 def peek(counter: IndexArray) -> int:
@@ -568,42 +587,14 @@ def bump(counter: IndexArray) -> None:
 def _peek_intrinsic() -> Any:
     """numba's ``peek``: an atomic load (acquire) of ``counter[0]``, never hoisted out of the
     loop that waits on it."""
-    from numba import types
-    from numba.extending import intrinsic
-
-    @intrinsic
-    def _peek(typingctx: Any, counter: Any) -> Any:  # noqa: ARG001 (numba's typing context)
-        if not (isinstance(counter, types.Array) and counter.dtype == types.int64):
-            return None
-
-        def codegen(context: Any, builder: Any, signature: Any, arguments: Any) -> Any:
-            array = context.make_array(signature.args[0])(context, builder, arguments[0])
-            return builder.load_atomic(array.data, "acquire", 8)
-
-        return types.int64(counter), codegen
-
-    return _peek
+    return _counter_intrinsic(
+        lambda _context, builder, address: builder.load_atomic(address, "acquire", 8), True
+    )
 
 
 def _bump_intrinsic() -> Any:
     """numba's ``bump``: ``counter[0] += 1`` as one atomic add (release)."""
-    from numba import types
-    from numba.extending import intrinsic
-
-    @intrinsic
-    def _bump(typingctx: Any, counter: Any) -> Any:  # noqa: ARG001 (numba's typing context)
-        if not (isinstance(counter, types.Array) and counter.dtype == types.int64):
-            return None
-
-        def codegen(context: Any, builder: Any, signature: Any, arguments: Any) -> Any:
-            array = context.make_array(signature.args[0])(context, builder, arguments[0])
-            one = context.get_constant(types.int64, 1)
-            builder.atomic_rmw("add", array.data, one, "release")
-            return context.get_dummy_value()
-
-        return types.none(counter), codegen
-
-    return _bump
+    return _counter_intrinsic(_add_one("release"), returns=False)
 
 
 def workers() -> tuple[IndexArray, int]:

@@ -293,7 +293,7 @@ def _sorted_half_edges(
         announce_compiling()
         _pack_half_edges(faces, valid, vertex_count, bits, packed, starts)
         with PARALLEL_KERNELS:
-            _sort_runs(packed, starts, *workers())
+            _finish_runs(packed, _NO_FACES, _NO_DIRECTIONS, starts, bits, False, *workers())
         direction = np.empty(len(packed), dtype=np.int8)  # a byte, not eight, for a 0 or 1
         if bits <= 32 and sys.byteorder == "little":
             # The face and direction are in the low 32 bits: read them there, 4 bytes a face.
@@ -346,7 +346,7 @@ def _wide_half_edges(
     announce_compiling()
     _sort_wide_half_edges(faces, valid, vertex_count, bits, key, starts)
     with PARALLEL_KERNELS:
-        _split_runs(key, face, forward, starts, bits, *workers())
+        _finish_runs(key, face, forward, starts, bits, True, *workers())
     return key, face, forward
 
 
@@ -360,7 +360,7 @@ def _sort_wide_half_edges(
     starts: IndexArray,
 ) -> None:
     """The words of the valid faces' half-edges in their smaller vertex's runs of ``key``,
-    for :func:`_split_runs` to sort and split into ``key`` (min * n + max), ``face_of`` and
+    for :func:`_finish_runs` to sort and split into ``key`` (min * n + max), ``face_of`` and
     ``forward``, sorted by key, then by face; ``starts`` (n + 1 zeros) ends holding each
     vertex's end.
 
@@ -381,40 +381,7 @@ def _sort_wide_half_edges(
             low, high = (start, end) if ahead else (end, start)
             key[starts[low]] = high << bits | face << 1 | ahead
             starts[low] += 1
-    # ``starts`` now holds each vertex's end: _split_runs finishes, on every core.
-
-
-@kernel(parallel=True, python=True)
-def _split_runs(
-    key: IndexArray,
-    face_of: IndexArray,
-    forward: NDArray[np.int8],
-    ends: IndexArray,
-    bits: int,
-    counter: IndexArray,
-    workers: int,
-) -> None:
-    """Sort each vertex's run of words (see :func:`_sort_wide_half_edges`) and split them into
-    the key, the face and the direction, blocks of vertices claimed by every core (each run
-    is its own: who takes it changes nothing)."""
-    vertices = len(ends) - 1
-    mask = (1 << bits - 1) - 1
-    blocks = (vertices + RUN_BLOCK - 1) // RUN_BLOCK
-    for _ in prange(workers):
-        block = claim(counter)
-        while block < blocks:
-            low = block * RUN_BLOCK
-            first = ends[low - 1] if low > 0 else 0
-            for vertex in range(low, min(vertices, low + RUN_BLOCK)):
-                last = ends[vertex]
-                sort_run(key, first, last)  # ours, not numba's: see mesh_normal.kernels
-                for row in range(first, last):
-                    value = key[row]
-                    forward[row] = value & 1
-                    face_of[row] = value >> 1 & mask
-                    key[row] = vertex * vertices + (value >> bits)
-                first = last
-            block = claim(counter)
+    # ``starts`` now holds each vertex's end: _finish_runs sorts and splits each run, on every core.
 
 
 @kernel(python=True)
@@ -462,7 +429,7 @@ def _pack_half_edges(
     starts: IndexArray,
 ) -> None:
     """``packed``: (min * n + max) << bits | face << 1 | forward for the valid faces' edges,
-    in their smaller vertex's runs (:func:`_sort_runs` sorts each). ``starts`` (n + 1 zeros)
+    in their smaller vertex's runs (:func:`_finish_runs` sorts each). ``starts`` (n + 1 zeros)
     ends holding each vertex's end.
 
     A counting sort by the smaller vertex, the key's leading part, then a sort of each vertex's
@@ -482,19 +449,31 @@ def _pack_half_edges(
             low, high = (start, end) if forward else (end, start)
             packed[starts[low]] = (low * vertex_count + high) << bits | face << 1 | forward
             starts[low] += 1
-    # ``starts`` now holds each vertex's end: _sort_runs finishes the sort, on every core.
+    # ``starts`` now holds each vertex's end: _finish_runs sorts each run, on every core.
 
 
-#: Vertices per task of :func:`_sort_runs` and :func:`_split_runs`.
+#: Vertices per task of :func:`_finish_runs`.
 RUN_BLOCK = 4096
 
 
 @kernel(parallel=True, python=True)
-def _sort_runs(packed: IndexArray, ends: IndexArray, counter: IndexArray, workers: int) -> None:
-    """Sort each vertex's run of ``packed`` (vertex v's ends at ``ends[v]``, starts at the end
-    of v - 1's), blocks of vertices claimed by every core: each run is its own, so who sorts
-    it changes nothing (measured 26 ms on one thread at the Dragon size)."""
+def _finish_runs(
+    key: IndexArray,
+    face_of: NDArray[np.int32] | IndexArray,
+    forward: NDArray[np.int8],
+    ends: IndexArray,
+    bits: int,
+    split: bool,
+    counter: IndexArray,
+    workers: int,
+) -> None:
+    """Sort each vertex's run of ``key`` (vertex v's ends at ``ends[v]``, starts at the end of
+    v - 1's) and, where ``split``, split its words (see :func:`_sort_wide_half_edges`) into the
+    key, the face and the direction; blocks of vertices claimed by every core. Each run is its
+    own, so who takes it changes nothing (the sorts measured 26 ms on one thread at the Dragon
+    size)."""
     vertices = len(ends) - 1
+    mask = (1 << bits - 1) - 1
     blocks = (vertices + RUN_BLOCK - 1) // RUN_BLOCK
     for _ in prange(workers):
         block = claim(counter)
@@ -503,9 +482,19 @@ def _sort_runs(packed: IndexArray, ends: IndexArray, counter: IndexArray, worker
             first = ends[low - 1] if low > 0 else 0
             for vertex in range(low, min(vertices, low + RUN_BLOCK)):
                 last = ends[vertex]
-                sort_run(packed, first, last)  # a few values, mostly in order (faces in turn)
+                sort_run(key, first, last)  # a few values, mostly in order (faces in turn)
+                if split:
+                    for row in range(first, last):
+                        value = key[row]
+                        forward[row] = value & 1
+                        face_of[row] = value >> 1 & mask
+                        key[row] = vertex * vertices + (value >> bits)
                 first = last
             block = claim(counter)
+
+
+#: What :func:`_finish_runs` is given for the arrays it does not split into.
+_NO_FACES, _NO_DIRECTIONS = np.empty(0, dtype=np.int32), np.empty(0, dtype=np.int8)
 
 
 def _connected(

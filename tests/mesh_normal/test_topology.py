@@ -32,7 +32,9 @@ def packed_sorted(faces: np.ndarray, valid: np.ndarray, vertex_count: int, pytho
         load_numba()
     run(faces, valid, vertex_count, bits, packed, starts)
     with PARALLEL_KERNELS:  # each run sorted on every core (as Python too, before numba loads)
-        topology._sort_runs(packed, starts, *workers())
+        topology._finish_runs(
+            packed, topology._NO_FACES, topology._NO_DIRECTIONS, starts, bits, False, *workers()
+        )
     return packed
 
 
@@ -117,7 +119,7 @@ def test_the_wide_sort_gives_what_a_lexsort_gives(vertex_count, faces, fan, pyth
     bits = len(faces).bit_length() + 1
     run(faces, valid, vertex_count, bits, key, starts)
     with PARALLEL_KERNELS:
-        topology._split_runs(key, face, forward, starts, bits, *workers())
+        topology._finish_runs(key, face, forward, starts, bits, True, *workers())
     expected = lexsorted(faces, valid, vertex_count)
     for got, want in zip((key, face, forward), expected, strict=True):
         assert np.array_equal(got, want)
