@@ -73,7 +73,6 @@ from typing import overload
 import numpy as np
 from numpy.typing import ArrayLike
 
-from mesh_normal import visibility
 from mesh_normal.checks import CheckedMesh
 from mesh_normal.choices import Method as Method
 from mesh_normal.choices import Verdict as Verdict
@@ -101,7 +100,7 @@ from mesh_normal.topology import KEY_LIMIT, Structure, by_position, structure
 from mesh_normal.topology import MeshTopology as MeshTopology  # re-exported: Orientation has one
 from mesh_normal.types import BoolArray, FloatArray, IndexArray, ParityArray
 from mesh_normal.visibility import MARGIN as VISIBILITY_MARGIN
-from mesh_normal.visibility import prefetch_corners, visible_sides
+from mesh_normal.visibility import Framed, framed, prefetch_corners, visible_sides
 
 VERDICTS: tuple[Verdict, ...] = ("outward", "inward", "mixed", "undetermined")
 METHODS: tuple[Method, ...] = ("volume", "visibility", "none")
@@ -343,7 +342,7 @@ class HeadStart:
         self._mesh, self._points = mesh, points
         self._thread: threading.Thread | None = None
         self._twins: BoolArray | None = None
-        self._frame: visibility.Framed | None = None
+        self._frame: Framed | None = None
         self._error: BaseException | None = None
 
     def start(self) -> None:
@@ -355,7 +354,7 @@ class HeadStart:
     def _run(self) -> None:
         try:
             self._twins = _twinned(self._points)
-            self._frame = visibility.framed(self._mesh.vertices, self._mesh.faces)
+            self._frame = framed(self._mesh.vertices, self._mesh.faces)
         except BaseException as error:  # raised again where the result is asked for
             self._error = error
 
@@ -374,12 +373,12 @@ class HeadStart:
             return twins
         return _twinned(self._points)
 
-    def frame(self) -> visibility.Framed | None:
+    def frame(self) -> Framed | None:
         """:func:`~mesh_normal.visibility.framed` of the mesh."""
         if self._joined():
             frame, self._frame = self._frame, None
             return frame
-        return visibility.framed(self._mesh.vertices, self._mesh.faces)
+        return framed(self._mesh.vertices, self._mesh.faces)
 
 
 def oriented(
