@@ -348,8 +348,12 @@ class HeadStart:
     def start(self) -> None:
         """Start the thread (once), for a mesh of ``HEAD_START_FACES`` faces or more."""
         if self._thread is None and len(self._points) >= HEAD_START_FACES:
-            self._thread = threading.Thread(target=self._run, name="mesh-normal-ahead")
-            self._thread.start()
+            thread = threading.Thread(target=self._run, name="mesh-normal-ahead")
+            try:
+                thread.start()
+            except RuntimeError:  # no thread to be had (a memory limit): taken in turn instead
+                return
+            self._thread = thread
 
     def _run(self) -> None:
         try:

@@ -559,3 +559,20 @@ def test_a_closed_mesh_starts_no_head_start(monkeypatch: pytest.MonkeyPatch) -> 
     vertices, faces = torus_mesh(2 * 200 * 200)  # every face of the grid: closed
     monkeypatch.setattr(orientation.HeadStart, "start", lambda _self: pytest.fail("started"))
     assert orient(vertices, faces).topology.watertight
+
+
+def test_without_a_thread_to_start_the_head_start_is_taken_in_turn(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    from benchmarks.mesh_kernels import torus_mesh
+
+    vertices, faces = torus_mesh(70_001)
+    expected = orient(vertices, faces)
+
+    def refused(_self: object) -> None:
+        raise RuntimeError("can't start new thread")
+
+    monkeypatch.setattr(orientation.threading.Thread, "start", refused)
+    result = orient(vertices, faces)
+    np.testing.assert_array_equal(result.flipped, expected.flipped)
+    assert result.orientation == expected.orientation
