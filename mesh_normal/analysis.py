@@ -132,9 +132,12 @@ def analyse_mesh(
     # The edges first: their sort is the largest working set, and the products are not
     # held yet while it runs (peak memory a face, not the sum of the two).
     ahead = HeadStart(checked, points)  # an open mesh's twins and rays, while this runs
-    found = structure(points, len(checked.vertices), ahead.start)
-    geometry = face_geometry(checked)
-    orientation = oriented(geometry, points, found, ahead)  # the vertices matched once
+    try:
+        found = structure(points, len(checked.vertices), ahead.start)
+        geometry = face_geometry(checked)
+        orientation = oriented(geometry, points, found, ahead)  # the vertices matched once
+    finally:
+        ahead.finish()
     used = np.zeros(len(mesh.vertices), dtype=bool)
     used[mesh.faces.ravel()] = True
     return MeshAnalysis(

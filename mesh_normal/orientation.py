@@ -315,8 +315,11 @@ def orient(
         return oriented(mesh, by_position(mesh.mesh, weld))
     points = by_position(mesh, weld)
     ahead = HeadStart(mesh, points)
-    found = structure(points, len(mesh.vertices), ahead.start)  # before the products: see
-    return oriented(face_geometry(mesh), points, found, ahead)  # analyse_mesh
+    try:
+        found = structure(points, len(mesh.vertices), ahead.start)  # before the products: see
+        return oriented(face_geometry(mesh), points, found, ahead)  # analyse_mesh
+    finally:
+        ahead.finish()
 
 
 #: Meshes of this many faces or more take an open mesh's twins and Morton order ahead, on
@@ -383,6 +386,14 @@ class HeadStart:
             frame, self._frame = self._frame, None
             return frame
         return framed(self._mesh.vertices, self._mesh.faces)
+
+    def finish(self) -> None:
+        """Wait for the thread, if it was started, and let its results go: for its owner once
+        the orientation is done (or failed), so that none of this mesh's work goes on after
+        it, even where no open patch was scored after all and nothing was asked for."""
+        if self._thread is not None:
+            self._thread.join()
+        self._twins = self._frame = None
 
 
 def oriented(

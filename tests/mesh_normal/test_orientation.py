@@ -576,3 +576,29 @@ def test_without_a_thread_to_start_the_head_start_is_taken_in_turn(
     result = orient(vertices, faces)
     np.testing.assert_array_equal(result.flipped, expected.flipped)
     assert result.orientation == expected.orientation
+
+
+def test_a_head_start_nobody_asks_for_is_waited_for(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Started, but its results never asked for (no open patch scored after all): orient()
+    still waits for it, so no work of the mesh goes on after the call."""
+    import threading
+    import time
+
+    from benchmarks.mesh_kernels import torus_mesh
+
+    vertices, faces = torus_mesh(70_001)
+    real_run = orientation.HeadStart._run
+
+    def slow(self: orientation.HeadStart) -> None:
+        time.sleep(0.3)
+        real_run(self)
+
+    monkeypatch.setattr(orientation.HeadStart, "_run", slow)
+    monkeypatch.setattr(
+        orientation.HeadStart, "twinned", lambda self: orientation._twinned(self._points)
+    )
+    monkeypatch.setattr(
+        orientation, "visible_sides", lambda *arguments: np.full(len(arguments[4]), np.nan)
+    )
+    orient(vertices, faces)
+    assert not any(thread.name == "mesh-normal-ahead" for thread in threading.enumerate())
