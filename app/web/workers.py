@@ -115,9 +115,10 @@ def send(connection: Connection, value: Any, shared_from: int | None = None) -> 
     buffers: list[pickle.PickleBuffer] = []
     header = pickle.dumps(value, protocol=5, buffer_callback=buffers.append)
     views = [buffer.raw() for buffer in buffers]
-    shared = shared_from is not None and hasattr(os, "memfd_create")
+    if not hasattr(os, "memfd_create"):
+        shared_from = None
     sizes = [
-        len(view) if shared and len(view) >= shared_from else _THROUGH_PIPE  # type: ignore[operator]
+        len(view) if shared_from is not None and len(view) >= shared_from else _THROUGH_PIPE
         for view in views
     ]
     connection.send((header, sizes))
