@@ -144,9 +144,7 @@ def _as_vertices(vertices: ArrayLike) -> tuple[FloatArray, tuple[float, float]]:
     if array.ndim != 2 or array.shape[1] != 3:
         raise ValueError(f"vertices must have shape (n, 3), not {array.shape}.")
     points = np.ascontiguousarray(array, dtype=np.float64)
-    # min and max carry a NaN or an infinity through: two passes, no temporary array.
-    low = float(points.min(initial=0.0))
-    high = float(points.max(initial=0.0))
+    low, high = _coordinate_range(points)
     if not (math.isfinite(low) and math.isfinite(high)):
         row = int(np.flatnonzero(~np.isfinite(points).all(axis=1))[0])
         raise ValueError(f"vertices[{row}] has a coordinate that is not a finite number.")
@@ -210,6 +208,23 @@ def _index_range(array: np.ndarray) -> tuple[int, int]:
 
     announce_compiling()
     return index_range(array)
+
+
+#: From how many coordinates :func:`_coordinate_range` takes them in one pass on every core.
+COMPILED_RANGE_FROM = 1 << 18
+
+
+def _coordinate_range(points: FloatArray) -> tuple[float, float]:
+    """The smallest and largest coordinate and 0, NaN where one is not finite (a NaN or an
+    infinity goes through ``min`` and ``max``: two NumPy passes, no temporary array). From
+    ``COMPILED_RANGE_FROM`` coordinates, one compiled pass on every core instead (22 against
+    8 ms at the Lucy size); below, numba need not be loaded."""
+    if points.size < COMPILED_RANGE_FROM:
+        return float(points.min(initial=0.0)), float(points.max(initial=0.0))
+    from mesh_normal.kernels import announce_compiling, coordinate_range
+
+    announce_compiling()
+    return coordinate_range(read_only(points))  # one signature (see CheckedMesh)
 
 
 def scaling(

@@ -10,6 +10,7 @@ from numpy.typing import NDArray
 FloatArray: TypeAlias = NDArray[np.float64]
 IndexArray: TypeAlias = NDArray[np.intp]
 BoolArray: TypeAlias = NDArray[np.bool_]
+ByteArray: TypeAlias = NDArray[np.uint8]
 #: 0 or 1 a face (a face's parity to its patch's first face): one byte each.
 ParityArray: TypeAlias = NDArray[np.int8]
 #: A point or direction as three floats, the way the compiled kernels pass them.

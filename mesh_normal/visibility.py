@@ -49,6 +49,7 @@ from mesh_normal.kernels import (
     lower_bound,
     prange,
     prefetch,
+    prefetch_row,
     workers,
 )
 from mesh_normal.types import BoolArray, FloatArray, IndexArray, ParityArray
@@ -98,9 +99,9 @@ def prefetch_corners(points: np.ndarray, faces: IndexArray, face: int) -> None:
     (a loop over faces in file order reads points far apart in a large, shuffled mesh). The
     orientation's cone terms use it too."""
     if face < len(faces):
-        prefetch(points, faces[face, 0])
-        prefetch(points, faces[face, 1])
-        prefetch(points, faces[face, 2])
+        prefetch_row(points, faces[face, 0])
+        prefetch_row(points, faces[face, 1])
+        prefetch_row(points, faces[face, 2])
 
 
 def visible_sides(

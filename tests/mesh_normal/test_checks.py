@@ -227,6 +227,36 @@ def test_the_index_range_over_many_blocks_finds_any_bad_index(planted: int) -> N
             checked_mesh(rng.random((1000, 3)), broken)
 
 
+@pytest.mark.parametrize("planted", [0, 1, 32767, 32768, 65536, 98306])
+@pytest.mark.parametrize("bad", [math.nan, math.inf, -math.inf])
+def test_the_coordinate_range_over_many_blocks_finds_any_bad_coordinate(
+    planted: int, bad: float
+) -> None:
+    # Coordinates over several of the parallel pass's blocks (the last one partial): a NaN or
+    # an infinity anywhere, even the last coordinate, is found, and the check names its row.
+    from mesh_normal.kernels import COORDINATE_BLOCK, coordinate_range
+
+    rng = np.random.default_rng(planted)
+    points = rng.normal(size=(COORDINATE_BLOCK + 1, 3)) + 0.25  # 98,307 coordinates
+    assert coordinate_range(points) == (min(0.0, points.min()), max(0.0, points.max()))
+    broken = points.copy()
+    broken.reshape(-1)[planted] = bad
+    assert all(map(math.isnan, coordinate_range(broken)))
+    large = np.tile(broken, (3, 1))  # over the check's compiled-pass threshold
+    assert large.size >= checks.COMPILED_RANGE_FROM
+    with pytest.raises(ValueError, match=re.escape(f"vertices[{planted // 3}] has a coordinate")):
+        checked_mesh(large, [[0, 1, 2]])
+
+
+def test_the_coordinate_range_includes_zero_and_matches_numpy_over_the_threshold() -> None:
+    positive = np.random.default_rng(5).random((checks.COMPILED_RANGE_FROM, 3)) + 3.0
+    mesh = checked_mesh(positive, [[0, 1, 2]])
+    assert mesh.scale == math.frexp(float(positive.max()))[1]
+    assert checks._coordinate_range(positive) == (0.0, float(positive.max()))
+    assert checks._coordinate_range(-positive) == (float(-positive.max()), 0.0)
+    assert checks._coordinate_range(positive[:10]) == (0.0, float(positive[:10].max()))
+
+
 @pytest.mark.parametrize("planted", [0, 511, 512, 16384, 40000, 49156])
 def test_normals_find_a_bad_index_as_their_kernel_reads_it(planted: int) -> None:
     # Raw intp faces skip the range pass: the one-pass kernel checks each index it reads, in

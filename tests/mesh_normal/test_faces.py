@@ -248,3 +248,35 @@ def test_small_integer_meshes_match_the_exact_cross_product(mesh: tuple) -> None
 
 
 # --- vertex normals -----------------------------------------------------------------------------
+
+
+def test_large_outputs_are_touched_on_every_core_and_hold_the_same_normals(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # Over TOUCH_FROM bytes the outputs' pages are first written on every core, then filled
+    # by the kernel: the same arrays as without that step, and as from the face geometry.
+    from mesh_normal import kernels
+    from mesh_normal.faces import face_geometry
+
+    rng = np.random.default_rng(13)
+    count = 280_000  # 9.2 MB of normals, areas and flags
+    vertices = rng.normal(size=(count // 2, 3))
+    faces = rng.integers(0, len(vertices), (count, 3))
+    faces[::1000, 1] = faces[::1000, 0]  # some degenerate
+    arrays = kernels.fresh_empty(((count, 3), np.float64), (count, np.float64), (count, bool))
+    assert [(a.shape, a.dtype) for a in arrays] == [
+        ((count, 3), np.float64),
+        ((count,), np.float64),
+        ((count,), np.bool_),
+    ]
+    assert sum(a.nbytes for a in arrays) >= kernels.TOUCH_FROM
+    assert all(a.flags.c_contiguous and a.flags.writeable for a in arrays)
+    touched = face_normals(vertices, faces)
+    monkeypatch.setattr(kernels, "TOUCH_FROM", 1 << 62)
+    untouched = face_normals(vertices, faces)
+    geometry = face_normals(face_geometry(vertices, faces))
+    for other in (untouched, geometry):
+        assert np.array_equal(touched.normals, other.normals)
+        assert np.array_equal(touched.areas, other.areas)
+        assert np.array_equal(touched.degenerate, other.degenerate)
+    assert touched.degenerate[::1000].all() and not touched.degenerate.all()
