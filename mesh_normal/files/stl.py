@@ -254,13 +254,17 @@ def _welded(
     groups: NDArray[np.intp] | None = None,
     group_names: list[str] | None = None,
 ) -> LoadedMesh:
-    bad = first_bad_vertex(corners)
+    # Welded first (the weld compares bits: a NaN or an infinity is a point like another),
+    # then checked: a sixth as many points as corners. The first corner of the first such
+    # point is the file's first such corner, as points are numbered by first appearance.
+    vertices, index = weld(corners)
+    bad = first_bad_vertex(vertices)
     if bad is not None:
+        corner = int(np.argmax(index == bad))
         raise MeshFileError(
-            f"Triangle {bad // 3 + 1:,} (counting from 1) has a corner "
+            f"Triangle {corner // 3 + 1:,} (counting from 1) has a corner "
             "coordinate that is not a finite number."
         )
-    vertices, index = weld(corners)
     notes.append(
         f"Welded {len(index):,} STL corners into {len(vertices):,} vertices "
         "(identical coordinates merged, in order of first appearance)."

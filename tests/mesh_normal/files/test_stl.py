@@ -292,3 +292,20 @@ def test_real_stl_points_are_distinct(name: str) -> None:
 
 def test_other_formats_do_not_claim_distinct_points() -> None:
     assert not read_mesh(DATA / "cube.obj").distinct_points
+
+
+@pytest.mark.parametrize("value", [np.nan, np.inf, -np.inf])
+@pytest.mark.parametrize("where", [(0, 0, 0), (2, 1, 0), (3, 2, 2)])
+def test_a_non_finite_corner_names_the_first_such_triangle(
+    value: float, where: tuple[int, int, int]
+) -> None:
+    # Checked after the weld: the first bad point's first corner is the file's first bad
+    # corner, also where a later triangle holds another bad value seen first in the table.
+    corners = np.concatenate([CORNERS, CORNERS + 10.0])
+    corners[where] = value
+    corners[-1, 0, 1] = -value  # a second bad point, in the last triangle
+    triangle = where[0] + 1
+    with pytest.raises(MeshFileError, match=rf"^Triangle {triangle} \(counting from 1\) has a"):
+        read_mesh(binary_stl(corners), "t.stl")
+    with pytest.raises(MeshFileError, match=rf"^Triangle {triangle} \(counting from 1\) has a"):
+        read_mesh(ascii_stl(corners, np.zeros((len(corners), 3))), "t.stl")
