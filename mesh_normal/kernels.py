@@ -192,6 +192,7 @@ def load_numba() -> None:
         llvm_prefetch_row = _prefetch_intrinsic(write=False, whole_row=True)
         python_peek, atomic_peek = peek, _peek_intrinsic()
         python_bump, atomic_bump = bump, _bump_intrinsic()
+        python_load_word, llvm_load_word = load_word, _load_word_intrinsic()
         waiting = [made for made in _KERNELS if isinstance(made, Kernel)]
         for made in waiting:
             made.dispatcher = _dispatcher(made.py_func, made.options)
@@ -212,6 +213,8 @@ def load_numba() -> None:
                     namespace[name] = atomic_peek
                 elif name == "bump" and value is python_bump:
                     namespace[name] = atomic_bump
+                elif name == "load_word" and value is python_load_word:
+                    namespace[name] = llvm_load_word
         _numba_loaded = True
 
 
@@ -711,6 +714,43 @@ def _peek_intrinsic() -> Any:
 def _bump_intrinsic() -> Any:
     """numba's ``bump``: ``counter[0] += 1`` as one atomic add (release)."""
     return _counter_intrinsic(_add_one("release"), returns=False)
+
+
+def load_word(data: np.ndarray, at: int, signed: bool) -> int:
+    """The 4-byte integer at byte ``at`` of the uint8 array ``data``, in this machine's byte
+    order, wherever it lies (a binary PLY's records are 13 bytes long). The stand-in for a
+    kernel's Python source; :func:`load_numba` puts :func:`_load_word_intrinsic` in its place."""
+    return int.from_bytes(bytes(data[at : at + 4]), sys.byteorder, signed=signed)
+
+
+def _load_word_intrinsic() -> Any:
+    """numba's ``load_word``: one unaligned 32-bit load (LLVM ``align 1``), sign- or
+    zero-extended to int64: what four byte loads and shifts compute, one instruction."""
+    from llvmlite import ir
+    from numba import types
+    from numba.core import cgutils
+    from numba.extending import intrinsic
+
+    @intrinsic
+    def _load_word(typingctx: Any, data: Any, at: Any, signed: Any) -> Any:  # noqa: ARG001
+        if not (isinstance(data, types.Array) and data.ndim == 1 and data.dtype == types.uint8):
+            return None
+
+        def codegen(context: Any, builder: Any, signature: Any, arguments: Any) -> Any:
+            array_type, at_type, _ = signature.args
+            made = context.make_array(array_type)(context, builder, arguments[0])
+            index = context.cast(builder, arguments[1], at_type, types.intp)
+            address = cgutils.get_item_pointer(  # type: ignore[no-untyped-call]
+                context, builder, array_type, made, [index], wraparound=False
+            )
+            word = builder.load(builder.bitcast(address, ir.IntType(32).as_pointer()), align=1)
+            wide = ir.IntType(64)
+            flag = context.cast(builder, arguments[2], signature.args[2], types.boolean)
+            return builder.select(flag, builder.sext(word, wide), builder.zext(word, wide))
+
+        return types.int64(data, at, signed), codegen
+
+    return _load_word
 
 
 def workers() -> tuple[IndexArray, int]:

@@ -85,8 +85,9 @@ def compile_kernels() -> None:
     # A binary STL's corners, read where they lie in its records (a read-only view).
     weld(np.frombuffer(bytes(2 * STL_RECORD.itemsize), STL_RECORD)["corners"])
     binary_items(
-        np.frombuffer(bytes(13), np.uint8), 1, 13, 4, True, True, np.empty((1, 3), np.int64)
-    )
+        np.frombuffer(bytes(13), np.uint8), 1, 13, 4, True, True, True,
+        np.empty((1, 3), np.int64), *workers(),
+    )  # fmt: skip
     # A file's stored normals against ours (every row compared, and some).
     unit, usable = unit_rows(np.eye(3))
     angles_between(unit, usable, Candidate(np.eye(3), np.array([False, True, False])))

@@ -36,6 +36,7 @@ from mesh_normal.files.formats import MAKER
 from mesh_normal.files.loaded import LoadedMesh, build
 from mesh_normal.files.polygons import triangulate
 from mesh_normal.files.text_kernels import binary_items
+from mesh_normal.kernels import PARALLEL_KERNELS, workers
 
 _TYPES = {
     "char": "i1",
@@ -230,7 +231,12 @@ def _items(records: NDArray[np.void], name: str, data: bytes, offset: int) -> ND
     at = offset + fields[name][1] + inner["items"][1]
     view = np.frombuffer(data, np.uint8)
     little = kind.byteorder == "<" or (kind.byteorder in "=|" and sys.byteorder == "little")
-    binary_items(view, at, records.dtype.itemsize, kind.itemsize, kind.kind == "i", little, out)
+    signed, native = kind.kind == "i", little == (sys.byteorder == "little")
+    with PARALLEL_KERNELS:
+        binary_items(
+            view, at, records.dtype.itemsize, kind.itemsize, signed, little, native, out,
+            *workers(),
+        )  # fmt: skip
     return out
 
 
@@ -576,10 +582,14 @@ def _mesh(elements: list[_Element], notes: list[str]) -> LoadedMesh:
         counts, flat = np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp)
     else:
         counts, flat = _polygons(face.data[key])
-    if len(flat) >= COMPILED_ITEMS and counts[0] == 3 and np.all(counts == 3):
+    source: NDArray[np.intp] | None = None  # None: face i is the file's face i
+    column = None if face is None or key is None else face.data[key]
+    if len(flat) >= COMPILED_ITEMS and (
+        _uniform(column, 3) or (counts[0] == 3 and np.all(counts == 3))
+    ):
         # Many triangles: they are their own fans (what triangulate gives, without building
         # the fans' corner positions and gathering the corners through them).
-        faces, source = flat.reshape(-1, 3), np.arange(len(counts))
+        faces = flat.reshape(-1, 3)
     else:
         positions, source, fan_notes = triangulate(counts, flat, vertices)
         notes += fan_notes
@@ -595,14 +605,15 @@ def _mesh(elements: list[_Element], notes: list[str]) -> LoadedMesh:
         notes.append(f"Ignored elements this reader does not use: {', '.join(others)}.")
     face_normals = _face_normals(face, source)
     face_colors = None if face is None else _colors(face)
-    face_colors = None if face_colors is None else face_colors[source]
+    if face_colors is not None and source is not None:
+        face_colors = face_colors[source]
     if strips is not None and len(strips.triangles):
         faces = np.concatenate([faces, strips.triangles])
         face_normals = None  # strips carry none: normals for only some triangles say nothing
         if face_colors is not None:
             notes.append("Face colours were not kept: the triangle strips carry none.")
             face_colors = None
-    from_polygons = len(source)
+    from_polygons = len(faces) if source is None else len(source)
     return build(
         "ply",
         vertices,
@@ -614,7 +625,7 @@ def _mesh(elements: list[_Element], notes: list[str]) -> LoadedMesh:
         face_colors=face_colors,
         notes=notes,
         face=lambda i: (
-            f"face {source[i]:,} (counting from 0)"
+            f"face {i if source is None else source[i]:,} (counting from 0)"
             if i < from_polygons or strips is None
             else f"triangle strip {strips.source[i - from_polygons]:,} (counting from 0)"
         ),
@@ -767,9 +778,17 @@ def _colors(element: _Element) -> NDArray[np.generic] | None:
     return np.stack([np.asarray(element.data[name]).astype(kind) for name in names], axis=1)
 
 
-def _face_normals(face: _Element | None, source: NDArray[np.intp]) -> NDArray[np.float64] | None:
+def _face_normals(
+    face: _Element | None, source: NDArray[np.intp] | None
+) -> NDArray[np.float64] | None:
     normals = _normals(face)
-    return None if normals is None else normals[source]
+    return normals if normals is None or source is None else normals[source]
+
+
+def _uniform(column: object, size: int) -> bool:
+    """Whether a list column was read as one array of rows of ``size`` (binary lists of one
+    length): then every face has ``size`` corners, without a look at each count."""
+    return isinstance(column, np.ndarray) and column.ndim == 2 and column.shape[1] == size
 
 
 def write_ply(

@@ -78,3 +78,47 @@ def test_quads_still_go_through_triangulate(monkeypatch: pytest.MonkeyPatch) -> 
     monkeypatch.setattr(ply, "COMPILED_ITEMS", 0)
     mesh = ply.read_ply(binary_ply("<", "u1", "i4", False, np.array([[0, 1, 2, 3]])))
     assert len(mesh.faces) == 2 and mesh.source_faces == 1
+
+
+@pytest.mark.parametrize("endian", ["<", ">"])
+@pytest.mark.parametrize("item", ["i4", "u4", "i2"])
+def test_many_blocks_of_records_read_on_every_core_match_numpy(endian: str, item: str) -> None:
+    # More records than three of the kernel's blocks (the last one partial); in this
+    # machine's byte order 4-byte items take one unaligned load each (13-byte records).
+    from mesh_normal.files.text_kernels import ITEMS_BLOCK
+
+    count = 3 * ITEMS_BLOCK + 7
+    low, high = (
+        (-(2**31), 2**31) if item == "i4" else (0, 2**32) if item == "u4" else (-(2**15), 2**15)
+    )
+    faces = np.random.default_rng(len(item)).integers(low, high, (count, 3))
+    faces[-1] = [high - 1, low, 0]
+    records = np.zeros(count, dtype=[("count", "u1"), ("items", endian + item, (3,))])
+    records["count"], records["items"] = 3, faces
+    element = ply._Element("face", count, [], {"vertex_indices": ("u1", item)}, ["vertex_indices"])
+    data = records.tobytes()
+    assert ply._binary_lists(element, data, 0, endian) == len(data)
+    np.testing.assert_array_equal(element.data["vertex_indices"], faces)
+
+
+def test_face_colours_and_normals_of_many_triangles_stay_in_file_order(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # Many triangles are their own faces (no fans, no gather through their numbers): the face
+    # colours and normals read are the file's, row for row, as through the fans.
+    rng = np.random.default_rng(9)
+    points = rng.normal(size=(30, 3))
+    triangles = np.array([[i, (i + 1) % 30, (i + 2) % 30] for i in range(30)])
+    colours = rng.integers(0, 256, (30, 3)).astype(np.uint8)
+    normals = rng.normal(size=(30, 3))
+    data = ply.write_ply(
+        points, triangles, face_colors=colours, normals=normals, normals_kind="face"
+    )
+    fanned = ply.read_ply(data)
+    monkeypatch.setattr(ply, "COMPILED_ITEMS", 0)
+    own = ply.read_ply(data)
+    np.testing.assert_array_equal(own.faces, triangles)
+    np.testing.assert_array_equal(own.face_colors, colours)
+    np.testing.assert_array_equal(own.file_face_normals, normals)
+    for name in ("faces", "face_colors", "file_face_normals"):
+        np.testing.assert_array_equal(getattr(own, name), getattr(fanned, name))
