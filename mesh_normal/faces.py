@@ -41,10 +41,12 @@ from numpy.typing import ArrayLike
 from mesh_normal.checks import CheckedMesh, as_checked, checked_mesh, refuse_faces
 from mesh_normal.kernels import (
     PARALLEL_KERNELS,
+    UNIT_BLOCK,
     announce_compiling,
     face_normals_kernel,
     fresh_empty,
     geometry_kernel,
+    unit_normals_kernel,
     workers,
 )
 from mesh_normal.types import BoolArray, FloatArray, IndexArray
@@ -104,6 +106,11 @@ class FaceGeometry:
         """(k, 3) float64: the unit normals of a slice (or a list) of the faces, not kept
         (a writer taking them a block at a time); into ``out`` if given (``crosses`` itself,
         by a caller that needs nothing more of this geometry and not 24 bytes a face more)."""
+        if isinstance(rows, slice) and rows == slice(None) and len(self.crosses) >= UNIT_BLOCK:
+            found = fresh_empty((self.crosses.shape, np.float64))[0] if out is None else out
+            with PARALLEL_KERNELS:
+                unit_normals_kernel(self.crosses, self.lengths, self.degenerate, found, *workers())
+            return found
         divisor = np.where(self.degenerate[rows], 1.0, self.lengths[rows])
         found = np.divide(self.crosses[rows], divisor[:, None], out=out)
         found += 0.0  # -0.0 becomes 0.0

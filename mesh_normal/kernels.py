@@ -764,6 +764,35 @@ def workers() -> tuple[IndexArray, int]:
     return counter, numba.get_num_threads()
 
 
+#: Faces per task of :func:`unit_normals_kernel`, and from how many faces it is used.
+UNIT_BLOCK = 1 << 14
+
+
+@kernel(parallel=True, python=True)
+def unit_normals_kernel(
+    crosses: FloatArray,
+    lengths: FloatArray,
+    degenerate: BoolArray,
+    out: FloatArray,
+    counter: IndexArray,
+    workers: int,
+) -> None:
+    """Each face's cross product over its length (over 1 where degenerate) plus 0.0, into
+    ``out`` (which may be ``crosses``): ``FaceGeometry.unit_normals``'s NumPy arithmetic, one
+    division a coordinate, in blocks claimed by every core (at the Dragon size 17 ms in NumPy's
+    three passes on one core)."""
+    blocks = (len(crosses) + UNIT_BLOCK - 1) // UNIT_BLOCK
+    for _ in prange(workers):
+        block = claim(counter)
+        while block < blocks:
+            for face in range(block * UNIT_BLOCK, min((block + 1) * UNIT_BLOCK, len(crosses))):
+                divisor = 1.0 if degenerate[face] else lengths[face]
+                out[face, 0] = crosses[face, 0] / divisor + 0.0  # -0.0 becomes 0.0
+                out[face, 1] = crosses[face, 1] / divisor + 0.0
+                out[face, 2] = crosses[face, 2] / divisor + 0.0
+            block = claim(counter)
+
+
 @kernel(parallel=True, python=True, named=True)
 def geometry_kernel(
     points: FloatArray,

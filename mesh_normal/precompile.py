@@ -26,7 +26,13 @@ from mesh_normal.files.polygons import triangulate
 from mesh_normal.files.stl import RECORD as STL_RECORD
 from mesh_normal.files.text_kernels import ObjScanner, binary_items
 from mesh_normal.files.weld import weld, weld_by_sort
-from mesh_normal.kernels import coordinate_range, load_numba, touch_kernel, workers
+from mesh_normal.kernels import (
+    coordinate_range,
+    load_numba,
+    touch_kernel,
+    unit_normals_kernel,
+    workers,
+)
 from mesh_normal.orientation import _twinned_wide, orient
 from mesh_normal.points import point_normals
 from mesh_normal.points.pcd import lzf_decompress
@@ -77,6 +83,8 @@ def compile_kernels() -> None:
     # A large mesh's checks and fresh outputs (the checks give read-only views).
     coordinate_range(_kept(points, True))
     touch_kernel(np.empty(1, np.uint8), *workers())
+    crosses = np.zeros((1, 3))
+    unit_normals_kernel(crosses, np.ones(1), np.zeros(1, bool), crosses, *workers())
     for dtype in (np.float32, np.float64):  # binary STL corners, and text ones
         corners = np.array([[0.0, 0, 0], [1, 0, 0], [0, 0, 0]], dtype)
         weld(corners)

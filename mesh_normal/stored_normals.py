@@ -30,6 +30,7 @@ from mesh_normal.corners import corner_normals
 from mesh_normal.faces import FaceGeometry
 from mesh_normal.files import LoadedMesh
 from mesh_normal.kernels import PARALLEL_KERNELS, announce_compiling, claim, kernel, prange, workers
+from mesh_normal.medians import median
 from mesh_normal.report import AGREEMENT_DEGREES, COMPARISON_CREASE, FileNormals, StoredKind
 from mesh_normal.types import BoolArray, FloatArray, IndexArray
 from mesh_normal.vertices import Weighting, vertex_normals
@@ -98,7 +99,7 @@ class Angles:
         """
         lines = np.minimum(self.radians, math.pi - self.radians)
         agreeing = int(np.count_nonzero(lines <= math.radians(AGREEMENT_DEGREES)))
-        return -agreeing, float(np.median(lines)) if len(lines) else math.inf
+        return -agreeing, median(lines) if len(lines) else math.inf
 
     def exact(self) -> bool:
         """Every compared angle is below ``EXACT_DEGREES`` (and at least one was compared).
@@ -326,6 +327,6 @@ def stored_normal_agreement(mesh: LoadedMesh, geometry: FaceGeometry) -> FileNor
         agreeing=angles.agreeing(),
         opposite=int(np.count_nonzero(angles.radians > math.pi / 2)),
         agreement_degrees=AGREEMENT_DEGREES,
-        median_angle_degrees=float(np.median(degrees)) if compared else None,
+        median_angle_degrees=median(degrees) if compared else None,
         max_angle_degrees=float(degrees.max()) if compared else None,
     )

@@ -269,8 +269,10 @@ def _welded(
         f"Welded {len(index):,} STL corners into {len(vertices):,} vertices "
         "(identical coordinates merged, in order of first appearance)."
     )
-    face_normals: NDArray[np.floating] | None = normals
-    if len(normals) and not np.any(normals):
+    # As float64 in face order first (what the mesh keeps): np.any of the records' strided
+    # float32 view took 8 ms at the Dragon size, of the copy 1 ms.
+    face_normals: NDArray[np.floating] | None = np.ascontiguousarray(normals, dtype=np.float64)
+    if len(normals) and not np.any(face_normals):
         face_normals = None
         notes.append(
             'Every facet normal in the file is zero (meaning "not given"), so there '

@@ -280,3 +280,29 @@ def test_large_outputs_are_touched_on_every_core_and_hold_the_same_normals(
         assert np.array_equal(touched.areas, other.areas)
         assert np.array_equal(touched.degenerate, other.degenerate)
     assert touched.degenerate[::1000].all() and not touched.degenerate.all()
+
+
+def test_a_large_geometrys_unit_normals_on_every_core_are_numpys(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # From UNIT_BLOCK faces the unit normals are one compiled pass on every core: the same
+    # bits as NumPy's where, divide and + 0.0, into a new array or into the crosses.
+    from mesh_normal import faces as faces_module
+    from mesh_normal.faces import face_geometry
+    from mesh_normal.kernels import UNIT_BLOCK
+
+    rng = np.random.default_rng(21)
+    count = 2 * UNIT_BLOCK + 3
+    vertices = rng.normal(size=(count, 3)) * 1e-3
+    faces = rng.integers(0, count, (count, 3))
+    faces[::97, 2] = faces[::97, 0]  # degenerate
+    geometry = face_geometry(vertices, faces)
+    compiled = geometry.unit_normals()
+    monkeypatch.setattr(faces_module, "UNIT_BLOCK", 1 << 62)
+    numpys = geometry.unit_normals()
+    assert compiled.tobytes() == numpys.tobytes()
+    assert not np.signbit(compiled[geometry.degenerate]).any()
+    monkeypatch.setattr(faces_module, "UNIT_BLOCK", UNIT_BLOCK)
+    again = face_geometry(vertices, faces)
+    assert again.unit_normals(out=again.crosses) is again.crosses
+    assert again.crosses.tobytes() == numpys.tobytes()
