@@ -181,7 +181,16 @@ def _nth(kind: str) -> Describe:
 def first_bad_vertex(points: NDArray[np.floating]) -> int | None:
     """The index of the first row (of 3 coordinates, in order) with a NaN or infinite
     coordinate, or ``None``. ``points`` is (k, 3), or (f, c, 3) (its f * c rows in order)."""
-    if not points.size or (np.isfinite(points.min()) and np.isfinite(points.max())):
+    if not points.size:
+        return None
+    if points.size >= COMPILED_FROM and points.dtype == np.float64 and points.flags.c_contiguous:
+        from mesh_normal.checks import read_only  # numba only where it pays
+        from mesh_normal.kernels import coordinate_range
+
+        # One pass on every core; read-only, the one signature that is precompiled.
+        if not np.isnan(coordinate_range(read_only(np.asarray(points, np.float64)))[0]):
+            return None
+    elif np.isfinite(points.min()) and np.isfinite(points.max()):
         return None  # NaN propagates through min and max: two fast passes settle most files
     finite = np.isfinite(points).all(axis=-1).ravel()
     return None if finite.all() else int(np.argmin(finite))
@@ -196,8 +205,19 @@ def _check_finite(points: FloatArray, describe: Describe) -> None:
         )
 
 
+#: From how many numbers the checks of a mesh read take one compiled pass on every core
+#: (numba loaded) instead of NumPy's ``min`` and ``max``.
+COMPILED_FROM = 1 << 18
+
+
 def _check_indices(triangles: IndexArray, count: int, describe: Describe) -> None:
-    low, high = int(triangles.min()), int(triangles.max())
+    if triangles.size >= COMPILED_FROM and triangles.dtype == np.intp:
+        from mesh_normal.checks import read_only
+        from mesh_normal.kernels import index_range
+
+        low, high = index_range(read_only(triangles))  # the precompiled signature
+    else:
+        low, high = int(triangles.min()), int(triangles.max())
     if low >= 0 and high < count:
         return
     bad = (triangles < 0) | (triangles >= count)

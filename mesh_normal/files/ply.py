@@ -25,7 +25,7 @@ import struct
 import sys
 from collections.abc import Iterator
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeGuard
 
 import numpy as np
 from numpy.lib.recfunctions import structured_to_unstructured
@@ -578,22 +578,27 @@ def _mesh(elements: list[_Element], notes: list[str]) -> LoadedMesh:
     vertices = _xyz(vertex)
     face = named.get("face")
     key = _indices_key(face)
-    if face is None or key is None:
-        counts, flat = np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp)
-    else:
-        counts, flat = _polygons(face.data[key])
-    source: NDArray[np.intp] | None = None  # None: face i is the file's face i
     column = None if face is None or key is None else face.data[key]
-    if len(flat) >= COMPILED_ITEMS and (
-        _uniform(column, 3) or (counts[0] == 3 and np.all(counts == 3))
-    ):
-        # Many triangles: they are their own fans (what triangulate gives, without building
-        # the fans' corner positions and gathering the corners through them).
-        faces = flat.reshape(-1, 3)
+    source: NDArray[np.intp] | None = None  # None: face i is the file's face i
+    faces: NDArray[np.integer]
+    if _many_triangles(column):
+        # Many triangles read as integers (the compiled loop's): their own faces, as below,
+        # without the counts and their check.
+        faces, polygons = column, len(column)
     else:
-        positions, source, fan_notes = triangulate(counts, flat, vertices)
-        notes += fan_notes
-        faces = flat[positions]
+        if face is None or key is None:
+            counts, flat = np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp)
+        else:
+            counts, flat = _polygons(column)
+        polygons = len(counts)
+        if len(flat) >= COMPILED_ITEMS and counts[0] == 3 and np.all(counts == 3):
+            # Many triangles: they are their own fans (what triangulate gives, without
+            # building the fans' corner positions and gathering the corners through them).
+            faces = flat.reshape(-1, 3)
+        else:
+            positions, source, fan_notes = triangulate(counts, flat, vertices)
+            notes += fan_notes
+            faces = flat[positions]
     strips = _read_strips(named.get("tristrips"))
     if strips is not None:
         notes.append(strips.note)
@@ -618,7 +623,7 @@ def _mesh(elements: list[_Element], notes: list[str]) -> LoadedMesh:
         "ply",
         vertices,
         faces,
-        source_faces=len(counts) + (0 if strips is None else strips.count),
+        source_faces=polygons + (0 if strips is None else strips.count),
         vertex_normals=_normals(vertex),
         face_normals=face_normals,
         vertex_colors=_colors(vertex),
@@ -785,10 +790,16 @@ def _face_normals(
     return normals if normals is None or source is None else normals[source]
 
 
-def _uniform(column: object, size: int) -> bool:
-    """Whether a list column was read as one array of rows of ``size`` (binary lists of one
-    length): then every face has ``size`` corners, without a look at each count."""
-    return isinstance(column, np.ndarray) and column.ndim == 2 and column.shape[1] == size
+def _many_triangles(column: object) -> TypeGuard[NDArray[np.int64]]:
+    """Whether a list column holds many triangles read as one int64 array of rows (binary
+    lists of one length, by the compiled loop): every face has 3 corners, unlooked at."""
+    return (
+        isinstance(column, np.ndarray)
+        and column.dtype == np.int64
+        and column.ndim == 2
+        and column.shape[1] == 3
+        and column.size >= COMPILED_ITEMS
+    )
 
 
 def write_ply(

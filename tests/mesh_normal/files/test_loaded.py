@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -42,3 +44,40 @@ def test_a_reader_giving_wrong_groups_fails_loudly(
             face_groups=None if groups is None else np.array(groups),
             group_names=names,
         )
+
+
+@pytest.mark.parametrize(
+    ("plant", "words"),
+    [
+        ("nan", "The coordinates of vertex 70,001 (counting from 0) include nan"),
+        ("inf", "The coordinates of vertex 70,001 (counting from 0) include -inf"),
+        ("negative", "Face 80,001 (counting from 0) refers to vertex -1; vertex indices"),
+        ("large", "Face 80,001 (counting from 0) refers to vertex 100,000 (counting from 0)"),
+    ],
+)
+def test_a_large_meshs_checks_on_every_core_say_what_numpys_say(
+    monkeypatch: pytest.MonkeyPatch, plant: str, words: str
+) -> None:
+    # Over COMPILED_FROM numbers the checks take one compiled pass (coordinate and index
+    # ranges); the first bad vertex or face, and the sentence, are the same as below it.
+    from mesh_normal.files import loaded
+    from mesh_normal.files.errors import MeshFileError
+
+    rng = np.random.default_rng(3)
+    vertices = rng.normal(size=(100_000, 3))
+    faces = rng.integers(0, len(vertices), (100_000, 3))
+    if plant in ("nan", "inf"):
+        vertices[70_001, 1] = np.nan if plant == "nan" else -np.inf
+        vertices[90_000, 2] = np.inf
+    else:
+        faces[80_001, 2] = -1 if plant == "negative" else 100_000
+        faces[90_000, 0] = -5
+    assert vertices.size >= loaded.COMPILED_FROM and faces.size >= loaded.COMPILED_FROM
+    for threshold in (loaded.COMPILED_FROM, 1 << 62):
+        monkeypatch.setattr(loaded, "COMPILED_FROM", threshold)
+        with pytest.raises(MeshFileError, match=re.escape(words)):
+            build("ply", vertices, faces, source_faces=len(faces))
+    fine = build(
+        "ply", np.nan_to_num(vertices, posinf=0, neginf=0), faces % 100_000, source_faces=1
+    )
+    assert len(fine.faces) == 100_000
