@@ -599,6 +599,7 @@ def _mesh(elements: list[_Element], notes: list[str]) -> LoadedMesh:
             positions, source, fan_notes = triangulate(counts, flat, vertices)
             notes += fan_notes
             faces = flat[positions]
+    from_polygons = len(faces)  # the triangles of the faces, before any of the strips'
     strips = _read_strips(named.get("tristrips"))
     if strips is not None:
         notes.append(strips.note)
@@ -618,7 +619,6 @@ def _mesh(elements: list[_Element], notes: list[str]) -> LoadedMesh:
         if face_colors is not None:
             notes.append("Face colours were not kept: the triangle strips carry none.")
             face_colors = None
-    from_polygons = len(faces) if source is None else len(source)
     return build(
         "ply",
         vertices,
