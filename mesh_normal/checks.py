@@ -199,8 +199,11 @@ def refuse_faces(faces: IndexArray, vertex_count: int) -> NoReturn:
     raise AssertionError("a kernel found an index out of range that the check did not")
 
 
-def _index_range(array: np.ndarray) -> tuple[int, int]:
-    if array.dtype != np.intp:
+def _index_range(array: np.ndarray, *, large_only: bool = False) -> tuple[int, int]:
+    """The smallest and largest index (and 0, where compiled): for the usual dtype one compiled
+    pass on every core; ``large_only``, only from ``COMPILED_RANGE_FROM`` indices (a file's
+    reader, which needs numba only then)."""
+    if array.dtype != np.intp or (large_only and array.size < COMPILED_RANGE_FROM):
         return array.min(), array.max()
     # One compiled pass for the usual dtype instead of two NumPy reductions; imported here so
     # that checking (and so reading and writing files) needs numba only when it is used.

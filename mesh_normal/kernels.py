@@ -176,8 +176,11 @@ def _dispatcher(function: Callable[..., Any], options: dict[str, Any]) -> Any:
 def load_numba() -> None:
     """Import numba and make every kernel its dispatcher (each compiled, or loaded from the
     cache, at its first call): in each kernel's module the name now means the dispatcher, as
-    numba needs for the kernels that call it, ``prange`` numba's and ``claim`` the atomic
-    add (:func:`_claim_intrinsic`) and ``prefetch`` the CPU's (:func:`_prefetch_intrinsic`)."""
+    numba needs for the kernels that call it, and each Python stand-in that a kernel's module
+    imported under its own name means numba's or LLVM's own: ``prange`` numba's, ``claim``,
+    ``peek`` and ``bump`` the atomic steps (:func:`_counter_intrinsic`), ``prefetch`` and
+    ``prefetch_row`` the CPU's (:func:`_prefetch_intrinsic`), ``load_word`` one unaligned load
+    (:func:`_load_word_intrinsic`)."""
     global _numba_loaded
     if _numba_loaded:
         return
@@ -186,13 +189,15 @@ def load_numba() -> None:
             return
         import numba
 
-        python_claim, atomic_claim = claim, _claim_intrinsic()
-        python_prefetch, llvm_prefetch = prefetch, _prefetch_intrinsic()
-        python_prefetch_row = prefetch_row
-        llvm_prefetch_row = _prefetch_intrinsic(write=False, whole_row=True)
-        python_peek, atomic_peek = peek, _peek_intrinsic()
-        python_bump, atomic_bump = bump, _bump_intrinsic()
-        python_load_word, llvm_load_word = load_word, _load_word_intrinsic()
+        compiled = {  # name: (the stand-in, what takes its place)
+            "prange": (range, numba.prange),
+            "claim": (claim, _claim_intrinsic()),
+            "prefetch": (prefetch, _prefetch_intrinsic()),
+            "prefetch_row": (prefetch_row, _prefetch_intrinsic(write=False, whole_row=True)),
+            "peek": (peek, _peek_intrinsic()),
+            "bump": (bump, _bump_intrinsic()),
+            "load_word": (load_word, _load_word_intrinsic()),
+        }
         waiting = [made for made in _KERNELS if isinstance(made, Kernel)]
         for made in waiting:
             made.dispatcher = _dispatcher(made.py_func, made.options)
@@ -201,20 +206,8 @@ def load_numba() -> None:
             for name, value in list(namespace.items()):
                 if isinstance(value, Kernel):
                     namespace[name] = value.dispatcher
-                elif name == "prange" and value is range:
-                    namespace[name] = numba.prange
-                elif name == "claim" and value is python_claim:
-                    namespace[name] = atomic_claim
-                elif name == "prefetch" and value is python_prefetch:
-                    namespace[name] = llvm_prefetch
-                elif name == "prefetch_row" and value is python_prefetch_row:
-                    namespace[name] = llvm_prefetch_row
-                elif name == "peek" and value is python_peek:
-                    namespace[name] = atomic_peek
-                elif name == "bump" and value is python_bump:
-                    namespace[name] = atomic_bump
-                elif name == "load_word" and value is python_load_word:
-                    namespace[name] = llvm_load_word
+                elif name in compiled and value is compiled[name][0]:
+                    namespace[name] = compiled[name][1]
         _numba_loaded = True
 
 
@@ -779,8 +772,8 @@ def unit_normals_kernel(
 ) -> None:
     """Each face's cross product over its length (over 1 where degenerate) plus 0.0, into
     ``out`` (which may be ``crosses``): ``FaceGeometry.unit_normals``'s NumPy arithmetic, one
-    division a coordinate, in blocks claimed by every core (at the Dragon size 17 ms in NumPy's
-    three passes on one core)."""
+    division a coordinate, in blocks claimed by every core (at the Dragon size 2 ms, against
+    7 ms for NumPy's three passes on one core)."""
     blocks = (len(crosses) + UNIT_BLOCK - 1) // UNIT_BLOCK
     for _ in prange(workers):
         block = claim(counter)

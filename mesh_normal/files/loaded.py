@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
@@ -9,6 +10,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
+from mesh_normal.checks import _coordinate_range, _index_range
 from mesh_normal.files.errors import MeshFileError
 from mesh_normal.types import FloatArray, IndexArray
 
@@ -183,12 +185,9 @@ def first_bad_vertex(points: NDArray[np.floating]) -> int | None:
     coordinate, or ``None``. ``points`` is (k, 3), or (f, c, 3) (its f * c rows in order)."""
     if not points.size:
         return None
-    if points.size >= COMPILED_FROM and points.dtype == np.float64 and points.flags.c_contiguous:
-        from mesh_normal.checks import read_only  # numba only where it pays
-        from mesh_normal.kernels import coordinate_range
-
-        # One pass on every core; read-only, the one signature that is precompiled.
-        if not np.isnan(coordinate_range(read_only(np.asarray(points, np.float64)))[0]):
+    if points.dtype == np.float64 and points.flags.c_contiguous:
+        extremes = _coordinate_range(np.asarray(points, np.float64))  # compiled when large
+        if math.isfinite(extremes[0]) and math.isfinite(extremes[1]):
             return None
     elif np.isfinite(points.min()) and np.isfinite(points.max()):
         return None  # NaN propagates through min and max: two fast passes settle most files
@@ -205,19 +204,8 @@ def _check_finite(points: FloatArray, describe: Describe) -> None:
         )
 
 
-#: From how many numbers the checks of a mesh read take one compiled pass on every core
-#: (numba loaded) instead of NumPy's ``min`` and ``max``.
-COMPILED_FROM = 1 << 18
-
-
 def _check_indices(triangles: IndexArray, count: int, describe: Describe) -> None:
-    if triangles.size >= COMPILED_FROM and triangles.dtype == np.intp:
-        from mesh_normal.checks import read_only
-        from mesh_normal.kernels import index_range
-
-        low, high = index_range(read_only(triangles))  # the precompiled signature
-    else:
-        low, high = int(triangles.min()), int(triangles.max())
+    low, high = (int(value) for value in _index_range(triangles, large_only=True))
     if low >= 0 and high < count:
         return
     bad = (triangles < 0) | (triangles >= count)

@@ -58,9 +58,9 @@ def test_a_reader_giving_wrong_groups_fails_loudly(
 def test_a_large_meshs_checks_on_every_core_say_what_numpys_say(
     monkeypatch: pytest.MonkeyPatch, plant: str, words: str
 ) -> None:
-    # Over COMPILED_FROM numbers the checks take one compiled pass (coordinate and index
-    # ranges); the first bad vertex or face, and the sentence, are the same as below it.
-    from mesh_normal.files import loaded
+    # Over COMPILED_RANGE_FROM numbers the checks take one compiled pass (coordinate and
+    # index ranges); the first bad vertex or face, and the sentence, are the same as below it.
+    from mesh_normal import checks
     from mesh_normal.files.errors import MeshFileError
 
     rng = np.random.default_rng(3)
@@ -72,9 +72,10 @@ def test_a_large_meshs_checks_on_every_core_say_what_numpys_say(
     else:
         faces[80_001, 2] = -1 if plant == "negative" else 100_000
         faces[90_000, 0] = -5
-    assert vertices.size >= loaded.COMPILED_FROM and faces.size >= loaded.COMPILED_FROM
-    for threshold in (loaded.COMPILED_FROM, 1 << 62):
-        monkeypatch.setattr(loaded, "COMPILED_FROM", threshold)
+    limit = checks.COMPILED_RANGE_FROM
+    assert vertices.size >= limit and faces.size >= limit
+    for threshold in (limit, 1 << 62):
+        monkeypatch.setattr(checks, "COMPILED_RANGE_FROM", threshold)
         with pytest.raises(MeshFileError, match=re.escape(words)):
             build("ply", vertices, faces, source_faces=len(faces))
     fine = build(
