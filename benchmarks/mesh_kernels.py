@@ -1,14 +1,16 @@
 """Mesh normal kernels, ours against trimesh, libigl and Open3D, side by side in one run.
 
-    .venv/bin/python -m benchmarks.mesh_kernels [--repeats 5] [--sizes 69451 871414 14000000]
+    .venv/bin/python -m benchmarks.mesh_kernels [--repeats 7] [--sizes 69451 871414 14000000]
 
 The meshes are synthetic stand-ins with the triangle counts of the Stanford bunny (69,451),
 dragon (871,414) and Lucy (14,000,000): a torus grid with noise of a tenth of its step on its
 radius (about half as many vertices as faces, valence 6), faces shuffled and cut to the exact
-count. Each kernel runs ``repeats`` times (at most ``--large-repeats`` above 2 million faces),
-all libraries alternately; the best time is reported and, in brackets, the median (ratios of
-medians in brackets too); only ratios within one run count. ``--idle N`` adds rows for face
-and area-weighted vertex normals against Open3D where each call follows a second of sleep.
+count. Each kernel runs ``repeats`` times, all libraries alternately (above 2 million faces,
+trimesh's and libigl's at most ``--large-repeats`` times: more would run this machine out of
+memory; ours and Open3D's all ``repeats``); the best time is reported and, in brackets, the
+median (ratios of medians in brackets too); only ratios within one run count. ``--idle N``
+adds rows for face and area-weighted vertex normals against Open3D where each call follows a
+second of sleep.
 
 trimesh's face normals are ``trimesh.triangles.normals(vertices[faces])`` (the gather is
 included, as it is in ours). Its angle-weighted vertex normals are ``mesh.vertex_normals``
@@ -143,7 +145,7 @@ LABELS = {
 LARGE = 2_000_000
 
 
-def run(size: int, repeats: int, idle: int = 0) -> list[str]:
+def run(size: int, repeats: int, idle: int = 0, peer_repeats: int | None = None) -> list[str]:
     vertices, faces = torus_mesh(size)
     ours: Kernels = {
         "face": lambda: face_normals(vertices, faces),
@@ -176,7 +178,12 @@ def run(size: int, repeats: int, idle: int = 0) -> list[str]:
         call()
     kernels = {("ours", k): v for k, v in ours.items()}
     kernels.update({(peer, k): v for peer, their in peers.items() for k, v in their.items()})
-    times, medians = best_times(kernels, repeats)
+    limits = {
+        key: peer_repeats
+        for key in kernels
+        if peer_repeats is not None and key[0] in ("trimesh", "libigl")
+    }
+    times, medians = best_times(kernels, repeats, limits)
     rows = []
     for key, mine in ((k, times["ours", k]) for k in ours):
         theirs = [times.get((peer, key)) for peer in PEERS]
@@ -205,12 +212,17 @@ def run(size: int, repeats: int, idle: int = 0) -> list[str]:
 
 
 def best_times(
-    kernels: dict[tuple[str, str], Callable[[], object]], repeats: int
+    kernels: dict[tuple[str, str], Callable[[], object]],
+    repeats: int,
+    limits: dict[tuple[str, str], int] | None = None,
 ) -> tuple[dict[tuple[str, str], float], dict[tuple[str, str], float]]:
-    """Best and median wall times in milliseconds of each kernel, the kernels run alternately."""
+    """Best and median wall times in milliseconds of each kernel, the kernels run alternately,
+    each ``repeats`` times or its limit in ``limits``."""
     times: dict[tuple[str, str], list[float]] = {name: [] for name in kernels}
-    for _ in range(repeats):
+    for round_ in range(repeats):
         for name, kernel in kernels.items():
+            if round_ >= (limits or {}).get(name, repeats):
+                continue
             start = time.perf_counter()
             kernel()
             times[name].append(time.perf_counter() - start)
@@ -346,7 +358,7 @@ def memory(size: int) -> list[str]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--repeats", type=int, default=7)
     parser.add_argument("--large-repeats", type=int, default=2)
     parser.add_argument("--sizes", type=int, nargs="+", default=list(SIZES))
     parser.add_argument(
@@ -362,8 +374,8 @@ def main() -> None:
     )
     print("|---:|---|---:|" + "---:|" * 6)
     for size in args.sizes:
-        repeats = args.repeats if size < LARGE else min(args.repeats, args.large_repeats)
-        for row in run(size, repeats, args.idle if size < LARGE else 0):
+        peers = None if size < LARGE else min(args.repeats, args.large_repeats)
+        for row in run(size, args.repeats, args.idle if size < LARGE else 0, peers):
             print(row, flush=True)
     print("\nDegenerate and tiny faces (angle-weighted vertex normals; Open3D's are by area):\n")
     print("\n".join(probe()))

@@ -39,7 +39,7 @@ from mesh_normal.points.pcd import lzf_decompress
 from mesh_normal.stored_normals import Candidate, angles_between, unit_rows
 from mesh_normal.topology import _wide_half_edges
 from mesh_normal.types import FloatArray, IndexArray
-from mesh_normal.vertices import vertex_normals
+from mesh_normal.vertices import normalise_packed_kernel, vertex_normals
 
 Scalar = TypeVar("Scalar", bound=np.generic)
 
@@ -85,6 +85,9 @@ def compile_kernels() -> None:
     touch_kernel(np.empty(1, np.uint8), *workers())
     crosses = np.zeros((1, 3))
     unit_normals_kernel(crosses, np.ones(1), np.zeros(1, bool), crosses, *workers())
+    sums = np.ones((1, 4))  # many vertices' normals, packed into their sums' memory
+    packed = sums.reshape(-1)[:3].reshape(1, 3)
+    normalise_packed_kernel(sums, packed, np.empty(1, bool), np.zeros(1, np.int64), 1, *workers())
     for dtype in (np.float32, np.float64):  # binary STL corners, and text ones
         corners = np.array([[0.0, 0, 0], [1, 0, 0], [0, 0, 0]], dtype)
         weld(corners)

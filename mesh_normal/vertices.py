@@ -279,23 +279,82 @@ def _add_row(sums: FloatArray, vertex: int, x: float, y: float, z: float, w: flo
 
 
 @kernel()
+def _normalise_row(sums: FloatArray, row: int) -> tuple[float, float, float, bool]:
+    """Row ``row`` of ``sums`` as :func:`normalise_kernel` writes it: the unit normal (zero
+    where it cancels) and whether it is missing."""
+    x, y, z, total = sums[row, 0], sums[row, 1], sums[row, 2], sums[row, 3]
+    square = x * x + y * y + z * z
+    cancel = _CANCELLED * total
+    missing = square <= cancel * cancel
+    length = math.inf if missing else math.sqrt(square)  # x / inf is an exact zero
+    return x / length + 0.0, y / length + 0.0, z / length + 0.0, missing  # -0.0 becomes 0.0
+
+
+@kernel()
 def normalise_kernel(sums: FloatArray, normals: FloatArray, missing: BoolArray) -> None:
     """Unit rows of ``sums[:, :3]``, or zero where they cancel against ``sums[:, 3]``.
 
     ``normals`` may share memory with ``sums``: row i is read before rows up to i are
     written, as (n, 3) is packed more densely than (n, 4). (Into the same memory, on one
     core: measured at the Lucy size, a separate (n, 3) array normalised on two cores took
-    longer, its fresh memory costing more than the second core saved.)
+    longer, its fresh memory costing more than the second core saved; many rows are
+    normalised on every core into the same memory by :func:`normalise_packed_kernel`.)
     """
     for row in range(len(sums)):
-        x, y, z, total = sums[row, 0], sums[row, 1], sums[row, 2], sums[row, 3]
-        square = x * x + y * y + z * z
-        cancel = _CANCELLED * total
-        missing[row] = square <= cancel * cancel
-        length = math.inf if missing[row] else math.sqrt(square)  # x / inf is an exact zero
-        normals[row, 0] = x / length + 0.0  # -0.0 becomes 0.0
-        normals[row, 1] = y / length + 0.0
-        normals[row, 2] = z / length + 0.0
+        normals[row, 0], normals[row, 1], normals[row, 2], missing[row] = _normalise_row(sums, row)
+
+
+#: Rows per task of :func:`normalise_packed_kernel` (512 KiB of sums), and from how many rows
+#: it is used instead of :func:`normalise_kernel`.
+PACK_BLOCK = 1 << 14
+PACK_FROM = 4 * PACK_BLOCK
+
+
+@kernel(parallel=True)
+def normalise_packed_kernel(
+    sums: FloatArray,
+    packed: FloatArray,
+    missing: BoolArray,
+    read: IndexArray,
+    size: int,
+    counter: IndexArray,
+    workers: int,
+) -> None:
+    """:func:`normalise_kernel` into ``packed``, the first ``3 * len(sums)`` doubles of the
+    memory of ``sums`` seen as (n, 3), on every core, block by block of ``size`` rows.
+
+    A worker claims the next block, normalises its rows into a buffer of its own and marks
+    the block read (``read``, one flag a block); it then writes the buffer into the block's
+    packed rows once every block whose sums those rows overwrite has been read. The packed
+    rows of block b lie over the sums of rows up to 3/4 of the block's end: blocks before b,
+    claimed before it and never waiting to be read, or b itself, already in the buffer. The
+    bits are :func:`normalise_kernel`'s; each row's arithmetic is the same.
+    """
+    count = len(sums)
+    blocks = (count + size - 1) // size
+    for _ in prange(workers):
+        rows = np.empty((size, 3))
+        known = 0  # the blocks before this one are known to be read
+        block = claim(counter)
+        while block < blocks:
+            first = block * size
+            stop = min(first + size, count)
+            for row in range(first, stop):
+                x, y, z, gone = _normalise_row(sums, row)
+                rows[row - first, 0], rows[row - first, 1], rows[row - first, 2] = x, y, z
+                missing[row] = gone
+            bump(read[block : block + 1])
+            # the last sums row under the packed rows: byte 24 * stop - 1 of row 32 bytes long
+            needed = min((3 * stop - 1) // 4 // size, block - 1)
+            while known <= needed:
+                while peek(read[known : known + 1]) == 0:
+                    pass
+                known += 1
+            for row in range(first, stop):
+                packed[row, 0] = rows[row - first, 0]
+                packed[row, 1] = rows[row - first, 1]
+                packed[row, 2] = rows[row - first, 2]
+            block = claim(counter)
 
 
 def smooth(geometry: FaceGeometry | CheckedMesh, weighting: str) -> tuple[FloatArray, BoolArray]:
@@ -330,7 +389,12 @@ def smooth(geometry: FaceGeometry | CheckedMesh, weighting: str) -> tuple[FloatA
         refuse_faces(faces, count)
     normals = sums.reshape(-1)[: 3 * count].reshape(count, 3)
     missing = np.empty(count, dtype=bool)
-    normalise_kernel(sums, normals, missing)
+    if count < PACK_FROM:
+        normalise_kernel(sums, normals, missing)
+    else:
+        read = np.zeros((count + PACK_BLOCK - 1) // PACK_BLOCK, dtype=np.int64)
+        with PARALLEL_KERNELS:
+            normalise_packed_kernel(sums, normals, missing, read, PACK_BLOCK, *workers())
     return normals, missing
 
 

@@ -130,3 +130,58 @@ def test_vertex_normals_match_trimesh(name: str) -> None:
 
 
 # --- corner normals -----------------------------------------------------------------------------
+
+
+def _sums(count: int, seed: int = 0) -> np.ndarray:
+    """Vertex sums as the kernels leave them: some cancel against their weight, some are
+    zero (a vertex in no face), the rest any direction."""
+    rng = np.random.default_rng(seed)
+    sums = rng.normal(size=(count, 4))
+    sums[:, 3] = np.abs(sums[:, 3]) + 1.0
+    sums[::7, :3] *= 1e-18  # cancelled: shorter than MESH_CANCELLED_SUM of the weight
+    sums[::11] = 0.0
+    sums[::13, :3] = -0.0
+    return sums
+
+
+@pytest.mark.parametrize("count", [1, 2, 3, 4, 5, 17, 64, 1000, 4099])
+@pytest.mark.parametrize("size", [1, 2, 3, 5, 64, 1024])
+def test_normalising_on_every_core_gives_the_one_core_bits(count: int, size: int) -> None:
+    # The rows packed into the sums' own memory, block by block in any order the workers
+    # finish them: the bytes of the one-thread kernel, which reads each row before it writes.
+    from mesh_normal.kernels import workers
+    from mesh_normal.vertices import normalise_kernel, normalise_packed_kernel
+
+    sums = _sums(count)
+    one = sums.copy()
+    normals = one.reshape(-1)[: 3 * count].reshape(count, 3)
+    missing = np.empty(count, dtype=bool)
+    normalise_kernel(one, normals, missing)
+    if count > 7:
+        assert missing.any() and not missing.all()
+
+    every = sums.copy()
+    packed = every.reshape(-1)[: 3 * count].reshape(count, 3)
+    flags = np.empty(count, dtype=bool)
+    read = np.zeros((count + size - 1) // size, dtype=np.int64)
+    normalise_packed_kernel(every, packed, flags, read, size, *workers())
+    assert packed.tobytes() == normals.tobytes()
+    assert flags.tobytes() == missing.tobytes()
+    assert (read == 1).all()  # every block read once
+
+
+def test_many_vertices_are_normalised_on_every_core(monkeypatch: pytest.MonkeyPatch) -> None:
+    # smooth() takes the packed kernel from PACK_FROM vertices on: the same normals and mask.
+    from mesh_normal import vertices as vertices_module
+
+    rng = np.random.default_rng(5)
+    points = rng.normal(size=(3000, 3))
+    faces = rng.integers(0, 3000, size=(9000, 3))
+    expected = {w: vertex_normals(points, faces, w) for w in WEIGHTINGS}
+    monkeypatch.setattr(vertices_module, "PACK_FROM", 10)
+    monkeypatch.setattr(vertices_module, "PACK_BLOCK", 37)
+    for weighting, reference in expected.items():
+        result = vertex_normals(points, faces, weighting)
+        assert result.normals.tobytes() == reference.normals.tobytes()
+        assert result.missing.tobytes() == reference.missing.tobytes()
+        assert result.normals.flags.c_contiguous and result.normals.shape == (3000, 3)
