@@ -306,3 +306,81 @@ def test_a_large_geometrys_unit_normals_on_every_core_are_numpys(
     again = face_geometry(vertices, faces)
     assert again.unit_normals(out=again.crosses) is again.crosses
     assert again.crosses.tobytes() == numpys.tobytes()
+
+
+def _moving_soup(faces: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """Random points and faces, some of them degenerate (a repeated index)."""
+    rng = np.random.default_rng(seed)
+    points = rng.normal(size=(faces // 2 + 3, 3))
+    indices = rng.integers(0, len(points), size=(faces, 3))
+    indices[::9, 1] = indices[::9, 0]
+    return points, indices
+
+
+def _garbage(count: int) -> FaceNormals:
+    """Arrays for ``out``, full of what a last frame could have left (NaN, True)."""
+    return FaceNormals(
+        np.full((count, 3), np.nan), np.full(count, -1.0), np.ones(count, dtype=bool)
+    )
+
+
+@pytest.mark.parametrize("faces", [4, 1000, 40_000])  # Python, and the compiled kernel
+def test_face_normals_into_given_arrays_are_a_fresh_calls_bits(faces: int) -> None:
+    points, indices = _moving_soup(faces)
+    out = _garbage(faces)
+    arrays = (out.normals, out.areas, out.degenerate)
+    for frame in range(3):  # the points move, the arrays stay
+        moved = points * (1.0 + frame) + frame
+        expected = face_normals(moved, indices)
+        result = face_normals(moved, indices, out=out)
+        assert result is out
+        assert (out.normals, out.areas, out.degenerate) == arrays  # the very same arrays
+        assert out.normals.tobytes() == expected.normals.tobytes()
+        assert out.areas.tobytes() == expected.areas.tobytes()
+        assert out.degenerate.tobytes() == expected.degenerate.tobytes()
+        assert out.degenerate.any() and not out.degenerate.all()
+
+
+def test_face_normals_of_a_geometry_into_given_arrays_are_copies() -> None:
+    from mesh_normal.faces import face_geometry
+
+    points, indices = _moving_soup(500)
+    geometry = face_geometry(points, indices)
+    out = _garbage(500)
+    result = face_normals(geometry, out=out)
+    own = face_normals(geometry)
+    assert result is out and out.normals is not own.normals
+    assert out.normals.tobytes() == own.normals.tobytes()
+    assert out.areas.tobytes() == own.areas.tobytes()
+    assert out.degenerate.tobytes() == own.degenerate.tobytes()
+
+
+def test_unfit_arrays_for_out_are_refused_with_the_array_named() -> None:
+    points, indices = _moving_soup(20)
+    good = _garbage(20)
+    read_only = np.zeros(20)
+    read_only.flags.writeable = False
+    cases = {
+        "out.normals": FaceNormals(np.zeros((21, 3)), good.areas, good.degenerate),
+        "out.areas": FaceNormals(good.normals, np.zeros(20, dtype=np.float32), good.degenerate),
+        "out.degenerate": FaceNormals(good.normals, good.areas, np.zeros(20, dtype=np.uint8)),
+        "read-only": FaceNormals(good.normals, read_only, good.degenerate),
+        "strided": FaceNormals(np.zeros((20, 6))[:, :3], good.areas, good.degenerate),
+    }
+    for words, out in cases.items():
+        with pytest.raises(ValueError, match=words):
+            face_normals(points, indices, out=out)
+    with pytest.raises(TypeError, match="out must be a FaceNormals"):
+        face_normals(points, indices, out=(good.normals, good.areas, good.degenerate))  # type: ignore[arg-type]
+    # Into the points it reads, or two results into one array: refused, the input untouched.
+    square = np.random.default_rng(1).normal(size=(20, 3))
+    before = square.copy()
+    with pytest.raises(ValueError, match="shares memory"):
+        face_normals(square, indices % 20, out=FaceNormals(square, good.areas, good.degenerate))
+    assert square.tobytes() == before.tobytes()
+    with pytest.raises(ValueError, match="shares memory"):
+        face_normals(
+            points,
+            indices,
+            out=FaceNormals(good.normals, good.normals.reshape(-1)[:20], good.degenerate),
+        )
