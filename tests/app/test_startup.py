@@ -74,3 +74,20 @@ def test_every_route_is_built_with_the_app_not_at_a_request(monkeypatch) -> None
     assert answer.status_code == 422
     assert answer.json()["field"] == "k"
     assert client.get("/api/normal", params={"ax": "x"}).status_code in (405, 422)
+
+
+def test_the_garbage_collector_runs_again_once_the_app_is_made() -> None:
+    # Paused while the app's modules load (a faster start), then back, with what the start made
+    # frozen out of its passes: a process that imports the app collects its garbage as before.
+    code = """
+import gc
+assert gc.isenabled()
+import app.main
+class Cycle:
+    pass
+one = Cycle()
+one.me = one
+del one
+print(gc.isenabled(), gc.get_freeze_count() > 10_000, gc.collect() >= 1)
+"""
+    assert run(code) == "True True True"
