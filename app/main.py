@@ -40,11 +40,9 @@ from app.web.workers import tune_allocator
 #: first page without them, and imports them in a thread once it is up (:func:`lifespan`), so
 #: that neither the first page nor the first upload waits for them.
 HEAVY_MODULES = ("app.mesh.work", "app.points.work")
-#: What the fork server imports once, before it forks each worker (so that a worker, the first
-#: or a replacement, starts without importing them itself, and the pages they touch are shared
-#: until written): the jobs, the warm-up each worker runs, trimesh's glTF loader, which takes
-#: seconds to import, and numba (the library imports it only for a kernel's first compiled call).
-PRELOAD = (*HEAVY_MODULES, "app.mesh.warmup", "trimesh.exchange.gltf", "mesh_normal._numba_cache")
+#: What the fork server imports once, before it forks each worker: :mod:`app.preload` (the jobs,
+#: the warm-up, trimesh's glTF loader and numba, the garbage collector paused meanwhile).
+PRELOAD = ("app.preload",)
 #: Seconds after start-up before :data:`HEAVY_MODULES` load: the first page, which a
 #: supervisor's health check or a reader often asks for at once, does not share the CPU with
 #: them.

@@ -28,6 +28,7 @@ from typing import Any, Literal, TypeVar
 
 import numpy as np
 
+from mesh_normal.collector import paused
 from mesh_normal.tolerances import MESH_DEGENERATE_SINE, MESH_RECOMPUTE_SINE
 from mesh_normal.types import BoolArray, ByteArray, Edges, FloatArray, IndexArray, Vector
 
@@ -184,7 +185,7 @@ def load_numba() -> None:
     global _numba_loaded
     if _numba_loaded:
         return
-    with _load:
+    with _load, paused():
         if _numba_loaded:
             return
         import numba

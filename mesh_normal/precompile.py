@@ -20,6 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mesh_normal.bounds import column_bounds
+from mesh_normal.collector import paused
 from mesh_normal.corners import corner_normals, corner_weights
 from mesh_normal.faces import face_geometry, face_normals
 from mesh_normal.files.polygons import triangulate
@@ -66,7 +67,13 @@ _OBJ = b"v 0 0 0\nv 1.5 0 0\nv 0 1 0.12345678901234567\nvn 0 0 1\nf 1//1 2//1 3/
 def compile_kernels() -> None:
     """Compile every mesh kernel now (into numba's cache), e.g. while building an image; where
     the cache holds them already, load them (a server's workers, as they start). numba is
-    loaded first: these calls are small enough to run in Python otherwise."""
+    loaded first: these calls are small enough to run in Python otherwise. The garbage
+    collector is paused meanwhile (:mod:`mesh_normal.collector`)."""
+    with paused():
+        _compile_kernels()
+
+
+def _compile_kernels() -> None:
     load_numba()
     for vertices, faces in (_NESTED, _OPEN):  # the checks give the kernels read-only views
         _mesh_kernels(vertices, faces)

@@ -91,3 +91,15 @@ del one
 print(gc.isenabled(), gc.get_freeze_count() > 10_000, gc.collect() >= 1)
 """
     assert run(code) == "True True True"
+
+
+def test_the_fork_server_s_preload_loads_the_jobs_and_freezes_them() -> None:
+    # What a worker's fork server runs: the heavy modules imported, the collector paused
+    # meanwhile and running again after, with their objects frozen out of its passes.
+    code = """
+import gc, sys
+import app.preload
+print(gc.isenabled(), gc.get_freeze_count() > 100_000,
+      all(name in sys.modules for name in app.preload.MODULES), "numba" in sys.modules)
+"""
+    assert run(code) == "True True True True"
