@@ -9,6 +9,7 @@ import gc
 # (the end of this module). Its passes over the hundreds of thousands of objects that FastAPI,
 # pydantic and our routes create at import took 50-60 ms of the 0.41 s to import the app
 # (median of 9), and the first page waits for that import.
+_COLLECTING = gc.isenabled()
 gc.disable()
 
 import importlib
@@ -161,7 +162,9 @@ def build_routes(routes: list[Any]) -> None:
             route.effective_low_priority_routes()
 
 
-app = create_app()
-
-gc.freeze()
-gc.enable()
+try:
+    app = create_app()
+    gc.freeze()
+finally:
+    if _COLLECTING:  # as it was before (an import that failed above leaves the process anyway)
+        gc.enable()

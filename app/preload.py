@@ -30,10 +30,15 @@ MODULES = (
 
 
 def load() -> None:
-    """Import :data:`MODULES`, the collector paused, and freeze what they made."""
+    """Import :data:`MODULES`, the collector paused, and freeze what they made. A module that
+    cannot be imported is left, as the fork server leaves each module it is given (the worker
+    imports it, or says why, when a job needs it); the others still load."""
     with paused():
         for name in MODULES:
-            importlib.import_module(name)
+            try:
+                importlib.import_module(name)
+            except ImportError:
+                continue
         gc.freeze()
 
 

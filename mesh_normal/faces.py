@@ -38,7 +38,7 @@ from typing import TypeAlias
 import numpy as np
 from numpy.typing import ArrayLike
 
-from mesh_normal.checks import CheckedMesh, as_checked, checked_mesh, refuse_faces
+from mesh_normal.checks import CheckedMesh, as_checked, checked_mesh, read_only, refuse_faces
 from mesh_normal.kernels import (
     PARALLEL_KERNELS,
     UNIT_BLOCK,
@@ -222,7 +222,8 @@ def face_normals(
     FaceNormals
         ``normals`` (m, 3) float64, ``areas`` (m,) float64 and the ``degenerate`` (m,) bool
         mask, in input order; zero rows where degenerate. Given a geometry, ``normals`` and
-        ``degenerate`` are its own arrays, not copies (unless ``out`` is given).
+        ``degenerate`` are read-only views of its own arrays, not copies (unless ``out`` is
+        given).
 
     Examples
     --------
@@ -230,17 +231,17 @@ def face_normals(
     array([[0., 0., 1.]])
     """
     mesh = kernel_ranged_input(vertices, faces)
-    source = mesh.mesh if isinstance(mesh, FaceGeometry) else mesh
-    count = len(source.faces)
+    count = len(mesh.mesh.faces if isinstance(mesh, FaceGeometry) else mesh.faces)
     if out is not None:
-        _check_out(out, count, source)
+        _check_out(out, count, mesh)
     if isinstance(mesh, FaceGeometry):
-        result = FaceNormals(mesh.normals, geometry_areas(mesh), mesh.degenerate)
-        if out is None:
-            return result
-        np.copyto(out.normals, result.normals)
-        np.copyto(out.areas, result.areas)
-        np.copyto(out.degenerate, result.degenerate)
+        if out is None:  # read-only views: passed as ``out`` later, they are refused
+            return FaceNormals(
+                read_only(mesh.normals), geometry_areas(mesh), read_only(mesh.degenerate)
+            )
+        mesh.unit_normals(out=out.normals)
+        np.copyto(out.areas, geometry_areas(mesh))
+        np.copyto(out.degenerate, mesh.degenerate)
         return out
     # From the mesh, one pass (no cross products kept): the same bits, a third of the traffic.
     announce_compiling(face_normals_kernel)
@@ -268,9 +269,10 @@ def face_normals(
     return out if out is not None else FaceNormals(normals, areas, degenerate)
 
 
-def _check_out(out: FaceNormals, count: int, mesh: CheckedMesh) -> None:
+def _check_out(out: FaceNormals, count: int, mesh: CheckedMesh | FaceGeometry) -> None:
     """Refuse ``out`` for :func:`face_normals` unless its arrays can take the results of
-    ``count`` faces: the one sentence names the first array that cannot."""
+    ``count`` faces and share no memory with the input's (a geometry's too) or each other's:
+    the one sentence names the first array that cannot."""
     if not isinstance(out, FaceNormals):
         raise TypeError(
             f"out must be a FaceNormals (e.g. an earlier result), not {type(out).__name__}."
@@ -280,7 +282,11 @@ def _check_out(out: FaceNormals, count: int, mesh: CheckedMesh) -> None:
         ("areas", (count,), np.dtype(np.float64)),
         ("degenerate", (count,), np.dtype(bool)),
     )
-    seen: list[np.ndarray] = [mesh.points, mesh.faces, mesh.vertices]
+    checked = mesh.mesh if isinstance(mesh, FaceGeometry) else mesh
+    seen: list[np.ndarray] = [checked.points, checked.faces, checked.vertices]
+    if isinstance(mesh, FaceGeometry):
+        seen += [mesh.crosses, mesh.lengths, mesh.degenerate, mesh.recomputed]
+        seen += list(mesh._cache.values())  # its normals, if taken
     for name, shape, dtype in wanted:
         array = getattr(out, name)
         if not (
@@ -288,6 +294,7 @@ def _check_out(out: FaceNormals, count: int, mesh: CheckedMesh) -> None:
             and array.shape == shape
             and array.dtype == dtype
             and array.flags.c_contiguous
+            and array.flags.aligned
             and array.flags.writeable
         ):
             raise ValueError(

@@ -304,6 +304,14 @@ def normalise_kernel(sums: FloatArray, normals: FloatArray, missing: BoolArray) 
         normals[row, 0], normals[row, 1], normals[row, 2], missing[row] = _normalise_row(sums, row)
 
 
+@kernel()
+def last_block_under(stop: int, size: int) -> int:
+    """The block (of ``size`` rows) of the last sums row that the packed rows before ``stop``
+    lie over: packed row i takes bytes 24 i to 24 i + 23 of the memory, sums row j bytes 32 j to
+    32 j + 31, so the byte 24 stop - 1 lies in sums row (24 stop - 1) // 32 = (3 stop - 1) // 4."""
+    return (3 * stop - 1) // 4 // size
+
+
 #: Rows per task of :func:`normalise_packed_kernel` (512 KiB of sums), and from how many rows
 #: it is used instead of :func:`normalise_kernel`.
 PACK_BLOCK = 1 << 14
@@ -344,8 +352,7 @@ def normalise_packed_kernel(
                 rows[row - first, 0], rows[row - first, 1], rows[row - first, 2] = x, y, z
                 missing[row] = gone
             bump(read[block : block + 1])
-            # the last sums row under the packed rows: byte 24 * stop - 1 of row 32 bytes long
-            needed = min((3 * stop - 1) // 4 // size, block - 1)
+            needed = min(last_block_under(stop, size), block - 1)  # this one is in ``rows``
             while known <= needed:
                 while peek(read[known : known + 1]) == 0:
                     pass

@@ -99,7 +99,26 @@ def test_the_fork_server_s_preload_loads_the_jobs_and_freezes_them() -> None:
     code = """
 import gc, sys
 import app.preload
+from app.main import HEAVY_MODULES
 print(gc.isenabled(), gc.get_freeze_count() > 100_000,
-      all(name in sys.modules for name in app.preload.MODULES), "numba" in sys.modules)
+      all(name in sys.modules for name in app.preload.MODULES), "numba" in sys.modules,
+      set(HEAVY_MODULES) <= set(app.preload.MODULES))
 """
-    assert run(code) == "True True True True"
+    assert run(code) == "True True True True True"
+
+
+def test_a_preload_module_that_fails_leaves_the_others_loading() -> None:
+    # As the fork server leaves a preload module it cannot import: the rest still load, the
+    # collector runs again.
+    code = """
+import gc, importlib, sys
+real = importlib.import_module
+def load(name, package=None):
+    if name == "app.mesh.work":
+        raise ImportError("a broken install")
+    return real(name, package)
+importlib.import_module = load
+import app.preload
+print(gc.isenabled(), "app.points.work" in sys.modules, "mesh_normal._numba_cache" in sys.modules)
+"""
+    assert run(code) == "True True True"  # the modules after the broken one still loaded

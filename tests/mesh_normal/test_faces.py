@@ -334,7 +334,9 @@ def test_face_normals_into_given_arrays_are_a_fresh_calls_bits(faces: int) -> No
         expected = face_normals(moved, indices)
         result = face_normals(moved, indices, out=out)
         assert result is out
-        assert (out.normals, out.areas, out.degenerate) == arrays  # the very same arrays
+        assert all(
+            a is b for a, b in zip((out.normals, out.areas, out.degenerate), arrays, strict=True)
+        )
         assert out.normals.tobytes() == expected.normals.tobytes()
         assert out.areas.tobytes() == expected.areas.tobytes()
         assert out.degenerate.tobytes() == expected.degenerate.tobytes()
@@ -384,3 +386,29 @@ def test_unfit_arrays_for_out_are_refused_with_the_array_named() -> None:
             indices,
             out=FaceNormals(good.normals, good.normals.reshape(-1)[:20], good.degenerate),
         )
+
+
+def test_a_geometry_s_own_arrays_are_never_written_through_out() -> None:
+    # A geometry's results are read-only views of its own arrays: given back as ``out`` for
+    # another mesh they are refused, and so is ``out`` over any array of the geometry itself.
+    from mesh_normal.faces import face_geometry
+
+    points, indices = _moving_soup(50)
+    geometry = face_geometry(points, indices)
+    own = face_normals(geometry)
+    before = geometry.normals.copy(), geometry.degenerate.copy(), geometry.crosses.copy()
+    other = points[::-1].copy()
+    with pytest.raises(ValueError, match=r"out\.normals must be a writable"):
+        face_normals(other, indices, out=own)
+    good = _garbage(50)
+    for name, array in (("normals", geometry.crosses), ("degenerate", geometry.recomputed)):
+        out = FaceNormals(
+            array if name == "normals" else good.normals,
+            good.areas,
+            array if name == "degenerate" else good.degenerate,
+        )
+        with pytest.raises(ValueError, match=rf"out\.{name} shares memory"):
+            face_normals(geometry, out=out)
+    assert geometry.normals.tobytes() == before[0].tobytes()
+    assert geometry.degenerate.tobytes() == before[1].tobytes()
+    assert geometry.crosses.tobytes() == before[2].tobytes()

@@ -185,3 +185,17 @@ def test_many_vertices_are_normalised_on_every_core(monkeypatch: pytest.MonkeyPa
         assert result.normals.tobytes() == reference.normals.tobytes()
         assert result.missing.tobytes() == reference.missing.tobytes()
         assert result.normals.flags.c_contiguous and result.normals.shape == (3000, 3)
+
+
+def test_each_block_waits_for_every_block_its_packed_rows_lie_over() -> None:
+    # Byte by byte: the packed rows of a block (24 bytes each) lie over the sums rows (32 bytes
+    # each) up to the last one the kernel waits for, and never over a later block's sums.
+    from mesh_normal.vertices import last_block_under
+
+    for size in (1, 2, 3, 5, 7, 37, 64):
+        for block in range(40):
+            first, stop = block * size, (block + 1) * size
+            covered = {byte // 32 for byte in range(24 * first, 24 * stop)}
+            assert last_block_under(stop, size) == max(covered) // size
+            assert max(covered) // size <= block  # earlier blocks, or this one
+            assert min(covered) // size <= block
