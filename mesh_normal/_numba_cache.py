@@ -6,6 +6,7 @@ compiled or loaded from the cache, so that importing the library does not import
 
 from __future__ import annotations
 
+import hashlib
 import os
 from typing import Any
 
@@ -55,12 +56,56 @@ class ReadOnlyInTreeLocator(_ReadOnlyLocator, InTreeCacheLocator):
         return cls(py_func, py_file) if os.path.exists(py_file) else None
 
 
+# --- kernels that call kernels of another module ---------------------------------------------
+#
+# numba compiles a kernel that calls another into one piece of machine code, and caches it under
+# the caller's own source file: its entry stays valid, with the callee's old code in it, when
+# only the callee's module changes (a working checkout after an edit of ``kernels.py``; the
+# callee itself is then never compiled, and ``announce_compiling`` says "compiling" in every
+# process). Every kernel's entry is therefore also stamped with the modules whose kernels
+# other modules' kernels call (``tests/mesh_normal/test_numba_cache.py`` finds them): an edit of
+# one of them compiles every kernel again. An installed package or the image never changes its
+# files, so their entries stay valid.
+
+#: The package's modules whose kernels are called by kernels of other modules.
+SHARED_MODULES = ("kernels.py", "vertices.py", "visibility.py", "files/eisel_lemire.py")
+
+
+def _shared_stamp() -> tuple[bytes, ...]:
+    """The SHA-256 of each of :data:`SHARED_MODULES`' source (what numba's own stamp of a
+    kernel's file is, in numba 0.68)."""
+    package = os.path.dirname(os.path.abspath(__file__))
+    stamps = []
+    for name in SHARED_MODULES:
+        with open(os.path.join(package, name), "rb") as source:
+            stamps.append(hashlib.sha256(source.read()).digest())
+    return tuple(stamps)
+
+
+_SHARED_STAMP = _shared_stamp()
+
+
+class _SharedStamp:
+    """A locator whose source stamp (numba's test of a cache entry) also covers
+    :data:`SHARED_MODULES`."""
+
+    def get_source_stamp(self) -> Any:
+        return (super().get_source_stamp(), _SHARED_STAMP)  # type: ignore[misc]
+
+
+def _stamped(locator: Any) -> Any:
+    return type(locator.__name__, (_SharedStamp, locator), {})
+
+
 class _KernelCacheImpl(CompileResultCacheImpl):
     _locator_classes = [  # noqa: RUF012 (numba's own class attribute)
-        CompileResultCacheImpl._locator_classes[0],  # NUMBA_CACHE_DIR, if numba may write it
-        ReadOnlyCacheDirLocator,
-        *CompileResultCacheImpl._locator_classes[1:],
-        ReadOnlyInTreeLocator,
+        _stamped(locator)
+        for locator in (
+            CompileResultCacheImpl._locator_classes[0],  # NUMBA_CACHE_DIR, if numba may write it
+            ReadOnlyCacheDirLocator,
+            *CompileResultCacheImpl._locator_classes[1:],
+            ReadOnlyInTreeLocator,
+        )
     ]
 
 
