@@ -19,9 +19,12 @@ of a fresh ``Trimesh(process=False)``; it has no area weighting, so the area row
 uniform row on the unit normals). libigl: ``igl.per_face_normals`` and
 ``igl.per_vertex_normals`` with each of its weightings. Open3D: ``compute_triangle_normals``
 and ``compute_vertex_normals`` (area-weighted) of a ``TriangleMesh`` built before the clock
-starts (from its second call, each writes into the normals' vector its mesh keeps; the row
-"into the last call's arrays" is ours with ``out=``, the same, against the same calls of the
-peers). Corner normals have no equivalent. A second table probes what each library returns
+starts: in the plain rows a new mesh for each call, whose call makes its output vector anew
+(as trimesh, libigl and ours make new arrays); in the rows "against Open3D's into its kept
+vector", the same mesh each time, whose call writes into the vector it kept from the last
+(ours still into new arrays: the pairing of the plain rows until session 19); "into the last
+call's arrays" is ours with ``out=`` against that kept vector, the same work. Corner normals
+have no equivalent. A second table probes what each library returns
 for degenerate and tiny faces, and a third the extra memory of our kernels (tracemalloc).
 """
 
@@ -32,6 +35,7 @@ import importlib.util
 import statistics
 import time
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -68,7 +72,7 @@ def torus_mesh(triangles: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     return vertices.reshape(-1, 3), faces
 
 
-Kernels = dict[str, Callable[[], object]]
+Kernels = dict[str, Callable[[], object]]  # a Fresh too
 
 
 def trimesh_kernels(vertices: np.ndarray, faces: np.ndarray) -> Kernels:
@@ -109,20 +113,46 @@ def igl_kernels(vertices: np.ndarray, faces: np.ndarray) -> Kernels:
     }
 
 
+class Fresh:
+    """A peer's call on a new object each time, the object made outside the clock
+    (``prepare``, which :func:`best_times` calls before it starts it): Open3D's mesh, whose
+    call then makes its output vector anew, as ours makes new arrays."""
+
+    def __init__(self, make: Callable[[], Any], call: Callable[[Any], object]) -> None:
+        self.make, self.call, self.made = make, call, None
+
+    def prepare(self) -> None:
+        self.made = self.make()
+
+    def __call__(self) -> object:
+        made, self.made = self.made, None
+        return self.call(made if made is not None else self.make())
+
+
 def open3d_kernels(vertices: np.ndarray, faces: np.ndarray) -> Kernels:
     if importlib.util.find_spec("open3d") is None:
         return {}
     import open3d as o3d
 
+    triangles = faces.astype(np.int32)
+
     def mesh() -> o3d.geometry.TriangleMesh:
         return o3d.geometry.TriangleMesh(
-            o3d.utility.Vector3dVector(vertices), o3d.utility.Vector3iVector(faces.astype(np.int32))
+            o3d.utility.Vector3dVector(vertices), o3d.utility.Vector3iVector(triangles)
         )
+
+    def face(made: o3d.geometry.TriangleMesh) -> object:
+        return np.asarray(made.compute_triangle_normals().triangle_normals)
+
+    def area(made: o3d.geometry.TriangleMesh) -> object:
+        return np.asarray(made.compute_vertex_normals().vertex_normals)
 
     flat, smooth = mesh(), mesh()  # built here, outside the timed calls
     return {
-        "face": lambda: np.asarray(flat.compute_triangle_normals().triangle_normals),
-        "area": lambda: np.asarray(smooth.compute_vertex_normals().vertex_normals),
+        "face": Fresh(mesh, face),
+        "area": Fresh(mesh, area),
+        "face kept": lambda: face(flat),
+        "area kept": lambda: area(smooth),
     }
 
 
@@ -136,15 +166,21 @@ def largest_angle(ours: np.ndarray, theirs: np.ndarray) -> float:
 
 
 PEERS = ("trimesh", "libigl", "Open3D")
-LABELS = {
-    "face": "face normals",
-    "face out": "face normals into the last call's arrays (`out=`)",
-    "area": "vertex normals, area-weighted",
-    "angle": "vertex normals, angle-weighted",
-    "uniform": "vertex normals, uniform",
-    "corner": "corner normals, crease 30°",
-    "corner 1": "corner normals, crease 1° (most vertices pairwise)",
-}
+#: The table's rows: ours, the peers' kernel, the label. Open3D's "face" and "area" calls are
+#: of a new mesh each (its output vector made anew, as ours are new arrays); its "kept" calls
+#: write into the vector its mesh keeps from the call before (as ours with ``out=``), the
+#: pairing of the plain rows until session 19.
+ROWS = (
+    ("face", "face", "face normals"),
+    ("face", "face kept", "face normals, new arrays, against Open3D's into its kept vector"),
+    ("face out", "face kept", "face normals into the last call's arrays (`out=`)"),
+    ("area", "area", "vertex normals, area-weighted"),
+    ("area", "area kept", "vertex normals, area-weighted, against Open3D's into its kept vector"),
+    ("angle", "angle", "vertex normals, angle-weighted"),
+    ("uniform", "uniform", "vertex normals, uniform"),
+    ("corner", "corner", "corner normals, crease 30°"),
+    ("corner 1", "corner 1", "corner normals, crease 1° (most vertices pairwise)"),
+)
 LARGE = 2_000_000
 
 
@@ -190,8 +226,10 @@ def run(size: int, repeats: int, idle: int = 0, peer_repeats: int | None = None)
     }
     times, medians = best_times(kernels, repeats, limits)
     rows = []
-    for key, mine in ((k, times["ours", k]) for k in ours):
-        same = "face" if key == "face out" else key  # the peers' face normals, as above
+    for key, same, label in ROWS:
+        if key not in ours:
+            continue
+        mine = times["ours", key]
         theirs = [times.get((peer, same)) for peer in PEERS]
         cells = [f"{t:.1f}" if t else "" for t in theirs]
         ratios = [
@@ -199,7 +237,7 @@ def run(size: int, repeats: int, idle: int = 0, peer_repeats: int | None = None)
             for t, peer in zip(theirs, PEERS, strict=True)
         ]
         rows.append(
-            f"| {size:,} | {LABELS[key]} | {mine:.1f} ({medians['ours', key]:.1f}) | "
+            f"| {size:,} | {label} | {mine:.1f} ({medians['ours', key]:.1f}) | "
             + " | ".join(cells + ratios)
             + " |"
         )
@@ -229,6 +267,8 @@ def best_times(
         for name, kernel in kernels.items():
             if round_ >= (limits or {}).get(name, repeats):
                 continue
+            if isinstance(kernel, Fresh):
+                kernel.prepare()
             start = time.perf_counter()
             kernel()
             times[name].append(time.perf_counter() - start)
@@ -240,10 +280,12 @@ def after_idle(size: int, ours: Kernels, open3d: Kernels, repeats: int) -> list[
     """Ours against Open3D on calls that each follow a second of sleep (threads parked, caches
     cold), alternately: the best and median times and Open3D / ours of each."""
     rows = []
-    for key in ("face", "area"):
+    for key, same, label in (row for row in ROWS if row[0] in ("face", "area")):
         times: dict[str, list[float]] = {"ours": [], "Open3D": []}
         for _ in range(repeats):
-            for name, call in (("ours", ours[key]), ("Open3D", open3d[key])):
+            for name, call in (("ours", ours[key]), ("Open3D", open3d[same])):
+                if isinstance(call, Fresh):
+                    call.prepare()
                 time.sleep(1.0)
                 start = time.perf_counter()
                 call()
@@ -251,7 +293,7 @@ def after_idle(size: int, ours: Kernels, open3d: Kernels, repeats: int) -> list[
         (mine, theirs) = (min(times["ours"]), min(times["Open3D"]))
         middle = {name: statistics.median(values) for name, values in times.items()}
         rows.append(
-            f"| {size:,} | {LABELS[key]}, each after 1 s idle | {mine:.1f} ({middle['ours']:.1f}) "
+            f"| {size:,} | {label}, each after 1 s idle | {mine:.1f} ({middle['ours']:.1f}) "
             f"| | | {theirs:.1f} | | | {theirs / mine:.2f}x "
             f"({middle['Open3D'] / middle['ours']:.2f}x) |"
         )

@@ -826,6 +826,8 @@ def face_normals_kernel(
     areas: FloatArray,
     degenerate: BoolArray,
     bad: IndexArray,
+    unit: int,
+    fresh: bool,
     counter: IndexArray,
     workers: int,
 ) -> None:
@@ -838,30 +840,52 @@ def face_normals_kernel(
 
     The faces' indices are checked as they are read (:func:`gather`): one out of range sets
     ``bad[0]`` and its block is left, so the caller raises instead of returning.
+
+    Workers claim ``unit`` faces at a time, a multiple of ``BLOCK``. ``fresh``: the outputs are
+    new memory, never written; a worker first writes a zero into each page of its unit's rows
+    (:func:`first_writes`), so the system zeroes those pages just before the worker fills them,
+    while they are still in the core's cache, each core its own pages.
     """
-    blocks = (len(faces) + BLOCK - 1) // BLOCK
+    units = (len(faces) + unit - 1) // unit
     power = math.ldexp(1.0, exponent) if -1022 <= exponent <= 1023 else 0.0
     for _ in prange(workers):
         corners = np.empty((BLOCK, 9))
-        block = claim(counter)
-        while block < blocks:
-            start = block * BLOCK
-            filled = gather(points, factor, faces, start, corners)
-            if filled < 0:
-                bad[0], filled = 1, 0
-            for row in range(filled):
-                face = start + row
-                (x, y, z), square, found = face_cross(face_edges(corners, row))
-                length = math.sqrt(square)
-                divisor = 1.0 if found == DEGENERATE else length
-                normals[face, 0] = x / divisor + 0.0  # -0.0 becomes 0.0
-                normals[face, 1] = y / divisor + 0.0
-                normals[face, 2] = z / divisor + 0.0
-                if power:
-                    areas[face] = length * power
-                elif exponent > 0 and length and math.frexp(length)[1] + exponent > 1024:
-                    areas[face] = math.inf  # what ldexp gives, where Python's would raise
-                else:
-                    areas[face] = math.ldexp(length, exponent)
-                degenerate[face] = found == DEGENERATE
-            block = claim(counter)
+        task = claim(counter)
+        while task < units:
+            first, stop = task * unit, min((task + 1) * unit, len(faces))
+            if fresh:
+                first_writes(normals, areas, degenerate, first, stop)
+            for start in range(first, stop, BLOCK):
+                filled = gather(points, factor, faces, start, corners)
+                if filled < 0:
+                    bad[0], filled = 1, 0
+                for row in range(filled):
+                    face = start + row
+                    (x, y, z), square, found = face_cross(face_edges(corners, row))
+                    length = math.sqrt(square)
+                    divisor = 1.0 if found == DEGENERATE else length
+                    normals[face, 0] = x / divisor + 0.0  # -0.0 becomes 0.0
+                    normals[face, 1] = y / divisor + 0.0
+                    normals[face, 2] = z / divisor + 0.0
+                    if power:
+                        areas[face] = length * power
+                    elif exponent > 0 and length and math.frexp(length)[1] + exponent > 1024:
+                        areas[face] = math.inf  # what ldexp gives, where Python's would raise
+                    else:
+                        areas[face] = math.ldexp(length, exponent)
+                    degenerate[face] = found == DEGENERATE
+            task = claim(counter)
+
+
+@kernel(python=True)
+def first_writes(
+    normals: FloatArray, areas: FloatArray, degenerate: BoolArray, first: int, stop: int
+) -> None:
+    """Write a zero into rows ``first`` to ``stop`` of the face kernel's outputs, less than a
+    small page (``PAGE`` bytes) apart: the system hands out each new page there now."""
+    for face in range(first, stop, PAGE // 24):  # 24 bytes a row
+        normals[face, 0] = 0.0
+    for face in range(first, stop, PAGE // 8):
+        areas[face] = 0.0
+    for face in range(first, stop, PAGE):
+        degenerate[face] = False

@@ -10,6 +10,7 @@ import trimesh
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from mesh_normal.checks import checked_mesh
 from mesh_normal.corners import CornerNormals, corner_normals
 from mesh_normal.faces import FaceNormals, face_areas, face_normals
 from mesh_normal.tolerances import MESH_DEGENERATE_SINE
@@ -250,36 +251,85 @@ def test_small_integer_meshes_match_the_exact_cross_product(mesh: tuple) -> None
 # --- vertex normals -----------------------------------------------------------------------------
 
 
-def test_large_outputs_are_touched_on_every_core_and_hold_the_same_normals(
+def test_large_outputs_are_first_written_by_their_worker_and_hold_the_same_normals(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    # Over TOUCH_FROM bytes the outputs' pages are first written on every core, then filled
-    # by the kernel: the same arrays as without that step, and as from the face geometry.
+    # From TOUCH_FROM bytes of new output, each worker first writes a zero into the pages of
+    # the unit of faces it claims, then fills them: the same arrays as without that step, and
+    # as from the face geometry.
+    from mesh_normal import faces as faces_module
     from mesh_normal import kernels
     from mesh_normal.faces import face_geometry
 
     rng = np.random.default_rng(13)
-    count = 280_000  # 9.2 MB of normals, areas and flags
+    count = 280_000  # 9.2 MB of normals, areas and flags: units of 8,704 faces, the last short
     vertices = rng.normal(size=(count // 2, 3))
     faces = rng.integers(0, len(vertices), (count, 3))
     faces[::1000, 1] = faces[::1000, 0]  # some degenerate
-    arrays = kernels.fresh_empty(((count, 3), np.float64), (count, np.float64), (count, bool))
-    assert [(a.shape, a.dtype) for a in arrays] == [
-        ((count, 3), np.float64),
-        ((count,), np.float64),
-        ((count,), np.bool_),
-    ]
-    assert sum(a.nbytes for a in arrays) >= kernels.TOUCH_FROM
-    assert all(a.flags.c_contiguous and a.flags.writeable for a in arrays)
+    assert faces_module.FACE_BYTES * count >= kernels.TOUCH_FROM == faces_module.TOUCH_FROM
+    calls: list[tuple[int, bool]] = []
+    real = faces_module.face_normals_kernel
+
+    def recording(*arguments: object) -> None:
+        calls.append((int(arguments[8]), bool(arguments[9])))  # type: ignore[call-overload]
+        real(*arguments)
+
+    monkeypatch.setattr(faces_module, "face_normals_kernel", recording)
     touched = face_normals(vertices, faces)
-    monkeypatch.setattr(kernels, "TOUCH_FROM", 1 << 62)
+    face_normals(vertices, faces, out=touched)  # arrays already written: not fresh
+    monkeypatch.setattr(faces_module, "TOUCH_FROM", 1 << 62)
     untouched = face_normals(vertices, faces)
+    assert calls == [(17 * kernels.BLOCK, True), (kernels.BLOCK, False), (kernels.BLOCK, False)]
     geometry = face_normals(face_geometry(vertices, faces))
     for other in (untouched, geometry):
         assert np.array_equal(touched.normals, other.normals)
         assert np.array_equal(touched.areas, other.areas)
         assert np.array_equal(touched.degenerate, other.degenerate)
     assert touched.degenerate[::1000].all() and not touched.degenerate.all()
+    arrays = kernels.fresh_empty(((count, 3), np.float64), (count, np.float64), (count, bool))
+    assert [(a.shape, a.dtype) for a in arrays] == [
+        ((count, 3), np.float64),
+        ((count,), np.float64),
+        ((count,), np.bool_),
+    ]
+    assert all(a.flags.c_contiguous and a.flags.writeable for a in arrays)
+
+
+@pytest.mark.parametrize("unit_blocks", [1, 2, 7])
+@pytest.mark.parametrize("fresh", [False, True])
+def test_the_face_kernel_gives_the_same_bits_for_any_unit(unit_blocks: int, fresh: bool) -> None:
+    # Units of 1, 2 or 7 blocks, the last one short, first written or not: every row once,
+    # the same bits as the library's call (a zero first written is always overwritten).
+    from mesh_normal import kernels
+
+    rng = np.random.default_rng(unit_blocks)
+    count = 9 * kernels.BLOCK + 77
+    vertices = rng.normal(size=(count // 2, 3)) * 1e3
+    faces = rng.integers(0, len(vertices), (count, 3))
+    faces[::50, 2] = faces[::50, 0]
+    expected = face_normals(vertices, faces)
+    normals = np.full((count, 3), np.nan)
+    areas, degenerate = np.full(count, np.nan), np.zeros(count, bool)
+    degenerate[1::2] = True
+    mesh = checked_mesh(vertices, faces)
+    bad = np.zeros(1, dtype=np.int64)
+    kernels.face_normals_kernel(
+        mesh.points,
+        mesh.factor,
+        mesh.faces,
+        2 * mesh.scale - 1,
+        normals,
+        areas,
+        degenerate,
+        bad,
+        unit_blocks * kernels.BLOCK,
+        fresh,
+        *kernels.workers(),
+    )
+    assert bad[0] == 0
+    assert np.array_equal(normals, expected.normals)
+    assert np.array_equal(areas, expected.areas)
+    assert np.array_equal(degenerate, expected.degenerate)
 
 
 def test_a_large_geometrys_unit_normals_on_every_core_are_numpys(
