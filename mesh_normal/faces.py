@@ -222,8 +222,9 @@ def face_normals(
         Arrays to write the results into, e.g. the last call's for a mesh whose points move
         from frame to frame: writable, C-contiguous, of the returned shapes and dtypes, and
         sharing no memory with the input. Returned, written. New memory of hundreds of
-        megabytes costs the system time to hand out (a third of the call at 14 million faces);
-        these arrays are written in place. On an error their contents are unspecified.
+        megabytes costs the system time to hand out (a quarter to a third of the call at 14
+        million faces); these arrays are written in place. On an error their contents are
+        unspecified.
 
     Returns
     -------
