@@ -119,14 +119,38 @@ class Fresh:
     call then makes its output vector anew, as ours makes new arrays."""
 
     def __init__(self, make: Callable[[], Any], call: Callable[[Any], object]) -> None:
-        self.make, self.call, self.made = make, call, None
+        self.make, self.call = make, call
+        self.made: Any = None
+        self.used: Any = None
 
     def prepare(self) -> None:
         self.made = self.make()
 
     def __call__(self) -> object:
         made, self.made = self.made, None
-        return self.call(made if made is not None else self.make())
+        self.used = made if made is not None else self.make()
+        return self.call(self.used)
+
+    def release(self) -> None:
+        """Free the mesh of the last call, after the clock stops (not its own work)."""
+        self.used = None
+
+
+def timed(kernel: Callable[[], object], idle: float = 0.0) -> float:
+    """Seconds of one call, a ``Fresh`` one's mesh made before and freed after the clock, as
+    is every result: freeing hundreds of megabytes is no part of the work measured. ``idle``:
+    seconds of sleep just before the clock starts."""
+    if isinstance(kernel, Fresh):
+        kernel.prepare()
+    if idle:
+        time.sleep(idle)
+    start = time.perf_counter()
+    result = kernel()
+    elapsed = time.perf_counter() - start
+    del result
+    if isinstance(kernel, Fresh):
+        kernel.release()
+    return elapsed
 
 
 def open3d_kernels(vertices: np.ndarray, faces: np.ndarray) -> Kernels:
@@ -267,11 +291,7 @@ def best_times(
         for name, kernel in kernels.items():
             if round_ >= (limits or {}).get(name, repeats):
                 continue
-            if isinstance(kernel, Fresh):
-                kernel.prepare()
-            start = time.perf_counter()
-            kernel()
-            times[name].append(time.perf_counter() - start)
+            times[name].append(timed(kernel))
     best = {name: 1e3 * min(values) for name, values in times.items()}
     return best, {name: 1e3 * statistics.median(values) for name, values in times.items()}
 
@@ -284,12 +304,7 @@ def after_idle(size: int, ours: Kernels, open3d: Kernels, repeats: int) -> list[
         times: dict[str, list[float]] = {"ours": [], "Open3D": []}
         for _ in range(repeats):
             for name, call in (("ours", ours[key]), ("Open3D", open3d[same])):
-                if isinstance(call, Fresh):
-                    call.prepare()
-                time.sleep(1.0)
-                start = time.perf_counter()
-                call()
-                times[name].append(1e3 * (time.perf_counter() - start))
+                times[name].append(1e3 * timed(call, idle=1.0))
         (mine, theirs) = (min(times["ours"]), min(times["Open3D"]))
         middle = {name: statistics.median(values) for name, values in times.items()}
         rows.append(

@@ -843,10 +843,11 @@ def face_normals_kernel(
     The faces' indices are checked as they are read (:func:`gather`): one out of range sets
     ``bad[0]`` and its block is left, so the caller raises instead of returning.
 
-    Workers claim ``unit`` faces at a time, a multiple of ``BLOCK``. ``fresh``: the outputs are
-    new memory, never written; a worker first writes a zero into each page of its unit's rows
-    (:func:`first_writes`), so the system zeroes those pages just before the worker fills them,
-    while they are still in the core's cache, each core its own pages.
+    Workers claim ``unit`` faces at a time: a positive multiple of ``BLOCK`` (0 would write
+    nothing). ``fresh``: the outputs are new memory, never written; a worker first writes a zero
+    into each page of its unit's rows (:func:`first_writes`), so the system hands out those
+    pages just before the worker fills them (a huge page of areas or flags spans several units:
+    the first worker to write it takes it for the others).
     """
     units = (len(faces) + unit - 1) // unit
     power = math.ldexp(1.0, exponent) if -1022 <= exponent <= 1023 else 0.0

@@ -276,12 +276,13 @@ def test_large_outputs_are_first_written_by_their_worker_and_hold_the_same_norma
 
     monkeypatch.setattr(faces_module, "face_normals_kernel", recording)
     touched = face_normals(vertices, faces)
-    face_normals(vertices, faces, out=touched)  # arrays already written: not fresh
+    given = FaceNormals(np.full((count, 3), np.nan), np.full(count, np.nan), np.ones(count, bool))
+    into = face_normals(vertices, faces, out=given)  # arrays already written: not fresh
     monkeypatch.setattr(faces_module, "TOUCH_FROM", 1 << 62)
     untouched = face_normals(vertices, faces)
     assert calls == [(17 * kernels.BLOCK, True), (kernels.BLOCK, False), (kernels.BLOCK, False)]
     geometry = face_normals(face_geometry(vertices, faces))
-    for other in (untouched, geometry):
+    for other in (into, untouched, geometry):
         assert np.array_equal(touched.normals, other.normals)
         assert np.array_equal(touched.areas, other.areas)
         assert np.array_equal(touched.degenerate, other.degenerate)
@@ -308,9 +309,14 @@ def test_the_face_kernel_gives_the_same_bits_for_any_unit(unit_blocks: int, fres
     faces = rng.integers(0, len(vertices), (count, 3))
     faces[::50, 2] = faces[::50, 0]
     expected = face_normals(vertices, faces)
-    normals = np.full((count, 3), np.nan)
-    areas, degenerate = np.full(count, np.nan), np.zeros(count, bool)
-    degenerate[1::2] = True
+    # Views into buffers a page longer each way: a write outside the rows shows there.
+    pad = 4096
+    normals_buffer = np.full((count + 2 * pad, 3), np.nan)
+    areas_buffer = np.full(count + 2 * pad, np.nan)
+    flags_buffer = np.zeros(count + 2 * pad, np.uint8)
+    flags_buffer[pad + 1 : pad + count : 2] = 1
+    normals, areas = normals_buffer[pad:-pad], areas_buffer[pad:-pad]
+    degenerate = flags_buffer[pad:-pad].view(bool)
     mesh = checked_mesh(vertices, faces)
     bad = np.zeros(1, dtype=np.int64)
     kernels.face_normals_kernel(
@@ -327,6 +333,9 @@ def test_the_face_kernel_gives_the_same_bits_for_any_unit(unit_blocks: int, fres
         *kernels.workers(),
     )
     assert bad[0] == 0
+    assert np.isnan(normals_buffer[:pad]).all() and np.isnan(normals_buffer[-pad:]).all()
+    assert np.isnan(areas_buffer[:pad]).all() and np.isnan(areas_buffer[-pad:]).all()
+    assert not flags_buffer[:pad].any() and not flags_buffer[-pad:].any()
     assert np.array_equal(normals, expected.normals)
     assert np.array_equal(areas, expected.areas)
     assert np.array_equal(degenerate, expected.degenerate)
