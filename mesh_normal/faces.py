@@ -263,6 +263,16 @@ def face_normals(
     # first written on every core, then filled, and one pass fewer).
     fresh = out is None and FACE_BYTES * count >= TOUCH_FROM
     unit = min(max(count // 32 // BLOCK, 1), FRESH_UNIT // BLOCK) * BLOCK if fresh else BLOCK
+    results = FaceNormals(normals, areas, degenerate)
+    if run_face_kernel(mesh, results, unit, fresh):
+        refuse_faces(mesh.faces, len(mesh.points))
+    return out if out is not None else results
+
+
+def run_face_kernel(mesh: CheckedMesh, into: FaceNormals, unit: int, fresh: bool) -> bool:
+    """Run :func:`~mesh_normal.kernels.face_normals_kernel` of ``mesh`` into the arrays of
+    ``into``, ``unit`` faces (a positive multiple of ``BLOCK``) claimed at a time, ``fresh``
+    memory first written unit by unit; True if a face has an index out of range."""
     bad = np.zeros(1, dtype=np.int64)
     with PARALLEL_KERNELS:
         face_normals_kernel(
@@ -270,17 +280,15 @@ def face_normals(
             mesh.factor,
             mesh.faces,
             2 * mesh.scale - 1,
-            normals,
-            areas,
-            degenerate,
+            into.normals,
+            into.areas,
+            into.degenerate,
             bad,
             unit,
             fresh,
             *workers(),
         )
-    if bad[0]:
-        refuse_faces(mesh.faces, len(mesh.points))
-    return out if out is not None else FaceNormals(normals, areas, degenerate)
+    return bool(bad[0])
 
 
 def _check_out(out: FaceNormals, count: int, mesh: CheckedMesh | FaceGeometry) -> None:

@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 
 from mesh_normal.checks import checked_mesh
 from mesh_normal.corners import CornerNormals, corner_normals
-from mesh_normal.faces import FaceNormals, face_areas, face_normals
+from mesh_normal.faces import FaceNormals, face_areas, face_normals, run_face_kernel
 from mesh_normal.tolerances import MESH_DEGENERATE_SINE
 from mesh_normal.vertices import WEIGHTINGS, VertexNormals, vertex_normals
 from tests.mesh_normal._normals import assert_clean, assert_unit_or_zero, unit
@@ -317,22 +317,10 @@ def test_the_face_kernel_gives_the_same_bits_for_any_unit(unit_blocks: int, fres
     flags_buffer[pad + 1 : pad + count : 2] = 1
     normals, areas = normals_buffer[pad:-pad], areas_buffer[pad:-pad]
     degenerate = flags_buffer[pad:-pad].view(bool)
-    mesh = checked_mesh(vertices, faces)
-    bad = np.zeros(1, dtype=np.int64)
-    kernels.face_normals_kernel(
-        mesh.points,
-        mesh.factor,
-        mesh.faces,
-        2 * mesh.scale - 1,
-        normals,
-        areas,
-        degenerate,
-        bad,
-        unit_blocks * kernels.BLOCK,
-        fresh,
-        *kernels.workers(),
+    into = FaceNormals(normals, areas, degenerate)
+    assert not run_face_kernel(
+        checked_mesh(vertices, faces), into, unit_blocks * kernels.BLOCK, fresh
     )
-    assert bad[0] == 0
     assert np.isnan(normals_buffer[:pad]).all() and np.isnan(normals_buffer[-pad:]).all()
     assert np.isnan(areas_buffer[:pad]).all() and np.isnan(areas_buffer[-pad:]).all()
     assert not flags_buffer[:pad].any() and not flags_buffer[-pad:].any()
