@@ -53,8 +53,6 @@ from mesh_normal.kernels import (
 )
 from mesh_normal.types import BoolArray, FloatArray, IndexArray
 
-#: Bytes of :func:`face_normals`' results per face: normal, area and flag.
-FACE_BYTES = 3 * 8 + 8 + 1
 #: The most faces a worker of :func:`face_normals` claims at a time into new memory: 2.1 MB of
 #: results in all (the fewer of 1/32 of the faces, in whole blocks, and this).
 FRESH_UNIT = 1 << 16
@@ -255,18 +253,18 @@ def face_normals(
     # From the mesh, one pass (no cross products kept): the same bits, a third of the traffic.
     announce_compiling(face_normals_kernel)
     if out is None:
-        normals, areas, degenerate = np.empty((count, 3)), np.empty(count), np.empty(count, bool)
+        into = FaceNormals(np.empty((count, 3)), np.empty(count), np.empty(count, bool))
     else:
-        normals, areas, degenerate = out.normals, out.areas, out.degenerate
+        into = out
     # New memory of TOUCH_FROM bytes or more: its pages first written by the worker that fills
     # them, a unit of faces at a time (measured at the Lucy size: no slower than all pages
     # first written on every core, then filled, and one pass fewer).
-    fresh = out is None and FACE_BYTES * count >= TOUCH_FROM
+    bytes_out = into.normals.nbytes + into.areas.nbytes + into.degenerate.nbytes
+    fresh = out is None and bytes_out >= TOUCH_FROM
     unit = min(max(count // 32 // BLOCK, 1), FRESH_UNIT // BLOCK) * BLOCK if fresh else BLOCK
-    results = FaceNormals(normals, areas, degenerate)
-    if run_face_kernel(mesh, results, unit, fresh):
+    if run_face_kernel(mesh, into, unit, fresh):
         refuse_faces(mesh.faces, len(mesh.points))
-    return out if out is not None else results
+    return into
 
 
 def run_face_kernel(mesh: CheckedMesh, into: FaceNormals, unit: int, fresh: bool) -> bool:

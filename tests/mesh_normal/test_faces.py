@@ -266,7 +266,7 @@ def test_large_outputs_are_first_written_by_their_worker_and_hold_the_same_norma
     vertices = rng.normal(size=(count // 2, 3))
     faces = rng.integers(0, len(vertices), (count, 3))
     faces[::1000, 1] = faces[::1000, 0]  # some degenerate
-    assert faces_module.FACE_BYTES * count >= kernels.TOUCH_FROM == faces_module.TOUCH_FROM
+    assert (3 * 8 + 8 + 1) * count >= kernels.TOUCH_FROM == faces_module.TOUCH_FROM
     calls: list[tuple[int, bool]] = []
     real = faces_module.face_normals_kernel
 
