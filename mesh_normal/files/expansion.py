@@ -94,48 +94,6 @@ def expanding(size: int, most: int = MAX_EXPANSION) -> Iterator[Expansion]:
         _current.reset(token)
 
 
-def charge(self, cost: int, what: str) -> None:
-    """Take ``cost`` bytes for ``what`` (a sentence's subject: "unpacking the .zip file's
-    members", "the 3MF file's build, 5,100,000 triangles"), or raise ExpansionTooLarge."""
-    if self.used + cost > self.limit:
-        raise ExpansionTooLarge(
-            f"The upload of {megabytes(self.size)} expands too far: {what} would take "
-            f"about {megabytes(self.used + cost)} of memory, more than the "
-            f"{megabytes(self.limit)} an upload of its size may expand into here "
-            f"({EXPANSION_RATIO} times its size, at least {megabytes(MIN_EXPANSION)})."
-        )
-    self.used += cost
-
-
-_current: contextvars.ContextVar[Expansion | None] = contextvars.ContextVar(
-    "mesh_normal_expansion", default=None
-)
-
-
-@contextlib.contextmanager
-def expanding(size: int, most: int = MAX_EXPANSION) -> Iterator[Expansion]:
-    """One budget for an input of ``size`` bytes for the ``with`` block (and the threads it
-    starts with the context copied). Inside another block, that outer budget stays."""
-    outer = _current.get()
-    if outer is not None:
-        yield outer
-        return
-    budget = Expansion(size, expansion_limit(size, most))
-    token = _current.set(budget)
-    try:
-        yield budget
-    finally:
-        _current.reset(token)
-
-
-@contextlib.contextmanager
-def reading(size: int) -> Iterator[Expansion]:
-    """What a reader's entry point wraps its work in: the caller's budget if one is open,
-    else one for this input alone with the library's default most."""
-    with expanding(size) as budget:
-        yield budget
-
-
 def charge(cost: int, what: str) -> None:
     """Charge the open budget (see :meth:`Expansion.charge`); outside any, nothing."""
     budget = _current.get()
