@@ -80,7 +80,8 @@ class Settings(BaseSettings):
     before the answer is a 503. ``queue_length``: the most jobs waiting at once. ``in_process``:
     run the jobs in threads of the server process instead (tests, debugging: no abort or
     cancellation protection). ``worker_memory_mb``: an address-space limit per worker (off
-    by default).
+    by default). ``expansion_limit_mb``: the most memory one upload may expand into.
+    ``job_seconds``: how long one heavy job may run.
     """
 
     model_config = SettingsConfigDict(
@@ -101,11 +102,21 @@ class Settings(BaseSettings):
     queue_length: int = Field(8, ge=0, le=10_000)
     in_process: bool = False
     worker_memory_mb: float | None = Field(None, gt=0, allow_inf_nan=False)
+    #: The most memory one upload may expand into (unpacked archives, instances, decompressed
+    #: points; mesh_normal.files.expansion), whatever its size.
+    expansion_limit_mb: float = Field(4096, gt=0, allow_inf_nan=False)
+    #: Seconds one heavy job may run before it is stopped.
+    job_seconds: float = Field(60.0, gt=0, le=3600, allow_inf_nan=False)
 
     @property
     def upload_limit(self) -> int:
         """The largest mesh upload, in bytes."""
         return int(self.upload_limit_mb * 1024 * 1024)
+
+    @property
+    def expansion_limit(self) -> int:
+        """The most memory one upload may expand into, in bytes."""
+        return int(self.expansion_limit_mb * 1024 * 1024)
 
     @property
     def memory_budget(self) -> int:
@@ -122,6 +133,8 @@ _EXPECTED = {
     "queue_length": "a whole number from 0 to 10000",
     "in_process": "true or false",
     "worker_memory_mb": "a positive number of megabytes",
+    "expansion_limit_mb": "a positive number of megabytes",
+    "job_seconds": "a number of seconds above 0, at most 3600",
 }
 
 

@@ -38,9 +38,20 @@ class ExpansionTooLarge(MeshFileError):
         super().__init__(message, 413)
 
 
-def expansion_limit(size: int, most: int = MAX_EXPANSION) -> int:
+#: The most for one input when a budget is opened without one: MAX_EXPANSION, or what the
+#: process's owner set (:func:`set_most`: the server's operator, in each worker).
+_most = MAX_EXPANSION
+
+
+def set_most(most: int) -> None:
+    """Set this process's most for one input (the server does, from its settings)."""
+    global _most
+    _most = most
+
+
+def expansion_limit(size: int, most: int | None = None) -> int:
     """The most memory an input of ``size`` bytes may expand into."""
-    return min(most, max(MIN_EXPANSION, EXPANSION_RATIO * size))
+    return min(_most if most is None else most, max(MIN_EXPANSION, EXPANSION_RATIO * size))
 
 
 def megabytes(count: float) -> str:
@@ -79,7 +90,7 @@ _current: contextvars.ContextVar[Expansion | None] = contextvars.ContextVar(
 
 
 @contextlib.contextmanager
-def expanding(size: int, most: int = MAX_EXPANSION) -> Iterator[Expansion]:
+def expanding(size: int, most: int | None = None) -> Iterator[Expansion]:
     """One budget for an input of ``size`` bytes for the ``with`` block (and the threads it
     starts with the context copied). Inside another block, that outer budget stays."""
     outer = _current.get()
