@@ -1,19 +1,24 @@
 """Normals of a point cloud: the flattest direction of each point's neighbourhood.
 
-Each point's neighbours (its k nearest, those within a radius, or at most k within a radius,
-the point itself included) come from scipy's ``cKDTree``, built and queried with the points in
-Morton (Z-curve) order, so that neighbouring queries touch neighbouring memory; the results go
-back to input order. Coordinates are first moved so that the bounding box is centred on the
-origin and scaled by a power of two (exact) into [-1, 1]: the normals do not depend on where the
-cloud sits or its unit. The compiled kernel (:mod:`mesh_normal.points._kernels`) centres each
-neighbourhood on its mean, takes the covariance in float64 and solves it by Jacobi rotations;
-the normal is the eigenvector of the smallest eigenvalue, the curvature (surface variation)
-that eigenvalue over their sum.
+Points at exactly the same place are estimated once (:func:`coincident_groups`) and each gets
+the normal of its place: a k-d tree cannot split a pile of equal points, so its queries would
+take time quadratic in the pile's size, and copies of a point say nothing of the surface.
+Neighbourhoods are of places: each place's neighbours (its k nearest, those within a radius,
+or at most k within a radius, itself included) come from scipy's ``cKDTree``, built and
+queried with the places in Morton (Z-curve) order, so that neighbouring queries touch
+neighbouring memory; the results go back to input order. Coordinates are first moved so that
+the bounding box is centred on the origin and scaled by a power of two (exact) into [-1, 1]:
+the normals do not depend on where the cloud sits or its unit. The compiled kernel
+(:mod:`mesh_normal.points._kernels`) centres each neighbourhood on its mean, takes the
+covariance in float64 and solves it by Jacobi rotations; the normal is the eigenvector of the
+smallest eigenvalue, the curvature (surface variation) that eigenvalue over their sum.
 
 Where the neighbourhood does not determine a plane there is no normal (a zero row and a status
-that says why; never NaN, never a made-up direction). "To rounding" below is the variance that
-rounding the coordinates alone could give: ``(POINT_ROUNDING_FACTOR * EPSILON * max |x|)**2``.
-Non-finite points get ``not_finite`` and are no one's neighbours. Then the normals are oriented
+that says why; never NaN, never a made-up direction). A place alone in its neighbourhood, or
+with one other, that holds three points or more with its copies is ``duplicates`` or
+``collinear``, as its points are. "To rounding" below is the variance that rounding the
+coordinates alone could give: ``(POINT_ROUNDING_FACTOR * EPSILON * max |x|)**2``. Non-finite
+points get ``not_finite`` and are no one's neighbours. Then the normals are oriented
 (:mod:`mesh_normal.points.orient`).
 """
 
@@ -76,7 +81,8 @@ class PointNormals:
         λ0 / (λ0 + λ1 + λ2) of the neighbourhood's covariance, in [0, 1/3]; 0 where its points
         are fewer than three or coincide.
     neighbours : (n,) int
-        How many points the neighbourhood held (the point itself included).
+        How many places the neighbourhood held (the point's own included; coincident points
+        are one place).
     valid : (n,) bool
         The point has a normal: status ``ok`` or ``unoriented``.
     status : (n,) uint8
@@ -115,10 +121,14 @@ class PointNormals:
 
 @dataclass(frozen=True, slots=True, eq=False)
 class _Frame:
-    """The finite points, centred and scaled, in Morton order, and where they came from."""
+    """The finite points' places (coincident points are one), centred and scaled, in Morton
+    order, and where they came from."""
 
     points: FloatArray  # (m, 3), C-contiguous
-    origin: IndexArray  # (m,) input index of each row
+    origin: IndexArray  # (m,) input index of each row's first point
+    weight: IndexArray  # (m,) how many input points sit at each row's place
+    finite: IndexArray  # (f,) input index of each finite point
+    place: IndexArray  # (f,) the row of each finite point's place
     centre: FloatArray  # (3,) subtracted first
     scale: float  # then divided by this power of two
     tiny: float  # the variance of rounding alone, in these units
@@ -162,7 +172,7 @@ def point_normals(
         normal lines that a sign is carried across.
     progress : callable, optional
         Called as ``progress(done, total)`` after each chunk of the estimation (``total``: the
-        finite points); the orientation follows the last call.
+        finite points' distinct places); the orientation follows the last call.
 
     Returns
     -------
@@ -184,9 +194,10 @@ def point_normals(
     signs = _signs(frame, local_normals, codes == 0, graph, orient, references, max_angle)
     local_normals[signs.flip] *= -1.0
     codes[signs.unoriented] = PointStatus.unoriented
+    finite, place = frame.finite, frame.place
+    normals[finite], curvature[finite] = local_normals[place], local_curvature[place]
+    neighbours[finite], status[finite] = used[place], codes[place]
     origin = frame.origin
-    normals[origin], curvature[origin], neighbours[origin] = local_normals, local_curvature, used
-    status[origin] = codes
     valid = (status == PointStatus.ok) | (status == PointStatus.unoriented)
     components = tuple(
         ComponentOrientation(
@@ -278,11 +289,43 @@ def _checked_orientation(
 # --- the frame and the neighbourhoods -----------------------------------------------------------
 
 
+def coincident_groups(points: FloatArray) -> tuple[IndexArray, IndexArray]:
+    """The distinct rows of ``points`` (n, 3): the index of each one's first occurrence,
+    ascending, and for each row the position of its own in that list. 0.0 and -0.0 are equal.
+
+    Sorted by a hash of the rows' bits, so that equal rows fall together in O(n log n); where
+    two different rows share a hash, by the rows themselves.
+    """
+    n = len(points)
+    bits = np.ascontiguousarray(points + 0.0).view(np.uint64).reshape(n, 3)
+    key = bits[:, 0] * np.uint64(0x9E3779B97F4A7C15)
+    key ^= bits[:, 1] * np.uint64(0xC2B2AE3D27D4EB4F)
+    key ^= (bits[:, 2] * np.uint64(0x165667B19E3779F9)) >> np.uint64(7)
+    order = np.argsort(key, kind="stable")
+    rows = bits[order]
+    same = np.all(rows[1:] == rows[:-1], axis=1)
+    if np.any(~same & (key[order[1:]] == key[order[:-1]])):
+        order = np.lexsort(bits.T[::-1])  # stable, as argsort's was
+        same = np.all(bits[order[1:]] == bits[order[:-1]], axis=1)
+    if not same.any():
+        return np.arange(n), np.arange(n)
+    starts = np.r_[True, ~same]
+    first = order[starts]  # a stable sort: each run's smallest index comes first
+    by_first = np.argsort(first)
+    rank = np.empty(len(first), dtype=np.intp)
+    rank[by_first] = np.arange(len(first))
+    group = np.empty(n, dtype=np.intp)
+    group[order] = rank[np.cumsum(starts) - 1]
+    return first[by_first], group
+
+
 def _frame(cloud: FloatArray) -> _Frame:
     finite = np.flatnonzero(np.isfinite(cloud).all(axis=1))
-    points = cloud[finite]
-    if len(points) == 0:
-        return _Frame(points, finite, np.zeros(3), 1.0, 0.0)
+    if len(finite) == 0:
+        return _Frame(cloud[finite], finite, finite, finite, finite, np.zeros(3), 1.0, 0.0)
+    first, group = coincident_groups(cloud[finite])
+    points = cloud[finite[first]]
+    weight = np.bincount(group, minlength=len(first))
     low, high = points.min(axis=0), points.max(axis=0)
     centre = low / 2 + high / 2  # no overflow near the largest double
     half = float((high / 2 - low / 2).max())
@@ -291,7 +334,18 @@ def _frame(cloud: FloatArray) -> _Frame:
     local = (points - centre) / scale
     order = _morton_order(local)
     tiny = (POINT_ROUNDING_FACTOR * rounding / scale) ** 2
-    return _Frame(np.ascontiguousarray(local[order]), finite[order], centre, scale, tiny)
+    row = np.empty(len(order), dtype=np.intp)
+    row[order] = np.arange(len(order))
+    return _Frame(
+        np.ascontiguousarray(local[order]),
+        finite[first[order]],
+        weight[order],
+        finite,
+        row[group],
+        centre,
+        scale,
+        tiny,
+    )
 
 
 def _morton_order(local: FloatArray) -> IndexArray:
@@ -350,7 +404,24 @@ def _estimate(
         graph[start:stop] = np.where(nearest < m, nearest, -1)
         if progress is not None:
             progress(stop, m)
+    _degenerate_piles(frame.weight, used, codes, graph)
     return normals, curvature, used, codes.astype(np.uint8), graph
+
+
+def _degenerate_piles(
+    weight: IndexArray, used: IndexArray, codes: IndexArray, graph: NDArray[np.int32]
+) -> None:
+    """Places alone in their neighbourhood, or with one other (the graph's nearest after
+    itself), whose points number three or more: their points coincide, or lie on a line."""
+    few = np.flatnonzero(used < 3)
+    if not len(few):
+        return
+    held = weight[few].copy()
+    pair = used[few] == 2
+    if pair.any():  # a graph of one column has no pairs
+        held[pair] += weight[graph[few[pair], 1]]
+    codes[few[(held >= 3) & ~pair]] = PointStatus.duplicates
+    codes[few[(held >= 3) & pair]] = PointStatus.collinear
 
 
 def _neighbourhoods(
@@ -387,13 +458,16 @@ def _signs(
 ) -> Signs:
     """The orientation asked for, in the frame's order."""
     m = len(normals)
+    weight = frame.weight
     if orient in ("mst", "riemannian"):
-        return along_tree(frame.points, normals, valid, graph, max_angle, orient == "riemannian")
+        riemannian = orient == "riemannian"
+        return along_tree(frame.points, normals, valid, graph, max_angle, riemannian, weight)
     if references is None:  # "none"
         return Signs(np.zeros(m, dtype=bool), np.zeros(m, dtype=bool), ())
     if orient == "viewpoint":
         sensor = (references - frame.centre) / frame.scale
-        return towards(normals, valid, sensor - frame.points, "viewpoint")
+        return towards(normals, valid, sensor - frame.points, "viewpoint", weight)
     if orient == "direction":
-        return towards(normals, valid, references, "direction")
-    return towards(normals, valid, references[frame.origin], "stored normals")
+        return towards(normals, valid, references, "direction", weight)
+    # A place's points may store different normals: its first point's decides.
+    return towards(normals, valid, references[frame.origin], "stored normals", weight)

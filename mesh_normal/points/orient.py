@@ -89,11 +89,18 @@ class Signs:
     components: tuple[ComponentOrientation, ...]
 
 
-def towards(normals: FloatArray, valid: BoolArray, references: FloatArray, what: str) -> Signs:
+def towards(
+    normals: FloatArray,
+    valid: BoolArray,
+    references: FloatArray,
+    what: str,
+    weight: IndexArray | None = None,
+) -> Signs:
     """Turn each valid normal to make a positive dot product with its row of ``references``.
 
     ``references`` is (n, 3) or (3,); a zero, non-finite or perpendicular one leaves the point
-    unoriented. The one summary is the whole cloud's (``what`` names the reference).
+    unoriented. The one summary is the whole cloud's (``what`` names the reference); with
+    ``weight``, each row counts as that many points in it (a place and its copies).
     """
     references = np.broadcast_to(references, normals.shape)
     with np.errstate(invalid="ignore", over="ignore"):
@@ -105,9 +112,12 @@ def towards(normals: FloatArray, valid: BoolArray, references: FloatArray, what:
     decided &= lengths > 0
     flip = valid & decided & (dots < 0)
     unoriented = valid & ~decided
-    left = int(unoriented.sum())
+    weight = np.ones(len(normals), dtype=np.intp) if weight is None else weight
+    left = int(weight[unoriented].sum())
     reason = f"{left} points are at right angles to the {what} or have none" if left else ""
-    summary = ComponentOrientation(int(valid.sum()), int(flip.sum()), left, reason, -1)
+    summary = ComponentOrientation(
+        int(weight[valid].sum()), int(weight[flip].sum()), left, reason, -1
+    )
     return Signs(flip, unoriented, (summary,) if valid.any() else ())
 
 
@@ -118,6 +128,7 @@ def along_tree(
     graph: NDArray[np.int32],
     max_angle: float,
     offsets: bool,
+    weight: IndexArray | None = None,
 ) -> Signs:
     """Signs along minimum spanning trees of the neighbour graph; see the module docstring.
 
@@ -134,6 +145,9 @@ def along_tree(
         Degrees, in (0, 90].
     offsets : bool
         The ``"riemannian"`` graph: drop edges that leave a tangent plane by over ``max_angle``.
+    weight : (n,) int, optional
+        How many points each row stands for (a place and its copies), in the summaries' counts
+        and the sizes of pieces; one each when not given.
     """
     from scipy.sparse import coo_matrix  # type: ignore[import-untyped]  # on first use
     from scipy.sparse.csgraph import (  # type: ignore[import-untyped]
@@ -143,6 +157,7 @@ def along_tree(
     )
 
     n = len(points)
+    weight = np.ones(n, dtype=np.intp) if weight is None else weight
     sharp_cosine = math.cos(math.radians(max_angle))
     rows, cols, weights = _edges(points, normals, valid, graph, offsets, sharp_cosine)
     graph_matrix = coo_matrix((weights, (rows, cols)), shape=(n, n)).tocsr()
@@ -153,7 +168,7 @@ def along_tree(
     # Seeds come from each part's largest piece between sharp edges of its tree, and from the
     # whole part only where that piece has no point to decide: an outlier above a scan is its
     # highest point, but seeded there the sign would reach the scan only across a sharp edge.
-    main = _main_pieces(tree, normals, valid, labels, sharp_cosine)
+    main = _main_pieces(tree, normals, valid, weight, labels, sharp_cosine)
     seeds, seed_flip, decided = _seeds(points, normals, main, labels, count)
     if not decided.all():
         more = _seeds(points, normals, valid, labels, count)
@@ -180,7 +195,9 @@ def along_tree(
     flip, cut = propagate_signs(order, parent, agrees, sharp, flags)
     unoriented = valid & (cut | ~reached)
     flip &= valid & ~unoriented
-    summaries = _summaries(labels, count, valid, flip, unoriented, seeds, decided, max_angle)
+    summaries = _summaries(
+        labels, count, (valid, flip, unoriented), weight, seeds, decided, max_angle
+    )
     return Signs(flip, unoriented, summaries)
 
 
@@ -205,10 +222,15 @@ def _edges(
 
 
 def _main_pieces(
-    tree: Any, normals: FloatArray, valid: BoolArray, labels: IndexArray, sharp_cosine: float
+    tree: Any,
+    normals: FloatArray,
+    valid: BoolArray,
+    weight: IndexArray,
+    labels: IndexArray,
+    sharp_cosine: float,
 ) -> BoolArray:
-    """(n,) bool: the valid points of each part's largest piece once its tree's sharp edges
-    are cut (the first such piece where two are as large)."""
+    """(n,) bool: the valid points of each part's largest piece (in points, ``weight`` each)
+    once its tree's sharp edges are cut (the first such piece where two are as large)."""
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
@@ -220,7 +242,7 @@ def _main_pieces(
         (np.ones(int(gentle.sum())), (edges.row[gentle], edges.col[gentle])), shape=(n, n)
     )
     count, piece = connected_components(pieces, directed=False)
-    sizes = np.bincount(piece, weights=valid, minlength=count)
+    sizes = np.bincount(piece, weights=valid * weight, minlength=count)
     part_of = np.empty(count, dtype=np.intp)
     part_of[piece] = labels
     order = np.lexsort((-sizes, part_of))
@@ -279,17 +301,18 @@ def _tree_steps(
 def _summaries(
     labels: IndexArray,
     count: int,
-    valid: BoolArray,
-    flip: BoolArray,
-    unoriented: BoolArray,
+    masks: tuple[BoolArray, BoolArray, BoolArray],
+    weight: IndexArray,
     seeds: IndexArray,
     decided: BoolArray,
     max_angle: float,
 ) -> tuple[ComponentOrientation, ...]:
-    """One summary per part that has valid points, largest first."""
-    points = np.bincount(labels[valid], minlength=count)
-    flipped = np.bincount(labels[flip], minlength=count)
-    left = np.bincount(labels[unoriented], minlength=count)
+    """One summary per part that has valid points, largest first; ``masks`` are the valid,
+    flipped and unoriented rows, each row counting as ``weight`` points."""
+    points, flipped, left = (
+        np.bincount(labels, weights=mask * weight, minlength=count).astype(np.intp)
+        for mask in masks
+    )
     summaries = []
     for label in np.argsort(-points, kind="stable")[: int((points > 0).sum())]:
         if not decided[label]:

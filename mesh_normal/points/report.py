@@ -16,7 +16,12 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from mesh_normal.points.estimate import PointNormals, PointStatus, point_normals
+from mesh_normal.points.estimate import (
+    PointNormals,
+    PointStatus,
+    coincident_groups,
+    point_normals,
+)
 from mesh_normal.points.models import (
     FLIPPED_FRACTION,
     POINT_AGREEMENT_DEGREES,
@@ -146,13 +151,19 @@ def _bounds(points: FloatArray) -> PointBounds | None:
 
 
 def _spacing(points: FloatArray) -> Spacing | None:
-    """Nearest other point's distance, from one k = 2 query (the first hit is the point)."""
+    """Nearest other point's distance: 0 for points with a copy, else the nearest other
+    place's, from one k = 2 query of the places (a pile of copies would make it quadratic)."""
     if len(points) < 2:
         return None
     from scipy.spatial import cKDTree  # type: ignore[import-untyped]  # on first use: 0.5 s
 
-    distances, _ = cKDTree(points).query(points, k=2, workers=-1)
-    nearest = distances[:, 1]
+    first, group = coincident_groups(points)
+    places = points[first]
+    apart = np.full(len(places), np.inf)
+    if len(places) > 1:
+        apart = cKDTree(places).query(places, k=2, workers=-1)[0][:, 1]
+    apart[np.bincount(group, minlength=len(places)) > 1] = 0.0
+    nearest = apart[group]
     return Spacing(
         min=float(nearest.min()),
         median=float(np.median(nearest)),
@@ -252,7 +263,7 @@ def _missing(
     if spacing is not None and spacing.coincident:
         found.append(
             f"{_points(spacing.coincident)} sit exactly where another point is (duplicates); "
-            "they count twice in their neighbours' fits."
+            "each gets the normal of its place, estimated once."
         )
     if counts.duplicates:
         found.append(

@@ -122,11 +122,20 @@ def test_none_keeps_the_canonical_sign() -> None:
 
 def test_points_without_normals_are_left_out_of_the_tree() -> None:
     points, truth = clouds.sphere(3_000)
-    broken = np.r_[points, np.full((5, 3), np.nan), np.tile([[3.0, 3, 3]], (40, 1))]
+    broken = np.r_[points, np.full((5, 3), np.nan)]
     result = point_normals(broken)
     assert wrong(result.normals[:3_000], truth) == 0
     assert [part.points for part in result.components] == [3_000]
     assert not result.normals[3_000:].any()
+
+
+def test_a_pile_of_copies_counts_each_copy_in_its_part() -> None:
+    """40 copies of one far point: one place, with its nearest sphere points as neighbours."""
+    points, truth = clouds.sphere(3_000)
+    result = point_normals(np.r_[points, np.tile([[3.0, 3, 3]], (40, 1))])
+    assert wrong(result.normals[:3_000], truth) == 0
+    assert [part.points for part in result.components] == [3_040]
+    assert result.valid[3_000:].all() and np.all(result.normals[3_000:] == result.normals[3_000])
 
 
 def test_an_outlier_above_a_closed_cloud_does_not_seed_it() -> None:
