@@ -21,6 +21,11 @@ _Item = TypeVar("_Item", bound=np.generic)
 #: Describes row ``i`` (0-based) of the arrays for an error sentence, e.g. "the point on line 12".
 Describe = Callable[[int], str]
 
+#: Bytes of memory a point takes in the point-normals job, measured over the whole job (the
+#: k-d tree queries' neighbour lists, the orientation, the report; see the server's
+#: ``app.points.estimates``): what readers charge for points they unpack from compressed data.
+POINT_JOB_BYTES = 213
+
 
 @dataclass(frozen=True, slots=True, eq=False)
 class PointCloud:

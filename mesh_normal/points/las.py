@@ -8,22 +8,30 @@ says so. Normals come from extra-bytes dimensions named ``normal_x normal_y norm
 ``nx ny nz`` when the file has them. Other attributes holding anything but zeros
 (``intensity``, ``classification``, ``gps_time``...) are named in a note.
 
-The header's point count is checked against the bytes first (LAS), and LAZ is decompressed
-in chunks of :data:`CHUNK_POINTS` points, so a header promising more points than the file
-holds costs one chunk, not the promise.
+The header is checked before laspy reads it: its scales and offsets (a scale of 0 would put
+every point at its offset, silently), its record counts against the bytes. A LAS file whose
+header promises more points than its point data hold is refused; one whose point data hold
+room for more than the header says is read as the header says (as other readers do: the
+count is what the writer meant, and what follows may be padding) and a note says so. LAZ is
+decompressed in chunks of :data:`CHUNK_POINTS` points, after its point count, at the bytes of
+a record and :data:`~mesh_normal.points.cloud.POINT_JOB_BYTES` a point, is charged to the
+upload's expansion budget (:mod:`mesh_normal.files.expansion`): compressed points are a few
+bytes each, and the header may promise billions.
 """
 
 from __future__ import annotations
 
 import io
+import math
 import struct
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from mesh_normal.files import expansion
 from mesh_normal.files.errors import MeshFileError
-from mesh_normal.points.cloud import PointCloud, colors_uint8, make_cloud
+from mesh_normal.points.cloud import POINT_JOB_BYTES, PointCloud, colors_uint8, make_cloud
 
 #: Points decompressed at once: at most 67 bytes each (point format 10), about 17 MB.
 CHUNK_POINTS = 1 << 18
@@ -55,11 +63,11 @@ def _read(data: bytes) -> PointCloud:
         compressed = bool(header.are_points_compressed)
         count = int(header.point_count)
         size = int(header.point_format.size)
-        if not compressed and header.offset_to_point_data + count * size > len(data):
-            held = max(len(data) - header.offset_to_point_data, 0) // max(size, 1)
-            raise MeshFileError(
-                f"The LAS header says {count:,} points, but the file holds only {held:,}: "
-                "it looks truncated."
+        notes = [] if compressed else _checked_count(data, count, size)
+        if compressed:
+            expansion.charge(
+                count * (size + POINT_JOB_BYTES),
+                f"the LAZ file's compressed points ({count:,} by its header)",
             )
         names = list(header.point_format.dimension_names)
         normal_names = next((n for n in _NORMALS if set(n) <= set(names)), None)
@@ -67,7 +75,34 @@ def _read(data: bytes) -> PointCloud:
         filled: set[str] = set()
         for chunk in reader.chunk_iterator(CHUNK_POINTS):
             _take(chunk, names, normal_names, parts, filled)
-    return _cloud(parts, names, normal_names, filled, compressed, count)
+    return _cloud(parts, names, normal_names, filled, compressed, count, notes)
+
+
+def _checked_count(data: bytes, count: int, size: int) -> list[str]:
+    """Refuse a LAS header that promises more points than the point data hold; a note when
+    they have room for more (the points end where the waveform data or the extended records
+    start, else at the end of the file)."""
+    (start,) = struct.unpack_from("<I", data, 96)
+    end = len(data)
+    minor = data[25]
+    if minor >= 3 and len(data) >= 235:
+        (waveform,) = struct.unpack_from("<Q", data, 227)
+        end = min(end, waveform) if waveform > start else end
+    if minor >= 4 and len(data) >= 247:
+        first, evlrs = struct.unpack_from("<QI", data, 235)
+        end = min(end, first) if evlrs and first > start else end
+    held = max(end - start, 0) // max(size, 1)
+    if held < count:
+        raise MeshFileError(
+            f"The LAS header says {count:,} points, but the file holds only {held:,}: "
+            "it looks truncated."
+        )
+    if held == count:
+        return []
+    return [
+        f"The LAS header says {count:,} points, but its point data have room for {held:,}; "
+        f"the {count:,} the header says were read, and the rest left out."
+    ]
 
 
 #: Bytes of the smallest LAS header (1.0-1.2), of a VLR's header and of an EVLR's.
@@ -84,6 +119,7 @@ def _check_header(data: bytes) -> None:
             f"The file is {len(data):,} bytes, too short for a LAS header ({_HEADER} bytes)."
         )
     minor = data[25]
+    _check_scales(data)
     header_size, point_offset, vlrs = struct.unpack_from("<HII", data, 94)
     if not header_size <= point_offset <= len(data):
         raise MeshFileError(
@@ -104,6 +140,22 @@ def _check_header(data: bytes) -> None:
                 f"The LAS header says {evlrs:,} extended variable-length records, but the "
                 "file is too short to hold them."
             )
+
+
+def _check_scales(data: bytes) -> None:
+    """Coordinates are ``X * scale + offset``: a scale of 0 or anything not finite would put
+    every point at one place, or nowhere, without a word."""
+    scales = struct.unpack_from("<3d", data, 131)
+    offsets = struct.unpack_from("<3d", data, 155)
+    for axis, scale, offset in zip("xyz", scales, offsets, strict=True):
+        if not math.isfinite(scale):
+            raise MeshFileError(f"The LAS file's {axis} scale is {scale}, not a finite number.")
+        if scale == 0:
+            raise MeshFileError(
+                f"The LAS file's {axis} scale is 0; every point would sit at its offset."
+            )
+        if not math.isfinite(offset):
+            raise MeshFileError(f"The LAS file's {axis} offset is {offset}, not a finite number.")
 
 
 def _check_chunks(data: bytes, point_offset: int, vlrs: int, header_size: int) -> None:
@@ -169,13 +221,13 @@ def _cloud(
     filled: set[str],
     compressed: bool,
     count: int,
+    notes: list[str],
 ) -> PointCloud:
     points = np.concatenate(parts["points"]) if parts["points"] else np.zeros((0, 3))
     if len(points) != count:
         raise MeshFileError(
             f"The LAS header says {count:,} points, but the file holds {len(points):,}."
         )
-    notes = []
     colors = None
     if parts["colors"]:
         wide = np.concatenate(parts["colors"]).astype(np.uint16)

@@ -16,7 +16,10 @@ points returned to the file's rows. A NaN normal (PCL's "no normal") stays NaN.
 
 ``binary_compressed`` is LZF (Marc Lehmann's format, as PCL writes it) over the fields one after
 another (all the points' ``x``, then all their ``y``...); :func:`lzf_decompress` unpacks it
-with a small compiled loop.
+with a small compiled loop that never writes past the size the header states. Before that, the
+unpacked bytes and what the points will cost in the job (:data:`POINT_JOB_BYTES` each) are
+charged to the upload's expansion budget (:mod:`mesh_normal.files.expansion`): a few hundred
+kilobytes of LZF can hold millions of points.
 """
 
 from __future__ import annotations
@@ -27,9 +30,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from mesh_normal.files import expansion
 from mesh_normal.files.errors import MeshFileError
 from mesh_normal.kernels import kernel
-from mesh_normal.points.cloud import PointCloud, make_cloud
+from mesh_normal.points.cloud import POINT_JOB_BYTES, PointCloud, make_cloud
 from mesh_normal.points.xyz import read_rows
 
 #: Most bytes one LZF byte can become: a 3-byte back reference copies up to 264 bytes.
@@ -241,6 +245,11 @@ def _compressed(
             f"The compressed PCD data ({packed:,} bytes) cannot unpack to the {size:,} bytes "
             "the header says."
         )
+    expansion.charge(
+        size + POINT_JOB_BYTES * header.points,
+        f"the PCD file's LZF data, {header.points:,} points ({expansion.megabytes(size)} "
+        "unpacked),",
+    )
     raw = lzf_decompress(source, size)
     columns, offset = {}, 0
     for name in record.names or ():
@@ -259,6 +268,10 @@ def lzf_decompress(source: bytes, size: int) -> NDArray[np.uint8]:
     size."""
     out = np.empty(size, dtype=np.uint8)
     written = _lzf(np.frombuffer(source, dtype=np.uint8), out)
+    if written == _PAST_THE_END:
+        raise MeshFileError(
+            f"The compressed PCD data unpack to more than the {size:,} bytes the file says."
+        )
     if written < 0:
         raise MeshFileError("The compressed PCD data are broken (not valid LZF).")
     if written != size:
@@ -268,11 +281,15 @@ def lzf_decompress(source: bytes, size: int) -> NDArray[np.uint8]:
     return out
 
 
+#: What :func:`_lzf` returns for data that would write past the end of ``out``.
+_PAST_THE_END = -2
+
+
 @kernel()
 def _lzf(source: NDArray[np.uint8], out: NDArray[np.uint8]) -> int:
-    """Unpack LZF ``source`` into ``out``: the bytes written, or -1 where the data break the
-    format. Compiled (Python did 5 MB/s); numba does not check indices, so every read and
-    write is checked here first."""
+    """Unpack LZF ``source`` into ``out``: the bytes written, -1 where the data break the
+    format, -2 where they would write past the end of ``out``. Compiled (Python did 5 MB/s);
+    numba does not check indices, so every read and write is checked here first."""
     i = 0
     o = 0
     end = source.shape[0]
@@ -282,7 +299,9 @@ def _lzf(source: NDArray[np.uint8], out: NDArray[np.uint8]) -> int:
         i += 1
         if control < 32:  # a literal run of control + 1 bytes
             length = control + 1
-            if i + length > end or o + length > size:
+            if o + length > size:
+                return -2
+            if i + length > end:
                 return -1
             out[o : o + length] = source[i : i + length]
             i += length
@@ -299,7 +318,9 @@ def _lzf(source: NDArray[np.uint8], out: NDArray[np.uint8]) -> int:
         reference = o - ((control & 31) << 8) - int(source[i]) - 1
         i += 1
         length += 2
-        if reference < 0 or o + length > size:
+        if o + length > size:
+            return -2
+        if reference < 0:
             return -1
         for k in range(length):  # byte by byte: an overlapping copy repeats what it wrote
             out[o + k] = out[reference + k]

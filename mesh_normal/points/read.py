@@ -12,7 +12,9 @@ organised clouds mark missing points with NaN: those rows are left out, counted 
 :attr:`PointCloud.kept` maps the points returned to the file's rows.
 
 Headers that promise more than the file holds (a PCD's ``POINTS``, a PLY's vertex count, a LAS
-point count) are refused before anything of that size is allocated.
+point count) are refused before anything of that size is allocated. Compressed point data (a
+PCD's LZF, LAZ) are charged to the input's expansion budget before they are unpacked
+(:mod:`mesh_normal.files.expansion`; one is opened here when the caller has not).
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ from __future__ import annotations
 import dataclasses
 import re
 
+from mesh_normal.files import expansion
 from mesh_normal.files.errors import MeshFileError, failure_reason, unsupported
 from mesh_normal.files.read import MeshSource, source_bytes
 
@@ -111,7 +114,8 @@ def read_points(source: MeshSource, filename: str | None = None) -> PointCloud:
         else:
             raise _unknown(filename)
     try:
-        cloud = _read(found, data, suffix)
+        with expansion.expanding(len(data)):  # the caller's budget, if it opened one
+            cloud = _read(found, data, suffix)
     except (MeshFileError, MemoryError):
         raise
     except Exception as error:  # a library's own exception (laspy's): never a 500

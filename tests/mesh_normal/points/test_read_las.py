@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from mesh_normal.files import MeshFileError
+from mesh_normal.files.expansion import ExpansionTooLarge
 from mesh_normal.points import las as las_module
 from mesh_normal.points.read import read_points
 
@@ -90,11 +91,19 @@ def _lie(data: bytes, count: int) -> bytes:
 
 @pytest.mark.parametrize("compress", [False, True])
 def test_lying_point_counts_are_refused(compress: bool) -> None:
-    with pytest.raises(MeshFileError, match=r"1,000,000,000 points|truncated or broken") as caught:
-        read_points(_lie(las_bytes(compress=compress), 10**9))
+    with pytest.raises(MeshFileError, match=r"1,000 points|truncated or broken") as caught:
+        read_points(_lie(las_bytes(compress=compress), 1000))
     assert caught.value.status_code == 400
     # A count below what follows reads that many, as laspy and LAStools do.
     assert len(read_points(_lie(las_bytes(compress=compress), 2)).points) == 2
+
+
+def test_a_billion_points_promised_are_refused() -> None:
+    """LAS: against the bytes; LAZ: charged to the upload's budget before decompressing."""
+    with pytest.raises(MeshFileError, match=r"says 1,000,000,000 points, but the file holds only 4"):
+        read_points(_lie(las_bytes(), 10**9))
+    with pytest.raises(ExpansionTooLarge, match=r"LAZ file's compressed points \(1,000,000,000 "):
+        read_points(_lie(las_bytes(compress=True), 10**9))
 
 
 def _patch(data: bytes, position: int, value: int) -> bytes:
