@@ -11,7 +11,9 @@ stay fronts. Point and line primitives are skipped with a note.
 
 Before trimesh reads it, :mod:`mesh_normal.files.gltf_buffers` refuses required extensions we
 cannot honour, decodes quantized accessors and gathers the buffers: a ``.gltf`` sent alone must
-embed them (``data:`` URIs); one with separate ``.bin`` files comes in a ``.zip``.
+embed them (``data:`` URIs); one with separate ``.bin`` files comes in a ``.zip``. Then
+:mod:`mesh_normal.files.gltf_scene` refuses node cycles and nodes with two parents, and charges
+what the scene places against the upload's expansion budget.
 """
 
 from __future__ import annotations
@@ -32,7 +34,8 @@ from mesh_normal.files.gltf_buffers import (
     gltf_header,
     packed_gltf,
 )
-from mesh_normal.files.loaded import MAX_TRIANGLES, LoadedMesh, build
+from mesh_normal.files.gltf_scene import check_scene
+from mesh_normal.files.loaded import LoadedMesh, build
 
 
 def read_glb(data: bytes) -> LoadedMesh:
@@ -59,6 +62,7 @@ def _read(
     del chunk  # the upload's view: the packed buffer holds what is needed of it
     if not header.get("meshes"):  # trimesh would fail on the missing accessors
         raise MeshFileError("The glTF file holds no meshes.")
+    check_scene(header)  # before trimesh makes the arrays: nodes may place a mesh many times
     draco, quantized = packed.draco, packed.quantized
     scene = load_gltf(
         io.BytesIO(packed.header),
@@ -106,18 +110,13 @@ def _flatten(scene: dict[str, Any], file_format: str) -> LoadedMesh:
     parts: list[tuple[NDArray[np.float64], NDArray[np.intp], NDArray[np.float64] | None]] = []
     colors: list[NDArray[Any] | None] = []
     names: list[str] = []  # one group per primitive placed, named by its node: the objects
-    skipped = mirrored = placed = 0
+    skipped = mirrored = 0
     for transform, name, node in _world_transforms(scene):
         kwargs = geometry.get(name) or {}
         if "faces" not in kwargs or "vertices" not in kwargs:
             skipped += 1
             continue
         faces = np.asarray(kwargs["faces"], dtype=np.intp).reshape(-1, 3)
-        placed += len(faces)
-        if placed > MAX_TRIANGLES:  # before the copy: nodes may place one mesh many times
-            raise MeshFileError(
-                f"The glTF file's nodes place more than {MAX_TRIANGLES:,} triangles."
-            )
         vertices = np.asarray(kwargs["vertices"], dtype=np.float64).reshape(-1, 3)
         linear = transform[:3, :3]
         if np.linalg.det(linear) < 0:

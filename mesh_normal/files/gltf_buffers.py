@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mesh_normal.files.errors import MeshFileError, unsupported
+from mesh_normal.files.errors import MeshFileError, failure_reason, unsupported
 
 #: ``name -> bytes`` for a file next to the ``.gltf`` (its path as the URI gives it), or
 #: ``None`` when there is none; ``None`` as a whole when the asset came alone.
@@ -58,7 +58,9 @@ _NORMALIZED = {
     5122: ("<i2", 32767.0),
     5123: ("<u2", 65535.0),
 }
-_WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
+#: Bytes of each glTF component type.
+ITEM_BYTES = {5120: 1, 5121: 1, 5122: 2, 5123: 2, 5125: 4, 5126: 4}
+WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
 _FLOAT = 5126
 
 
@@ -94,8 +96,10 @@ def gltf_header(data: bytes) -> dict[str, Any]:
 def _json(data: bytes) -> dict[str, Any]:
     try:
         header = json.loads(data.decode("utf-8").rstrip("\0 "))
-    except (UnicodeDecodeError, json.JSONDecodeError) as error:
-        raise MeshFileError(f"The glTF JSON could not be parsed: {error}.") from error
+    except ValueError as error:  # not UTF-8, not JSON, or an integer of too many digits
+        raise MeshFileError(
+            f"The glTF JSON could not be parsed: {failure_reason(error)}."
+        ) from error
     if not isinstance(header, dict):
         raise MeshFileError("The glTF JSON is not an object.")
     return header
@@ -147,19 +151,22 @@ def packed_gltf(
     """One glTF JSON and one buffer holding every buffer, Draco and quantized accessors
     decoded."""
     blob = bytearray()
-    starts = []
+    starts, lengths = [], []
     for index, buffer in enumerate(header.get("buffers") or []):
         starts.append(len(blob))
         blob += _buffer_bytes(index, buffer, glb_chunk, resolve)
+        lengths.append(len(blob) - starts[-1])
         blob += b"\0" * (-len(blob) % 4)
-    for view in header.get("bufferViews") or []:
+    for index, view in enumerate(header.get("bufferViews") or []):
         buffer = view.get("buffer", 0)
-        if not isinstance(buffer, int) or not 0 <= buffer < len(starts):
-            raise MeshFileError(f"A glTF buffer view names buffer {buffer!r}, which is missing.")
+        if not _is_size(buffer) or buffer >= len(starts):
+            raise MeshFileError(f"glTF buffer view {index} names a buffer that is missing.")
+        _check_view(index, view, lengths[buffer])
         view["byteOffset"] = view.get("byteOffset", 0) + starts[buffer]
         view["buffer"] = 0
         view.pop("extensions", None)  # EXT_meshopt_compression's own buffers: we read fallbacks
     header["buffers"] = [{"byteLength": len(blob), "uri": PACKED_URI}] if blob else []
+    _check_accessors(header)
     draco = _decode_draco(header, blob)
     quantized = _decode_normalized(header, blob)
     for key in ("images", "textures", "samplers"):  # never read: the geometry needs none
@@ -168,6 +175,49 @@ def packed_gltf(
         material.clear()
     text = json.dumps(header, separators=(",", ":")).encode("utf-8")
     return Packed(text, blob, quantized, draco)
+
+
+def _is_size(value: object) -> bool:
+    """Whether a JSON value is a whole number, 0 or more (``true`` is not)."""
+    return isinstance(value, int) and not isinstance(value, bool) and value >= 0
+
+
+def _check_view(index: int, view: dict[str, Any], buffer_length: int) -> None:
+    """Refuse a buffer view that does not fit its buffer (trimesh would assert)."""
+    offset, length = view.get("byteOffset", 0), view.get("byteLength")
+    if not _is_size(offset) or not _is_size(length) or offset + length > buffer_length:
+        raise MeshFileError(
+            f"glTF buffer view {index} does not fit in its buffer of {buffer_length:,} bytes."
+        )
+    stride = view.get("byteStride")
+    if stride is not None and (not _is_size(stride) or stride == 0):
+        raise MeshFileError(f"glTF buffer view {index} has a byteStride that is not above 0.")
+
+
+def _check_accessors(header: dict[str, Any]) -> None:
+    """Refuse an accessor that does not fit its buffer view or has no valid count, component
+    type or type (trimesh would assert, or fail to reshape)."""
+    views = header.get("bufferViews") or []
+    for index, accessor in enumerate(header.get("accessors") or []):
+        if not isinstance(accessor, dict):
+            raise MeshFileError(f"glTF accessor {index} is not an object.")
+        kind, shape = accessor.get("componentType"), accessor.get("type")
+        item = 0
+        if isinstance(kind, int) and isinstance(shape, str):
+            item = ITEM_BYTES.get(kind, 0) * WIDTH.get(shape, 0)
+        if not _is_size(accessor.get("count")) or not item:
+            raise MeshFileError(f"glTF accessor {index} has no valid count, componentType or type.")
+        if "bufferView" not in accessor:  # zeros, or filled by Draco
+            continue
+        view, offset = accessor["bufferView"], accessor.get("byteOffset", 0)
+        if not _is_size(view) or view >= len(views) or not _is_size(offset):
+            raise MeshFileError(f"glTF accessor {index} names a buffer view that is missing.")
+        stride = views[view].get("byteStride") or item
+        count = accessor["count"]
+        if count and offset + (count - 1) * stride + item > views[view]["byteLength"]:
+            raise MeshFileError(
+                f"glTF accessor {index} runs past the end of its buffer view {view}."
+            )
 
 
 def _buffer_bytes(
@@ -258,7 +308,7 @@ _COLOR_COMPONENTS = {"u1": 5121, "u2": 5123, "f4": 5126}
 def _draco_colors(data: Any, accessor: dict[str, Any]) -> tuple[NDArray[Any], int]:
     """A Draco ``COLOR_0`` as its accessor declares it: bytes, shorts or float32 0-1."""
     kind = {5121: "u1", 5123: "u2"}.get(accessor.get("componentType", 5126), "f4")
-    width = _WIDTH.get(accessor.get("type", ""), 3)
+    width = WIDTH.get(accessor.get("type", ""), 3)
     values = np.asarray(data)
     values = values.reshape(len(values), -1)[:, :width] if values.size else values.reshape(0, width)
     if kind == "f4" and values.dtype.kind in "ui":  # integers where floats are declared
@@ -352,7 +402,7 @@ def _dequantized(
     """``(count, width) float32``: the accessor's integers decoded as the spec says."""
     dtype, divisor = _NORMALIZED[kind]
     item = np.dtype(dtype).itemsize
-    count, width = int(accessor.get("count", 0)), _WIDTH.get(accessor.get("type", ""), 1)
+    count, width = int(accessor.get("count", 0)), WIDTH.get(accessor.get("type", ""), 1)
     start = view.get("byteOffset", 0) + accessor.get("byteOffset", 0)
     stride = view.get("byteStride") or item * width
     end = start + (count - 1) * stride + item * width if count else start

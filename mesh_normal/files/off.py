@@ -170,7 +170,9 @@ def _plain_head(data: bytes) -> tuple[int, int, int, int] | None:
         if words:
             found.append(words)
     keyword, counts = found
-    if keyword != [b"OFF"] or len(counts) != 3 or not all(word.isdigit() for word in counts):
+    if keyword != [b"OFF"] or len(counts) != 3:
+        return None
+    if not all(word.isdigit() and len(word) < 19 for word in counts):  # else int() may refuse
         return None
     return position, number + 1, int(counts[0]), int(counts[1])
 

@@ -367,7 +367,7 @@ def _read_chunks(elements: list[_Element], body: bytes) -> bool:
             if not words:
                 words = next(chunks, [])
             size = words[0] if words else b""
-            if not size.isdigit():
+            if not size.isdigit() or len(size) >= 10:  # else int() may refuse it
                 return False
             width = int(size) + 1
             values, words = _take(chunks, words, width * element.count, size, width)
@@ -481,7 +481,7 @@ def _line_columns(
         at = 0
         for name in element.order:
             if name in element.lists:
-                if at >= len(words) or not words[at].isdigit():
+                if at >= len(words) or not words[at].isdigit() or len(words[at]) >= 10:
                     return None
                 size = int(words[at])
                 columns[name].append(words[at + 1 : at + 1 + size])
@@ -537,7 +537,7 @@ def _is_number(token: bytes) -> bool:
 def _ascii_lists(element: _Element, tokens: list[bytes], position: int) -> int:
     if element.order == [*element.lists] and len(element.lists) == 1 and element.count:
         size = tokens[position] if position < len(tokens) else b""
-        width = int(size) + 1 if size.isdigit() else 0
+        width = int(size) + 1 if size.isdigit() and len(size) < 10 else 0  # else int() refuses
         end = position + width * element.count
         if width and end <= len(tokens) and tokens[position:end:width].count(size) == element.count:
             rows = _floats(tokens[position:end]).reshape(element.count, width)[:, 1:]
@@ -747,8 +747,8 @@ def strip_triangles(
 def _polygons(column: object) -> tuple[NDArray[np.intp], NDArray[np.int64]]:
     """Corner counts and the flat corner indices of a list column (array or list of rows)."""
     if isinstance(column, np.ndarray) and column.ndim == 2:
-        if column.dtype.kind == "f" and not np.all(column == np.round(column)):  # ASCII, "2.9"
-            raise MeshFileError("The PLY file has a face index that is not a whole number.")
+        if column.dtype.kind == "f":  # ASCII: "2.9", or digits past any vertex count
+            _whole_indices(column)
         # One pass from the records' strided view to a contiguous copy, then flattened free.
         flat = column.astype(np.int64, copy=False).ravel()
         return np.full(len(column), column.shape[1], dtype=np.intp), flat
@@ -759,9 +759,17 @@ def _polygons(column: object) -> tuple[NDArray[np.intp], NDArray[np.int64]]:
         values = np.array(listed, dtype=np.float64) if listed else np.zeros(0)
     except ValueError:
         raise MeshFileError("The PLY file has a face index that is not a number.") from None
+    _whole_indices(values)
+    return counts, values.astype(np.int64)
+
+
+def _whole_indices(values: NDArray[np.float64]) -> None:
+    """Refuse face indices read as floats that are not whole numbers, or too large to cast
+    (infinity, for a number of thousands of digits, would become a negative index)."""
+    if np.any(np.abs(values) >= 2.0**53):
+        raise MeshFileError("The PLY file has a face index too large to name a vertex.")
     if not np.all(values == np.round(values)):
         raise MeshFileError("The PLY file has a face index that is not a whole number.")
-    return counts, values.astype(np.int64)
 
 
 def _normals(element: _Element | None) -> NDArray[np.float64] | None:

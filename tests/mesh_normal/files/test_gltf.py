@@ -2,7 +2,10 @@ from __future__ import annotations
 
 import importlib.util
 import json
+import re
 import struct
+import time
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -11,6 +14,7 @@ import trimesh
 
 import mesh_normal as mn
 from mesh_normal.files import MeshFileError, read_mesh
+from mesh_normal.files.expansion import ExpansionTooLarge, expanding
 from mesh_normal.files.gltf_buffers import glb_parts
 from tests.paths import DATA
 
@@ -235,9 +239,9 @@ def test_a_gltf_sent_as_bytes_still_asks_for_its_buffer() -> None:
 
 
 def test_nodes_that_place_too_many_triangles_are_refused(monkeypatch: pytest.MonkeyPatch) -> None:
-    from mesh_normal.files import gltf
+    from mesh_normal.files import gltf_scene
 
-    monkeypatch.setattr(gltf, "MAX_TRIANGLES", 1000)  # DenseSphere places 30,720
+    monkeypatch.setattr(gltf_scene, "MAX_TRIANGLES", 1000)  # DenseSphere places 30,720
     with pytest.raises(MeshFileError, match="nodes place more than 1,000 triangles"):
         read_mesh(DATA / "gltf" / "DenseSphere.glb")
 
@@ -363,3 +367,154 @@ def test_trimesh_exported_vertex_colours_come_back(draco: bool) -> None:
     # Draco may reorder the vertices: each position keeps its colour
     order = [int(np.flatnonzero((box.vertices == point).all(axis=1))[0]) for point in mesh.vertices]
     np.testing.assert_array_equal(mesh.vertex_colors, colors[order])
+
+
+def placed(triangles: int, nodes: int) -> dict[str, Any]:
+    """A glTF header whose ``nodes`` root nodes each place one mesh of ``triangles`` triangles
+    over three vertices. Its blob: :func:`placed_blob`."""
+    header: dict[str, Any] = {
+        "asset": {"version": "2.0"},
+        "buffers": [{"byteLength": 36 + 12 * triangles}],
+        "bufferViews": [
+            {"buffer": 0, "byteLength": 36},
+            {"buffer": 0, "byteOffset": 36, "byteLength": 12 * triangles},
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3"},
+            {"bufferView": 1, "componentType": 5125, "count": 3 * triangles, "type": "SCALAR"},
+        ],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+        "nodes": [{"mesh": 0, "translation": [index, 0, 0]} for index in range(nodes)],
+        "scenes": [{"nodes": list(range(nodes))}],
+    }
+    return header
+
+
+def placed_blob(triangles: int) -> bytes:
+    corners = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], dtype=np.float32).tobytes()
+    return corners + np.tile(np.arange(3, dtype=np.uint32), triangles).tobytes()
+
+
+def test_nodes_placing_one_mesh_again_and_again_are_charged_before_trimesh_reads_it(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import trimesh.exchange.gltf
+
+    def never(*_: object, **__: object) -> None:
+        raise AssertionError("trimesh read the buffers before the charge")
+
+    monkeypatch.setattr(trimesh.exchange.gltf, "load_gltf", never)
+    header = placed(1000, 2000) | {"nodes": [{"mesh": 0}] * 2000}
+    data = glb(header, placed_blob(1000))
+    assert len(data) < 50_000
+    with expanding(len(data)), pytest.raises(ExpansionTooLarge) as raised:
+        read_mesh(data, "bomb.glb")
+    assert raised.value.status_code == 413
+    assert "the glTF file's nodes, placing 2,000,000 triangles, would take about" in str(
+        raised.value
+    )
+
+
+def test_a_mesh_placed_by_several_nodes_is_read_once_per_node() -> None:
+    data = glb(placed(2, 3), placed_blob(2))
+    with expanding(len(data)):
+        mesh = read_mesh(data, "instances.glb")
+    assert len(mesh.faces) == 6
+    assert sorted(set(mesh.vertices[:, 0])) == [0, 1, 2, 3]
+
+
+def test_accessors_of_zeros_are_charged_by_their_declared_count() -> None:
+    header = placed(1, 1)
+    header["accessors"].append({"componentType": 5126, "count": 10**11, "type": "VEC3"})
+    data = glb(header, placed_blob(1))
+    with expanding(len(data)), pytest.raises(ExpansionTooLarge) as raised:
+        read_mesh(data, "zeros.glb")
+    assert "the glTF file's accessors would take about" in str(raised.value)
+
+
+@pytest.mark.parametrize(
+    ("children", "sentence"),
+    [
+        (
+            {3: [5], 5: [3]},
+            "The glTF file's node 3 is its own descendant (node 3 -> 5 -> 3); the glTF "
+            "specification forbids cycles.",
+        ),
+        ({2: [2]}, "The glTF file's node 2 is its own descendant (node 2 -> 2);"),
+        (
+            {1: [2], 2: [4], 4: [1]},
+            "The glTF file's node 1 is its own descendant (node 1 -> 2 -> 4 -> 1);",
+        ),
+        (
+            {0: [5], 2: [5]},
+            "The glTF file's node 5 has two parents (nodes 0 and 2); the glTF specification "
+            "allows one.",
+        ),
+        ({0: [9]}, "The glTF file's node 0 is not an object whose children are among its 6 nodes."),
+    ],
+)
+def test_nodes_must_form_trees(children: dict[int, list[int]], sentence: str) -> None:
+    header = placed(1, 6)
+    for node, found in children.items():
+        header["nodes"][node]["children"] = found
+    with pytest.raises(MeshFileError, match=re.escape(sentence)) as raised:
+        read_mesh(glb(header, placed_blob(1)), "loop.glb")
+    assert raised.value.status_code == 400
+
+
+def test_a_deep_chain_of_nodes_is_answered_quickly() -> None:
+    count = 100_000
+    nodes = [{"children": [index + 1]} for index in range(count)] + [{"mesh": 0}]
+    header = placed(1, 1) | {"nodes": nodes, "scenes": [{"nodes": [0]}]}
+    header["nodes"][count // 2]["children"].append(0)  # the root becomes its own descendant
+    start = time.perf_counter()
+    loop = r"node 0 is its own descendant \(node 0 -> 1 -> 2 -> \.\.\. -> 50000 -> 0\)"
+    with pytest.raises(MeshFileError, match=loop):
+        read_mesh(glb(header, placed_blob(1)), "chain.glb")
+    assert time.perf_counter() - start < 10
+
+
+def broken(change: Callable[[dict[str, Any]], None]) -> bytes:
+    header = placed(1, 1)
+    change(header)
+    return glb(header, placed_blob(1))
+
+
+@pytest.mark.parametrize(
+    ("data", "sentence"),
+    [
+        (
+            broken(lambda h: h["bufferViews"][1].update(byteLength=400)),
+            "glTF buffer view 1 does not fit in its buffer of 48 bytes.",
+        ),
+        (
+            broken(lambda h: h["bufferViews"][0].update(byteOffset=-12)),
+            "glTF buffer view 0 does not fit in its buffer of 48 bytes.",
+        ),
+        (
+            broken(lambda h: h["bufferViews"][0].update(byteStride=0)),
+            "glTF buffer view 0 has a byteStride that is not above 0.",
+        ),
+        (
+            broken(
+                lambda h: (
+                    h["bufferViews"][0].update(byteStride=12) or h["accessors"][0].update(count=30)
+                )
+            ),
+            "glTF accessor 0 runs past the end of its buffer view 0.",
+        ),
+        (
+            broken(lambda h: h["accessors"][1].update(byteOffset=100)),
+            "glTF accessor 1 runs past the end of its buffer view 1.",
+        ),
+        (
+            broken(lambda h: h["accessors"][1].update(type=["SCALAR"])),
+            "glTF accessor 1 has no valid count, componentType or type.",
+        ),
+        (broken(lambda h: h["accessors"].append(None)), "glTF accessor 2 is not an object."),
+    ],
+)
+def test_buffers_that_trimesh_would_assert_on_are_named(data: bytes, sentence: str) -> None:
+    with pytest.raises(MeshFileError) as raised:
+        read_mesh(data, "broken.glb")
+    assert str(raised.value) == sentence
