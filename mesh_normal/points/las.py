@@ -67,7 +67,7 @@ def _read(data: bytes) -> PointCloud:
         if compressed:
             expansion.charge(
                 count * (size + POINT_JOB_BYTES),
-                f"the LAZ file's compressed points ({count:,} by its header)",
+                f"the LAZ file's {count:,} compressed points",
             )
         names = list(header.point_format.dimension_names)
         normal_names = next((n for n in _NORMALS if set(n) <= set(names)), None)

@@ -100,9 +100,9 @@ def test_lying_point_counts_are_refused(compress: bool) -> None:
 
 def test_a_billion_points_promised_are_refused() -> None:
     """LAS: against the bytes; LAZ: charged to the upload's budget before decompressing."""
-    with pytest.raises(MeshFileError, match=r"says 1,000,000,000 points, but the file holds only 4"):
+    with pytest.raises(MeshFileError, match=r"says 1,000,000,000 points, but the file holds only"):
         read_points(_lie(las_bytes(), 10**9))
-    with pytest.raises(ExpansionTooLarge, match=r"LAZ file's compressed points \(1,000,000,000 "):
+    with pytest.raises(ExpansionTooLarge, match=r"LAZ file's 1,000,000,000 compressed points"):
         read_points(_lie(las_bytes(compress=True), 10**9))
 
 
