@@ -2,30 +2,28 @@
 
 from __future__ import annotations
 
-import re
 from typing import Any
 
 from fastapi import APIRouter, Request
 from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import Response
 
+from app.calculator import batch
 from app.calculator.calculation import calculation_payload, from_doubles, from_typed
 from app.calculator.chart import bar_figure
 from app.calculator.fast import fast_payload
 from app.calculator.params import query_parameters_spec, read_triangle
-from app.calculator.payloads import batch_payload, payload_csv
+from app.calculator.payloads import payload_csv
 from app.calculator.schemas import BatchRequest, BatchResult, Figure, NormalRequest, NormalResult
-from app.config import BATCH_LIMIT
-from app.web.errors import ERROR_RESPONSES, ApiError
+from app.web.errors import ERROR_RESPONSES
+from app.web.jobs import Jobs
 from app.web.jsonio import (
     FastJSONResponse,
-    parse_body,
     raw_json_body,
     read_body,
     request_body_spec,
 )
 from app.web.routes import RequestRoute
-from mesh_normal.triangle import triangle_normal
 
 router = APIRouter(
     prefix="/api",
@@ -102,55 +100,14 @@ async def get_normal_csv(
     response_model=BatchResult,
     openapi_extra=request_body_spec(BatchRequest),
 )
-async def post_normals(request: Request) -> FastJSONResponse:
+async def post_normals(request: Request) -> Response:
     """Normals of up to 100,000 triangles, in input order."""
     raw = await raw_json_body(request)
-    # Parsing and computing a full batch takes a while: keep the event loop free meanwhile.
-    content = await run_in_threadpool(_batch, raw)
-    return FastJSONResponse(content)
-
-
-def _batch(raw: bytes) -> dict[str, Any]:
-    # Imported here, not at the top: NumPy is for batches only, and importing it would add
-    # to every start-up of the server (the calculator page and /api/normal never need it).
-    import numpy as np
-
-    from mesh_normal.triangle_batch import triangle_normals
-
-    refuse_oversized_batch(raw)
-    body = parse_body(raw, BatchRequest)
-    triangles = np.array(body.triangles, dtype=np.float64).reshape(-1, 3, 3)
-    batch = triangle_normals(triangles, swap_winding=body.swap_winding)
-    exact_rows = {
-        int(row): triangle_normal(*triangles[row].tolist(), swap_winding=body.swap_winding)
-        for row in np.flatnonzero(batch.out_of_range)
-    }
-    return batch_payload(batch, exact_rows)
-
-
-#: A JSON string, escapes included (linear: each character matches one way).
-_STRING = re.compile(rb'"(?:[^"\\]|\\.)*"')
-
-
-def refuse_oversized_batch(raw: bytes) -> None:
-    """Refuse a batch of more than ``BATCH_LIMIT`` triangles before it is parsed.
-
-    Parsing builds every number as an object (about 70 times the body's size for 1.9 million
-    triangles); counting brackets reads the bytes once. A valid body holds exactly
-    ``4 * n + 1`` of them for ``n`` triangles (keys are ``triangles`` and ``swap_winding``,
-    with no bracket), so more than ``4 * BATCH_LIMIT + 1`` is over the limit or not a batch.
-    """
-    most = 4 * BATCH_LIMIT + 1
-    brackets = raw.count(b"[")
-    if brackets > most and b'"' in raw:  # brackets inside strings are no triangles
-        brackets = _STRING.sub(b'""', raw).count(b"[")
-    if brackets > most:
-        raise ApiError(
-            413,
-            f"A batch holds at most {BATCH_LIMIT:,} triangles (about {(brackets - 1) // 4:,} "
-            "were sent); split it into several requests.",
-            "triangles",
-        )
+    if len(raw) <= batch.INLINE_BYTES:
+        return FastJSONResponse(await run_in_threadpool(batch.payload, raw))
+    jobs: Jobs = request.app.state.jobs
+    text = await jobs.run(request, batch.estimate(raw), batch.job, raw)
+    return Response(text, media_type="application/json")
 
 
 @router.get(
