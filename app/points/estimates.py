@@ -8,7 +8,10 @@ The factors below are that per point over the fewest bytes a point takes in each
 (binary PLY and PCD: 12, three floats; LAS: 20, point format 0; text: about 20; LAZ: about 4),
 plus the file itself, rounded up: binary PLY of doubles (24 bytes a point) measured 38 a byte
 at 300,000 points with the fixed part, 9.3 without, and XYZ text of 59 bytes a point 4.2.
-Lower them here, in this one table, when they are measured per format.
+Lower them here, in this one table, when they are measured per format. The readers charge
+points they unpack from compressed data (a PCD's LZF, LAZ) at the same 213 bytes a point
+(``mesh_normal.points.cloud.POINT_JOB_BYTES``) to the upload's expansion budget, so a file
+that packs more points than its size allows is refused before this estimate could be wrong.
 """
 
 from __future__ import annotations
