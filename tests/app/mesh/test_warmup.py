@@ -117,7 +117,9 @@ import mesh_normal.kernels as kernels
 tetra = [u for u in warmup.uploads() if u.filename in ("warm.stl", "warm.obj")]
 small = [*tetra, *(u for u in warmup.uploads() if u.filename == "ascii.stl")]
 open_box = warmup.Upload(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\n", "open.obj")
-assert set(_STARTUP_JOBS) == {work.report, work.fix, work.normals}, _STARTUP_JOBS
+from app.calculator import batch
+assert set(_STARTUP_JOBS) == {work.report, work.fix, work.normals, batch.job}, _STARTUP_JOBS
+assert batch.job(b'{"triangles": [[[0, 0, 0], [1, 0, 0], [0, 1, 0]]] }').startswith(b'{"results"')
 for upload in [*small, open_box]:
     assert warmup.small_file(upload), upload.filename
     work.report(upload, None)
