@@ -15,7 +15,7 @@ from fastapi import APIRouter, Path, Query, Request
 from fastapi.responses import Response, StreamingResponse
 
 from app.mesh.estimates import Task, estimate
-from app.mesh.samples import SAMPLES, sample
+from app.mesh.samples import SAMPLES, computed, sample
 from app.mesh.uploads import (
     UPLOAD_BODY,
     UPLOAD_WELD_BODY,
@@ -122,11 +122,15 @@ SampleName = Annotated[
     responses={404: {"description": "There is no sample of that name.", **_NOT_FOUND}},
 )
 async def get_mesh_sample(request: Request, name: SampleName) -> FastJSONResponse:
-    """The report on one of the mesh page's samples: what POST /api/mesh answers for its file."""
+    """The report on one of the mesh page's samples: what POST /api/mesh answers for its file
+    (computed once, then served from memory)."""
     from app.mesh import work
 
     upload = sample(name).upload()
-    return FastJSONResponse(await run_job(request, "report", upload, work.report, None))
+    report = await computed(request).get(
+        ("report", name), lambda: run_job(request, "report", upload, work.report, None)
+    )
+    return FastJSONResponse(report)
 
 
 @router.post(

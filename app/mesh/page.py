@@ -4,7 +4,8 @@
 of one mesh) answers with the whole page and its report, so it works without JavaScript.
 ``POST /mesh?part=report`` answers with the report alone, which the page's script swaps in.
 ``GET /mesh/sample/{name}`` is the page for one of :mod:`app.mesh.samples`, as if uploaded;
-``GET /mesh/sample/{name}/file`` is that sample's file.
+``GET /mesh/sample/{name}/file`` is that sample's file. What the jobs make of a sample is
+computed once and then served from memory (:class:`app.mesh.samples.Computed`).
 The server keeps nothing: the page's downloads send the files again to the JSON API.
 """
 
@@ -16,7 +17,7 @@ from fastapi import APIRouter, Query, Request
 from fastapi.responses import HTMLResponse, Response
 
 from app.mesh.api import MEDIA_TYPES, FixFormat, attachment, run_job, stem
-from app.mesh.samples import SAMPLES, sample
+from app.mesh.samples import SAMPLES, computed, sample
 from app.mesh.uploads import read_upload
 from app.web.errors import ApiError
 from app.web.links import public_url
@@ -88,8 +89,12 @@ async def mesh_sample(request: Request, name: str) -> HTMLResponse:
     chosen = sample(name)
     upload = chosen.upload()
     context = _form_context(request)
+    base_url = public_url("/")
     context.update(
-        await run_job(request, "page", upload, work.page, stem(upload.filename), public_url("/"))
+        await computed(request).get(
+            ("page", chosen.name, base_url),
+            lambda: run_job(request, "page", upload, work.page, stem(upload.filename), base_url),
+        )
     )
     context["sample"] = chosen
     fragment = request.query_params.get("part") == "report"
@@ -127,6 +132,9 @@ async def mesh_sample_file(
     from app.mesh import work
 
     args = (file_format, normals or "auto", "angle", 30.0, winding, None)
-    body, written, headers = await run_job(request, "fix", chosen.upload(), work.export, *args)
-    headers.update(attachment(f"{chosen.name}-{'fixed' if fix else 'export'}.{written}"))
+    body, written, said = await computed(request).get(
+        ("export", chosen.name, *args),
+        lambda: run_job(request, "fix", chosen.upload(), work.export, *args),
+    )
+    headers = {**said, **attachment(f"{chosen.name}-{'fixed' if fix else 'export'}.{written}")}
     return Response(body.data, media_type=MEDIA_TYPES[written], headers=headers)

@@ -2,14 +2,20 @@
 
 Each is a few hundred bytes of OBJ or ASCII PLY, written from the faces below when asked for;
 ``GET /mesh/sample/{name}`` reports on it exactly as an upload of the same file would be.
+What the jobs make of a sample (its report, its page, its file written again) is the same every
+time: each is computed once, by a heavy job, and then served from memory (:class:`Computed`),
+so that a visitor who asks for the samples again and again costs no job slot.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+import asyncio
+from collections.abc import Awaitable, Callable, Hashable, Sequence
 from dataclasses import dataclass
 from functools import cache
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, TypeVar
+
+from starlette.requests import Request
 
 from app.mesh.uploads import Upload
 from app.web.errors import ApiError
@@ -21,6 +27,7 @@ if TYPE_CHECKING:  # NumPy is imported by the functions that make a file, not at
     Points = NDArray[np.float64]
 
 Faces = list[tuple[int, int, int]]
+Value = TypeVar("Value")
 
 
 @cache
@@ -245,4 +252,53 @@ def sample(name: str) -> Sample:
             + ".",
             "name",
         )
+    return found
+
+
+#: The status of a job whose client hung up (:mod:`app.web.jobs`).
+CLIENT_LEFT = 499
+
+
+class Computed:
+    """What the jobs made of the samples, by key: each computed once, by the first request
+    that asks; the requests that ask meanwhile wait for that same computation."""
+
+    def __init__(self) -> None:
+        self.values: dict[Hashable, Any] = {}
+        self._pending: dict[Hashable, asyncio.Task[Any]] = {}
+
+    async def get(self, key: Hashable, compute: Callable[[], Awaitable[Value]]) -> Value:
+        """The value for ``key``, from ``compute()`` (a job for the asking request) the first
+        time. When the request that started it hangs up (its job stopped), the next one
+        waiting starts again; any other failure is every waiting request's answer."""
+        while True:
+            if key in self.values:
+                value: Value = self.values[key]
+                return value
+            task = self._pending.get(key)
+            started = task is None or task.get_loop() is not asyncio.get_running_loop()
+            if task is None or started:
+                task = asyncio.ensure_future(compute())
+                self._pending[key] = task
+                task.add_done_callback(lambda done: self._done(key, done))
+            try:
+                # Shielded: a waiting request that is cancelled must not cancel the others' job.
+                return await asyncio.shield(task)
+            except ApiError as error:
+                if started or error.status_code != CLIENT_LEFT:
+                    raise
+
+    def _done(self, key: Hashable, task: asyncio.Task[Any]) -> None:
+        if self._pending.get(key) is task:
+            del self._pending[key]
+        if not task.cancelled() and task.exception() is None:
+            self.values[key] = task.result()
+
+
+def computed(request: Request) -> Computed:
+    """The app's :class:`Computed`, made at its first use."""
+    state = request.app.state
+    found: Computed | None = getattr(state, "sample_values", None)
+    if found is None:
+        found = state.sample_values = Computed()
     return found

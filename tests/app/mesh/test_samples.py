@@ -3,12 +3,24 @@ the sample's page, its JSON twin and its file are those of an upload of the same
 
 from __future__ import annotations
 
+import asyncio
+import functools
 import re
+import time
+from collections import Counter
+from collections.abc import Awaitable, Callable
+from typing import Any
 
+import httpx
 import pytest
+from fastapi import FastAPI
 from fastapi.testclient import TestClient
 
-from app.mesh.samples import CUBE_FACES, SAMPLES
+from app.config import Settings
+from app.main import create_app
+from app.mesh import work
+from app.mesh.samples import CUBE_FACES, SAMPLES, Computed
+from app.web.errors import ApiError
 from mesh_normal.files import read_mesh
 from tests.app.mesh.test_page import json_block, post
 from tests.conftest import Page, assert_error
@@ -172,3 +184,119 @@ def test_captions_and_stored_normals_read_plainly(client: TestClient) -> None:
         "weighting, not a problem), 3 point the other way (see the diagnosis)."
     )
     assert "3 normals stored in the file point the other way" in page.text("problem-file_normals")
+
+
+# --- computed once, then served from memory ------------------------------------------------------
+
+
+def counting_app(monkeypatch: pytest.MonkeyPatch) -> tuple[FastAPI, Counter[tuple[str, str]]]:
+    """An app whose jobs run in its threads, each taking a moment (so that requests overlap),
+    and the jobs it ran, by function and sample."""
+    app = create_app(settings=Settings(in_process=True))
+    jobs: Counter[tuple[str, str]] = Counter()
+    run = app.state.jobs.run
+
+    async def counting(request: Any, estimate: int, function: Any, *args: Any) -> Any:
+        jobs[function.__name__, args[0].filename] += 1
+        return await run(request, estimate, function, *args)
+
+    def slow(real: Callable[..., Any]) -> Callable[..., Any]:
+        @functools.wraps(real)
+        def slowly(*args: Any) -> Any:
+            time.sleep(0.2)
+            return real(*args)
+
+        return slowly
+
+    app.state.jobs.run = counting
+    for name in ("report", "page", "export"):
+        monkeypatch.setattr(work, name, slow(getattr(work, name)))
+    return app, jobs
+
+
+def test_twenty_requests_for_samples_run_one_job_each(monkeypatch: pytest.MonkeyPatch) -> None:
+    app, jobs = counting_app(monkeypatch)
+    paths = [
+        f"{prefix}/{name}{suffix}"
+        for name in ("cube", "inside-out")
+        for prefix, suffix in (
+            ("/api/mesh/sample", ""),
+            ("/mesh/sample", ""),
+            ("/mesh/sample", "/file?format=stl&fix=true"),
+        )
+    ]
+
+    async def scenario() -> list[list[httpx.Response]]:
+        transport = httpx.ASGITransport(app=app)
+        async with httpx.AsyncClient(transport=transport, base_url="http://test") as client:
+            rounds = []
+            for _ in range(2):  # all at once, then all again once computed
+                requests = [client.get(paths[index % len(paths)]) for index in range(20)]
+                rounds.append(list(await asyncio.gather(*requests)))
+            return rounds
+
+    rounds = asyncio.run(scenario())
+    expected = {
+        (function, f"{name}.obj"): 1
+        for function in ("report", "page", "export")
+        for name in ("cube", "inside-out")
+    }
+    assert dict(jobs) == expected
+    answers: dict[str, set[tuple[int, bytes, str | None]]] = {}
+    for answer in rounds[0] + rounds[1]:
+        said = (answer.status_code, answer.content, answer.headers.get("content-disposition"))
+        answers.setdefault(str(answer.url), set()).add(said)
+    assert len(answers) == len(paths)
+    for url, said in answers.items():
+        assert len(said) == 1 and next(iter(said))[0] == 200, url  # the same answer each time
+    fixed = next(iter(answers["http://test/mesh/sample/cube/file?format=stl&fix=true"]))
+    assert fixed[2] == 'attachment; filename="cube-fixed.stl"'
+
+
+def test_a_failed_computation_is_every_waiters_answer_and_is_not_kept() -> None:
+    computed = Computed()
+    calls: list[int] = []
+
+    async def busy() -> int:
+        calls.append(1)
+        await asyncio.sleep(0.05)
+        raise ApiError(503, "Busy.")
+
+    async def fine() -> int:
+        calls.append(2)
+        return 7
+
+    async def scenario() -> tuple[list[int | BaseException], int]:
+        first = await asyncio.gather(
+            *[computed.get("k", busy) for _ in range(3)], return_exceptions=True
+        )
+        return first, await computed.get("k", fine)
+
+    failures, value = asyncio.run(scenario())
+    assert all(isinstance(f, ApiError) and f.status_code == 503 for f in failures)
+    assert (calls, value) == ([1, 2], 7)
+
+
+def test_when_the_first_client_leaves_the_next_one_computes() -> None:
+    computed = Computed()
+    calls: list[str] = []
+
+    def job(name: str, left: bool) -> Callable[[], Awaitable[str]]:
+        async def run() -> str:
+            calls.append(name)
+            await asyncio.sleep(0.05)
+            if left:
+                raise ApiError(499, "The client closed the connection before the answer.")
+            return name
+
+        return run
+
+    async def scenario() -> list[str | BaseException]:
+        first = asyncio.ensure_future(computed.get("k", job("first", True)))
+        await asyncio.sleep(0)
+        second = computed.get("k", job("second", False))
+        return await asyncio.gather(first, second, return_exceptions=True)
+
+    left, value = asyncio.run(scenario())
+    assert isinstance(left, ApiError) and left.status_code == 499
+    assert value == "second" and calls == ["first", "second"]
