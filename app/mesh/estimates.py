@@ -10,12 +10,13 @@ less.
 
 from __future__ import annotations
 
-import io
-import zipfile
 from typing import Literal
 
 from app.mesh.uploads import Upload
-from mesh_normal.files.archive import is_zip, unpack_limit
+from app.web.errors import ApiError
+from mesh_normal.files.archive import is_zip, open_zip
+from mesh_normal.files.errors import MeshFileError
+from mesh_normal.files.expansion import expansion_limit
 from mesh_normal.files.formats import suffix_format
 
 #: Peak memory of reading and analysing a mesh, per byte of its file, by format (the larger
@@ -53,7 +54,8 @@ JOB_OVERHEAD = 64 * 2**20
 
 
 def estimate(upload: Upload, task: Task) -> int:
-    """The bytes of memory this upload's job may take at its peak."""
+    """The bytes of memory this upload's job may take at its peak. A .zip whose directory
+    lists more members than the reader accepts is refused here, before any work (a 413)."""
     files = upload.parts or ((upload.filename, upload.data),)
     total = 0.0
     for name, data in files:
@@ -74,10 +76,13 @@ def _size_and_factor(name: str | None, data: bytes) -> tuple[int, float]:
 
 def _zip_size(data: bytes) -> int:
     """The members' unpacked size, as the archive's directory states it (capped where the
-    reader stops); a zip that cannot be opened counts as its own size (the reader refuses it)."""
+    reader stops: its expansion budget); a zip that cannot be opened counts as its own size
+    (the reader refuses it). The directory is counted before it is parsed (``open_zip``)."""
     try:
-        with zipfile.ZipFile(io.BytesIO(data)) as archive:
+        with open_zip(data) as archive:
             unpacked = sum(info.file_size for info in archive.infolist())
-    except (zipfile.BadZipFile, OSError, ValueError):
+    except MeshFileError as error:
+        if error.status_code == 413:  # too many members: refused now, in the server
+            raise ApiError(413, str(error), "file") from None
         return len(data)
-    return min(max(unpacked, len(data)), unpack_limit(len(data)))
+    return min(max(unpacked, len(data)), expansion_limit(len(data)))

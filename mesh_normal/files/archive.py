@@ -6,11 +6,12 @@ The one member whose extension names a mesh format is read; a ``.gltf`` finds th
 URIs name among the other members, read only when asked for, so images cost nothing. The
 mesh's first note names the files read and those not needed.
 
-Guarded against zip bombs: at most :data:`MAX_MEMBERS` members; a total uncompressed size of
-at most :func:`unpack_limit` (:data:`MAX_RATIO` times the archive, at least :data:`MIN_LIMIT`,
-at most :data:`MAX_TOTAL`), checked on the sizes the archive states and again on the bytes
-really read; no member named outside the archive (``..``, absolute paths, drive letters), no
-name twice, no ``.zip`` inside (one level only, so one budget).
+Guarded against zip bombs: at most :data:`MAX_MEMBERS` members, counted in the archive's
+directory before :mod:`zipfile` parses it (:func:`open_zip`); what the members unpack to is
+charged to the input's one expansion budget (:mod:`mesh_normal.files.expansion`) as it is
+unpacked, so a member that lies about its size is stopped as it unpacks; no member named
+outside the archive (``..``, absolute paths, drive letters), no name twice, no ``.zip`` inside
+(a 3MF inside charges the same budget).
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ import zlib
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from typing import TYPE_CHECKING
 
+from mesh_normal.files import expansion
 from mesh_normal.files.errors import MeshFileError, failure_reason
 from mesh_normal.files.formats import suffix_format
 
@@ -36,10 +38,13 @@ if TYPE_CHECKING:  # not NumPy at import: the app checks archives' names and siz
 
 #: Most members an archive may hold.
 MAX_MEMBERS = 1000
-#: Most bytes all members may hold together, uncompressed.
-MAX_TOTAL = 1 << 30
-#: Most uncompressed bytes per byte of archive (mesh files compress about 2 to 10 times).
-MAX_RATIO = 50
+#: Memory a member takes per byte unpacked, by the format it is read as: its bytes while they
+#: are read, and the reader's peak (``make bench-memory``: binary STL 5.1, OBJ 4.9, PLY 4.9,
+#: OFF 6.0, GLB 5.9). Other members (a glTF's buffers, a 3MF's parts) are held as bytes: 1,
+#: and their readers charge what they make of them.
+MEMORY_PER_BYTE: dict[str, float] = {"stl": 6, "obj": 6, "ply": 6, "off": 7, "glb": 7, "gltf": 7}
+#: Bytes unpacked (and charged) at a time.
+CHUNK = 1 << 20
 #: What the standard library raises for a damaged archive or member (bad CRC, a broken deflate
 #: stream, data cut short), an encrypted one, or a version or method it does not have.
 UNPACK_ERRORS = (
@@ -52,28 +57,21 @@ UNPACK_ERRORS = (
     struct.error,
 )
 
-#: What any archive may unpack to, whatever its ratio: a small file compresses well.
-MIN_LIMIT = 1 << 20
-
 
 def is_zip(data: bytes) -> bool:
     """Whether the bytes are a ``.zip`` archive (a local file header, or an empty archive)."""
     return data.startswith((b"PK\x03\x04", b"PK\x05\x06"))
 
 
-def unpack_limit(size: int) -> int:
-    """Most bytes an archive of ``size`` bytes may unpack to."""
-    return min(MAX_TOTAL, max(MIN_LIMIT, MAX_RATIO * size))
-
-
 def read_zip(data: bytes, read_file: ReadFile) -> LoadedMesh:
     """Read the one mesh file in a ``.zip`` (see the module docstring); ``read_file(data,
     name)`` reads a member other than a ``.gltf`` (it is ``read_mesh``, passed in because
     ``read_mesh`` calls this)."""
-    with opened_zip(data, "The .zip file could not be opened") as (archive, members, budget):
+    with expansion.expanding(len(data)), opened_zip(data, ".zip file") as (archive, members):
         chosen = mesh_name(members, "The .zip file holds")
-        first = budget.read(archive, members[chosen])
-        if is_zip(first) and suffix_format(chosen) != "3mf":  # one level: no fresh budget
+        per_byte = MEMORY_PER_BYTE.get(suffix_format(chosen) or "", 1)
+        first = unpack(archive, members[chosen], ".zip file", per_byte)
+        if is_zip(first) and suffix_format(chosen) != "3mf":  # one level
             raise MeshFileError(
                 f"The member {chosen} of the .zip file is itself a .zip; send the mesh "
                 "file's own archive."
@@ -81,7 +79,7 @@ def read_zip(data: bytes, read_file: ReadFile) -> LoadedMesh:
 
         def fetch(name: str) -> bytes | None:
             info = members.get(name)
-            return None if info is None else budget.read(archive, info)
+            return None if info is None else unpack(archive, info, ".zip file")
 
         mesh, used = read_chosen(chosen, first, fetch, read_file)
     return with_note(mesh, chosen, used, members, "from the .zip file")
@@ -220,58 +218,122 @@ def _listed(names: list[str]) -> str:
     return " and ".join(filter(None, (", ".join(shown[:-1]), shown[-1])))
 
 
+#: The end of central directory record, the zip64 one and its locator (APPNOTE 4.3.14-16).
+_END = struct.Struct("<4s4H2LH")
+_LOCATOR = struct.Struct("<4sLQL")
+_END64 = struct.Struct("<4sQ2H2L4Q")
+#: A central directory record: its fixed part, and where its three lengths are.
+_ENTRY_SIZE = 46
+_LENGTHS = struct.Struct("<3H")
+
+
+def listed_members(data: bytes) -> tuple[int, int] | None:
+    """The members the archive in ``data`` states in its end record, and how many records its
+    directory holds, counted no further than ``MAX_MEMBERS + 1``; ``None`` for bytes with no
+    end record. Bounded: the end record is found as :mod:`zipfile` finds it (in the last 22
+    bytes and up to 64 KB of comment); its count may lie, and :mod:`zipfile` reads the
+    directory by its size, so the directory's records are walked as :mod:`zipfile` will."""
+    end = _end_record(data)
+    if end is None:
+        return None
+    stated, size, start = end
+    position, count = start, 0
+    while 0 <= position < start + size and count <= MAX_MEMBERS:
+        if position + _ENTRY_SIZE > len(data) or not data.startswith(b"PK\x01\x02", position):
+            break  # zipfile refuses the directory here
+        count += 1
+        position += _ENTRY_SIZE + sum(_LENGTHS.unpack_from(data, position + 28))
+    return stated, count
+
+
+def _end_record(data: bytes) -> tuple[int, int, int] | None:
+    """The members the end record states, the directory's size and where it starts."""
+    at = len(data) - _END.size
+    if not (at >= 0 and data.startswith(b"PK\x05\x06", at) and data.endswith(b"\0\0")):
+        at = data.rfind(b"PK\x05\x06", max(len(data) - (1 << 16) - _END.size, 0))
+        if at < 0 or at + _END.size > len(data):
+            return None
+    stated, size = _END.unpack_from(data, at)[4:6]
+    start = at - size
+    if at >= _LOCATOR.size + _END64.size:
+        signature, disk, _, disks = _LOCATOR.unpack_from(data, at - _LOCATOR.size)
+        end64 = _END64.unpack_from(data, at - _LOCATOR.size - _END64.size)
+        if signature == b"PK\x06\x07" and disk == 0 and disks <= 1 and end64[0] == b"PK\x06\x06":
+            stated, size = end64[7:9]
+            start = at - _LOCATOR.size - _END64.size - size
+    return stated, size, start
+
+
+def open_zip(data: bytes, title: str = ".zip file") -> zipfile.ZipFile:
+    """The archive in ``data``, once its directory lists at most :data:`MAX_MEMBERS` members
+    (:func:`listed_members`, before :mod:`zipfile` parses it: a directory of a million
+    entries takes seconds and a gigabyte to parse). ``title`` names it in the sentences."""
+    stated, count = listed_members(data) or (0, 0)
+    if stated > MAX_MEMBERS or count > MAX_MEMBERS:
+        listed = f"{stated:,}" if stated > MAX_MEMBERS else f"more than {MAX_MEMBERS:,}"
+        raise MeshFileError(f"The {title} lists {listed} members; at most {MAX_MEMBERS:,}.", 413)
+    try:
+        return zipfile.ZipFile(io.BytesIO(data))
+    except UNPACK_ERRORS as error:
+        raise MeshFileError(f"The {title} could not be opened: {unpack_reason(error)}.") from error
+
+
+def unpack_reason(error: Exception) -> str:
+    """What :mod:`zipfile` or :mod:`zlib` found wrong, in our words (theirs name internals)."""
+    text = str(error).lower()
+    if isinstance(error, RuntimeError) and ("encrypted" in text or "password" in text):
+        return "it is encrypted"
+    if isinstance(error, NotImplementedError) or "not supported" in text:
+        return "it uses a compression method or zip feature that is not supported"
+    if "crc" in text:
+        return "its data does not match its checksum"
+    if isinstance(error, zlib.error | EOFError):
+        return "its compressed data is damaged or cut short"
+    if "not a zip file" in text:
+        return "it is not a zip archive, or its end is missing"
+    return "its directory or headers are damaged"
+
+
 @contextlib.contextmanager
 def opened_zip(
-    data: bytes, cannot_open: str
-) -> Iterator[tuple[zipfile.ZipFile, dict[str, zipfile.ZipInfo], Budget]]:
-    """The archive in ``data``, its members once they pass the guards, and the budget of bytes
-    it may unpack to; ``cannot_open`` starts the sentence for bytes that are no zip."""
-    try:
-        archive = zipfile.ZipFile(io.BytesIO(data))
-    except UNPACK_ERRORS as error:
-        raise MeshFileError(f"{cannot_open}: {error}.") from error
-    with archive:
-        yield archive, checked_members(archive, len(data)), Budget(unpack_limit(len(data)))
+    data: bytes, title: str
+) -> Iterator[tuple[zipfile.ZipFile, dict[str, zipfile.ZipInfo]]]:
+    """The archive in ``data`` (:func:`open_zip`) and its members once they pass the guards;
+    ``title`` names it in the sentences (``.zip file``, ``3MF file``)."""
+    with open_zip(data, title) as archive:
+        yield archive, checked_members(archive, title)
 
 
-def checked_members(archive: zipfile.ZipFile, size: int) -> dict[str, zipfile.ZipInfo]:
-    """The archive's files by normalised name, once its names and sizes pass the guards."""
-    infos = archive.infolist()
-    if len(infos) > MAX_MEMBERS:
-        raise MeshFileError(f"The .zip file holds {len(infos):,} members; at most {MAX_MEMBERS:,}.")
-    total = sum(info.file_size for info in infos)
-    if total > unpack_limit(size):
-        raise MeshFileError(
-            f"The .zip file would unpack to {total:,} bytes, more than this reader accepts "
-            f"({unpack_limit(size):,}: {MAX_RATIO} times the archive, at most {MAX_TOTAL:,})."
-        )
+def checked_members(archive: zipfile.ZipFile, title: str) -> dict[str, zipfile.ZipInfo]:
+    """The archive's files by normalised name, once their names pass the guards."""
     members: dict[str, zipfile.ZipInfo] = {}
-    for info in infos:
-        name = member_name(info.filename, "The .zip file names a member outside itself")
+    for info in archive.infolist():
+        name = member_name(info.filename, f"The {title} names a member outside itself")
         if info.is_dir():
             continue
         if name in members:
-            raise MeshFileError(f"The .zip file holds two members named {name[:100]}.")
+            raise MeshFileError(f"The {title} holds two members named {name[:100]}.")
         members[name] = info
     return members
 
 
-@dataclasses.dataclass(slots=True)
-class Budget:
-    """Bytes left to unpack; the archive's stated sizes may lie, so what is read counts."""
-
-    left: int
-
-    def read(self, archive: zipfile.ZipFile, info: zipfile.ZipInfo) -> bytes:
-        try:
-            with archive.open(info) as file:
-                data = file.read(self.left + 1)
-        except UNPACK_ERRORS as error:
-            reason = str(error).strip().rstrip(".") or type(error).__name__
-            raise MeshFileError(
-                f"The member {info.filename} of the archive could not be unpacked: {reason}."
-            ) from error
-        if len(data) > self.left:
-            raise MeshFileError("The .zip file unpacks to more than its members state.")
-        self.left -= len(data)
-        return data
+def unpack(
+    archive: zipfile.ZipFile, info: zipfile.ZipInfo, title: str, per_byte: float = 1
+) -> bytes:
+    """The member ``info`` unpacked, charged to the input's expansion budget at ``per_byte``
+    bytes of memory a byte, a chunk at a time: the sizes an archive states may lie."""
+    what = f"unpacking {info.filename[:100]} from the {title}"
+    chunks: list[bytes] = []
+    try:
+        with archive.open(info) as file:
+            while chunk := file.read(CHUNK):
+                expansion.charge(int(len(chunk) * per_byte), what)
+                chunks.append(chunk)
+    except MeshFileError:  # the budget's: a ValueError too
+        raise
+    except UNPACK_ERRORS as error:
+        raise MeshFileError(
+            f"The member {info.filename[:100]} of the {title} could not be unpacked: "
+            f"{unpack_reason(error)}."
+        ) from error
+    return b"".join(chunks)

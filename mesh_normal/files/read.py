@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Protocol
 from urllib.parse import unquote
 
+from mesh_normal.files import expansion
 from mesh_normal.files.archive import is_zip
 from mesh_normal.files.errors import MeshFileError, failure_reason, unsupported
 from mesh_normal.files.formats import FORMATS, SUFFIXES, suffix_format
@@ -46,8 +47,10 @@ def read_mesh(source: MeshSource, filename: str | None = None) -> LoadedMesh:
     Raises
     ------
     MeshFileError
-        With one sentence naming the problem: 400 for a broken file or bad content, 415 for
-        a format that is unknown or not supported.
+        With one sentence naming the problem: 400 for a broken file or bad content, 413 for
+        one that expands past its budget (:mod:`mesh_normal.files.expansion`: a zip bomb, a
+        3MF that places one object thousands of times), 415 for a format that is unknown or
+        not supported.
     OSError
         A path that cannot be opened, as Python raises it (``FileNotFoundError``,
         ``PermissionError``, ``IsADirectoryError``), like ``open`` and ``numpy.load``: the file
@@ -59,6 +62,11 @@ def read_mesh(source: MeshSource, filename: str | None = None) -> LoadedMesh:
     if mapped is not None:
         return read_mapped(mapped, filename or Path(source).name)  # type: ignore[arg-type]
     data, filename = source_bytes(source, filename)
+    with expansion.expanding(len(data)):  # one budget for all it expands into
+        return _read_bytes(data, filename, source)
+
+
+def _read_bytes(data: bytes, filename: str | None, source: object) -> LoadedMesh:
     if not data:
         raise MeshFileError("The file is empty (0 bytes).")
     if data.startswith(b"\xef\xbb\xbf"):  # a UTF-8 byte order mark: text formats only
@@ -158,7 +166,9 @@ def read_mesh_files(files: Iterable[tuple[str | None, bytes]]) -> LoadedMesh:
     """
     from mesh_normal.files.archive import read_files
 
-    return read_files(list(files), read_mesh)
+    parts = list(files)
+    with expansion.expanding(sum(len(data) for _, data in parts)):
+        return read_files(parts, read_mesh)
 
 
 def _beside(path: Path) -> Callable[[str], bytes | None]:

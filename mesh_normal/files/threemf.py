@@ -12,9 +12,13 @@ Colours: a triangle's ``pid`` and ``p1`` (or its object's ``pid`` and ``pindex``
 become its face colour, uint8 RGBA. They are kept when every placed triangle has one; a
 triangle with a colour per corner (``p2``, ``p3``) keeps its first corner's, and a note says so.
 
-The package is opened with the guards of :mod:`mesh_normal.files.archive` (member count, unpack
-limit, names outside the archive); documents with a DTD are refused, which rules out entity
-expansion.
+The package is opened with the guards of :mod:`mesh_normal.files.archive` (member count, names
+outside the archive), and everything it expands into is charged to the input's one budget
+(:mod:`mesh_normal.files.expansion`): the parts as they unpack, the XML as it is parsed, the
+triangles the build places before they are placed. XML that declares a DTD is refused, in any
+encoding (:mod:`defusedxml`), which rules out entity expansion. The model is parsed as a
+stream: each ``<vertex>`` and ``<triangle>`` becomes numbers as it is read and is dropped, so
+the tree keeps only the small elements around them.
 """
 
 from __future__ import annotations
@@ -22,16 +26,19 @@ from __future__ import annotations
 import functools
 import io
 import posixpath
-import re
 import xml.etree.ElementTree as ET
 import zipfile
-from collections.abc import Callable, Iterator
-from dataclasses import dataclass
+from array import array
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass, field
 
 import numpy as np
+from defusedxml import DefusedXmlException
+from defusedxml.ElementTree import iterparse
 from numpy.typing import NDArray
 
-from mesh_normal.files.archive import UNPACK_ERRORS, Budget, opened_zip
+from mesh_normal.files import expansion
+from mesh_normal.files.archive import UNPACK_ERRORS, open_zip, opened_zip, unpack
 from mesh_normal.files.errors import MeshFileError, unsupported
 from mesh_normal.files.loaded import MAX_TRIANGLES, LoadedMesh, build
 
@@ -43,13 +50,32 @@ _MODEL_RELATION = "http://schemas.microsoft.com/3dmanufacturing/2013/01/3dmodel"
 #: Deepest nesting of components (a cycle would be infinite).
 MAX_DEPTH = 32
 
-_DOCTYPE = re.compile(rb"<!DOCTYPE|<!ENTITY", re.IGNORECASE)
+#: Memory per byte of XML, charged before it is parsed: the numbers of its vertices and
+#: triangles (24 bytes each in arrays, from at least 28 bytes of XML each).
+XML_PER_BYTE = 1
+#: Memory of each element the parse keeps (all but vertices and triangles; a triangle's colour
+#: attributes count as one), measured with tracemalloc: 330 to 430 bytes for an element with
+#: one to four attributes, and the object or component it becomes.
+KEPT_BYTES = 640
+#: Kept elements charged at a time.
+KEPT_BATCH = 4096
+#: Memory of each triangle and each vertex the build places, in the mesh's arrays and the
+#: report's: about 250 bytes a triangle measured, with its share of vertices.
+PLACED_TRIANGLE_BYTES = 250
+PLACED_VERTEX_BYTES = 100
+
+#: Where objects and meshes are, by local names below the root, and what the elements below
+#: a mesh hold.
+_OBJECT = ["resources", "object"]
+_MESH = ["resources", "object", "mesh"]
+_LEAVES = {"vertices": "vertex", "triangles": "triangle"}
+_COLOUR_KEYS = ("pid", "p1", "p2", "p3")
 
 
 def is_3mf(data: bytes) -> bool:
     """Whether a zip archive's bytes are a 3MF package (its members name the model part)."""
     try:
-        with zipfile.ZipFile(io.BytesIO(data)) as archive:
+        with open_zip(data) as archive:
             names = {info.filename.lower().lstrip("/") for info in archive.infolist()}
             if MODEL_PART.lower() in names:
                 return True
@@ -60,7 +86,7 @@ def is_3mf(data: bytes) -> bool:
                 return False
             with archive.open(types) as file:  # bounded: a content-types part is tiny
                 return MODEL_TYPE.encode() in file.read(1 << 16)
-    except (*UNPACK_ERRORS, OSError):  # a damaged zip (names that are not UTF-8 too) is no 3MF
+    except (MeshFileError, *UNPACK_ERRORS, OSError):  # a damaged zip is no 3MF; the reader says why
         return False
 
 
@@ -80,10 +106,15 @@ class _Object:
 
 def read_3mf(data: bytes) -> LoadedMesh:
     """Read a 3MF package (see the module docstring)."""
-    root = _parse(_model_bytes(data))
+    with expansion.expanding(len(data)):
+        return _read(data)
+
+
+def _read(data: bytes) -> LoadedMesh:
+    root, meshes = _parse(_model_bytes(data))
     palettes = _palettes(root)
     objects = {
-        obj.get("id", ""): _object(obj, number, palettes)
+        obj.get("id", ""): _object(obj, number, palettes, meshes)
         for number, obj in enumerate(root.iterfind("{*}resources/{*}object"), start=1)
     }
     items = list(root.iterfind("{*}build/{*}item"))
@@ -91,9 +122,15 @@ def read_3mf(data: bytes) -> LoadedMesh:
         raise MeshFileError("The 3MF file's build names no objects to make.")
     # Counted before anything is placed: components that place components can multiply a few
     # kilobytes into billions of placements.
-    memo: dict[str, int] = {}
-    if sum(_cost(objects, item.get("objectid", ""), memo, 0) for item in items) > MAX_TRIANGLES:
+    memo: dict[str, tuple[int, int]] = {}
+    costs = [_cost(objects, item.get("objectid", ""), memo, 0) for item in items]
+    triangles, vertices = sum(cost[0] for cost in costs), sum(cost[1] for cost in costs)
+    if triangles > MAX_TRIANGLES:
         raise MeshFileError(f"The 3MF file's build makes more than {MAX_TRIANGLES:,} triangles.")
+    expansion.charge(
+        triangles * PLACED_TRIANGLE_BYTES + vertices * PLACED_VERTEX_BYTES,
+        f"the 3MF file's build, placing {triangles:,} triangles and {vertices:,} vertices,",
+    )
     placed: list[tuple[_Object, NDArray[np.float64]]] = []
     owner: list[int] = []  # the build item of each placed mesh: one object of the report each
     triangles = 0
@@ -113,28 +150,24 @@ def read_3mf(data: bytes) -> LoadedMesh:
 
 
 def _model_bytes(data: bytes) -> bytes:
-    with opened_zip(data, "The 3MF file could not be opened as a zip") as (
-        archive,
-        members,
-        budget,
-    ):
+    with opened_zip(data, "3MF file") as (archive, members):
         by_lower = {name.lower(): info for name, info in members.items()}  # OPC: no case
-        part = _model_part_name(archive, by_lower, budget)
+        part = _model_part_name(archive, by_lower)
         info = by_lower.get(part.lower())
         if info is None:
             raise MeshFileError(f"The 3MF file has no model part ({part}).")
-        return budget.read(archive, info)
+        return unpack(archive, info, "3MF file")
 
 
-def _model_part_name(
-    archive: zipfile.ZipFile, members: dict[str, zipfile.ZipInfo], budget: Budget
-) -> str:
+def _model_part_name(archive: zipfile.ZipFile, members: dict[str, zipfile.ZipInfo]) -> str:
     """The model part ``_rels/.rels`` names, else the usual ``3D/3dmodel.model``."""
     rels = members.get("_rels/.rels")
     if rels is None:
         return MODEL_PART
     try:
-        root = _parse(budget.read(archive, rels))
+        root, _ = _parse(unpack(archive, rels, "3MF file"))
+    except expansion.ExpansionTooLarge:
+        raise
     except MeshFileError:
         return MODEL_PART  # a broken relationships part: the model may still be where usual
     for relation in root.iterfind("{*}Relationship"):
@@ -143,13 +176,101 @@ def _model_part_name(
     return MODEL_PART
 
 
-def _parse(xml: bytes) -> ET.Element:
-    if _DOCTYPE.search(xml[:4096]) or _DOCTYPE.search(xml):
-        raise MeshFileError("The 3MF file's XML declares a DTD, which this reader refuses.")
+@dataclass(slots=True)
+class _Leaves:
+    """The numbers of one ``<mesh>``'s vertices and triangles, and the colour attributes of
+    the triangles that have some (by row), read as the parser passes them."""
+
+    vertices: array[float] = field(default_factory=lambda: array("d"))
+    triangles: array[int] = field(default_factory=lambda: array("q"))
+    colours: dict[int, dict[str, str]] = field(default_factory=dict)
+
+
+def _parse(xml: bytes) -> tuple[ET.Element, dict[ET.Element, _Leaves]]:
+    """The XML's tree without its vertices and triangles, and those of each ``<mesh>``; XML
+    that declares a DTD or entities is refused, whatever its encoding."""
+    expansion.charge(
+        len(xml) * XML_PER_BYTE, f"parsing the 3MF file's XML ({expansion.megabytes(len(xml))})"
+    )
     try:
-        return ET.fromstring(xml)
+        return _streamed(xml)
+    except DefusedXmlException:
+        raise MeshFileError(
+            "The 3MF file's XML declares a DTD (or entities), which this reader refuses."
+        ) from None
     except ET.ParseError as error:
-        raise MeshFileError(f"The 3MF file's XML is broken: {error}.") from error
+        raise MeshFileError(f"The 3MF file's XML is broken: {error}.") from None
+    except MeshFileError:
+        raise
+    except ValueError:  # expat's "multi-byte encodings are not supported"
+        raise MeshFileError(
+            "The 3MF file's XML is in an encoding this reader does not support."
+        ) from None
+
+
+def _streamed(xml: bytes) -> tuple[ET.Element, dict[ET.Element, _Leaves]]:
+    meshes: dict[ET.Element, _Leaves] = {}
+    names: list[str] = []  # the local names of the open elements, root first
+    opened: list[ET.Element] = []
+    leaves: _Leaves | None = None  # the mesh whose <vertices> or <triangles> is open
+    leaf = ""  # "vertex" or "triangle": what that element holds
+    objects = kept = 0
+    root = None
+    for event, element in iterparse(io.BytesIO(xml), ("start", "end"), forbid_dtd=True):
+        if event == "start":
+            names.append(element.tag.rpartition("}")[2])
+            opened.append(element)
+            if len(names) == 3 and names[1:] == _OBJECT:
+                objects += 1
+            elif len(names) == 5 and names[1:4] == _MESH and names[4] in _LEAVES:
+                leaves, leaf = meshes.setdefault(opened[3], _Leaves()), _LEAVES[names[4]]
+            continue
+        name = names.pop()
+        opened.pop()
+        root = element
+        if leaves is not None and len(names) == 5 and name == leaf:
+            kept += _leaf(leaves, element, leaf, objects)
+            opened[-1].clear()  # the <vertices> or <triangles> keeps none of them
+            continue
+        if len(names) == 4:
+            leaves = None
+        kept += 1
+        if kept >= KEPT_BATCH:
+            expansion.charge(kept * KEPT_BYTES, "the 3MF file's XML elements")
+            kept = 0
+    assert root is not None  # the parser raises for XML without an element
+    return root, meshes
+
+
+def _leaf(leaves: _Leaves, element: ET.Element, tag: str, number: int) -> int:
+    """Add a ``<vertex>`` or ``<triangle>`` to its mesh's numbers; 1 when its colour
+    attributes are kept, else 0."""
+    attrib = element.attrib
+    vertex = tag == "vertex"
+    keys = ("x", "y", "z") if vertex else ("v1", "v2", "v3")
+    target: array[float] | array[int] = leaves.vertices if vertex else leaves.triangles
+    row = len(target) // 3
+    kind = float if vertex else int
+    try:
+        values = (kind(attrib[keys[0]]), kind(attrib[keys[1]]), kind(attrib[keys[2]]))
+    except (KeyError, ValueError) as error:
+        raise MeshFileError(
+            f"The {tag} {row:,} (counting from 0) of object {number} has a missing or "
+            f"non-numeric {'/'.join(keys)} attribute."
+        ) from error
+    try:
+        target.extend(values)  # type: ignore[arg-type]
+    except OverflowError:
+        raise MeshFileError(
+            f"The triangle {row:,} (counting from 0) of object {number} refers to a vertex "
+            "number too large to be one."
+        ) from None
+    if vertex:
+        return 0
+    colour = {key: attrib[key] for key in _COLOUR_KEYS if key in attrib}
+    if colour:
+        leaves.colours[row] = colour
+    return len(colour) > 0
 
 
 #: Colour resources by id: the text of each one's colours, in order (read when a triangle
@@ -186,7 +307,9 @@ def _rgba(text: str) -> tuple[int, int, int, int]:
     return value[0], value[1], value[2], value[3]
 
 
-def _object(obj: ET.Element, number: int, palettes: Palettes) -> _Object:
+def _object(
+    obj: ET.Element, number: int, palettes: Palettes, meshes: dict[ET.Element, _Leaves]
+) -> _Object:
     mesh = obj.find("{*}mesh")
     if mesh is None:
         if any(
@@ -203,28 +326,34 @@ def _object(obj: ET.Element, number: int, palettes: Palettes) -> _Object:
             for component in obj.iterfind("{*}components/{*}component")
         )
         return _Object(number, None, None, components)
-    vertices = _numbers(mesh.iterfind("{*}vertices/{*}vertex"), ("x", "y", "z"), float, number)
-    elements = list(mesh.iterfind("{*}triangles/{*}triangle"))
-    triangles = _numbers(iter(elements), ("v1", "v2", "v3"), int, number)
-    points = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
-    faces = np.asarray(triangles, dtype=np.intp).reshape(-1, 3)
+    leaves = meshes.get(mesh, _Leaves())
+    points = np.frombuffer(leaves.vertices, dtype=np.float64).reshape(-1, 3)
+    faces = np.frombuffer(leaves.triangles, dtype=np.int64).astype(np.intp).reshape(-1, 3)
     _check_indices(faces, len(points), number)
-    colors, colored, corners = _triangle_colors(obj, elements, palettes, number)
+    colors, colored, corners = _triangle_colors(obj, len(faces), leaves.colours, palettes, number)
     return _Object(number, points, faces, colors=colors, colored=colored, corner_colored=corners)
 
 
 def _triangle_colors(
-    obj: ET.Element, triangles: list[ET.Element], palettes: Palettes, number: int
+    obj: ET.Element,
+    count: int,
+    attributes: dict[int, dict[str, str]],
+    palettes: Palettes,
+    number: int,
 ) -> tuple[NDArray[np.uint8], NDArray[np.bool_], int]:
-    """Each triangle's colour from its ``pid``/``p1`` or its object's ``pid``/``pindex``,
-    whether it has one, and how many have a colour per corner."""
-    colors = np.zeros((len(triangles), 4), dtype=np.uint8)
-    colored = np.zeros(len(triangles), dtype=bool)
+    """Each of the ``count`` triangles' colour from its ``pid``/``p1`` (its colour
+    ``attributes``, by row) or its object's ``pid``/``pindex``, whether it has one, and how
+    many have a colour per corner."""
+    colors = np.zeros((count, 4), dtype=np.uint8)
+    colored = np.zeros(count, dtype=bool)
     corners = 0
     default_group, default_index = obj.get("pid"), obj.get("pindex")
-    for row, triangle in enumerate(triangles):
+    # Without an object's colour, only the triangles with attributes can have one.
+    rows: Iterable[int] = attributes if default_group is None else range(count)
+    for row in rows:
+        triangle = attributes.get(row, {})
         group = triangle.get("pid", default_group)
-        index = triangle.get("p1", default_index if "pid" not in triangle.attrib else None)
+        index = triangle.get("p1", default_index if "pid" not in triangle else None)
         palette = palettes.get(group or "")
         if palette is None or index is None:
             continue
@@ -242,26 +371,6 @@ def _triangle_colors(
         colored[row] = True
         corners += any(triangle.get(key, index) != index for key in ("p2", "p3"))
     return colors, colored, corners
-
-
-def _numbers(
-    elements: Iterator[ET.Element],
-    names: tuple[str, str, str],
-    kind: Callable[[str], float],
-    number: int,
-) -> list[float]:
-    """The attributes ``names`` of every element, flat, as ``kind``; one sentence if one lacks."""
-    values: list[float] = []
-    tag = "vertex" if kind is float else "triangle"
-    for index, element in enumerate(elements):
-        try:
-            values.extend(kind(element.attrib[name]) for name in names)
-        except (KeyError, ValueError) as error:
-            raise MeshFileError(
-                f"The {tag} {index:,} (counting from 0) of object {number} has a missing or "
-                f"non-numeric {'/'.join(names)} attribute."
-            ) from error
-    return values
 
 
 def _check_indices(faces: NDArray[np.intp], count: int, number: int) -> None:
@@ -306,16 +415,21 @@ def _object_at(objects: dict[str, _Object], object_id: str, depth: int) -> _Obje
     return obj
 
 
-def _cost(objects: dict[str, _Object], object_id: str, memo: dict[str, int], depth: int) -> int:
-    """The triangles ``object_id`` places (each placement at least one), counted once per object."""
+def _cost(
+    objects: dict[str, _Object], object_id: str, memo: dict[str, tuple[int, int]], depth: int
+) -> tuple[int, int]:
+    """The triangles (each placement at least one) and vertices ``object_id`` places, counted
+    once per object."""
     if object_id in memo:
         return memo[object_id]
     obj = _object_at(objects, object_id, depth)
-    if obj.triangles is not None:
-        cost = max(len(obj.triangles), 1)
+    if obj.triangles is not None and obj.vertices is not None:
+        triangles, vertices = max(len(obj.triangles), 1), len(obj.vertices)
     else:
-        cost = sum(_cost(objects, child, memo, depth + 1) for child, _ in obj.components)
-    memo[object_id] = min(cost, MAX_TRIANGLES + 1)  # bounded: the sums stay small integers
+        costs = [_cost(objects, child, memo, depth + 1) for child, _ in obj.components]
+        triangles, vertices = sum(cost[0] for cost in costs), sum(cost[1] for cost in costs)
+    # bounded: the sums stay small integers
+    memo[object_id] = (min(triangles, MAX_TRIANGLES + 1), min(vertices, 3 * MAX_TRIANGLES + 1))
     return memo[object_id]
 
 

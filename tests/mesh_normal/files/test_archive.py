@@ -6,6 +6,7 @@ import contextlib
 import io
 import json
 import random
+import time
 import zipfile
 
 import numpy as np
@@ -14,7 +15,8 @@ import trimesh
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mesh_normal.files import MeshFileError, archive, read_mesh, read_mesh_files
+from mesh_normal.files import MeshFileError, archive, expansion, read_mesh, read_mesh_files
+from tests.hostile_archives import HOSTILE, directory_of, zip64_claim
 from tests.meshes import CUBE_OBJ
 from tests.paths import DATA
 
@@ -85,25 +87,86 @@ def test_a_broken_zip_is_a_400() -> None:
     assert error.value.status_code == 400 and "could not be opened" in str(error.value)
 
 
-def test_a_zip_bomb_is_refused_before_it_unpacks() -> None:
+def test_a_zip_bomb_is_stopped_as_it_unpacks() -> None:
     data = zipped({"big.obj": b"\0" * 10_000_000})  # about 10 kB deflated
-    with pytest.raises(MeshFileError, match="would unpack to 10,000,000 bytes"):
+    with (
+        expansion.expanding(len(data), most=20 * 2**20) as budget,
+        pytest.raises(expansion.ExpansionTooLarge) as error,
+    ):
         read_mesh(data)
+    assert error.value.status_code == 413
+    assert "unpacking big.obj from the .zip file would take about" in str(error.value)
+    assert budget.used <= budget.limit  # charged a chunk at a time, never past the limit
+
+
+def test_members_charge_the_memory_their_format_takes() -> None:
+    obj = ("mtllib cube.mtl\n" + CUBE_OBJ).encode()
+    data = zipped({"cube.obj": obj, "cube.mtl": b"newmtl a\n" * 1000})
+    with expansion.expanding(len(data)) as budget:
+        read_mesh(data)
+    assert budget.used == len(obj) * archive.MEMORY_PER_BYTE["obj"]  # the .mtl was not read
 
 
 def test_too_many_members(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(archive, "MAX_MEMBERS", 3)
     data = zipped({f"{index}.txt": b"" for index in range(4)})
-    with pytest.raises(MeshFileError, match="holds 4 members; at most 3"):
+    with pytest.raises(MeshFileError, match=r"The \.zip file lists 4 members; at most 3") as error:
         read_mesh(data)
+    assert error.value.status_code == 413
 
 
-def test_members_larger_than_they_state_are_cut_off() -> None:
-    data = zipped({"a.obj": b"0123456789"})
-    with zipfile.ZipFile(io.BytesIO(data)) as file:
-        budget = archive.Budget(5)
-        with pytest.raises(MeshFileError, match="more than its members state"):
-            budget.read(file, file.infolist()[0])
+def test_a_directory_of_400001_entries_is_refused_before_it_is_parsed() -> None:
+    started = time.perf_counter()
+    for data in (zip64_claim(400_001), (HOSTILE / "zip_many_entries.zip").read_bytes()):
+        with pytest.raises(MeshFileError) as error:
+            read_mesh(data, "many.zip")
+        assert error.value.status_code == 413
+        assert str(error.value) == "The .zip file lists 400,001 members; at most 1,000."
+    assert time.perf_counter() - started < 1
+
+
+def test_a_real_directory_of_100001_entries_is_refused_at_once() -> None:
+    data = directory_of(100_001)  # its 16-bit count wraps to 34,465, still too many
+    assert len(zipfile.ZipFile(io.BytesIO(directory_of(3))).infolist()) == 3  # a real zip
+    started = time.perf_counter()
+    with pytest.raises(MeshFileError, match="lists 34,465 members; at most 1,000"):
+        read_mesh(data, "many.zip")
+    assert time.perf_counter() - started < 1
+
+
+def test_a_directory_stating_fewer_entries_than_it_holds_is_counted() -> None:
+    """zipfile reads the directory by its size, whatever its count says: the records are
+    counted, a thousand and one at most."""
+    started = time.perf_counter()
+    with pytest.raises(MeshFileError, match="lists more than 1,000 members; at most 1,000"):
+        read_mesh(directory_of(100_001, stated=1), "many.zip")
+    assert time.perf_counter() - started < 1
+    assert archive.listed_members(directory_of(5, stated=1)) == (1, 5)
+    assert archive.listed_members(b"PK\x03\x04 no end") is None
+
+
+def test_an_encrypted_member_is_named_in_our_words() -> None:
+    data = bytearray(_zip_of("cube.obj", CUBE_OBJ.encode()))
+    directory = data.rindex(b"PK\x01\x02")
+    data[directory + 8] |= 1  # the directory's flag: encrypted
+    with pytest.raises(MeshFileError) as error:
+        read_mesh(bytes(data), "cube.zip")
+    assert str(error.value) == (
+        "The member cube.obj of the .zip file could not be unpacked: it is encrypted."
+    )
+
+
+@pytest.mark.parametrize(
+    ("data", "reason"),
+    [
+        (b"PK\x03\x04" + b"\0" * 40, "it is not a zip archive, or its end is missing"),
+        (directory_of(2)[:-30] + directory_of(2)[-22:], "its directory or headers are damaged"),
+    ],
+)
+def test_an_archive_that_cannot_be_opened_says_why_in_our_words(data: bytes, reason: str) -> None:
+    with pytest.raises(MeshFileError) as error:
+        read_mesh(data, "x.zip")
+    assert str(error.value) == f"The .zip file could not be opened: {reason}."
 
 
 GLTF = DATA / "gltf"
@@ -148,12 +211,6 @@ def test_real_meshopt_is_a_415_naming_it() -> None:
     assert "This glTF needs EXT_meshopt_compression, which is not supported" in str(error.value)
 
 
-def test_the_unpack_limit() -> None:
-    assert archive.unpack_limit(100) == 1 << 20  # a small file may compress very well
-    assert archive.unpack_limit(1_000_000) == 50_000_000
-    assert archive.unpack_limit(1 << 30) == 1 << 30
-
-
 def _zip_of(name: str, data: bytes, method: int = zipfile.ZIP_DEFLATED) -> bytes:
     buffer = io.BytesIO()
     with zipfile.ZipFile(buffer, "w", method) as archive:
@@ -164,7 +221,7 @@ def _zip_of(name: str, data: bytes, method: int = zipfile.ZIP_DEFLATED) -> bytes
 def test_a_damaged_member_is_a_400_naming_it() -> None:
     damaged = bytearray(_zip_of("cube.obj", CUBE_OBJ.encode()))
     damaged[40] ^= 0xFF  # inside the deflate stream
-    with pytest.raises(MeshFileError, match=r"The member cube\.obj of the archive could not be"):
+    with pytest.raises(MeshFileError, match=r"The member cube\.obj of the \.zip file could not be"):
         read_mesh(bytes(damaged), "cube.zip")
 
 

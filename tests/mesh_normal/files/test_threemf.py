@@ -3,15 +3,17 @@
 from __future__ import annotations
 
 import io
+import time
 import zipfile
 
 import numpy as np
 import pytest
 from fastapi.testclient import TestClient
 
-from mesh_normal.files import MeshFileError, archive, read_mesh
+from mesh_normal.files import MeshFileError, expansion, read_mesh, threemf
 from mesh_normal.files.formats import ACCEPTED_SUFFIXES, FORMATS
 from mesh_normal.files.read import sniff
+from tests import hostile_archives as hostile
 from tests.conftest import assert_error
 from tests.paths import DATA
 
@@ -239,12 +241,98 @@ def test_components_in_other_model_parts_are_a_415() -> None:
     assert error.value.status_code == 415
 
 
-def test_the_zip_bomb_guards_of_archives_hold(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(archive, "MIN_LIMIT", 1000)
-    resources = mesh_object(1, TETRA_VERTICES * 2000, TETRA_TRIANGLES)  # compresses well
+def test_the_parts_unpack_into_the_budget_of_the_input() -> None:
+    resources = mesh_object(1, TETRA_VERTICES * 20_000, TETRA_TRIANGLES)  # compresses well
     data = package(model(resources, '<item objectid="1"/>'))
-    with pytest.raises(MeshFileError, match="would unpack to"):
+    with (
+        expansion.expanding(len(data), most=2 * 2**20),
+        pytest.raises(
+            expansion.ExpansionTooLarge, match=r"unpacking 3D/3dmodel\.model from the 3MF"
+        ),
+    ):
         read_mesh(data, "bomb.3mf")
+
+
+def test_a_3mf_inside_a_zip_charges_the_same_budget() -> None:
+    inner = tetrahedron()
+    with zipfile.ZipFile(io.BytesIO(inner)) as source:
+        xml = len(source.read("3D/3dmodel.model"))
+    outer = hostile.zipped({"parts/tetra.3mf": inner})
+    with expansion.expanding(len(outer)) as budget:
+        read_mesh(outer, "parts.zip")
+    # the 3MF's bytes, its model part's, their parse, and the build: one budget for all
+    assert budget.used >= len(inner) + xml * (1 + threemf.XML_PER_BYTE) + 4 * 250
+
+
+@pytest.mark.parametrize("encoding", ["utf-8", "utf-16", "utf-16-le", "utf-16-be"])
+def test_a_dtd_is_refused_in_any_encoding(encoding: str) -> None:
+    for xml in (hostile.utf16_dtd(encoding), hostile.billion_laughs(encoding)):
+        started = time.perf_counter()
+        with pytest.raises(MeshFileError) as error:
+            read_mesh(hostile.package(xml), "dtd.3mf")
+        assert time.perf_counter() - started < 5
+        assert error.value.status_code == 400
+        assert str(error.value) == (
+            "The 3MF file's XML declares a DTD (or entities), which this reader refuses."
+        )
+
+
+@pytest.mark.parametrize(
+    ("name", "status", "words"),
+    [
+        ("3mf_utf16_dtd.3mf", 400, "The 3MF file's XML declares a DTD (or entities)"),
+        ("3mf_billion_laughs_utf16.3mf", 400, "The 3MF file's XML declares a DTD (or entities)"),
+        ("3mf_in_zip.zip", 413, "the 3MF file's XML elements would take about"),
+        (
+            "3mf_2500_placements.3mf",
+            413,
+            "the 3MF file's build, placing 5,100,000 triangles and 5,105,000 vertices, would",
+        ),
+    ],
+)
+def test_the_hostile_packages(name: str, status: int, words: str) -> None:
+    started = time.perf_counter()
+    with pytest.raises(MeshFileError) as error:
+        read_mesh(hostile.HOSTILE / name)
+    assert time.perf_counter() - started < 10
+    assert error.value.status_code == status and words in str(error.value)
+    assert str(error.value).endswith(".") and ". " not in str(error.value)
+
+
+def test_the_hostile_files_are_what_their_makers_make() -> None:
+    for name, make in hostile.FILES.items():
+        assert (hostile.HOSTILE / name).read_bytes() == make(), name
+
+
+def test_an_encoding_expat_lacks_is_one_sentence() -> None:
+    xml = '<?xml version="1.0" encoding="UTF-16-LE"?><model/>'.encode("utf-16-le")
+    with pytest.raises(MeshFileError) as error:
+        read_mesh(hostile.package(b"\xff\xfe" + xml), "odd.3mf")
+    assert str(error.value) == "The 3MF file's XML is in an encoding this reader does not support."
+
+
+def test_placements_within_the_budget_are_read() -> None:
+    data = hostile.placements(count=20, triangles=100)
+    with expansion.expanding(len(data)) as budget:
+        mesh = read_mesh(data, "twenty.3mf")
+    assert len(mesh.faces) == 2000 and len(mesh.vertices) == 20 * 102
+    assert budget.used >= 2000 * threemf.PLACED_TRIANGLE_BYTES
+
+
+def test_the_elements_the_parse_keeps_are_charged() -> None:
+    build = '<item objectid="1"/>' * 10_000
+    data = package(model(mesh_object(1, TETRA_VERTICES, TETRA_TRIANGLES), build))
+    with expansion.expanding(len(data)) as budget:
+        assert len(read_mesh(data, "items.3mf").faces) == 40_000
+    assert budget.used >= 8192 * threemf.KEPT_BYTES
+
+
+def test_a_zip_listing_too_many_members_is_no_3mf_and_is_refused_as_one() -> None:
+    data = hostile.zip64_claim(400_001)
+    assert sniff(data) is None
+    with pytest.raises(MeshFileError, match="The 3MF file lists 400,001 members") as error:
+        read_mesh(data, "many.3mf")
+    assert error.value.status_code == 413
 
 
 @pytest.mark.parametrize("leaf", [TETRA_TRIANGLES[:1], []])
