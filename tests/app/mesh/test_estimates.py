@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import io
+import time
 import zipfile
 
 import numpy as np
@@ -16,6 +17,8 @@ from app.mesh.estimates import (
     estimate,
 )
 from app.mesh.uploads import Upload
+from app.web.errors import ApiError
+from tests.hostile_archives import HOSTILE, directory_of
 from tests.meshes import CUBE_OBJ, ascii_stl
 
 OBJ = (CUBE_OBJ + "# padding\n" * 10_000).encode()
@@ -55,3 +58,24 @@ def test_several_files_add_up() -> None:
     parts = (("cube.obj", OBJ), ("cube.mtl", b"newmtl a\n" * 100))
     alone = [estimate(Upload(data, name), "fix") - JOB_OVERHEAD for name, data in parts]
     assert estimate(Upload.several(parts, None), "fix") == sum(alone) + JOB_OVERHEAD
+
+
+@pytest.mark.parametrize("name", ["many.zip", "many.3mf", None])
+def test_a_zip_listing_too_many_members_is_refused_at_once(name: str | None) -> None:
+    """Its directory is counted from its end record, never parsed: a 413 naming the count,
+    before any job is admitted."""
+    for data, listed in (
+        ((HOSTILE / "zip_many_entries.zip").read_bytes(), "400,001"),
+        (directory_of(100_001, stated=1), "more than 1,000"),
+    ):
+        started = time.perf_counter()
+        with pytest.raises(ApiError) as error:
+            estimate(Upload(data, name), "report")
+        assert time.perf_counter() - started < 1
+        assert (error.value.status_code, error.value.field) == (413, "file")
+        assert error.value.error == f"The .zip file lists {listed} members; at most 1,000."
+
+
+def test_a_zip_that_cannot_be_opened_counts_as_its_size() -> None:
+    data = b"PK\x03\x04" + b"\0" * 1000
+    assert estimate(Upload(data, "x.zip"), "report") == len(data) * UNKNOWN_PER_BYTE + JOB_OVERHEAD
