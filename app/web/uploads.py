@@ -18,8 +18,10 @@ import io
 from collections.abc import AsyncGenerator, AsyncIterator
 from contextlib import aclosing
 from dataclasses import dataclass
+from email.message import Message
 
 from fastapi import Request
+from python_multipart.multipart import parse_options_header
 from starlette.datastructures import FormData, UploadFile
 from starlette.exceptions import HTTPException
 from starlette.formparsers import MultiPartException, MultiPartParser
@@ -106,6 +108,33 @@ class _InMemory(MultiPartParser):
     file back (measured for a 42 MB STL: 47 ms to parse and 30 ms to read back before)."""
 
     spool_max_size = 0
+
+    def on_headers_finished(self) -> None:
+        """Starlette's, but a part that names its file only as ``filename*`` (RFC 5987: how
+        some clients send a name that is not ASCII) is that file, not a text field."""
+        part = self._current_part
+        disposition = part.content_disposition or b""
+        extended = extended_filename(disposition)
+        if extended is not None:
+            # Starlette tells a file by a plain ``filename``: an empty one, then the real name.
+            part.content_disposition = disposition + b'; filename=""'
+        super().on_headers_finished()
+        if extended is not None and part.file is not None:
+            part.file.filename = extended
+
+
+def extended_filename(disposition: bytes) -> str | None:
+    """The file name a Content-Disposition header gives only as ``filename*`` (``UTF-8''``
+    and the name percent-encoded, or split as ``filename*0*``, ``filename*1``...), decoded;
+    ``None`` where it gives a plain ``filename`` (Starlette reads that one) or no name."""
+    if b"filename*" not in disposition.lower():
+        return None
+    _, options = parse_options_header(disposition)
+    if b"filename" in options:
+        return None
+    header = Message()
+    header["content-disposition"] = disposition.decode("latin-1")
+    return header.get_filename()
 
 
 async def _contents(item: UploadFile) -> bytes:
