@@ -75,11 +75,16 @@ class Expansion:
         """Take ``cost`` bytes for ``what`` (a sentence's subject: "unpacking the .zip file's
         members", "the 3MF file's build, 5,100,000 triangles"), or raise ExpansionTooLarge."""
         if self.used + cost > self.limit:
+            need, limit = megabytes(self.used + cost), megabytes(self.limit)
+            rule = (
+                "the most for one upload on this server"
+                if self.limit < max(MIN_EXPANSION, EXPANSION_RATIO * self.size)
+                else f"{EXPANSION_RATIO} times its size, at least {megabytes(MIN_EXPANSION)}"
+            )
             raise ExpansionTooLarge(
                 f"The upload of {megabytes(self.size)} expands too far: {what} would take "
-                f"about {megabytes(self.used + cost)} of memory, more than the "
-                f"{megabytes(self.limit)} an upload of its size may expand into here "
-                f"({EXPANSION_RATIO} times its size, at least {megabytes(MIN_EXPANSION)})."
+                f"{'just over' if need == limit else 'about'} {need} of memory, more than "
+                f"the {limit} an upload of its size may expand into here ({rule})."
             )
         self.used += cost
 

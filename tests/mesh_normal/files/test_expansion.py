@@ -84,3 +84,13 @@ def test_the_readers_open_a_budget_of_their_input() -> None:
 )
 def test_megabytes_in_words(count: float, words: str) -> None:
     assert expansion.megabytes(count) == words
+
+
+def test_a_limit_set_by_the_most_says_so_and_a_close_call_is_just_over() -> None:
+    with expansion.expanding(10 * 2**20, most=300 * 2**20):
+        with pytest.raises(expansion.ExpansionTooLarge) as error:
+            expansion.charge(300 * 2**20 + 1, "unpacking the .zip file's members")
+    assert str(error.value).endswith(
+        "would take just over 300 MB of memory, more than the 300 MB an upload of its size may "
+        "expand into here (the most for one upload on this server)."
+    )
