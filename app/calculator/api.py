@@ -106,7 +106,9 @@ async def post_normals(request: Request) -> Response:
     if len(raw) <= batch.INLINE_BYTES:
         return FastJSONResponse(await run_in_threadpool(batch.payload, raw))
     jobs: Jobs = request.app.state.jobs
-    text = await jobs.run(request, batch.estimate(raw), batch.job, raw)
+    estimate = batch.estimate(raw)
+    batch.refuse_beyond_budget(estimate, jobs.admission.budget)
+    text = await jobs.run(request, estimate, batch.job, raw)
     return Response(text, media_type="application/json")
 
 

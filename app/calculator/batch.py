@@ -45,6 +45,19 @@ def estimate(raw: bytes) -> int:
     return BYTES_PER_TRIANGLE * triangles + BYTES_PER_BODY_BYTE * len(raw)
 
 
+def refuse_beyond_budget(estimate: int, budget: int) -> None:
+    """A 413 for a batch whose job would need more than the server's whole memory budget
+    (the jobs' own sentence speaks of a file)."""
+    if estimate > budget:
+        raise ApiError(
+            413,
+            f"This batch would need about {estimate / 2**20:,.0f} MB of memory, more than this "
+            f"server gives one request ({budget / 2**20:,.0f} MB); split it into several "
+            "requests.",
+            "triangles",
+        )
+
+
 def payload(raw: bytes) -> dict[str, Any]:
     """The answer to the batch in ``raw`` (an ApiError for a bad one)."""
     # Imported here, not at the top: NumPy is for batches only, and importing it would add

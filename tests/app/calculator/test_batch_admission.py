@@ -84,6 +84,16 @@ def test_a_bad_large_batch_is_refused_as_a_small_one_is(
     assert len(estimates) == 1
 
 
+def test_a_batch_beyond_the_whole_budget_is_a_413() -> None:
+    app = create_app(settings=Settings(in_process=True, memory_budget_mb=10))
+    body = body_of(8_000)
+    needed = f"about {batch.estimate(body) / 2**20:.0f} MB"
+    assert needed == "about 17 MB"
+    with TestClient(app, raise_server_exceptions=False) as client:
+        answer = client.post("/api/normals", content=body, headers=JSON)
+    assert_error(answer, 413, "triangles", "This batch", needed, "(10 MB)", "split it")
+
+
 def test_the_estimate_counts_at_most_the_limit() -> None:
     huge = b'{"triangles":[' + b"[[0,0,0],[0,0,0],[0,0,0]]," * 200_000 + b"]}"
     most = batch.BYTES_PER_TRIANGLE * 100_000 + 2 * len(huge)
