@@ -160,7 +160,7 @@ def packed_gltf(
     for index, view in enumerate(header.get("bufferViews") or []):
         buffer = view.get("buffer", 0)
         if not _is_size(buffer) or buffer >= len(starts):
-            raise MeshFileError(f"glTF buffer view {index} names a buffer that is missing.")
+            raise MeshFileError(f"The glTF buffer view {index} names a buffer that is missing.")
         _check_view(index, view, lengths[buffer])
         view["byteOffset"] = view.get("byteOffset", 0) + starts[buffer]
         view["buffer"] = 0
@@ -187,11 +187,11 @@ def _check_view(index: int, view: dict[str, Any], buffer_length: int) -> None:
     offset, length = view.get("byteOffset", 0), view.get("byteLength")
     if not _is_size(offset) or not _is_size(length) or offset + length > buffer_length:
         raise MeshFileError(
-            f"glTF buffer view {index} does not fit in its buffer of {buffer_length:,} bytes."
+            f"The glTF buffer view {index} does not fit in its buffer of {buffer_length:,} bytes."
         )
     stride = view.get("byteStride")
     if stride is not None and (not _is_size(stride) or stride == 0):
-        raise MeshFileError(f"glTF buffer view {index} has a byteStride that is not above 0.")
+        raise MeshFileError(f"The glTF buffer view {index} has a byteStride that is not above 0.")
 
 
 def _check_accessors(header: dict[str, Any]) -> None:
@@ -200,23 +200,25 @@ def _check_accessors(header: dict[str, Any]) -> None:
     views = header.get("bufferViews") or []
     for index, accessor in enumerate(header.get("accessors") or []):
         if not isinstance(accessor, dict):
-            raise MeshFileError(f"glTF accessor {index} is not an object.")
+            raise MeshFileError(f"The glTF accessor {index} is not an object.")
         kind, shape = accessor.get("componentType"), accessor.get("type")
         item = 0
         if isinstance(kind, int) and isinstance(shape, str):
             item = ITEM_BYTES.get(kind, 0) * WIDTH.get(shape, 0)
         if not _is_size(accessor.get("count")) or not item:
-            raise MeshFileError(f"glTF accessor {index} has no valid count, componentType or type.")
+            raise MeshFileError(
+                f"The glTF accessor {index} has no valid count, componentType or type."
+            )
         if "bufferView" not in accessor:  # zeros, or filled by Draco
             continue
         view, offset = accessor["bufferView"], accessor.get("byteOffset", 0)
         if not _is_size(view) or view >= len(views) or not _is_size(offset):
-            raise MeshFileError(f"glTF accessor {index} names a buffer view that is missing.")
+            raise MeshFileError(f"The glTF accessor {index} names a buffer view that is missing.")
         stride = views[view].get("byteStride") or item
         count = accessor["count"]
         if count and offset + (count - 1) * stride + item > views[view]["byteLength"]:
             raise MeshFileError(
-                f"glTF accessor {index} runs past the end of its buffer view {view}."
+                f"The glTF accessor {index} runs past the end of its buffer view {view}."
             )
 
 
@@ -231,12 +233,12 @@ def _buffer_bytes(
     if uri is None:
         if index == 0 and glb_chunk is not None:
             return glb_chunk[:length]
-        raise MeshFileError(f"glTF buffer {index} has no data (no uri and no GLB chunk).")
+        raise MeshFileError(f"The glTF buffer {index} has no data (no uri and no GLB chunk).")
     if uri.startswith("data:"):
         try:
             return base64.b64decode(uri.split(",", 1)[1], validate=False)[:length]
         except (IndexError, binascii.Error) as error:
-            raise MeshFileError(f"glTF buffer {index} has a broken data: URI.") from error
+            raise MeshFileError(f"The glTF buffer {index} has a broken data: URI.") from error
     found = resolve(urllib.parse.unquote(uri)) if resolve is not None else None
     if found is None:
         where = "is not in the .zip" if resolve is not None else "does not come with it"

@@ -485,15 +485,15 @@ def broken(change: Callable[[dict[str, Any]], None]) -> bytes:
     [
         (
             broken(lambda h: h["bufferViews"][1].update(byteLength=400)),
-            "glTF buffer view 1 does not fit in its buffer of 48 bytes.",
+            "The glTF buffer view 1 does not fit in its buffer of 48 bytes.",
         ),
         (
             broken(lambda h: h["bufferViews"][0].update(byteOffset=-12)),
-            "glTF buffer view 0 does not fit in its buffer of 48 bytes.",
+            "The glTF buffer view 0 does not fit in its buffer of 48 bytes.",
         ),
         (
             broken(lambda h: h["bufferViews"][0].update(byteStride=0)),
-            "glTF buffer view 0 has a byteStride that is not above 0.",
+            "The glTF buffer view 0 has a byteStride that is not above 0.",
         ),
         (
             broken(
@@ -501,17 +501,17 @@ def broken(change: Callable[[dict[str, Any]], None]) -> bytes:
                     h["bufferViews"][0].update(byteStride=12) or h["accessors"][0].update(count=30)
                 )
             ),
-            "glTF accessor 0 runs past the end of its buffer view 0.",
+            "The glTF accessor 0 runs past the end of its buffer view 0.",
         ),
         (
             broken(lambda h: h["accessors"][1].update(byteOffset=100)),
-            "glTF accessor 1 runs past the end of its buffer view 1.",
+            "The glTF accessor 1 runs past the end of its buffer view 1.",
         ),
         (
             broken(lambda h: h["accessors"][1].update(type=["SCALAR"])),
-            "glTF accessor 1 has no valid count, componentType or type.",
+            "The glTF accessor 1 has no valid count, componentType or type.",
         ),
-        (broken(lambda h: h["accessors"].append(None)), "glTF accessor 2 is not an object."),
+        (broken(lambda h: h["accessors"].append(None)), "The glTF accessor 2 is not an object."),
     ],
 )
 def test_buffers_that_trimesh_would_assert_on_are_named(data: bytes, sentence: str) -> None:
