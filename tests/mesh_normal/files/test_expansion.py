@@ -87,9 +87,11 @@ def test_megabytes_in_words(count: float, words: str) -> None:
 
 
 def test_a_limit_set_by_the_most_says_so_and_a_close_call_is_just_over() -> None:
-    with expansion.expanding(10 * 2**20, most=300 * 2**20):
-        with pytest.raises(expansion.ExpansionTooLarge) as error:
-            expansion.charge(300 * 2**20 + 1, "unpacking the .zip file's members")
+    with (
+        expansion.expanding(10 * 2**20, most=300 * 2**20),
+        pytest.raises(expansion.ExpansionTooLarge) as error,
+    ):
+        expansion.charge(300 * 2**20 + 1, "unpacking the .zip file's members")
     assert str(error.value).endswith(
         "would take just over 300 MB of memory, more than the 300 MB an upload of its size may "
         "expand into here (the most for one upload on this server)."
