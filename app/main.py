@@ -12,10 +12,13 @@ import gc
 _COLLECTING = gc.isenabled()
 gc.disable()
 
+import asyncio
 import importlib
+import signal
 import threading
-from collections.abc import AsyncIterator
+from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
+from types import FrameType
 from typing import Any
 
 from fastapi import FastAPI
@@ -73,16 +76,53 @@ async def lifespan(app: FastAPI) -> AsyncIterator[None]:
     """Start the worker processes for the heavy mesh work, in the background (each loads
     everything a job can need as it starts: :func:`app.mesh.warmup.warm`); with
     ``MESH_IN_PROCESS``, load the kernels here, in the background, so that the first mesh
-    upload does not wait for them."""
+    upload does not wait for them. A signal to stop ends the running jobs at once
+    (:func:`end_jobs_on_stop`)."""
     jobs: Jobs = app.state.jobs
     heavy = threading.Timer(HEAVY_IMPORT_DELAY, load_heavy_modules, (jobs.pool is None,))
     heavy.daemon = True
     heavy.start()
     jobs.start()
+    restore = end_jobs_on_stop(jobs)
     try:
         yield
     finally:
+        restore()
         jobs.close()
+
+
+#: The signals that stop the server (uvicorn's own: SIGTERM from ``kill`` or ``docker stop``,
+#: SIGINT from Ctrl+C).
+STOP_SIGNALS = (signal.SIGTERM, signal.SIGINT)
+
+
+def end_jobs_on_stop(jobs: Jobs) -> Callable[[], None]:
+    """On a signal to stop, end the running jobs (:meth:`Jobs.shut_down`: their requests
+    answer 503 at once), then let the server's own handler go on: uvicorn stops taking
+    connections and waits for the requests in flight, which no longer wait for their jobs,
+    however it was started (``--timeout-graceful-shutdown`` or not). Returns what puts the
+    server's handlers back. Only where the server handles signals itself, in the main thread."""
+    if threading.current_thread() is not threading.main_thread():
+        return lambda: None
+    loop = asyncio.get_running_loop()
+    previous: dict[int, Callable[[int, FrameType | None], Any]] = {}
+
+    def stop(number: int, frame: FrameType | None) -> None:
+        loop.call_soon_threadsafe(jobs.shut_down)
+        previous[number](number, frame)
+
+    for number in STOP_SIGNALS:
+        handler = signal.getsignal(number)
+        if callable(handler):
+            previous[number] = handler
+            signal.signal(number, stop)
+
+    def restore() -> None:
+        for number, handler in previous.items():
+            if signal.getsignal(number) is stop:
+                signal.signal(number, handler)
+
+    return restore
 
 
 def load_heavy_modules(compile_kernels: bool) -> None:

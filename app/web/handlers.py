@@ -14,6 +14,7 @@ from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import Response
 from starlette.exceptions import HTTPException as StarletteHTTPException
+from starlette.requests import ClientDisconnect
 from starlette.routing import Match, Mount
 from starlette.staticfiles import StaticFiles
 
@@ -120,6 +121,14 @@ async def on_file_not_found(request: Request, exc: Exception) -> Response:
     return render_error(request, ApiError(503, NO_TEMP_DIR_SENTENCE))
 
 
+async def on_disconnect(request: Request, exc: Exception) -> Response:
+    """A client that left while its body was being read: one line in the log, no traceback
+    (hundreds of them must not flood it); the answer goes nowhere."""
+    assert isinstance(exc, ClientDisconnect)
+    logger.info("client left while sending its request to %s", request.url.path)
+    return Response(status_code=499)
+
+
 async def on_crash(request: Request, _exc: Exception) -> Response:
     logger.exception("unhandled error on %s", request.url.path)
     response = render_error(request, ApiError(500, "Something went wrong on our side."))
@@ -132,6 +141,7 @@ def install(app: FastAPI) -> None:
     """Register the one set of handlers that turns every failure into an ApiError (a missing
     temporary folder, where something needs one, into a 503 that says so)."""
     app.add_exception_handler(FileNotFoundError, on_file_not_found)
+    app.add_exception_handler(ClientDisconnect, on_disconnect)
     app.add_exception_handler(ApiError, on_api_error)
     app.add_exception_handler(RequestValidationError, on_validation)
     app.add_exception_handler(StarletteHTTPException, on_http)

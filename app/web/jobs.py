@@ -7,9 +7,14 @@ most ``queue_seconds`` and behind at most ``queue_length`` others, and then the 
 wait would help. Pages, static files and the calculator never come here, so they never wait.
 
 The jobs run in :class:`app.web.workers.WorkerPool` processes (or, with ``in_process``, in
-threads of the server, for tests and debugging). A client that hangs up stops its job (its
-worker is killed and replaced); a worker that dies or runs out of memory is a 503 saying that
-the server ran out of memory, never a 400 blaming the file.
+threads of the server, for tests and debugging, without the limits below). Each job may run
+``job_seconds`` and take the memory a worker's cap leaves it: ``worker_memory_mb`` in all, or
+by default the whole ``memory_budget_mb`` beyond what the warm worker itself holds. Beyond
+either, the answer blames the file (a 422 for the time, a 413 for the memory: the same file
+would fail again), and the worker lives on. A client that hangs up stops its job, its worker
+kept if the job stops within :data:`app.web.workers.GRACE_SECONDS`. A worker killed from
+outside (the system out of memory) is a 503 saying that the server ran out of memory. When the
+server is asked to stop (:meth:`Jobs.shut_down`), the running jobs end at once, as 503s.
 """
 
 from __future__ import annotations
@@ -26,7 +31,17 @@ from starlette.requests import Request
 from app.config import RETRY_AFTER_SECONDS, Settings
 from app.web.errors import ApiError
 from app.web.handlers import temp_dir_problem
-from app.web.workers import WorkerCrashed, WorkerDied, WorkerOutOfMemory, WorkerPool
+from app.web.workers import (
+    ALLOCATION_FAILED,
+    GRACE_SECONDS,
+    JobTimedOut,
+    ServerThread,
+    Worker,
+    WorkerCrashed,
+    WorkerDied,
+    WorkerOutOfMemory,
+    WorkerPool,
+)
 from mesh_normal.allocator import give_back
 
 logger = logging.getLogger(__name__)
@@ -47,12 +62,37 @@ NO_MEMORY = (
 )
 
 
+SHUTTING_DOWN = "The server is restarting; try again in a few seconds (Retry-After says when)."
+
+
 def busy() -> ApiError:
     return ApiError(503, BUSY, None, headers={"retry-after": str(RETRY_AFTER_SECONDS)})
 
 
 def out_of_memory() -> ApiError:
     return ApiError(503, NO_MEMORY, None, headers={"retry-after": str(RETRY_AFTER_SECONDS)})
+
+
+def shutting_down() -> ApiError:
+    return ApiError(503, SHUTTING_DOWN, None, headers={"retry-after": str(RETRY_AFTER_SECONDS)})
+
+
+def too_long(seconds: float) -> ApiError:
+    return ApiError(
+        422,
+        f"This file took longer than the {seconds:g} s one file may take here; "
+        "send a smaller file.",
+        "file",
+    )
+
+
+def beyond_allowance(allowance: int) -> ApiError:
+    return ApiError(
+        413,
+        f"This file needs more memory than the {allowance / 2**20:,.0f} MB this server gives "
+        "one file; send a smaller file.",
+        "file",
+    )
 
 
 def beyond_budget(estimate: int, budget: int) -> ApiError:
@@ -136,6 +176,7 @@ class Jobs:
         self._trim: asyncio.TimerHandle | None = None
         self._trim_loop: asyncio.AbstractEventLoop | None = None
         self._trim_step = 0  # of TRIM_DELAYS_SECONDS, the one the pending trim is
+        self.closing = False  # the server is stopping: no job runs any more
         self.admission = Admission(
             settings.workers,
             settings.memory_budget,
@@ -160,12 +201,21 @@ class Jobs:
                 warm=warm,
                 preload=preload,
                 memory_limit=None if limit is None else int(limit * 2**20),
+                job_memory=settings.memory_budget if limit is None else None,
+                job_seconds=settings.job_seconds,
             )
         )
 
     def start(self) -> None:
         if self.pool is not None:
             self.pool.start()
+
+    def shut_down(self) -> None:
+        """The server is stopping: end the running jobs now (each answers a 503) and refuse
+        new ones, so that the server does not wait for them."""
+        self.closing = True
+        if self.pool is not None:
+            self.pool.close()
 
     def close(self) -> None:
         if self._trim is not None:
@@ -184,6 +234,8 @@ class Jobs:
         """``function(*args)`` as a heavy job of about ``estimate`` bytes, for ``request``."""
         try:
             async with self.admission.admit(estimate):
+                if self.closing:
+                    raise shutting_down()
                 if self.pool is None:
                     try:
                         return await run_in_threadpool(function, *args)
@@ -226,25 +278,29 @@ class Jobs:
     ) -> Value:
         worker = await pool.acquire(self.settings.queue_seconds, (function, args))
         if worker is None:  # the workers are still starting, or being replaced
-            raise busy()
+            raise shutting_down() if self.closing else busy()
         job = asyncio.ensure_future(worker.call(function, args))
         gone = asyncio.ensure_future(disconnected(request))
         clean = False
         try:
             await asyncio.wait({job, gone}, return_when=asyncio.FIRST_COMPLETED)
             if not job.done():  # the client hung up: stop its work
-                job.cancel()
-                logger.info("client left during %s: its worker is stopped", request.url.path)
+                clean = await stop(worker, job)
+                logger.info(
+                    "client left during %s: its job %s",
+                    request.url.path,
+                    "stopped" if clean else "did not stop, its worker was replaced",
+                )
                 raise ApiError(499, "The client closed the connection before the answer.")
             value: Value = job.result()
             clean = True
             return value
-        except ApiError as error:
-            clean = error.status_code != 499
+        except ApiError as error:  # the job's refusal, or the client gone
+            clean = clean or error.status_code != 499
             raise
-        except (WorkerDied, WorkerOutOfMemory) as error:
-            logger.warning("a worker ran out of memory or ended on %s: %s", request.url.path, error)
-            raise out_of_memory() from None
+        except (WorkerOutOfMemory, JobTimedOut, WorkerDied) as error:
+            clean = True  # the worker lives on, unless it died or was killed (release sees)
+            raise self._answer(request, worker, error) from None
         except WorkerCrashed as error:
             logger.error("a job failed on %s:\n%s", request.url.path, error)
             raise
@@ -254,6 +310,36 @@ class Jobs:
             with suppress(BaseException):
                 await job
             pool.release(worker, clean)
+
+    def _answer(
+        self,
+        request: Request,
+        worker: Worker | ServerThread,
+        error: WorkerOutOfMemory | JobTimedOut | WorkerDied,
+    ) -> ApiError:
+        """What a job that ran out of time or memory, or whose worker died, answers; logged."""
+        path = request.url.path
+        if self.closing and not isinstance(error, WorkerOutOfMemory):
+            return shutting_down()  # its worker was stopped with the server
+        if isinstance(error, JobTimedOut):
+            logger.warning("a job on %s ran past its %g s", path, self.settings.job_seconds)
+            return too_long(self.settings.job_seconds)
+        logger.warning("a worker ran out of memory or ended on %s: %s", path, error)
+        capped = isinstance(error, WorkerOutOfMemory) or error.exitcode in ALLOCATION_FAILED
+        if capped and worker.allowance is not None:
+            return beyond_allowance(worker.allowance)
+        return out_of_memory()
+
+
+async def stop(worker: Worker | ServerThread, job: asyncio.Future[Any]) -> bool:
+    """Stop ``worker``'s job (its client left); True if it stopped within ``GRACE_SECONDS``
+    (the worker lives on), False if the worker must be replaced."""
+    worker.interrupt()
+    done, _ = await asyncio.wait({job}, timeout=GRACE_SECONDS)
+    if not done:
+        return False
+    error = job.exception()
+    return not isinstance(error, WorkerDied | JobTimedOut)
 
 
 async def disconnected(request: Request) -> None:

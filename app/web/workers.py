@@ -20,6 +20,13 @@ Until the first worker is ready (seconds after the server's first page: the fork
 end in milliseconds in the kernels' Python path, with nothing to cancel and no memory to run
 out of) runs in a thread of the server instead of waiting; any other job waits for a worker.
 
+Each job has a time limit, and each worker a memory cap (``RLIMIT_DATA``: the memory it
+writes, not the address space it merely reserves, so that numba's threads and glibc's arenas
+do not trip it). A job whose time is up, or whose client left, is stopped in the worker
+(:func:`run_in_worker`: an exception raised in its Python code), so the warm worker lives on;
+only a job that does not stop within ``GRACE_SECONDS`` (a native loop) costs its worker. A
+worker's parent, the fork server, ending (the server was killed) ends it too.
+
 Jobs travel as pickles of protocol 5: large buffers (``pickle.PickleBuffer``, NumPy arrays)
 go out of band, so a 200 MB upload is not copied into a pickle on its way; to a worker, those of
 a megabyte or more go in shared memory (:func:`send`), and answers come back as raw bytes.
@@ -28,27 +35,44 @@ a megabyte or more go in shared memory (:func:`send`), and answers come back as 
 from __future__ import annotations
 
 import asyncio
+import ctypes
 import logging
 import mmap
 import multiprocessing
 import os
 import pickle
 import resource
+import signal
 import threading
 import traceback
 from collections import deque
 from collections.abc import Callable, Sequence
+from contextlib import suppress
 from multiprocessing import reduction
 from multiprocessing.connection import Connection, wait
 from multiprocessing.process import BaseProcess
+from types import FrameType
 from typing import Any
 
 from app.web.errors import ApiError
 from mesh_normal import allocator
 
 #: How a worker's job ended: its value, a refusal (an ApiError's status, sentence and field),
-#: memory exhausted, or a crash (the traceback, for the log).
+#: memory exhausted, a crash (the traceback, for the log), its time up, or stopped on request.
 OK, REFUSED, NO_MEMORY, CRASHED = "ok", "refused", "memory", "crashed"
+TIMED_OUT, CANCELLED = "timed out", "cancelled"
+
+#: Seconds a worker has to answer once its job is to stop (its time is up, or its client left)
+#: before it is killed and replaced: a job sees the stop only between two steps of its Python
+#: code, not inside a kernel or a NumPy call.
+GRACE_SECONDS = 2.0
+
+#: The signal that asks a worker to stop its job (its time limit is SIGALRM, its own timer).
+STOP_SIGNAL = signal.SIGUSR1
+
+#: What a worker that died from these signals most likely met: an allocation its cap refused,
+#: in native code that aborts or dereferences the null pointer instead of raising MemoryError.
+ALLOCATION_FAILED = frozenset({-signal.SIGSEGV, -signal.SIGABRT, -signal.SIGBUS})
 
 
 logger = logging.getLogger(__name__)
@@ -89,6 +113,14 @@ class WorkerDied(Exception):
 
 class WorkerOutOfMemory(Exception):
     """The job raised ``MemoryError`` in its worker (the worker itself lives on)."""
+
+
+class JobTimedOut(Exception):
+    """The job ran past its time limit: its worker stopped it, or was killed when it did not."""
+
+
+class JobCancelled(Exception):
+    """The job stopped when asked to (:meth:`Worker.interrupt`); its worker lives on."""
 
 
 class WorkerCrashed(Exception):
@@ -139,6 +171,15 @@ def send(connection: Connection, value: Any, shared_from: int | None = None) -> 
 def receive(connection: Connection) -> Any:
     """What :func:`send` sent: a buffer that came in shared memory is a read-only map of it
     (``mmap``), which the value's own unpickling keeps or copies."""
+    return unpickled(*received(connection))
+
+
+def unpickled(header: bytes, buffers: list[bytes | mmap.mmap]) -> Any:
+    return pickle.loads(header, buffers=buffers)
+
+
+def received(connection: Connection) -> tuple[bytes, list[bytes | mmap.mmap]]:
+    """What :func:`send` sent, still pickled: its header and its buffers."""
     header, sizes = connection.recv()
     buffers: list[bytes | mmap.mmap] = []
     for size in sizes:
@@ -150,29 +191,126 @@ def receive(connection: Connection) -> Any:
             buffers.append(mmap.mmap(descriptor, size, access=mmap.ACCESS_READ) if size else b"")
         finally:
             os.close(descriptor)
-    return pickle.loads(header, buffers=buffers)
+    return header, buffers
 
 
 def serve(
-    connection: Connection, warm: Callable[[], object] | None, memory_limit: int | None
+    connection: Connection,
+    warm: Callable[[], object] | None,
+    memory_limit: int | None,
+    job_memory: int | None = None,
+    job_seconds: float | None = None,
 ) -> None:
-    """A worker's life: warm up, say so, then run one job after another until the pipe closes."""
-    if memory_limit is not None:
-        resource.setrlimit(resource.RLIMIT_AS, (memory_limit, memory_limit))
+    """A worker's life: warm up, cap its memory, say so, then run one job after another until
+    the pipe closes.
+
+    The cap is ``memory_limit`` bytes in all, or else ``job_memory`` bytes beyond what the warm
+    worker holds; the word ``ready`` comes with what that leaves a job (None: no cap). Each job
+    may run ``job_seconds``.
+    """
+    die_with_parent()
     tune_allocator()
     allocator.enable_jobs()  # a job may keep freed memory while it runs (allocator.start_job)
+    signal.signal(signal.SIGALRM, _stop_job)
+    signal.signal(STOP_SIGNAL, _stop_job)
     try:
         if warm is not None:
             warm()
-        connection.send("ready")
+        connection.send(("ready", cap_memory(memory_limit, job_memory)))
         while True:
-            function, args = receive(connection)
-            outcome = run(function, args)
-            send(connection, outcome)
-            del function, args, outcome
+            # Unpickled in the job: a job too large for the memory cap fails as any other.
+            outcome = run_in_worker(run_job, received(connection), job_seconds)
+            try:
+                send(connection, outcome)
+            except MemoryError:  # pickling the value failed: nothing was sent yet
+                send(connection, (NO_MEMORY, None))
+            del outcome
             allocator.end_job(_MAPPED_FROM)  # the allocator as it was, and the memory back
     except (EOFError, OSError):  # the server closed the pipe: it no longer needs this worker
         return
+
+
+#: Linux's ``prctl`` option: the signal this process gets when its parent ends.
+_PR_SET_PDEATHSIG = 1
+
+
+def die_with_parent() -> None:
+    """Have the kernel kill this worker when its parent, the fork server, ends (Linux). The
+    fork server ends when the server does, however it ends (its pipe from the server closes);
+    without this, a busy worker would run its job on, outside the server's tree."""
+    prctl = allocator.libc("prctl")
+    if prctl is None:
+        return
+    parent = os.getppid()
+    prctl(ctypes.c_int(_PR_SET_PDEATHSIG), ctypes.c_ulong(signal.SIGKILL), 0, 0, 0)
+    if os.getppid() != parent:  # the parent ended before the kernel was told
+        os._exit(1)
+
+
+def written_memory() -> int:
+    """The bytes this process has written or may write (its data: heap and private maps, what
+    ``RLIMIT_DATA`` counts), or 0 where ``/proc`` does not say."""
+    try:
+        with open("/proc/self/status") as status:
+            for line in status:
+                if line.startswith("VmData:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return 0
+
+
+def cap_memory(memory_limit: int | None, job_memory: int | None) -> int | None:
+    """Cap this process's data at ``memory_limit`` bytes, or at ``job_memory`` beyond what it
+    holds now; return what that leaves a job (None: no cap). Beyond it an allocation fails:
+    ``MemoryError`` in Python and NumPy, an abort or a crash in some native code."""
+    held = written_memory()
+    limit = memory_limit if memory_limit is not None else job_memory and held + job_memory
+    if not limit:
+        return None
+    resource.setrlimit(resource.RLIMIT_DATA, (limit, limit))
+    return max(limit - held, 0)
+
+
+class _Stop(BaseException):
+    """Raised in a job to stop it: a BaseException, as KeyboardInterrupt is, so that the job's
+    own ``except Exception`` does not take it for a failure of its own."""
+
+    def __init__(self, ending: str) -> None:
+        super().__init__(ending)
+        self.ending = ending
+
+
+#: Whether a job is running in this worker, to be stopped: a stop signal that comes after it
+#: ended (an answer and a stop that crossed), or a second one, is ignored.
+_job_running = False
+
+
+def _stop_job(signum: int, _frame: FrameType | None) -> None:
+    global _job_running
+    if _job_running:
+        _job_running = False  # one stop a job: its cleanup is not interrupted again
+        raise _Stop(TIMED_OUT if signum == signal.SIGALRM else CANCELLED)
+
+
+def run_in_worker(
+    function: Callable[..., Any], args: Sequence[Any], seconds: float | None
+) -> tuple[str, Any]:
+    """:func:`run` in a worker, stopped by its timer after ``seconds`` or by
+    :data:`STOP_SIGNAL`: then ``(TIMED_OUT, None)`` or ``(CANCELLED, None)``."""
+    global _job_running
+    try:
+        _job_running = True
+        if seconds:
+            signal.setitimer(signal.ITIMER_REAL, seconds)
+        try:
+            return run(function, args)
+        finally:
+            _job_running = False
+            signal.setitimer(signal.ITIMER_REAL, 0)
+    except _Stop as stop:
+        signal.setitimer(signal.ITIMER_REAL, 0)  # the stop may have come before the finally
+        return stop.ending, None
 
 
 #: Blocks of at least this many bytes get their own mapping, returned to the system when freed.
@@ -184,6 +322,12 @@ def tune_allocator() -> None:
     system when freed. glibc otherwise raises that threshold (up to 32 MB) after large frees,
     and then keeps what a large upload once took resident for good. Nothing elsewhere."""
     allocator.map_from(_MAPPED_FROM)
+
+
+def run_job(header: bytes, buffers: list[bytes | mmap.mmap]) -> Any:
+    """The job that :meth:`Worker.call` sent, pickled (:func:`send`): its function's value."""
+    function, args = unpickled(header, buffers)
+    return function(*args)
 
 
 def run(function: Callable[..., Any], args: Sequence[Any]) -> tuple[str, Any]:
@@ -200,17 +344,25 @@ def run(function: Callable[..., Any], args: Sequence[Any]) -> tuple[str, Any]:
 
 
 class Worker:
-    """One worker process and the pipe to it."""
+    """One worker process and the pipe to it (:func:`serve` says what the limits are)."""
 
     def __init__(
         self,
         context: multiprocessing.context.BaseContext,
         warm: Callable[[], object] | None,
         memory_limit: int | None,
+        job_memory: int | None = None,
+        job_seconds: float | None = None,
     ) -> None:
+        self.job_seconds = job_seconds
+        #: The memory a job may take in this worker (bytes; None: no cap), once it is ready.
+        self.allowance: int | None = None
         self.connection, child = context.Pipe()
         self.process: BaseProcess = context.Process(  # type: ignore[attr-defined]
-            target=serve, args=(child, warm, memory_limit), daemon=True, name="mesh-worker"
+            target=serve,
+            args=(child, warm, memory_limit, job_memory, job_seconds),
+            daemon=True,
+            name="mesh-worker",
         )
         self.process.start()
         child.close()
@@ -223,8 +375,15 @@ class Worker:
         await asyncio.get_running_loop().run_in_executor(None, wait, waited)
 
     async def answer(self) -> Any:
-        """The worker's next message; WorkerDied if it ended instead."""
-        await self.waited()
+        """The worker's next message; WorkerDied if it ended instead. A job that does not end
+        within its time and ``GRACE_SECONDS`` more (stuck where its timer cannot stop it) is
+        JobTimedOut, its worker killed."""
+        seconds = None if self.job_seconds is None else self.job_seconds + GRACE_SECONDS
+        try:
+            await asyncio.wait_for(self.waited(), seconds)
+        except TimeoutError:
+            self.stop()
+            raise JobTimedOut() from None
         try:
             # The message may be large: read it in a thread, not in the event loop.
             return await asyncio.get_running_loop().run_in_executor(None, receive, self.connection)
@@ -246,7 +405,7 @@ class Worker:
         """Wait for the worker's word that it has warmed up; WorkerDied if it ended instead."""
         await self.waited()
         try:
-            self.connection.recv()
+            _, self.allowance = self.connection.recv()
         except (EOFError, OSError):
             self.process.join()
             raise WorkerDied(self.process.exitcode) from None
@@ -262,14 +421,14 @@ class Worker:
         except (BrokenPipeError, OSError):
             self.process.join()
             raise WorkerDied(self.process.exitcode) from None
-        ending, value = await self.answer()
-        if ending == REFUSED:
-            raise ApiError(*value)
-        if ending == NO_MEMORY:
-            raise WorkerOutOfMemory()
-        if ending == CRASHED:
-            raise WorkerCrashed(value)
-        return value
+        return ended(*await self.answer())
+
+    def interrupt(self) -> None:
+        """Ask the worker to stop its job: :meth:`call` then ends (JobCancelled, or however
+        the job ended if it was ending anyway), within ``GRACE_SECONDS`` if the worker is fine."""
+        with suppress(ProcessLookupError):
+            if self.process.pid is not None and self.process.is_alive():
+                os.kill(self.process.pid, STOP_SIGNAL)
 
     def stop(self) -> None:
         """End the worker now (SIGKILL: a job in a native loop does not look at signals)."""
@@ -278,19 +437,33 @@ class Worker:
         self.connection.close()
 
 
+def ended(ending: str, value: Any) -> Any:
+    """A job's value, or the exception that says how it ended otherwise."""
+    if ending == REFUSED:
+        raise ApiError(*value)
+    if ending == NO_MEMORY:
+        raise WorkerOutOfMemory()
+    if ending == CRASHED:
+        raise WorkerCrashed(value)
+    if ending == TIMED_OUT:
+        raise JobTimedOut()
+    if ending == CANCELLED:
+        raise JobCancelled()
+    return value
+
+
 class ServerThread:
     """Stands in for a worker while none is ready: the job runs in a thread of the server (see
-    :func:`run_in_server_while_starting`); its endings come back as a worker's do."""
+    :func:`run_in_server_while_starting`); its endings come back as a worker's do. Its jobs
+    are small: no time limit, no cap, and nothing to stop."""
+
+    allowance: int | None = None
 
     async def call(self, function: Callable[..., Any], args: Sequence[Any]) -> Any:
-        ending, value = await asyncio.to_thread(run, function, args)
-        if ending == REFUSED:
-            raise ApiError(*value)
-        if ending == NO_MEMORY:
-            raise WorkerOutOfMemory()
-        if ending == CRASHED:
-            raise WorkerCrashed(value)
-        return value
+        return ended(*await asyncio.to_thread(run, function, args))
+
+    def interrupt(self) -> None:
+        """Its small job ends on its own, in milliseconds."""
 
 
 class WorkerPool:
@@ -304,10 +477,16 @@ class WorkerPool:
         warm: Callable[[], object] | None = None,
         preload: Sequence[str] = (),
         memory_limit: int | None = None,
+        job_memory: int | None = None,
+        job_seconds: float | None = None,
     ) -> None:
+        """``memory_limit``, ``job_memory`` and ``job_seconds``: each worker's limits
+        (:func:`serve`)."""
         self.count = count
         self.warm = warm
         self.memory_limit = memory_limit
+        self.job_memory = job_memory
+        self.job_seconds = job_seconds
         self.context = multiprocessing.get_context("forkserver")
         self.context.set_forkserver_preload(list(preload))
         self.idle: deque[Worker] = deque()
@@ -372,7 +551,9 @@ class WorkerPool:
     def _launch(self, generation: int) -> Worker | None:
         """A new worker process (in a thread: starting one blocks), or None, that process
         stopped again, if the pool was closed (a new generation) while it started."""
-        worker = Worker(self.context, self.warm, self.memory_limit)
+        worker = Worker(
+            self.context, self.warm, self.memory_limit, self.job_memory, self.job_seconds
+        )
         with self._lock:
             if generation == self._generation:
                 self._starting.add(worker)
@@ -404,18 +585,21 @@ class WorkerPool:
         if not started and not self.idle and _starting_job(job):
             return ServerThread()
         deadline = loop.time() + (timeout if started else max(timeout, STARTUP_SECONDS))
-        while not self.idle:
-            assert self._changed is not None
-            left = deadline - loop.time()
-            if left <= 0:
-                return None
-            try:
-                await asyncio.wait_for(self._changed.wait(), left)
-            except TimeoutError:
-                return None
-        worker = self.idle.popleft()
-        self.busy.add(worker)
-        return worker
+        while True:
+            while not self.idle:
+                assert self._changed is not None
+                left = deadline - loop.time()
+                if left <= 0 or not self._started:  # waited long enough, or closed
+                    return None
+                try:
+                    await asyncio.wait_for(self._changed.wait(), left)
+                except TimeoutError:
+                    return None
+            worker = self.idle.popleft()
+            if worker.process.is_alive():
+                self.busy.add(worker)
+                return worker
+            self._replace(worker)  # it died idle (e.g. its fork server was killed)
 
     def release(self, worker: Worker | ServerThread, clean: bool) -> None:
         """Take a worker back: idle again after a clean job, else stopped and replaced."""
@@ -426,9 +610,13 @@ class WorkerPool:
             self.idle.append(worker)
             self._notify()
             return
+        self._replace(worker)
+
+    def _replace(self, worker: Worker) -> None:
         worker.stop()
-        self.replaced += 1
-        self._spawn()
+        if self._started:  # not once the pool is closed
+            self.replaced += 1
+            self._spawn()
 
     def close(self) -> None:
         """Stop every worker, the ones still starting too."""
@@ -442,3 +630,6 @@ class WorkerPool:
         self.idle.clear()
         self.busy.clear()
         self._started = False
+        if self._changed is not None:  # whoever waits for a worker learns of it
+            with suppress(RuntimeError):  # unless its event loop is closed already
+                self._notify()

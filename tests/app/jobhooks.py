@@ -4,9 +4,12 @@ when called). They find their folder of marker files from the upload's name."""
 
 from __future__ import annotations
 
+import functools
 import os
+import signal
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -53,6 +56,55 @@ def value(data: bytes, *, times: int = 1) -> tuple[int, bytes]:
 def sleep_forever(*_args: Any) -> None:
     while True:
         time.sleep(1)
+
+
+def stuck(*_args: Any) -> None:
+    """Never stop, not even when asked to: as a job in a native loop, which sees no signal."""
+    signal.signal(signal.SIGALRM, signal.SIG_IGN)
+    signal.signal(signal.SIGUSR1, signal.SIG_IGN)
+    while True:
+        time.sleep(1)
+
+
+def killed(*_args: Any) -> MeshReport:
+    """Be killed from outside, as the system's out-of-memory killer does (SIGKILL)."""
+    os.kill(os.getpid(), signal.SIGKILL)
+    raise AssertionError("not reached")
+
+
+def crash(*_args: Any) -> None:
+    """Die as native code does on an allocation it did not check (SIGSEGV)."""
+    os.kill(os.getpid(), signal.SIGSEGV)
+
+
+def warm_numeric() -> None:
+    """A worker's warm-up for :func:`allocate` and :func:`allocate_in_kernel`: NumPy and numba
+    loaded, the kernel compiled, so that what a job may take is all theirs."""
+    allocate_in_kernel(1)
+
+
+def allocate(megabytes: int) -> int:
+    """Write ``megabytes`` of a NumPy array."""
+    import numpy as np
+
+    return int(np.ones(megabytes * 2**20, dtype=np.uint8).sum())
+
+
+@functools.cache
+def _ones_kernel() -> Callable[[int], int]:
+    import numba
+    import numpy as np
+
+    @numba.njit(cache=False)  # type: ignore[misc]
+    def ones(size: int) -> int:
+        return int(np.ones(size, dtype=np.uint8).sum())
+
+    return ones  # type: ignore[no-any-return]
+
+
+def allocate_in_kernel(megabytes: int) -> int:
+    """Write ``megabytes`` of an array made in a compiled (numba) kernel."""
+    return int(_ones_kernel()(megabytes * 2**20))
 
 
 def refuse(*_args: Any) -> None:

@@ -15,7 +15,14 @@ import pytest
 from app.mesh.uploads import Upload
 from app.web import workers
 from app.web.errors import ApiError
-from app.web.workers import Worker, WorkerDied, WorkerOutOfMemory, WorkerPool
+from app.web.workers import (
+    JobCancelled,
+    JobTimedOut,
+    Worker,
+    WorkerDied,
+    WorkerOutOfMemory,
+    WorkerPool,
+)
 from mesh_normal import allocator
 from tests.app import jobhooks
 from tests.meshes import binary_stl
@@ -24,9 +31,11 @@ from tests.meshes import binary_stl
 PATIENCE_S = 30
 
 
-def with_pool(scenario: Callable[[WorkerPool], Awaitable[Any]], count: int = 1) -> Any:
+def with_pool(
+    scenario: Callable[[WorkerPool], Awaitable[Any]], count: int = 1, **limits: Any
+) -> Any:
     async def main() -> Any:
-        pool = WorkerPool(count)
+        pool = WorkerPool(count, **limits)
         pool.start()
         try:
             return await scenario(pool)
@@ -44,8 +53,8 @@ async def call(pool: WorkerPool, function: Callable[..., Any], *args: Any) -> An
         value = await worker.call(function, args)
         clean = True
         return value
-    except (ApiError, WorkerOutOfMemory):
-        clean = True  # the job failed, its worker is fine (as app.web.jobs treats it)
+    except (ApiError, WorkerOutOfMemory, JobTimedOut, JobCancelled):
+        clean = True  # the job failed, its worker is fine unless it was killed (release sees)
         raise
     finally:
         pool.release(worker, clean)
@@ -272,3 +281,119 @@ def test_a_job_s_buffers_without_shared_memory_come_through_the_pipe() -> None:
     sender.join()
     np.testing.assert_array_equal(array, value[0])
     assert text == value[1] and upload.data == value[2].data and upload.mapped is None
+
+
+def test_a_job_past_its_time_is_stopped_and_its_worker_lives_on() -> None:
+    async def scenario(pool: WorkerPool) -> None:
+        first, _ = await call(pool, jobhooks.value, b"")
+        with pytest.raises(JobTimedOut):
+            await call(pool, jobhooks.sleep_forever)
+        again, _ = await call(pool, jobhooks.value, b"")
+        assert again == first and pool.replaced == 0
+
+    with_pool(scenario, job_seconds=0.5)
+
+
+def test_a_job_that_does_not_stop_in_time_costs_its_worker() -> None:
+    """A job that sees no signal (as one in a native loop) is killed after its time and the
+    grace; a new worker takes the next job."""
+
+    async def scenario(pool: WorkerPool) -> None:
+        first, _ = await call(pool, jobhooks.value, b"")
+        with pytest.raises(JobTimedOut):
+            await asyncio.wait_for(call(pool, jobhooks.stuck), PATIENCE_S)
+        again, _ = await call(pool, jobhooks.value, b"")
+        assert again != first and pool.replaced == 1
+
+    with_pool(scenario, job_seconds=0.5)
+
+
+def test_a_job_asked_to_stop_stops_and_its_worker_lives_on() -> None:
+    async def scenario(pool: WorkerPool) -> None:
+        first, _ = await call(pool, jobhooks.value, b"")
+        worker = await pool.acquire(60)
+        assert isinstance(worker, Worker)
+        job = asyncio.ensure_future(worker.call(jobhooks.sleep_forever, ()))
+        await asyncio.sleep(0.5)  # the job is running (or about to: the stop waits for it)
+        worker.interrupt()
+        with pytest.raises(JobCancelled):
+            await asyncio.wait_for(job, PATIENCE_S)
+        pool.release(worker, clean=True)
+        again, _ = await call(pool, jobhooks.value, b"")
+        assert again == first and pool.replaced == 0
+
+    with_pool(scenario)
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/self/status"), reason="reads /proc")
+@pytest.mark.parametrize("allocate", [jobhooks.allocate, jobhooks.allocate_in_kernel])
+def test_a_job_past_its_worker_s_memory_cap_is_a_memory_error(
+    allocate: Callable[[int], int],
+) -> None:
+    """The cap (200 MB beyond the warm worker's own) refuses 400 MB in NumPy or in a numba
+    kernel as a MemoryError, not a crash; the worker lives on and takes 100 MB after."""
+
+    async def scenario(pool: WorkerPool) -> None:
+        first, _ = await call(pool, jobhooks.value, b"")
+        assert {worker.allowance for worker in pool.idle} == {200 * 2**20}
+        with pytest.raises(WorkerOutOfMemory):
+            await call(pool, allocate, 400)
+        assert await call(pool, allocate, 100) == 100 * 2**20
+        again, _ = await call(pool, jobhooks.value, b"")
+        assert again == first and pool.replaced == 0
+
+    with_pool(scenario, warm=jobhooks.warm_numeric, job_memory=200 * 2**20)
+
+
+def test_a_worker_that_crashes_is_replaced_and_says_how_it_ended() -> None:
+    async def scenario(pool: WorkerPool) -> int | None:
+        with pytest.raises(WorkerDied) as died:
+            await call(pool, jobhooks.crash)
+        await call(pool, jobhooks.value, b"")
+        return died.value.exitcode
+
+    assert with_pool(scenario) == -signal.SIGSEGV
+
+
+def alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    return True
+
+
+async def gone(pid: int) -> None:
+    """Wait until process ``pid`` has ended (its parent may reap it a moment later)."""
+    for _ in range(PATIENCE_S * 20):
+        with open(f"/proc/{pid}/stat") if alive(pid) else open(os.devnull) as stat:
+            if not alive(pid) or stat.read().split(") ")[1].startswith("Z"):
+                return
+        await asyncio.sleep(0.05)
+    raise AssertionError(f"process {pid} still runs")
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/self/stat"), reason="reads /proc")
+def test_a_killed_fork_server_takes_its_workers_with_it() -> None:
+    """Its busy worker too; the pool then starts a new fork server and new workers."""
+
+    async def scenario(pool: WorkerPool) -> None:
+        busy = await pool.acquire(60)
+        idle = await pool.acquire(60)
+        assert isinstance(busy, Worker) and isinstance(idle, Worker)
+        pool.release(idle, clean=True)
+        job = asyncio.ensure_future(busy.call(jobhooks.sleep_forever, ()))
+        await asyncio.sleep(0.5)
+        assert busy.process.pid is not None and idle.process.pid is not None
+        with open(f"/proc/{busy.process.pid}/stat") as stat:
+            fork_server = int(stat.read().split(") ")[1].split()[1])
+        os.kill(fork_server, signal.SIGKILL)
+        await gone(busy.process.pid)
+        await gone(idle.process.pid)
+        with pytest.raises(WorkerDied):
+            await asyncio.wait_for(job, PATIENCE_S)
+        pool.release(busy, clean=False)
+        pid, _ = await call(pool, jobhooks.value, b"")  # the dead idle worker is skipped
+        assert pid not in (busy.process.pid, idle.process.pid)
+
+    with_pool(scenario, count=2)
