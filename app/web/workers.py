@@ -25,7 +25,7 @@ writes, not the address space it merely reserves, so that numba's threads and gl
 do not trip it). A job whose time is up, or whose client left, is stopped in the worker
 (:func:`run_in_worker`: an exception raised in its Python code), so the warm worker lives on;
 only a job that does not stop within ``GRACE_SECONDS`` (a native loop) costs its worker. A
-worker's parent, the fork server, ending (the server was killed) ends it too.
+worker ends with the server, and with its parent, the fork server, however they end.
 
 Jobs travel as pickles of protocol 5: large buffers (``pickle.PickleBuffer``, NumPy arrays)
 go out of band, so a 200 MB upload is not copied into a pickle on its way; to a worker, those of
@@ -209,6 +209,7 @@ def serve(
     may run ``job_seconds``.
     """
     die_with_parent()
+    end_with_server()
     tune_allocator()
     allocator.enable_jobs()  # a job may keep freed memory while it runs (allocator.start_job)
     signal.signal(signal.SIGALRM, _stop_job)
@@ -245,6 +246,22 @@ def die_with_parent() -> None:
     prctl(ctypes.c_int(_PR_SET_PDEATHSIG), ctypes.c_ulong(signal.SIGKILL), 0, 0, 0)
     if os.getppid() != parent:  # the parent ended before the kernel was told
         os._exit(1)
+
+
+def end_with_server() -> None:
+    """End this worker as soon as the server that started it ends, even mid-job (a thread
+    waits for the server's end of the pipe it was started through to close). The fork server
+    alone would not: each worker holds the pipe that tells it the server ended, so it stays
+    while a busy worker does."""
+    server = multiprocessing.parent_process()
+    if server is None or server.sentinel is None:
+        return
+
+    def watch(sentinel: int) -> None:
+        wait([sentinel])
+        os._exit(1)
+
+    threading.Thread(target=watch, args=(server.sentinel,), name="server", daemon=True).start()
 
 
 def written_memory() -> int:
@@ -395,9 +412,13 @@ class Worker:
         """Wait until the worker's message can be read; WorkerDied if it ended instead. A wake
         without either (the loop may wake a reader early) waits again."""
         while True:
-            await self.readable()
-            if self.connection.poll():
-                return
+            try:
+                await self.readable()
+                if self.connection.poll():
+                    return
+            except OSError:  # the pipe was closed: the worker was stopped meanwhile
+                self.process.join()
+                raise WorkerDied(self.process.exitcode) from None
             if not self.process.is_alive():
                 raise WorkerDied(self.process.exitcode)
 
