@@ -56,6 +56,9 @@ BUSY = (
 #: system: soon (the job's answer has usually been sent by then), and once more later.
 TRIM_DELAYS_SECONDS = (1.0, 10.0)
 
+#: How often a job whose client left is asked to stop, until it does.
+STOP_AGAIN_SECONDS = 0.1
+
 NO_MEMORY = (
     "The server ran out of memory while working on this file; try again later, "
     "or send a smaller file."
@@ -334,9 +337,14 @@ class Jobs:
 async def stop(worker: Worker | ServerThread, job: asyncio.Future[Any]) -> bool:
     """Stop ``worker``'s job (its client left); True if it stopped within ``GRACE_SECONDS``
     (the worker lives on), False if the worker must be replaced."""
-    worker.interrupt()
-    done, _ = await asyncio.wait({job}, timeout=GRACE_SECONDS)
-    if not done:
+    loop = asyncio.get_running_loop()
+    deadline = loop.time() + GRACE_SECONDS
+    while not job.done() and loop.time() < deadline:
+        # Asked again until it stops: a client that leaves right after its body may do so
+        # before the worker has the job, when a stop is ignored.
+        worker.interrupt()
+        await asyncio.wait({job}, timeout=STOP_AGAIN_SECONDS)
+    if not job.done():
         return False
     error = job.exception()
     return not isinstance(error, WorkerDied | JobTimedOut)

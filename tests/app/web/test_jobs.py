@@ -147,3 +147,75 @@ def test_jobs_one_after_another_do_not_put_the_trim_off(monkeypatch: pytest.Monk
         assert pending.cancelled()
 
     run(scenario())
+
+
+def test_a_worker_s_memory_cap_is_by_default_the_budget_beyond_its_own() -> None:
+    from app.config import load_settings
+    from app.web import jobs
+
+    pool = jobs.Jobs(load_settings(in_process=False, memory_budget_mb=300)).pool
+    assert pool is not None
+    assert (pool.memory_limit, pool.job_memory) == (None, 300 * MB)
+    pool = jobs.Jobs(load_settings(in_process=False, worker_memory_mb=500)).pool
+    assert pool is not None
+    assert (pool.memory_limit, pool.job_memory) == (500 * MB, None)
+    assert jobs.Jobs(load_settings(in_process=False, job_seconds=7)).pool.job_seconds == 7  # type: ignore[union-attr]
+
+
+@pytest.mark.parametrize(
+    ("error", "allowance", "status", "words"),
+    [
+        ("time", 100 * MB, 422, "took longer than the 60 s one file may take here"),
+        ("memory", 100 * MB, 413, "needs more memory than the 100 MB this server gives one file"),
+        ("segfault", 100 * MB, 413, "needs more memory than the 100 MB"),
+        ("abort", 100 * MB, 413, "needs more memory than the 100 MB"),
+        ("killed", 100 * MB, 503, "ran out of memory"),
+        ("memory", None, 503, "ran out of memory"),
+        ("abort", None, 503, "ran out of memory"),
+    ],
+)
+def test_a_job_that_ran_out_of_time_or_memory_says_so(
+    error: str, allowance: int | None, status: int, words: str
+) -> None:
+    """Beyond its time or its worker's cap (MemoryError, or death by a signal that a failed
+    allocation gives) the file is the cause: 422 or 413, never "try again". A worker killed
+    from outside, or one without a cap, is the server's memory: 503, try again later."""
+    import signal
+    from types import SimpleNamespace
+
+    from app.config import load_settings
+    from app.web import jobs, workers
+
+    exceptions: dict[str, Exception] = {
+        "time": workers.JobTimedOut(),
+        "memory": workers.WorkerOutOfMemory(),
+        "segfault": workers.WorkerDied(-signal.SIGSEGV),
+        "abort": workers.WorkerDied(-signal.SIGABRT),
+        "killed": workers.WorkerDied(-signal.SIGKILL),
+    }
+    heavy = jobs.Jobs(load_settings(in_process=True, job_seconds=60))
+    request = SimpleNamespace(url=SimpleNamespace(path="/api/mesh"))
+    worker = SimpleNamespace(allowance=allowance)
+    answer = heavy._answer(request, worker, exceptions[error])  # type: ignore[arg-type]
+    assert answer.status_code == status and words in answer.error
+    assert (answer.field == "file") == (status != 503)
+    assert ("retry-after" in answer.headers) == (status == 503)
+
+
+def test_once_the_server_stops_no_job_runs_and_stopped_ones_say_so() -> None:
+    import signal
+    from types import SimpleNamespace
+
+    from app.config import load_settings
+    from app.web import jobs, workers
+
+    heavy = jobs.Jobs(load_settings(in_process=True))
+    heavy.shut_down()
+    with pytest.raises(ApiError) as refused:
+        run(heavy.run(None, MB, sum, [1]))  # type: ignore[arg-type]
+    assert refused.value.status_code == 503 and refused.value.error == jobs.SHUTTING_DOWN
+    request = SimpleNamespace(url=SimpleNamespace(path="/api/mesh"))
+    died = workers.WorkerDied(-signal.SIGKILL)
+    answer = heavy._answer(request, SimpleNamespace(allowance=MB), died)  # type: ignore[arg-type]
+    assert answer.error == jobs.SHUTTING_DOWN and "retry-after" in answer.headers
+    heavy.close()

@@ -16,6 +16,7 @@ from collections.abc import Callable, Iterator
 from contextlib import suppress
 from pathlib import Path
 from typing import Any
+from urllib.parse import quote
 
 import httpx
 import pytest
@@ -166,6 +167,33 @@ def test_clients_that_leave_mid_body_leave_no_traceback(server: Server, tmp_path
     log = server.log.read_text()
     assert "Traceback" not in log and "ClientDisconnect" not in log, log
     assert len(log.splitlines()) < 20, log
+
+
+def test_clients_that_leave_right_after_their_body_cost_no_worker(
+    server: Server, tmp_path: Path
+) -> None:
+    """Each job (which would run for ever) is stopped, however early its client left, and the
+    one worker lives on: every job, and the next upload, ran in the same process."""
+    folders = [tmp_path / f"gone{number}" for number in range(5)]
+    for folder in folders:
+        folder.mkdir()
+        head = (
+            f"POST /api/mesh?filename={quote(str(folder / 'cube.obj'))} HTTP/1.1\r\nHost: x\r\n"
+            f"Content-Length: {len(CUBE_OBJ)}\r\n\r\n{CUBE_OBJ}"
+        )
+        with socket.create_connection(("127.0.0.1", server.port), timeout=PATIENCE_S) as client:
+            client.sendall(head.encode())
+    (tmp_path / "fine").mkdir()
+    (tmp_path / "fine" / "release").touch()
+    answer = server.upload(tmp_path / "fine")
+    assert answer.status_code == 200 and answer.json()["faces"] == 12
+    pids = {
+        (folder / "started").read_text()
+        for folder in [*folders, tmp_path / "fine"]
+        if (folder / "started").exists()
+    }
+    assert len(pids) == 1, "a worker was replaced"
+    assert not any((folder / "finished").exists() for folder in folders)
 
 
 @pytest.fixture
