@@ -282,7 +282,7 @@ def test_a_dtd_is_refused_in_any_encoding(encoding: str) -> None:
     [
         ("3mf_utf16_dtd.3mf", 400, "The 3MF file's XML declares a DTD (or entities)"),
         ("3mf_billion_laughs_utf16.3mf", 400, "The 3MF file's XML declares a DTD (or entities)"),
-        ("3mf_in_zip.zip", 413, "the 3MF file's XML elements would take about"),
+        ("3mf_in_zip.zip", 413, "the 3MF file's XML elements would take"),
         (
             "3mf_2500_placements.3mf",
             413,
