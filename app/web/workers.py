@@ -67,6 +67,10 @@ TIMED_OUT, CANCELLED = "timed out", "cancelled"
 #: code, not inside a kernel or a NumPy call.
 GRACE_SECONDS = 2.0
 
+#: What a worker that ran out of memory while it received a job says with NO_MEMORY: it ends,
+#: as what is left of the job in the pipe cannot be told from the next one.
+LEAVING = "leaving"
+
 #: The signal that asks a worker to stop its job (its time limit is SIGALRM, its own timer).
 STOP_SIGNAL = signal.SIGUSR1
 
@@ -219,8 +223,14 @@ def serve(
             warm()
         connection.send(("ready", cap_memory(memory_limit, job_memory)))
         while True:
+            try:
+                job = received(connection)
+            except MemoryError:  # beyond the cap already: the rest of the message is unread
+                send(connection, (NO_MEMORY, LEAVING))
+                return
             # Unpickled in the job: a job too large for the memory cap fails as any other.
-            outcome = run_in_worker(run_job, received(connection), job_seconds)
+            outcome = run_in_worker(run_job, job, job_seconds)
+            del job
             try:
                 send(connection, outcome)
             except MemoryError:  # pickling the value failed: nothing was sent yet
@@ -236,9 +246,9 @@ _PR_SET_PDEATHSIG = 1
 
 
 def die_with_parent() -> None:
-    """Have the kernel kill this worker when its parent, the fork server, ends (Linux). The
-    fork server ends when the server does, however it ends (its pipe from the server closes);
-    without this, a busy worker would run its job on, outside the server's tree."""
+    """Have the kernel kill this worker when its parent, the fork server, ends (Linux):
+    without this, a busy worker of a killed fork server runs its job on, outside the server's
+    tree. The server's own end is :func:`end_with_server`'s."""
     prctl = allocator.libc("prctl")
     if prctl is None:
         return
@@ -372,6 +382,7 @@ class Worker:
         job_seconds: float | None = None,
     ) -> None:
         self.job_seconds = job_seconds
+        self.leaving = False  # the worker said it ends after this job (LEAVING)
         #: The memory a job may take in this worker (bytes; None: no cap), once it is ready.
         self.allowance: int | None = None
         self.connection, child = context.Pipe()
@@ -439,10 +450,20 @@ class Worker:
             await loop.run_in_executor(
                 None, send, self.connection, (function, tuple(args)), SHARED_FROM
             )
-        except (BrokenPipeError, OSError):
+        except (BrokenPipeError, OSError):  # it ended while the job was on its way
             self.process.join()
-            raise WorkerDied(self.process.exitcode) from None
-        return ended(*await self.answer())
+            ending, value = self.last_word()
+        else:
+            ending, value = await self.answer()
+        self.leaving = ending == NO_MEMORY and value == LEAVING
+        return ended(ending, value)
+
+    def last_word(self) -> Any:
+        """What an ended worker said before it ended (it may say why), else WorkerDied."""
+        with suppress(EOFError, OSError):
+            if self.connection.poll():
+                return receive(self.connection)
+        raise WorkerDied(self.process.exitcode)
 
     def interrupt(self) -> None:
         """Ask the worker to stop its job: :meth:`call` then ends (JobCancelled, or however
@@ -627,7 +648,7 @@ class WorkerPool:
         if isinstance(worker, ServerThread):
             return  # its thread ends with its small job
         self.busy.discard(worker)
-        if clean and worker.process.is_alive():
+        if clean and not worker.leaving and worker.process.is_alive():
             self.idle.append(worker)
             self._notify()
             return

@@ -345,6 +345,20 @@ def test_a_job_past_its_worker_s_memory_cap_is_a_memory_error(
     with_pool(scenario, warm=jobhooks.warm_numeric, job_memory=200 * 2**20)
 
 
+def test_a_job_whose_message_is_beyond_the_cap_is_a_memory_error_and_its_worker_replaced() -> None:
+    """80 MB of bytes travel inside the pickle, which the worker cannot take in 30 MB: it says
+    so and ends (the rest of the message is unread); a new worker takes the next job."""
+
+    async def scenario(pool: WorkerPool) -> None:
+        first, _ = await call(pool, jobhooks.value, b"")
+        with pytest.raises(WorkerOutOfMemory):
+            await call(pool, jobhooks.value, b"x" * (80 * 2**20))
+        again, _ = await call(pool, jobhooks.value, b"")
+        assert again != first and pool.replaced == 1
+
+    with_pool(scenario, warm=jobhooks.warm_numeric, job_memory=30 * 2**20)
+
+
 def test_a_worker_that_crashes_is_replaced_and_says_how_it_ended() -> None:
     async def scenario(pool: WorkerPool) -> int | None:
         with pytest.raises(WorkerDied) as died:
