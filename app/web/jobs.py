@@ -43,6 +43,7 @@ from app.web.workers import (
     WorkerPool,
 )
 from mesh_normal.allocator import give_back
+from mesh_normal.files import expansion
 
 logger = logging.getLogger(__name__)
 
@@ -206,6 +207,7 @@ class Jobs:
                 memory_limit=None if limit is None else int(limit * 2**20),
                 job_memory=settings.memory_budget if limit is None else None,
                 job_seconds=settings.job_seconds,
+                expansion_most=settings.expansion_limit,
             )
         )
 
@@ -240,6 +242,8 @@ class Jobs:
                 if self.closing:
                     raise shutting_down()
                 if self.pool is None:
+                    # This task's context, which the thread runs in: no other request's.
+                    expansion.set_most(self.settings.expansion_limit)
                     try:
                         return await run_in_threadpool(function, *args)
                     except MemoryError:

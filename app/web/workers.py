@@ -56,6 +56,7 @@ from typing import Any
 
 from app.web.errors import ApiError
 from mesh_normal import allocator
+from mesh_normal.files import expansion
 
 #: How a worker's job ended: its value, a refusal (an ApiError's status, sentence and field),
 #: memory exhausted, a crash (the traceback, for the log), its time up, or stopped on request.
@@ -204,14 +205,18 @@ def serve(
     memory_limit: int | None,
     job_memory: int | None = None,
     job_seconds: float | None = None,
+    expansion_most: int | None = None,
 ) -> None:
     """A worker's life: warm up, cap its memory, say so, then run one job after another until
     the pipe closes.
 
     The cap is ``memory_limit`` bytes in all, or else ``job_memory`` bytes beyond what the warm
     worker holds; the word ``ready`` comes with what that leaves a job (None: no cap). Each job
-    may run ``job_seconds``.
+    may run ``job_seconds``, and its upload may expand into at most ``expansion_most`` bytes
+    (:mod:`mesh_normal.files.expansion`).
     """
+    if expansion_most is not None:
+        expansion.set_most(expansion_most)
     die_with_parent()
     end_with_server()
     tune_allocator()
@@ -380,6 +385,7 @@ class Worker:
         memory_limit: int | None,
         job_memory: int | None = None,
         job_seconds: float | None = None,
+        expansion_most: int | None = None,
     ) -> None:
         self.job_seconds = job_seconds
         self.leaving = False  # the worker said it ends after this job (LEAVING)
@@ -388,7 +394,7 @@ class Worker:
         self.connection, child = context.Pipe()
         self.process: BaseProcess = context.Process(  # type: ignore[attr-defined]
             target=serve,
-            args=(child, warm, memory_limit, job_memory, job_seconds),
+            args=(child, warm, memory_limit, job_memory, job_seconds, expansion_most),
             daemon=True,
             name="mesh-worker",
         )
@@ -521,14 +527,16 @@ class WorkerPool:
         memory_limit: int | None = None,
         job_memory: int | None = None,
         job_seconds: float | None = None,
+        expansion_most: int | None = None,
     ) -> None:
-        """``memory_limit``, ``job_memory`` and ``job_seconds``: each worker's limits
-        (:func:`serve`)."""
+        """``memory_limit``, ``job_memory``, ``job_seconds`` and ``expansion_most``: each
+        worker's limits (:func:`serve`)."""
         self.count = count
         self.warm = warm
         self.memory_limit = memory_limit
         self.job_memory = job_memory
         self.job_seconds = job_seconds
+        self.expansion_most = expansion_most
         self.context = multiprocessing.get_context("forkserver")
         self.context.set_forkserver_preload(list(preload))
         self.idle: deque[Worker] = deque()
@@ -594,7 +602,12 @@ class WorkerPool:
         """A new worker process (in a thread: starting one blocks), or None, that process
         stopped again, if the pool was closed (a new generation) while it started."""
         worker = Worker(
-            self.context, self.warm, self.memory_limit, self.job_memory, self.job_seconds
+            self.context,
+            self.warm,
+            self.memory_limit,
+            self.job_memory,
+            self.job_seconds,
+            self.expansion_most,
         )
         with self._lock:
             if generation == self._generation:

@@ -39,19 +39,22 @@ class ExpansionTooLarge(MeshFileError):
 
 
 #: The most for one input when a budget is opened without one: MAX_EXPANSION, or what the
-#: process's owner set (:func:`set_most`: the server's operator, in each worker).
-_most = MAX_EXPANSION
+#: caller set for its context (:func:`set_most`: the server's operator's limit).
+_most: contextvars.ContextVar[int] = contextvars.ContextVar(
+    "mesh_normal_expansion_most", default=MAX_EXPANSION
+)
 
 
 def set_most(most: int) -> None:
-    """Set this process's most for one input (the server does, from its settings)."""
-    global _most
-    _most = most
+    """Set the most for one input in the current context: a worker process's whole life (it
+    runs its jobs in its main thread), or a request's task and the threads it starts."""
+    _most.set(most)
 
 
 def expansion_limit(size: int, most: int | None = None) -> int:
     """The most memory an input of ``size`` bytes may expand into."""
-    return min(_most if most is None else most, max(MIN_EXPANSION, EXPANSION_RATIO * size))
+    most = _most.get() if most is None else most
+    return min(most, max(MIN_EXPANSION, EXPANSION_RATIO * size))
 
 
 def megabytes(count: float) -> str:

@@ -24,6 +24,7 @@ from app.web.workers import (
     WorkerPool,
 )
 from mesh_normal import allocator
+from mesh_normal.files import expansion
 from tests.app import jobhooks
 from tests.meshes import binary_stl
 
@@ -411,3 +412,10 @@ def test_a_killed_fork_server_takes_its_workers_with_it() -> None:
         assert pid not in (busy.process.pid, idle.process.pid)
 
     with_pool(scenario, count=2)
+
+
+def test_a_worker_limits_what_an_upload_expands_into_as_the_pool_says() -> None:
+    async def scenario(pool: WorkerPool) -> int:
+        return int(await call(pool, expansion.expansion_limit, 2**40))
+
+    assert with_pool(scenario, expansion_most=300 * 2**20) == 300 * 2**20

@@ -19,10 +19,13 @@ def test_the_limit_is_a_ratio_of_the_size_between_a_least_and_a_most() -> None:
     assert expansion.expansion_limit(10 * 2**20, most=300 * 2**20) == 300 * 2**20
 
 
-def test_set_most_sets_the_process_most(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(expansion, "_most", expansion.MAX_EXPANSION)
-    expansion.set_most(512 * 2**20)
-    assert expansion.expansion_limit(2**30) == 512 * 2**20
+def test_set_most_sets_the_most_of_its_context_alone() -> None:
+    def limited() -> int:
+        expansion.set_most(512 * 2**20)
+        return expansion.expansion_limit(2**30)
+
+    assert contextvars.copy_context().run(limited) == 512 * 2**20
+    assert expansion.expansion_limit(2**30) == expansion.MAX_EXPANSION
 
 
 def test_a_charge_past_the_limit_is_a_413_naming_what_expanded() -> None:
