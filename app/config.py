@@ -79,8 +79,9 @@ class Settings(BaseSettings):
     machine's or container's memory). ``queue_seconds``: how long a job waits for a slot
     before the answer is a 503. ``queue_length``: the most jobs waiting at once. ``in_process``:
     run the jobs in threads of the server process instead (tests, debugging: no abort or
-    cancellation protection). ``worker_memory_mb``: an address-space limit per worker (off
-    by default). ``expansion_limit_mb``: the most memory one upload may expand into.
+    cancellation protection). ``worker_memory_mb``: each worker's memory cap in all
+    (``RLIMIT_DATA``); unset, a worker may take the whole ``memory_budget_mb`` beyond what it
+    holds once warm. ``expansion_limit_mb``: the most memory one upload may expand into.
     ``job_seconds``: how long one heavy job may run.
     """
 

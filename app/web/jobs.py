@@ -4,7 +4,8 @@ A job says up front how much memory it may take (its estimate). It runs when a s
 and its estimate fits in what the running jobs leave of the budget; otherwise it waits, at
 most ``queue_seconds`` and behind at most ``queue_length`` others, and then the answer is a
 503 with ``Retry-After``. A job whose estimate alone exceeds the whole budget is a 413: no
-wait would help. Pages, static files and the calculator never come here, so they never wait.
+wait would help. Pages, static files and the calculator's single triangles never come here,
+so they never wait; a large calculator batch does (:mod:`app.calculator.batch`).
 
 The jobs run in :class:`app.web.workers.WorkerPool` processes (or, with ``in_process``, in
 threads of the server, for tests and debugging, without the limits below). Each job may run
