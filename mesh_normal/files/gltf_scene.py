@@ -15,8 +15,8 @@ from __future__ import annotations
 from collections import Counter
 from typing import Any, TypeGuard
 
-from mesh_normal.files import expansion
 from mesh_normal.files.errors import MeshFileError
+from mesh_normal.files.expansion import charge
 from mesh_normal.files.gltf_buffers import ITEM_BYTES, WIDTH
 from mesh_normal.files.loaded import MAX_TRIANGLES
 
@@ -41,11 +41,11 @@ def check_scene(header: dict[str, Any]) -> None:
     """
     children = _children(header)
     _check_tree(children)
-    expansion.charge(_copied_accessors(header), "the glTF file's accessors")
+    charge(_copied_accessors(header), "the glTF file's accessors")
     triangles, cost = _placed(header, children)
     if triangles > MAX_TRIANGLES:
         raise MeshFileError(f"The glTF file's nodes place more than {MAX_TRIANGLES:,} triangles.")
-    expansion.charge(cost, f"the glTF file's nodes, placing {triangles:,} triangles,")
+    charge(cost, f"the glTF file's nodes, placing {triangles:,} triangles,")
 
 
 def _is_index(value: object, size: int) -> TypeGuard[int]:

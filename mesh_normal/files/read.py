@@ -12,9 +12,9 @@ from pathlib import Path
 from typing import Protocol
 from urllib.parse import unquote
 
-from mesh_normal.files import expansion
 from mesh_normal.files.archive import is_zip
 from mesh_normal.files.errors import MeshFileError, failure_reason, unsupported
+from mesh_normal.files.expansion import expanding
 from mesh_normal.files.formats import FORMATS, SUFFIXES, suffix_format
 from mesh_normal.files.loaded import LoadedMesh
 from mesh_normal.files.stl import HEADER, RECORD, is_binary, looks_ascii
@@ -62,7 +62,7 @@ def read_mesh(source: MeshSource, filename: str | None = None) -> LoadedMesh:
     if mapped is not None:
         return read_mapped(mapped, filename or Path(source).name)  # type: ignore[arg-type]
     data, filename = source_bytes(source, filename)
-    with expansion.expanding(len(data)):  # one budget for all it expands into
+    with expanding(len(data)):  # one budget for all it expands into
         return _read_bytes(data, filename, source)
 
 
@@ -167,7 +167,7 @@ def read_mesh_files(files: Iterable[tuple[str | None, bytes]]) -> LoadedMesh:
     from mesh_normal.files.archive import read_files
 
     parts = list(files)
-    with expansion.expanding(sum(len(data) for _, data in parts)):
+    with expanding(sum(len(data) for _, data in parts)):
         return read_files(parts, read_mesh)
 
 

@@ -37,9 +37,9 @@ from defusedxml import DefusedXmlException
 from defusedxml.ElementTree import iterparse
 from numpy.typing import NDArray
 
-from mesh_normal.files import expansion
 from mesh_normal.files.archive import UNPACK_ERRORS, open_zip, opened_zip, unpack
 from mesh_normal.files.errors import MeshFileError, unsupported
+from mesh_normal.files.expansion import ExpansionTooLarge, charge, expanding, megabytes
 from mesh_normal.files.loaded import MAX_TRIANGLES, LoadedMesh, build
 
 #: Where a 3MF package keeps its model unless ``_rels/.rels`` says otherwise.
@@ -106,7 +106,7 @@ class _Object:
 
 def read_3mf(data: bytes) -> LoadedMesh:
     """Read a 3MF package (see the module docstring)."""
-    with expansion.expanding(len(data)):
+    with expanding(len(data)):
         return _read(data)
 
 
@@ -127,7 +127,7 @@ def _read(data: bytes) -> LoadedMesh:
     triangles, vertices = sum(cost[0] for cost in costs), sum(cost[1] for cost in costs)
     if triangles > MAX_TRIANGLES:
         raise MeshFileError(f"The 3MF file's build makes more than {MAX_TRIANGLES:,} triangles.")
-    expansion.charge(
+    charge(
         triangles * PLACED_TRIANGLE_BYTES + vertices * PLACED_VERTEX_BYTES,
         f"the 3MF file's build, placing {triangles:,} triangles and {vertices:,} vertices,",
     )
@@ -166,7 +166,7 @@ def _model_part_name(archive: zipfile.ZipFile, members: dict[str, zipfile.ZipInf
         return MODEL_PART
     try:
         root, _ = _parse(unpack(archive, rels, "3MF file"))
-    except expansion.ExpansionTooLarge:
+    except ExpansionTooLarge:
         raise
     except MeshFileError:
         return MODEL_PART  # a broken relationships part: the model may still be where usual
@@ -189,9 +189,7 @@ class _Leaves:
 def _parse(xml: bytes) -> tuple[ET.Element, dict[ET.Element, _Leaves]]:
     """The XML's tree without its vertices and triangles, and those of each ``<mesh>``; XML
     that declares a DTD or entities is refused, whatever its encoding."""
-    expansion.charge(
-        len(xml) * XML_PER_BYTE, f"parsing the 3MF file's XML ({expansion.megabytes(len(xml))})"
-    )
+    charge(len(xml) * XML_PER_BYTE, f"parsing the 3MF file's XML ({megabytes(len(xml))})")
     try:
         return _streamed(xml)
     except DefusedXmlException:
@@ -236,7 +234,7 @@ def _streamed(xml: bytes) -> tuple[ET.Element, dict[ET.Element, _Leaves]]:
             leaves = None
         kept += 1
         if kept >= KEPT_BATCH:
-            expansion.charge(kept * KEPT_BYTES, "the 3MF file's XML elements")
+            charge(kept * KEPT_BYTES, "the 3MF file's XML elements")
             kept = 0
     assert root is not None  # the parser raises for XML without an element
     return root, meshes
