@@ -11,7 +11,7 @@ UV := $(shell command -v uv 2>/dev/null || echo .tools/bin/uv)
 HOST ?= 127.0.0.1
 PORT ?= 8000
 
-.PHONY: run test lint bench bench-mesh bench-mesh-e2e bench-readers bench-orient bench-points bench-soak bench-memory bench-startup bench-batch env clean vendor
+.PHONY: run test lint bench bench-hostile bench-mesh bench-mesh-e2e bench-readers bench-orient bench-points bench-soak bench-memory bench-startup bench-batch env clean vendor
 
 # uv itself comes from PyPI when the machine does not have it yet.
 .tools/bin/uv:
@@ -73,6 +73,10 @@ bench-points: .venv/.test
 # The batch on small STL files: 1 vs 2 local workers, per-file overhead; ARGS="--files 100".
 bench-batch: .venv/.test
 	.venv/bin/python -m benchmarks.batch $(ARGS)
+
+# The hostile uploads (tests/data/hostile/ and larger generated ones) against a real server.
+bench-hostile: .venv/.test
+	.venv/bin/python -m benchmarks.hostile $(ARGS)
 
 bench-memory: .venv/.test
 	.venv/bin/python -m benchmarks.memory

@@ -151,6 +151,20 @@ def wait_until_ready(server: Server, process: subprocess.Popen[bytes]) -> None:
     reply = httpx.post(server.url + MESH, files=files, timeout=120)
     if reply.status_code != 200:
         raise RuntimeError(f"the first upload was answered {reply.status_code}: {reply.text}")
+    settle(server.root)
+
+
+def settle(root: psutil.Process, seconds: float = 60) -> None:
+    """Wait until the other workers have warmed up too (the server tree's memory steady for 2 s,
+    at most ``seconds``), so that the first row's figures are its own."""
+    deadline = time.monotonic() + seconds
+    steady_since, last = time.monotonic(), tree_memory(root)
+    while time.monotonic() < deadline and time.monotonic() - steady_since < 2:
+        time.sleep(0.2)
+        now = tree_memory(root)
+        if abs(now - last) > 5 * 2**20:
+            steady_since = time.monotonic()
+        last = now
 
 
 def stop(process: subprocess.Popen[bytes], root: psutil.Process) -> None:
