@@ -217,6 +217,7 @@ def serve(
     """
     if expansion_most is not None:
         expansion.set_most(expansion_most)
+    os.nice(WORKER_NICENESS)  # the server's pages come first when the cores are busy
     die_with_parent()
     end_with_server()
     tune_allocator()
@@ -245,6 +246,10 @@ def serve(
     except (EOFError, OSError):  # the server closed the pipe: it no longer needs this worker
         return
 
+
+#: How much lower than the server's a worker's scheduling priority is: a job of seconds may
+#: wait a moment for a core; a page waiting behind it is what a user sees.
+WORKER_NICENESS = 5
 
 #: Linux's ``prctl`` option: the signal this process gets when its parent ends.
 _PR_SET_PDEATHSIG = 1

@@ -419,3 +419,10 @@ def test_a_worker_limits_what_an_upload_expands_into_as_the_pool_says() -> None:
         return int(await call(pool, expansion.expansion_limit, 2**40))
 
     assert with_pool(scenario, expansion_most=300 * 2**20) == 300 * 2**20
+
+
+def test_a_worker_runs_at_a_lower_priority_than_the_server() -> None:
+    async def scenario(pool: WorkerPool) -> int:
+        return int(await call(pool, os.nice, 0))
+
+    assert with_pool(scenario) == min(os.nice(0) + workers.WORKER_NICENESS, 19)
