@@ -11,7 +11,7 @@ UV := $(shell command -v uv 2>/dev/null || echo .tools/bin/uv)
 HOST ?= 127.0.0.1
 PORT ?= 8000
 
-.PHONY: run test lint bench bench-hostile bench-mesh bench-mesh-e2e bench-readers bench-orient bench-points bench-soak bench-memory bench-startup bench-batch env clean vendor
+.PHONY: run test lint docs docs-serve bench bench-hostile bench-mesh bench-mesh-e2e bench-readers bench-orient bench-points bench-soak bench-memory bench-startup bench-batch env clean vendor
 
 # uv itself comes from PyPI when the machine does not have it yet.
 .tools/bin/uv:
@@ -50,8 +50,17 @@ lint: .venv/.test
 	.venv/bin/ruff check mesh_normal app tests benchmarks
 	.venv/bin/mypy
 
-test: lint
+test: lint docs
 	.venv/bin/pytest
+
+# The documentation site (mkdocs.yml, docs/): built strictly, so that a broken link or a missing
+# reference fails; `make docs-serve` previews it at http://127.0.0.1:8001 as it is edited.
+export NO_MKDOCS_2_WARNING := 1
+docs: .venv/.test
+	.venv/bin/mkdocs build --strict --quiet
+
+docs-serve: .venv/.test
+	.venv/bin/mkdocs serve --dev-addr 127.0.0.1:8001
 
 bench: .venv/.test
 	.venv/bin/python -m benchmarks.run
