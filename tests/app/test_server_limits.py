@@ -1,6 +1,7 @@
-"""The server's limits: the same uvicorn options in the Dockerfile's CMD and in `make run`, read by
-uvicorn's own command line, and what they do on a real server (a huge header, the connection
-cap, an idle keep-alive connection)."""
+"""The server's limits: the same uvicorn options in the Dockerfile's CMD, in `make run` and on the
+operators' page (docs/operators.md, with every MESH_ setting), read by uvicorn's own command line,
+and what they do on a real server (a huge header, the connection cap, an idle keep-alive
+connection)."""
 
 from __future__ import annotations
 
@@ -18,7 +19,7 @@ import pytest
 
 from tests.paths import ROOT
 
-#: What each option must be (README, "Running it in public").
+#: What each option must be (docs/operators.md, "The server's limits").
 EXPECTED = {
     "http": "h11",
     "h11_max_incomplete_event_size": 16384,
@@ -61,6 +62,44 @@ def test_the_image_and_make_run_set_the_same_limits() -> None:
         assert image[name] == value, name
         assert local[name] == value, name
     assert (image["host"], image["port"]) == ("0.0.0.0", 8000)
+
+
+OPERATORS = ROOT / "docs" / "operators.md"
+
+
+def operators_table(heading: str) -> dict[str, str]:
+    """The first two cells of each row of the table under ``## heading`` on the operators' page,
+    the first without its backticks (``| `MESH_WORKERS` | 2 | ... |`` -> ``MESH_WORKERS: 2``)."""
+    text = OPERATORS.read_text(encoding="utf-8")
+    found = re.search(rf"^## {re.escape(heading)}\n(.*?)(?=^## |\Z)", text, re.M | re.S)
+    assert found, f"docs/operators.md has a section {heading!r}"
+    rows = re.findall(r"^\| `([^|]+)` \| ([^|]*) \|", found.group(1), re.M)
+    assert rows, f"the section {heading!r} has a table"
+    return {name.strip("` "): cell.strip() for name, cell in rows}
+
+
+def test_the_operators_page_lists_the_same_limits() -> None:
+    options = shlex.split(" ".join(operators_table("The server's limits")))
+    documented = uvicorn_params(["app.main:app", *options])
+    assert documented == uvicorn_params(["app.main:app", *makefile_limits()])
+    for name, value in EXPECTED.items():
+        assert documented[name] == value, name
+
+
+def test_the_operators_page_lists_every_setting_with_its_default() -> None:
+    from pydantic_core import PydanticUndefined
+
+    from app.config import Settings
+
+    table = operators_table("Settings")
+    names = {f"MESH_{name.upper()}": field for name, field in Settings.model_fields.items()}
+    assert set(table) == set(names)
+    for variable, field in names.items():
+        default = field.default
+        if default is None or default is PydanticUndefined:  # unset, or worked out at start
+            continue
+        expected = str(default).lower() if isinstance(default, bool) else f"{default:g}"
+        assert table[variable] == expected, variable
 
 
 def free_port() -> int:
