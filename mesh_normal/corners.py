@@ -70,7 +70,7 @@ def corner_normals(
         Indices into ``vertices``.
     crease_angle : float
         In degrees, from 0 to 180.
-    weighting : {"uniform", "area", "angle", "max"}
+    weighting : {"angle", "area", "uniform", "max"}
         As for :func:`mesh_normal.vertices.vertex_normals`.
 
     Returns

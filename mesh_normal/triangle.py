@@ -36,6 +36,27 @@ class TriangleNormal:
 
     ``None`` marks a value whose exact result is outside the double range; ``message``
     then says which and why. ``unit_normal`` is ``None`` only for a degenerate triangle.
+
+    Attributes
+    ----------
+    a, b, c : (3,) float
+        The corners as given, as floats.
+    order : str
+        ``"ABC"``, or ``"ACB"`` with ``swap_winding``.
+    u, v : (3,) float or None
+        The edges B - A and C - A (C - A and B - A for ``"ACB"``).
+    normal : (3,) float or None
+        The raw normal n = u x v.
+    magnitude : float or None
+        |n|, twice the area.
+    unit_normal : (3,) float or None
+        n / |n|; ``None`` for a degenerate triangle.
+    area : float or None
+        |n| / 2.
+    degenerate : bool
+        The exact n is zero (repeated or collinear points).
+    message : str or None
+        One sentence on a degenerate triangle or a value out of range; else ``None``.
     """
 
     a: Vector

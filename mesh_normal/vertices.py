@@ -422,7 +422,7 @@ def vertex_normals(
         None: ``vertex_normals(geometry, weighting="area")``).
     faces : (m, 3) int
         Indices into ``vertices``.
-    weighting : {"uniform", "area", "angle", "max"}
+    weighting : {"angle", "area", "uniform", "max"}
         How each face's normal counts at a vertex; see the module docstring.
 
     Returns

@@ -95,17 +95,20 @@ def batch(
     beyond its start) bound one file: a file over them is a row saying so. A second call with
     the same arguments runs only the files without a row yet (see :mod:`.driver`).
 
-    The columns are :data:`~mesh_normal.datasets.schema.SCHEMA`'s; for example, every
-    inside-out mesh bigger than 1 MB, in pandas::
-
-        table = mn.batch("meshes/", out="checked/")
-        df = table.to_pandas()
-        df[(df.orientation == "inward") & (df["size"] > 1_000_000)].path
+    The columns are :data:`~mesh_normal.datasets.schema.SCHEMA`'s.
 
     Raises
     ------
     ValueError
         For a bad option, or an input that names nothing (one sentence).
+
+    Examples
+    --------
+    Every inside-out mesh bigger than 1 MB, in pandas:
+
+    >>> table = mn.batch("meshes/", out="checked/")
+    >>> df = table.to_pandas()
+    >>> df[(df.orientation == "inward") & (df["size"] > 1_000_000)].path
     """
     return run_batch(
         [paths] if isinstance(paths, str) else list(paths),

@@ -36,13 +36,18 @@ _OBJ = re.compile(rb"^[ \t]*(?:v|f)[ \t]", re.MULTILINE)
 def read_mesh(source: MeshSource, filename: str | None = None) -> LoadedMesh:
     """Read a mesh file; the format comes from the bytes, else from the file name's extension.
 
-    >>> read_mesh("bunny.obj")                         # a path (str or os.PathLike)
-    >>> read_mesh(data, "bunny.obj")                   # bytes, with the name if known
-    >>> with open("bunny.obj", "rb") as file:          # a binary file object
-    ...     mesh = read_mesh(file)
+    Parameters
+    ----------
+    source : str, os.PathLike, bytes or binary file object
+        The file: a path, its bytes, or a file object opened in binary mode.
+    filename : str, optional
+        Only helps tell the format (and names it in notes); for a path or a file object
+        with a ``name`` it defaults to that name.
 
-    ``filename`` only helps tell the format (and names it in notes); for a path or a file object
-    with a ``name`` it defaults to that name.
+    Returns
+    -------
+    LoadedMesh
+        The vertices ``(n, 3)``, the triangles ``(m, 3)`` and what else the file holds.
 
     Raises
     ------
@@ -57,6 +62,13 @@ def read_mesh(source: MeshSource, filename: str | None = None) -> LoadedMesh:
         was never read, so there is no mesh to judge.
     TypeError
         A source of another type, or a file object opened in text mode.
+
+    Examples
+    --------
+    >>> read_mesh("bunny.obj")                         # a path (str or os.PathLike)
+    >>> read_mesh(data, "bunny.obj")                   # bytes, with the name if known
+    >>> with open("bunny.obj", "rb") as file:          # a binary file object
+    ...     mesh = read_mesh(file)
     """
     mapped = mapped_binary_stl(source)
     if mapped is not None:

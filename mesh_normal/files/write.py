@@ -86,10 +86,6 @@ def write_mesh(
 ) -> bytes | None:
     """The bytes of a mesh file, or, given ``path``, that file written.
 
-    >>> data = write_mesh(vertices, faces, "ply")         # bytes
-    >>> write_mesh(vertices, faces, path="fixed.obj")      # the format from the suffix
-    >>> write_mesh(vertices, faces, "glb", normals=corners, normals_kind="corner")
-
     Parameters
     ----------
     vertices : (n, 3) float
@@ -105,28 +101,33 @@ def write_mesh(
         Where to write the file (replaced if it exists, through a temporary file and a rename,
         so a failed write leaves the old file whole); the function then returns ``None``.
     vertex_colors : (n, 3) or (n, 4), optional
-        Vertex ``red green blue [alpha]`` (as :attr:`LoadedMesh.vertex_colors
-        <mesh_normal.files.LoadedMesh.vertex_colors>` holds them). PLY writes them in their
-        own type (``uchar`` 0-255, ``float`` 0-1, ...), OBJ as ``v x y z r g b`` floats 0-1
-        (no alpha); STL holds none and writes none. :func:`unkept` names what is left out.
+        Vertex ``red green blue [alpha]`` (as ``LoadedMesh.vertex_colors`` holds them). PLY
+        writes them in their own type (``uchar`` 0-255, ``float`` 0-1, ...), OBJ as
+        ``v x y z r g b`` floats 0-1 (no alpha); STL holds none and writes none.
+        :func:`unkept` names what is left out.
     face_colors : (m, 3) or (m, 4), optional
-        The colour of each triangle (as :attr:`LoadedMesh.face_colors
-        <mesh_normal.files.LoadedMesh.face_colors>` holds them): PLY writes them on its faces
-        in their own type, OFF after each face; STL, OBJ and GLB hold none.
+        The colour of each triangle (as ``LoadedMesh.face_colors`` holds them): PLY writes
+        them on its faces in their own type, OFF after each face; STL, OBJ and GLB hold none.
     normals : (n, 3), (m, 3) or (m, 3, 3) float, optional
         Vertex, face or corner normals (from :func:`mesh_normal.vertex_normals` and the
-        like), written as the format holds them (:data:`~mesh_normal.files.formats.
-        HOLDS_NORMALS`): OBJ ``vn`` of any kind; PLY ``nx ny nz`` of vertices or faces; GLB
-        ``NORMAL``, its vertices split where face or corner normals differ; OFF vertex
-        normals (``NOFF``); STL the face normals as its facet normals. A kind the format
-        cannot hold is left out: :func:`unkept` names it.
-    normals_kind : {"face", "vertex", "corner"}, optional
+        like), written as the format holds them
+        (:data:`~mesh_normal.files.formats.HOLDS_NORMALS`): OBJ ``vn`` of any kind; PLY
+        ``nx ny nz`` of vertices or faces; GLB ``NORMAL``, its vertices split where face or
+        corner normals differ; OFF vertex normals (``NOFF``); STL the face normals as its
+        facet normals. A kind the format cannot hold is left out: :func:`unkept` names it.
+    normals_kind : "face", "vertex" or "corner", optional
         Which ``normals`` are; without it, told from their shape (``(m, 3, 3)`` corner,
         ``(n, 3)`` vertex, ``(m, 3)`` face), a ``ValueError`` when ``n == m`` leaves it open.
     face_groups : (m,) int, optional
-        Each face's group, an index into ``group_names`` (as :attr:`LoadedMesh.face_groups
-        <mesh_normal.files.LoadedMesh.face_groups>`); OBJ writes them as ``o``/``g`` runs,
-        the other formats hold none.
+        Each face's group, an index into ``group_names`` (as ``LoadedMesh.face_groups``);
+        OBJ writes them as ``o``/``g`` runs, the other formats hold none.
+    group_names : sequence of str, optional
+        The groups' names (as ``LoadedMesh.group_names``); needed with ``face_groups``.
+
+    Returns
+    -------
+    bytes or None
+        The file's bytes; ``None`` when ``path`` was given and the file written.
 
     Raises
     ------
@@ -137,6 +138,12 @@ def write_mesh(
         coordinates STL cannot hold.
     OSError
         When ``path`` cannot be written, as Python raises it.
+
+    Examples
+    --------
+    >>> data = write_mesh(vertices, faces, "ply")         # bytes
+    >>> write_mesh(vertices, faces, path="fixed.obj")      # the format from the suffix
+    >>> write_mesh(vertices, faces, "glb", normals=corners, normals_kind="corner")
     """
     if file_format is None and path is None:
         raise TypeError("write_mesh needs a file_format or a path to take the format from.")

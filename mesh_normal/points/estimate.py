@@ -58,7 +58,25 @@ QUERY_CHUNK = 2**17
 
 
 class PointStatus(IntEnum):
-    """Why a point has its normal, or has none (``PointNormals.status``, uint8)."""
+    """Why a point has its normal, or has none (``PointNormals.status``, uint8).
+
+    Attributes
+    ----------
+    ok : 0
+        A unit normal, oriented as asked.
+    not_finite : 1
+        A coordinate is NaN or infinite.
+    too_few_neighbours : 2
+        Fewer than three points in its neighbourhood, itself included.
+    duplicates : 3
+        Its neighbourhood's points coincide (to rounding).
+    collinear : 4
+        They lie on a line (to rounding, or 2**-20 of their length).
+    ambiguous : 5
+        Two directions are equally flat (e.g. a symmetric corner).
+    unoriented : 6
+        A unit normal, but its side could not be decided; see ``components``.
+    """
 
     ok = 0  #: a unit normal, oriented as asked
     not_finite = 1  #: a coordinate is NaN or infinite

@@ -64,10 +64,18 @@ _SEED_DIRECTIONS = tuple(
 class ComponentOrientation:
     """How one connected part of the cloud was oriented.
 
-    ``points`` counts its points that have a normal; ``flipped`` those whose normal was turned;
-    ``unoriented`` those whose side could not be decided (their normal keeps its canonical sign);
-    ``reason`` says why in one sentence, or is empty when every point was oriented; ``seed`` is
-    the input index of the point that decided its side (-1 when none did).
+    Attributes
+    ----------
+    points : int
+        Its points that have a normal.
+    flipped : int
+        Those whose normal was turned.
+    unoriented : int
+        Those whose side could not be decided (their normal keeps its canonical sign).
+    reason : str
+        Why, in one sentence; empty when every point was oriented.
+    seed : int
+        The input index of the point that decided its side (-1 when none did).
     """
 
     points: int

@@ -80,11 +80,18 @@ def read_points(source: MeshSource, filename: str | None = None) -> PointCloud:
     """Read a point-cloud file (or a mesh file, as its vertices); the format comes from the
     bytes, else from the file name's extension.
 
-    >>> read_points("scan.pcd")
-    >>> read_points(data, "scan.xyz")      # bytes, with the name if known
+    Parameters
+    ----------
+    source : str, os.PathLike, bytes or binary file object
+        The file: a path, its bytes, or a file object opened in binary mode.
+    filename : str, optional
+        Helps tell the format and the columns of a text table (``.xyzn``, ``.xyzrgb``,
+        ``.pts``); for a path or a file object with a ``name`` it defaults to it.
 
-    ``filename`` helps tell the format and the columns of a text table (``.xyzn``,
-    ``.xyzrgb``, ``.pts``); for a path or a file object with a ``name`` it defaults to it.
+    Returns
+    -------
+    PointCloud
+        The points ``(n, 3)`` and what else the file holds (normals, colours, a viewpoint).
 
     Raises
     ------
@@ -94,6 +101,11 @@ def read_points(source: MeshSource, filename: str | None = None) -> PointCloud:
     OSError, TypeError
         As :func:`~mesh_normal.files.read_mesh` raises them (a path that cannot be opened, a
         source of another type).
+
+    Examples
+    --------
+    >>> read_points("scan.pcd")
+    >>> read_points(data, "scan.xyz")      # bytes, with the name if known
     """
     data, filename = source_bytes(source, filename)
     if not data:

@@ -38,8 +38,16 @@ def write_points(
     Parameters
     ----------
     points : (n, 3) float
+        Finite coordinates.
     normals : (n, 3) float, optional
+        One normal a point, finite (zeros for a point without one).
     fmt : {"ply", "xyz", "csv"}
+        Binary little-endian PLY of doubles, or text that reads back to the same doubles.
+
+    Returns
+    -------
+    bytes
+        The file.
 
     Raises
     ------
