@@ -4,7 +4,7 @@
 #   docker run --rm -p 8000:8000 mesh-normal-calculator
 #   docker run --rm --read-only --tmpfs /tmp -p 8000:8000 mesh-normal-calculator   # read-only root
 #
-# Nothing is written at run time but uploads over 1 MB, spooled to /tmp (a tmpfs there is enough):
+# Nothing is written at run time but the worker processes' sockets in /tmp (a tmpfs is enough):
 # the mesh kernels are compiled into the image, and numba reads their cache without writing it.
 #
 # Two stages: the builder installs the locked runtime dependencies (uv.lock: the library's own and
@@ -76,7 +76,7 @@ EXPOSE 8000
 HEALTHCHECK --interval=30s --timeout=5s --start-period=10s --retries=3 \
     CMD ["python", "-c", "import urllib.request; urllib.request.urlopen('http://127.0.0.1:8000/healthz', timeout=4)"]
 
-# The server's limits (README, "Running it in public"): h11 caps a request's header at about
+# The server's limits (docs/operators.md): h11 caps a request's header at about
 # 16 KB (httptools takes any size), idle keep-alive connections close after 5 s, more than 100
 # connections at once get a 503, and a stop lets requests in flight finish for up to 8 s
 # (within `docker stop`'s 10 s). Read timeouts for headers and bodies belong to the proxy in

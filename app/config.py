@@ -2,7 +2,7 @@
 
 The constants are fixed by design; :class:`Settings` holds what an operator may change
 through the environment (``MESH_UPLOAD_LIMIT_MB``, ``MESH_PUBLIC_URL`` and the heavy-job
-settings; the README's section for operators lists them).
+settings; docs/operators.md lists them).
 """
 
 from __future__ import annotations
