@@ -1,6 +1,6 @@
 """Orienting meshes: our ``orient`` against trimesh's and libigl's, side by side in one run.
 
-    make bench-orient     # or: .venv/bin/python -m benchmarks.orientation [--repeats 5]
+    make bench-orient  # or: python -m benchmarks.orientation [--repeats 5] [--markdown PATH]
 
 Peers: ``trimesh.repair.fix_normals`` (consistent winding by a breadth-first walk, then the
 volume's sign for watertight meshes only: open parts are not turned outward) and libigl's
@@ -29,6 +29,7 @@ from collections.abc import Callable
 import numpy as np
 import trimesh
 
+from benchmarks import tables
 from mesh_normal.orientation import orient
 
 
@@ -119,15 +120,17 @@ def best(function: Callable[[], object], repeats: int) -> float:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=5)
+    tables.add_option(parser)
     args = parser.parse_args()
+    out = tables.Report(args.markdown)
     tools: dict[str, Callable[[np.ndarray, np.ndarray], np.ndarray]] = {
         "mesh_normal": ours,
         "trimesh": trimesh_fix,
     }
     if importlib.util.find_spec("igl") is not None:
         tools["libigl"] = igl_fix
-    print("| case | faces | " + " | ".join(f"{t} s (ratio), outward" for t in tools) + " |")
-    print("|---|---:|" + "---:|" * len(tools))
+    out.print("| case | faces | " + " | ".join(f"{t} s (ratio), outward" for t in tools) + " |")
+    out.print("|---|---:|" + "---:|" * len(tools))
     for name, build in CASES.items():
         vertices, outward = build()
         faces = outward[:, ::-1].copy()
@@ -137,7 +140,8 @@ def main() -> None:
             mine = mine or seconds
             share = outward_share(fix(vertices, faces), outward)
             cells.append(f"{seconds:.3f} ({seconds / mine:.2f}), {share:.0%}")
-        print(f"| {name} | {len(faces):,} | " + " | ".join(cells) + " |")
+        out.print(f"| {name} | {len(faces):,} | " + " | ".join(cells) + " |")
+    out.write()
 
 
 if __name__ == "__main__":

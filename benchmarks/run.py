@@ -1,6 +1,6 @@
 """Side-by-side speed measurements for the calculator issue.
 
-    make bench            # or: .venv/bin/python -m benchmarks.run [--seconds 10] [--rounds 3]
+    .venv/bin/python -m benchmarks.run [--seconds 10] [--rounds 3] [--markdown PATH]
 
 1. Requests per second of POST /api/normal against bare FastAPI echo endpoints, each app on
    its own single uvicorn worker, measured alternately in one run with wrk (Debian's package):
@@ -27,6 +27,8 @@ import urllib.request
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
+
+from benchmarks import tables
 
 BODY = (
     '{"a": [1.5, -2.25, 0.1], "b": [4.0, 0.5, -3.0], "c": [0.3, 7.0, 2.5], "swap_winding": false}'
@@ -164,36 +166,40 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--loads", type=int, default=3)
     parser.add_argument("--api-only", action="store_true", help="leave out the page load")
+    tables.add_option(parser)
     args = parser.parse_args()
+    report = tables.Report(args.markdown)
 
     before = os.getloadavg()[0]
     samples = bench_api(args.seconds, args.rounds)
     after = os.getloadavg()[0]
     ours = samples["POST /api/normal"]
-    print(
-        f"\n| endpoint (1 uvicorn worker, wrk -c16, {args.rounds} rounds of {args.seconds} s, "
+    report.print(
+        f"| endpoint (1 uvicorn worker, wrk -c16, {args.rounds} rounds of {args.seconds} s, "
         "alternating) | requests/s, median | best | ours as share, median | best round |"
     )
-    print("|---|---:|---:|---:|---:|")
+    report.print("|---|---:|---:|---:|---:|")
     for name, values in samples.items():
         share = statistics.median(o / v for o, v in zip(ours, values, strict=True))
         best = max(o / v for o, v in zip(ours, values, strict=True))
-        print(
+        report.print(
             f"| {name} | {statistics.median(values):,.0f} | {max(values):,.0f} "
             f"| {share:.2f} | {best:.2f} |"
         )
     print(f"\nload average (1 min) {before:.2f} before, {after:.2f} after (2 cores)")
     if args.api_only:
+        report.write()
         return
 
     drawn, size = bench_page(args.loads)
-    print(
+    report.print(
         f"\n| first load of / (headless Chromium, median of {args.loads} fresh loads) "
         "| value | target |"
     )
-    print("|---|---:|---:|")
-    print(f"| transferred, compressed | {size / 1024:,.0f} KB | 500 KB |")
-    print(f"| chart drawn after navigation start | {drawn:,.0f} ms | 1000 ms |")
+    report.print("|---|---:|---:|")
+    report.print(f"| transferred, compressed | {size / 1024:,.0f} KB | 500 KB |")
+    report.print(f"| chart drawn after navigation start | {drawn:,.0f} ms | 1000 ms |")
+    report.write()
 
 
 if __name__ == "__main__":
