@@ -26,6 +26,8 @@ vector", the same mesh each time, whose call writes into the vector it kept from
 call's arrays" is ours with ``out=`` against that kept vector, the same work. Corner normals
 have no equivalent. A second table probes what each library returns
 for degenerate and tiny faces, and a third the extra memory of our kernels (tracemalloc).
+``--markdown PATH`` writes a summary (ours / the peer's time of each kernel, best and median)
+and the degenerate faces' table to a file, after a line naming the machine and the date.
 """
 
 from __future__ import annotations
@@ -39,6 +41,7 @@ from typing import Any
 
 import numpy as np
 
+from benchmarks import tables
 from mesh_normal.corners import corner_normals
 from mesh_normal.faces import face_normals
 from mesh_normal.vertices import vertex_normals
@@ -208,7 +211,17 @@ ROWS = (
 LARGE = 2_000_000
 
 
-def run(size: int, repeats: int, idle: int = 0, peer_repeats: int | None = None) -> list[str]:
+#: ours / a peer's time, best (median), by (kernel, peer) and size: the table ``--markdown`` writes.
+Summary = dict[tuple[str, str], dict[int, str]]
+
+
+def run(
+    size: int,
+    repeats: int,
+    idle: int = 0,
+    peer_repeats: int | None = None,
+    summary: Summary | None = None,
+) -> list[str]:
     vertices, faces = torus_mesh(size)
     kept = face_normals(vertices, faces)  # Open3D writes into the vector its mesh keeps
     ours: Kernels = {
@@ -265,8 +278,13 @@ def run(size: int, repeats: int, idle: int = 0, peer_repeats: int | None = None)
             + " | ".join(cells + ratios)
             + " |"
         )
+        peer = "Open3D" if times.get(("Open3D", same)) else "trimesh"
+        if summary is not None and times.get((peer, same)):
+            summary.setdefault((label, peer), {})[size] = (
+                f"{mine / times[peer, same]:.2f} ({medians['ours', key] / medians[peer, same]:.2f})"
+            )
     if idle and open3d:
-        rows += after_idle(size, ours, open3d, idle)
+        rows += after_idle(size, ours, open3d, idle, summary)
     if "angle" in peers["trimesh"]:
         import trimesh
 
@@ -301,7 +319,9 @@ def best_times(
     return best, {name: 1e3 * statistics.median(values) for name, values in times.items()}
 
 
-def after_idle(size: int, ours: Kernels, open3d: Kernels, repeats: int) -> list[str]:
+def after_idle(
+    size: int, ours: Kernels, open3d: Kernels, repeats: int, summary: Summary | None = None
+) -> list[str]:
     """Ours against Open3D on calls that each follow a second of sleep (threads parked, caches
     cold), alternately: the best and median times and Open3D / ours of each."""
     rows = []
@@ -319,7 +339,22 @@ def after_idle(size: int, ours: Kernels, open3d: Kernels, repeats: int) -> list[
             f"| | | {theirs:.1f} | | | {theirs / mine:.2f}x "
             f"({middle['Open3D'] / middle['ours']:.2f}x) |"
         )
+        if summary is not None:
+            summary.setdefault((f"{label}, each after 1 s idle", "Open3D"), {})[size] = (
+                f"{mine / theirs:.2f} ({middle['ours'] / middle['Open3D']:.2f})"
+            )
     return rows
+
+
+def summary_table(summary: Summary, sizes: list[int]) -> str:
+    """Ours / the peer's time of each kernel at each size, best (median): under 1, ours wins."""
+    rows = [
+        "| kernel | ours / | " + " | ".join(f"{size:,} triangles" for size in sizes) + " |",
+        "|---|---|" + "---:|" * len(sizes),
+    ]
+    for (label, peer), cells in summary.items():
+        rows.append(f"| {label} | {peer} | " + " | ".join(cells.get(s, "") for s in sizes) + " |")
+    return "\n".join(rows)
 
 
 # --- what each library returns for degenerate and tiny faces --------------------------------
@@ -434,7 +469,9 @@ def main() -> None:
     parser.add_argument(
         "--idle", type=int, default=0, help="also time this many calls after 1 s of sleep each"
     )
+    tables.add_option(parser)
     args = parser.parse_args()
+    summary: Summary = {}
     print(
         "| triangles | kernel | ours (ms) | "
         + " | ".join(f"{p} (ms)" for p in PEERS)
@@ -445,10 +482,16 @@ def main() -> None:
     print("|---:|---|---:|" + "---:|" * 6)
     for size in args.sizes:
         peers = None if size < LARGE else min(args.repeats, args.large_repeats)
-        for row in run(size, args.repeats, args.idle if size < LARGE else 0, peers):
+        for row in run(size, args.repeats, args.idle if size < LARGE else 0, peers, summary):
             print(row, flush=True)
-    print("\nDegenerate and tiny faces (angle-weighted vertex normals; Open3D's are by area):\n")
-    print("\n".join(probe()))
+    out = tables.Report(args.markdown)
+    out.print(f"\nOurs / the peer's time, best of {args.repeats} (median), alternately:\n")
+    out.print(summary_table(summary, args.sizes))
+    out.print(
+        "\nDegenerate and tiny faces (angle-weighted vertex normals; Open3D's are by area):\n"
+    )
+    out.print("\n".join(probe()))
+    out.write()
     print("\nExtra memory (MiB): peak allocated during the call, minus its output:\n")
     print("| triangles | kernel | output | peak | extra | extra / output |")
     print("|---:|---|---:|---:|---:|---:|")

@@ -1,6 +1,7 @@
 """Point-cloud normals: ours against Open3D's, speed and accuracy side by side in one run.
 
     make bench-points     # or: .venv/bin/python -m benchmarks.points [--quick] [--no-memory]
+    .venv/bin/python -m benchmarks.points --markdown docs/benchmarks/points.md  # writes the table
 
 Rows (``--quick``: a fifth of the sizes, for a smoke run):
 
@@ -24,16 +25,21 @@ import subprocess
 import sys
 import time
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from benchmarks import tables
 from mesh_normal.points import estimate, point_normals
 from mesh_normal.points.orient import along_tree
 
 # Launch numba's threads before Open3D loads its own (older) TBB, which numba would try to use.
 point_normals(np.random.default_rng(0).normal(size=(100, 3)), orient="none")
 import open3d  # noqa: E402
+
+#: The table as printed; main() gives it the path of ``--markdown``.
+OUT = tables.Report(None)
 
 
 def sphere(n: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
@@ -79,9 +85,9 @@ def estimation(n: int, repeats: int) -> None:
     point_normals(points[:1000], orient="none")
     ours, _ = best(lambda: point_normals(points, orient="none"), repeats)
     theirs, _ = best(lambda: open3d_normals(points), repeats)
-    print(
+    OUT.print(
         f"| estimation, {n:,} points, k = 30, random order | {ours:.2f} s | {theirs:.2f} s "
-        f"| {ours / theirs:.2f} |"
+        f"| {ours / theirs:.2f} | |"
     )
 
 
@@ -90,7 +96,7 @@ def accuracy(n: int) -> None:
     ours = [rmse(point_normals(points + o, orient="none").normals, truth) for o in OFFSETS]
     theirs = [rmse(open3d_normals(points + o), truth) for o in OFFSETS]
     for offset, our, their in zip(OFFSETS, ours, theirs, strict=True):
-        print(
+        OUT.print(
             f"| unoriented RMSE, {n:,}-point sphere, offset {offset:g} | {our:.4f}° "
             f"| {their:.4f}° | |"
         )
@@ -109,7 +115,9 @@ def orientation(n: int, repeats: int) -> None:
 
         ours, oriented = best(orient, repeats)
         inward = int((np.einsum("ij,ij->i", oriented, truth_local) < 0).sum())
-        print(f"| orientation `{mode}`, {n:,}-point torus | {ours:.2f} s | | | {inward} inward")
+        OUT.print(
+            f"| orientation `{mode}`, {n:,}-point torus | {ours:.2f} s | | | {inward} inward |"
+        )
     cloud = open3d_cloud(points)
     cloud.estimate_normals(open3d.geometry.KDTreeSearchParamKNN(30))
     start = time.perf_counter()
@@ -119,7 +127,7 @@ def orientation(n: int, repeats: int) -> None:
     inward = int((np.einsum("ij,ij->i", oriented, truth) < 0).sum())
     # Open3D's answer may be consistent but all inward: count the smaller side as wrong.
     wrong = min(inward, n - inward)
-    print(
+    OUT.print(
         f"| Open3D consistent tangent plane (30), {n:,}-point torus | | {theirs:.2f} s | "
         f"| {wrong} inconsistent (of {inward} inward) |"
     )
@@ -142,7 +150,7 @@ def memory(n: int, orient: str) -> None:
     ).stdout
     seconds = time.perf_counter() - start
     before, peak, valid = json.loads(output.splitlines()[-1])
-    print(
+    OUT.print(
         f"| memory, {n:,} points, orient `{orient}` | peak {peak / 2**20:.2f} GiB "
         f"(input {before / 2**20:.2f} GiB), {seconds:.0f} s | | | {valid:,} normals |"
     )
@@ -156,16 +164,19 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="a fifth of the sizes")
     parser.add_argument("--repeats", type=int, default=2)
     parser.add_argument("--no-memory", action="store_true", help="skip the 10M-point run")
+    tables.add_option(parser)
     arguments = parser.parse_args()
+    OUT.path = Path(arguments.markdown) if arguments.markdown else None
     scale = 5 if arguments.quick else 1
-    print("| case | ours | Open3D | ratio | notes |")
-    print("|---|---|---|---|---|")
+    OUT.print("| case | ours | Open3D | ratio | notes |")
+    OUT.print("|---|---|---|---|---|")
     estimation(1_000_000 // scale, arguments.repeats)
     accuracy(1_000_000 // scale)
     orientation(100_000 // scale, arguments.repeats)
     if not arguments.no_memory:
         for orient in ("none", "mst"):
             memory(10_000_000 // scale, orient)
+    OUT.write()
 
 
 if __name__ == "__main__":
