@@ -104,12 +104,14 @@ def export_mesh(
 ) -> MeshExport:
     """``mesh`` as a file of ``file_format`` (default: :func:`default_format`).
 
-    >>> result = export_mesh(read_mesh("bunny.obj"), "glb", normals="corner", winding="fix")
-    >>> result.faces_flipped, result.dropped
-
     Normals are always computed by our kernels on the faces written (so they follow a fix or
     a flip), never copied from the file; ``weld`` is the fix's (see
     :func:`~mesh_normal.orient`).
+
+    Examples
+    --------
+    >>> result = export_mesh(read_mesh("bunny.obj"), "glb", normals="corner", winding="fix")
+    >>> result.faces_flipped, result.dropped
     """
     chosen = file_format or default_format(mesh)
     faces, flipped, orientation = _wound(mesh, winding, weld)
