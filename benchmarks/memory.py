@@ -39,6 +39,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from benchmarks import tables
+
 FORMATS = ("stl", "stl-ascii", "obj", "ply", "ply-ascii", "off", "glb")
 PATHS = ("read", "report", "face", "vertex", "corner", "corner-json", "fix")
 #: About how many bytes of file each vertex of the torus takes (it has two triangles a vertex).
@@ -228,11 +230,13 @@ def main() -> None:
     parser.add_argument("--formats", default=",".join(FORMATS))
     parser.add_argument("--paths", default=",".join(PATHS))
     parser.add_argument("--child", nargs=3, metavar=("PATH", "FILE", "SMALL"))
+    tables.add_option(parser)
     arguments = parser.parse_args()
     if arguments.child:
         path_name, file, small = arguments.child
         child(path_name, Path(file), Path(small))
         return
+    out = tables.Report(arguments.markdown)
     formats, paths = arguments.formats.split(","), arguments.paths.split(",")
     with tempfile.TemporaryDirectory() as folder:
         files = {kind: make_file(kind, arguments.mb, Path(folder)) for kind in formats}
@@ -249,11 +253,12 @@ def main() -> None:
             )
         sizes = {kind: files[kind].stat().st_size / 1e6 for kind in formats}
     print("Peak resident memory per MB of upload (the upload's own bytes included):\n")
-    print("| format | file MB | " + " | ".join(paths) + " |")
-    print("|---|---:|" + "---:|" * len(paths))
+    out.print("| format | file MB | " + " | ".join(paths) + " |")
+    out.print("|---|---:|" + "---:|" * len(paths))
     for kind in formats:
         row = " | ".join(f"{figures[kind, name]:.1f}" for name in paths)
-        print(f"| {kind} | {sizes[kind]:.1f} | {row} |")
+        out.print(f"| {kind} | {sizes[kind]:.1f} | {row} |")
+    out.write()
 
 
 if __name__ == "__main__":

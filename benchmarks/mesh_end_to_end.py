@@ -47,6 +47,7 @@ from contextlib import contextmanager
 from functools import partial
 from pathlib import Path
 
+from benchmarks import tables
 from benchmarks.mesh_kernels import torus_mesh
 from benchmarks.run import free_port
 
@@ -310,6 +311,7 @@ def main() -> None:
     parser.add_argument("--lucy-runs", type=int, default=2)
     parser.add_argument("--skip-lucy", action="store_true")
     parser.add_argument("--skip-readers", action="store_true")
+    tables.add_option(parser)
     args = parser.parse_args()
     if not args.skip_readers:  # the file readers against trimesh's (benchmarks/readers.py)
         from benchmarks import readers
@@ -321,23 +323,25 @@ def main() -> None:
             )
         )
 
+    out = tables.Report(args.markdown)  # the uploads and the Lucy runs (readers: their own)
     rows = bench_uploads(args.sizes, args.repeats)
-    print(
+    out.print(
         f"\n| triangles | binary STL | ours: POST /api/mesh, median / best of {args.repeats} (s) "
         "| trimesh process=True, median / best (s) | trimesh process=False (s) | Open3D (s) "
         "| trimesh process=True / ours | process=False / ours | Open3D / ours | target |"
     )
-    print("|---:|---:|" + "---:|" * 7 + "---|")
-    print("\n".join(rows))
+    out.print("|---:|---:|" + "---:|" * 7 + "---|")
+    out.print("\n".join(rows))
     if not args.skip_lucy:
         rows = bench_lucy(args.lucy_runs)
         size = (84 + 50 * LUCY) / 2**20
-        print(
+        out.print(
             f"\n| {LUCY:,} triangles, binary STL ({size:,.0f} MiB) | wall (s) | peak RSS (GiB) "
             "| stages (the CLI's --progress) | 30 s (analyze 15 s) / 6 GiB |"
         )
-        print("|---|---:|---:|---|---|")
-        print("\n".join(rows))
+        out.print("|---|---:|---:|---|---|")
+        out.print("\n".join(rows))
+    out.write()
 
 
 if __name__ == "__main__":

@@ -11,7 +11,8 @@ digits). Per round, alternating, in this process with the file's bytes in memory
 a whole report (``read_mesh`` + ``analyse_mesh`` + ``build_report`` and its JSON, as
 ``POST /api/mesh`` does without HTTP): the issue's target is that at most 0.4 times trimesh's
 load. Best and median of ``--repeats`` rounds after one warm-up; the machine is shared, so only
-the ratios within one run count, and the load average is printed with them.
+the ratios within one run count. ``--markdown PATH`` also writes the table to a file, after a
+line naming the machine, its load and the date.
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
+from benchmarks import tables
 from benchmarks.mesh_kernels import torus_mesh
 
 SIZE = 871_414
@@ -125,10 +127,6 @@ def _timed(call: Callable[[], object]) -> float:
     return time.perf_counter() - start
 
 
-def load_average() -> str:
-    return " ".join(f"{value:.2f}" for value in os.getloadavg())
-
-
 def bench(kinds: list[str], size: int, repeats: int) -> list[str]:
     rows = []
     for kind in kinds:
@@ -144,11 +142,9 @@ def bench(kinds: list[str], size: int, repeats: int) -> list[str]:
         for call in calls.values():  # warm-up: kernels, caches
             call()
         samples: dict[str, list[float]] = {key: [] for key in calls}
-        before = load_average()
         for _ in range(repeats):
             for key, call in calls.items():
                 samples[key].append(_timed(call))
-        after = load_average()
         best = {key: min(values) for key, values in samples.items()}
         median = {key: statistics.median(values) for key, values in samples.items()}
         for what in ("read", "report"):
@@ -162,7 +158,7 @@ def bench(kinds: list[str], size: int, repeats: int) -> list[str]:
                 f"| {label} | {len(data) / 2**20:.1f} | {what} | "
                 f"{median[what]:.3f} / {best[what]:.3f} | "
                 f"{median['trimesh']:.3f} / {best['trimesh']:.3f} | "
-                f"{ratio_median:.2f} / {ratio_best:.2f} | ≤ {target} ({met}) | {before} → {after} |"
+                f"{ratio_median:.2f} / {ratio_best:.2f} | ≤ {target} ({met}) |"
             )
             print(rows[-1], file=sys.stderr, flush=True)
     return rows
@@ -171,9 +167,9 @@ def bench(kinds: list[str], size: int, repeats: int) -> list[str]:
 def table(rows: list[str], repeats: int, size: int = SIZE) -> str:
     head = (
         f"| file ({size:,} faces) | MiB | ours timed | ours, median / best of {repeats} (s) "
-        "| trimesh load(process=False) (s) | ours / trimesh, median / best | target | load |"
+        "| trimesh load(process=False) (s) | ours / trimesh, median / best | target |"
     )
-    return "\n".join([head, "|---|---:|---|---:|---:|---:|---|---|", *rows])
+    return "\n".join([head, "|---|---:|---|---:|---:|---:|---|", *rows])
 
 
 def main() -> None:
@@ -181,9 +177,12 @@ def main() -> None:
     parser.add_argument("--size", type=int, default=SIZE)
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--formats", default=",".join(FILES))
+    tables.add_option(parser)
     args = parser.parse_args()
+    out = tables.Report(args.markdown)
     rows = bench(args.formats.split(","), args.size, args.repeats)
-    print("\n" + table(rows, args.repeats, args.size))
+    out.print("\n" + table(rows, args.repeats, args.size))
+    out.write()
 
 
 if __name__ == "__main__":
