@@ -12,7 +12,9 @@ lists 400,001 members, 200,000 identical points, 100,000 points each 20 times, 1
 100,000 triangles at once, 600 clients that announce 1 MB and leave after 56 bytes, and the
 sample pages asked 20 times at once while 5 uploads run.
 
-    .venv/bin/python -m benchmarks.hostile [--rows NAME ...]
+    .venv/bin/python -m benchmarks.hostile [--rows NAME ...] [--markdown PATH]
+
+``--markdown PATH`` also writes the table to a file, after a line naming the machine and date.
 """
 
 from __future__ import annotations
@@ -39,6 +41,7 @@ import httpx
 import numpy as np
 import psutil  # type: ignore[import-untyped]
 
+from benchmarks import tables
 from benchmarks.stalls import ascii_stl, free_port
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -448,13 +451,16 @@ def main() -> None:
     parser.add_argument(
         "--rows", nargs="+", choices=list(table), metavar="NAME", help="only these rows"
     )
+    tables.add_option(parser)
     arguments = parser.parse_args()
+    out = tables.Report(arguments.markdown)
     chosen = arguments.rows or list(table)
     print(f"{len(chosen)} rows, {os.cpu_count()} cores, load {os.getloadavg()[0]:.2f}")
     with serve() as server:
-        print(HEADER, flush=True)
+        out.print(HEADER)
         for name in chosen:
-            print(table[name](server).markdown(), flush=True)
+            out.print(table[name](server).markdown())
+    out.write()
 
 
 if __name__ == "__main__":

@@ -15,7 +15,8 @@ capped at ``--limit-gb``). For ``--seconds``, eight client threads send, at rand
 A separate probe thread times ``GET /`` every 50 ms. Reported: every status code with its count,
 whether any 5xx other than a planned 503 came back, whether the worker process lived to the end,
 its resident memory before and after (each once steady for 3 s: the workers warm up as they
-start), and the probe's p50 / p99 / max.
+start), and the probe's p50 / p99 / max; then one row of all that as a Markdown table, which
+``--markdown PATH`` also writes to a file after a line naming the machine and the date.
 The targets of issue 10: no unplanned 5xx, no process death, resident memory back within 20 %
 of its start, ``GET /`` p99 under 0.5 s.
 """
@@ -42,6 +43,7 @@ import httpx
 import numpy as np
 import trimesh
 
+from benchmarks import tables
 from mesh_normal.files import write_mesh
 
 DATA = Path(__file__).resolve().parent.parent / "tests" / "data"
@@ -246,7 +248,9 @@ def main() -> None:
     parser.add_argument("--limit-gb", type=float, default=4)
     parser.add_argument("--upload-mb", type=float, default=20, help="size of the largest uploads")
     parser.add_argument("--clients", type=int, default=8)
+    tables.add_option(parser)
     args = parser.parse_args()
+    out = tables.Report(args.markdown)
     if shutil.which("prlimit") is None:
         sys.exit("prlimit (util-linux) is missing")
     limit_mb = 50
@@ -314,6 +318,22 @@ def main() -> None:
         f"GET / while soaking: {len(probe)} probes, p50 {statistics.median(probe) * 1000:.0f} ms, "
         f"p99 {p99 * 1000:.0f} ms, max {probe[-1] * 1000:.0f} ms"
     )
+    answered: collections.Counter[int] = collections.Counter()
+    for (_, status), count in soak.statuses.items():
+        answered[status] += count
+    out.print(
+        "\n| soak | answered (200 / 400 / 413 / planned 503) | unplanned 5xx | process alive "
+        "| resident memory before -> after | `GET /` p50 / p99 / max |"
+    )
+    out.print("|---|---:|---:|---|---:|---:|")
+    out.print(
+        f"| {args.seconds:.0f} s, {args.clients} clients, uploads up to {args.upload_mb:g} MB "
+        f"| {' / '.join(str(answered[status]) for status in (200, 400, 413, 503))} "
+        f"| {len(soak.unplanned)} | {'yes' if alive else 'no'} "
+        f"| {before:,.0f} -> {after:,.0f} MB ({after / before - 1:+.0%}) "
+        f"| {statistics.median(probe) * 1000:.0f} / {p99 * 1000:.0f} / {probe[-1] * 1000:.0f} ms |"
+    )
+    out.write()
 
 
 if __name__ == "__main__":

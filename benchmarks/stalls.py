@@ -10,7 +10,10 @@ figures are that page's latencies while the uploads run.
 Then the peak memory of corner normals as JSON, written whole (as before) and in blocks (as
 ``POST /api/mesh/normals`` now streams them).
 
-    .venv/bin/python -m benchmarks.stalls [--mb 40]
+    .venv/bin/python -m benchmarks.stalls [--mb 40] [--markdown PATH]
+
+``--markdown PATH`` writes the latencies' table to a file, after a line naming the machine and
+the date.
 """
 
 from __future__ import annotations
@@ -26,6 +29,8 @@ from pathlib import Path
 
 import httpx
 import numpy as np
+
+from benchmarks import tables
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -132,19 +137,37 @@ print((resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - base) / 1024, size /
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--mb", type=float, default=40, help="size of each upload, MB")
+    tables.add_option(parser)
     arguments = parser.parse_args()
+    out = tables.Report(arguments.markdown)
     data = ascii_stl(arguments.mb)
     print(f"four uploads of {len(data) / 2**20:.0f} MB ASCII STL, {os.cpu_count()} cores")
+    out.print(
+        f"| jobs run in (four uploads of {len(data) / 2**20:.0f} MB ASCII STL at once) "
+        "| uploads answered | all four done in | `GET /` p50 | p99 | max |"
+    )
+    out.print("|---|---|---:|---:|---:|---:|")
     for label, environment in (
-        ("threads in the server (before)", {"MESH_IN_PROCESS": "1", "MESH_WORKERS": "4"}),
-        ("worker processes (after)", {"MESH_WORKERS": "2", "MESH_QUEUE_SECONDS": "600"}),
+        (
+            "threads of the server (`MESH_IN_PROCESS=1`, four at once)",
+            {"MESH_IN_PROCESS": "1", "MESH_WORKERS": "4"},
+        ),
+        ("two worker processes (the default)", {"MESH_WORKERS": "2", "MESH_QUEUE_SECONDS": "600"}),
     ):
         process, url = serve(environment)
         try:
-            print(f"{label}: {under_load(url, data)}")
+            figures = under_load(url, data)
         finally:
             process.terminate()
             process.wait()
+        statuses = figures["statuses"]
+        assert isinstance(statuses, list)
+        answered = ", ".join(f"{statuses.count(s)} × {s}" for s in sorted(set(statuses)))
+        out.print(
+            f"| {label} | {answered} | {figures['uploads_s']} s | {figures['p50_s']} s "
+            f"| {figures['p99_s']} s | {figures['max_s']} s |"
+        )
+    out.write()
     faces = 2_000_000
     whole, blocks = json_peak(faces, streamed=False), json_peak(faces, streamed=True)
     print(f"  JSON corner normals: {whole / blocks:.0f} times less peak memory in blocks")

@@ -12,7 +12,9 @@
 - the bytecode: how many of the environment's and the checkout's modules have a current .pyc.
 
 The machine's load (``os.getloadavg``) is printed with the figures: on two shared cores the
-times move by a half between runs, the ratios within one run much less.
+times move by a half between runs, the ratios within one run much less. Then the figures as a
+Markdown table, which ``--markdown PATH`` also writes to a file after a line naming the machine
+and the date.
 """
 
 from __future__ import annotations
@@ -32,6 +34,8 @@ import tempfile
 import time
 import urllib.request
 from pathlib import Path
+
+from benchmarks import tables
 
 ROOT = Path(__file__).resolve().parent.parent
 VENV_BIN = Path(sys.executable).parent
@@ -126,7 +130,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rounds", type=int, default=7, help="server rounds (default 7)")
     parser.add_argument("--runs", type=int, default=15, help="hyperfine runs (default 15)")
+    tables.add_option(parser)
     args = parser.parse_args()
+    out = tables.Report(args.markdown)
     if shutil.which("hyperfine") is None:
         sys.exit("benchmarks.startup: hyperfine is not installed")
     print(f"load average before: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
@@ -161,6 +167,24 @@ def main() -> None:
     print(f"first page, ours / bare: {figures(ratios)} (target 1.5)")
     print(f"first upload minus second (s): {figures(gaps)} (target 0.2)")
     print(f"load average after: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
+    out.print(f"\n| measured (hyperfine: {args.runs} runs; servers: {args.rounds} rounds) | best "
+              "| median | target |")  # fmt: skip
+    out.print("|---|---:|---:|---:|")
+    out.print(f"| `mesh-normal --help` | {help_best:.3f} s | {help_median:.3f} s | 0.3 s |")
+    out.print(
+        f"| `mesh-normal analyze tetra.obj` | {tiny_best:.3f} s | {tiny_median:.3f} s | 1 s |"
+    )
+    out.print(f"| `import numpy`, for scale | {numpy_best:.3f} s | {numpy_median:.3f} s | |")
+    out.print(f"| first page, ours | {min(ours):.3f} s | {statistics.median(ours):.3f} s | |")
+    out.print(
+        f"| first page, bare FastAPI | {min(bare):.3f} s | {statistics.median(bare):.3f} s | |"
+    )
+    out.print(f"| first page, ours / bare FastAPI, per round | {min(ratios):.2f} "
+              f"| {statistics.median(ratios):.2f} | 1.5 |")  # fmt: skip
+    out.print(f"| first upload minus the second | {min(gaps):.3f} s "
+              f"| {statistics.median(gaps):.3f} s | 0.2 s |")  # fmt: skip
+    out.print(f"| modules with a current .pyc | {compiled:,} of {total:,} | | all |")
+    out.write()
 
 
 if __name__ == "__main__":
