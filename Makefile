@@ -62,8 +62,23 @@ docs: .venv/.test
 docs-serve: .venv/.test
 	.venv/bin/mkdocs serve --dev-addr 127.0.0.1:8001
 
+# Every benchmark, each writing its table to docs/benchmarks/NAME.md for docs/benchmarks.md
+# (hours; needs wrk, Chromium and hyperfine). The bench-* targets below run one each and print.
 bench: .venv/.test
-	.venv/bin/python -m benchmarks.run
+	$(UV) sync --locked --group test --group bench
+	$(COMPILE_SOURCES)
+	.venv/bin/python -m benchmarks.run --rounds 5 --loads 7 --markdown docs/benchmarks/api.md
+	.venv/bin/python -m benchmarks.startup --rounds 7 --runs 3 --markdown docs/benchmarks/startup.md
+	.venv/bin/python -m benchmarks.mesh_kernels --sizes 871414 14000000 --idle 7 --markdown docs/benchmarks/mesh-kernels.md
+	.venv/bin/python -m benchmarks.orientation --markdown docs/benchmarks/orientation.md
+	.venv/bin/python -m benchmarks.readers --markdown docs/benchmarks/readers.md
+	.venv/bin/python -m benchmarks.mesh_end_to_end --sizes 871414 --lucy-runs 1 --skip-readers --markdown docs/benchmarks/mesh-end-to-end.md
+	.venv/bin/python -m benchmarks.memory --markdown docs/benchmarks/memory.md
+	.venv/bin/python -m benchmarks.points --markdown docs/benchmarks/points.md
+	.venv/bin/python -m benchmarks.batch --markdown docs/benchmarks/batch.md
+	.venv/bin/python -m benchmarks.stalls --markdown docs/benchmarks/stalls.md
+	.venv/bin/python -m benchmarks.hostile --markdown docs/benchmarks/hostile.md
+	.venv/bin/python -m benchmarks.soak --markdown docs/benchmarks/soak.md
 
 bench-mesh: .venv/.test
 	$(UV) sync --locked --group test --group bench
