@@ -1,6 +1,7 @@
 """Peak memory per MB of upload, for every format and every heavy path.
 
     make bench-memory     # or: .venv/bin/python -m benchmarks.memory [--mb 25] [--jobs 4]
+    .venv/bin/python -m benchmarks.memory --markdown PATH   # also writes the table to PATH
 
 Each format gets a torus of about ``--mb`` megabytes of file (its own vertices, shared by its
 triangles; STL repeats them per corner as STL does). Each (format, path) runs in a fresh

@@ -2,7 +2,7 @@
 
     make bench-mesh-e2e   # or: .venv/bin/python -m benchmarks.mesh_end_to_end
                           #     [--sizes 69451 871414] [--repeats 7] [--skip-lucy]
-                          #     [--skip-readers]
+                          #     [--skip-readers] [--markdown PATH]
 
 0. The readers table of :mod:`benchmarks.readers` (OBJ, PLY and OFF against trimesh's
    ``load(process=False)``), unless ``--skip-readers``.
@@ -24,6 +24,9 @@
    subprocess on a 14,000,000-face binary STL (about 700 MB): wall time, peak RSS of that
    child (GNU time's ``%M``, see :func:`run_cli`) and the CLI's own stage times
    (``--progress``), against 30 s and 6 GiB. A small run first makes sure numba's cache is filled.
+
+``--markdown PATH`` also writes tables 1 and 2 to a file, after a line naming the machine and
+the date (the readers write their own: ``benchmarks.readers --markdown``).
 
 The meshes are :func:`benchmarks.mesh_kernels.torus_mesh` written by ``write_mesh`` into
 ``$MESH_E2E_DIR`` (default ``/tmp/mesh-e2e``) and reused when present. The machine is shared
