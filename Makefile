@@ -37,7 +37,7 @@ env: .venv/.test
 # `make run` since the sources change between runs.
 COMPILE_SOURCES = .venv/bin/python -m compileall -q mesh_normal app && .venv/bin/python -m app.web.templating
 
-# The server's limits, as in the Dockerfile's CMD (see the README's "Running it in public").
+# The server's limits, as in the Dockerfile's CMD (see docs/operators.md).
 SERVER_LIMITS := --http h11 --h11-max-incomplete-event-size 16384 --timeout-keep-alive 5 \
 	--limit-concurrency 100 --backlog 256 --timeout-graceful-shutdown 8
 

@@ -3,7 +3,7 @@
 The per-face work is compiled with numba (``cache=True``: compiled on first use, once, then
 loaded from the cache; ``NUMBA_CACHE_DIR`` moves the cache). It is the only implementation:
 NumPy alone measured 3-5 times slower than Open3D, whose times are the target (see the
-README's mesh kernels section). So this part of ``mesh_normal`` is not pure NumPy.
+benchmarks page, docs/benchmarks.md). So this part of ``mesh_normal`` is not pure NumPy.
 ``error_model="numpy"`` drops Python's zero-division checks (no division here can be by zero,
 and IEEE rules apply); the face kernel runs its blocks of faces on every core
 (``parallel=True``: blocks write disjoint rows, so the bits do not depend on the number of
