@@ -46,8 +46,8 @@ run: .venv/.web
 	.venv/bin/uvicorn app.main:app --host $(HOST) --port $(PORT) $(SERVER_LIMITS)
 
 lint: .venv/.test
-	.venv/bin/ruff format --check mesh_normal app tests benchmarks
-	.venv/bin/ruff check mesh_normal app tests benchmarks
+	.venv/bin/ruff format --check mesh_normal app tests benchmarks docs/hooks.py
+	.venv/bin/ruff check mesh_normal app tests benchmarks docs/hooks.py
 	.venv/bin/mypy
 
 test: lint docs

@@ -2,8 +2,8 @@
 
 :data:`SCHEMA` is the Arrow schema of ``report.parquet``; each field carries its description in
 its metadata (``field.metadata[b"description"]``), and :data:`COLUMNS` lists them for the
-datasets page (docs/datasets.md) and ``mesh-normal batch --help``. Figures a row cannot have (an unreadable file's, a
-point cloud's faces) are null.
+datasets page (docs/datasets.md) and ``mesh-normal batch --help``. Figures a row cannot have
+(an unreadable file's, a point cloud's faces) are null.
 """
 
 from __future__ import annotations
