@@ -1,8 +1,8 @@
 """The service's limits and settings, in one declarative table.
 
 The constants are fixed by design; :class:`Settings` holds what an operator may change
-through the environment (``MESH_UPLOAD_LIMIT_MB``, ``MESH_PUBLIC_URL`` and the heavy-job
-settings; docs/operators.md lists them).
+through the environment (``MESH_UPLOAD_LIMIT_MB``, ``MESH_PUBLIC_URL``, ``MESH_DOCS_URL`` and
+the heavy-job settings; docs/operators.md lists them).
 """
 
 from __future__ import annotations
@@ -48,6 +48,15 @@ DEFAULT_UPLOAD_LIMIT_MB = 200
 #: Environment variable that sets the public address for absolute links (default: relative).
 PUBLIC_URL_VARIABLE = "MESH_PUBLIC_URL"
 
+#: An http(s) address without a query or fragment: ``MESH_PUBLIC_URL`` and ``MESH_DOCS_URL``.
+ADDRESS_PATTERN = r"^https?://[^\s/?#@]+(/[^\s?#]*)?$"
+
+#: An example of each address setting, for the sentence naming a bad one.
+_ADDRESS_EXAMPLES = {
+    "public_url": "https://normals.example.org/",
+    "docs_url": "https://docs.normals.example.org/",
+}
+
 
 #: Seconds a client is asked to wait (``Retry-After``) when the heavy-job slots are full.
 RETRY_AFTER_SECONDS = 5
@@ -73,7 +82,8 @@ class Settings(BaseSettings):
     """What the environment may set (``MESH_`` and the name in capitals).
 
     ``upload_limit_mb``: the mesh upload limit in MB. ``public_url``: the server's public
-    address (``MESH_PUBLIC_URL``). ``workers``: worker processes for the
+    address (``MESH_PUBLIC_URL``). ``docs_url``: the documentation site's address
+    (``MESH_DOCS_URL``), for the pages' links to the guide. ``workers``: worker processes for the
     heavy mesh work, which is also the most heavy jobs at once. ``memory_budget_mb``: the
     memory the jobs running at once may use together, by their estimates (default half of the
     machine's or container's memory). ``queue_seconds``: how long a job waits for a slot
@@ -94,7 +104,11 @@ class Settings(BaseSettings):
     #: for the absolute links pasted elsewhere (the embed code, curl commands). Unset, the
     #: server writes relative links (the page's script completes them from its own address):
     #: the request's Host header, which anyone may forge, never goes into a link.
-    public_url: str | None = Field(None, pattern=r"^https?://[^\s/?#@]+(/[^\s?#]*)?$")
+    public_url: str | None = Field(None, pattern=ADDRESS_PATTERN)
+    #: ``MESH_DOCS_URL``: where the documentation site (``make docs``, published by the
+    #: operator; the app does not serve it) is (``https://docs.normals.example/``). Set, the
+    #: pages link to its guide where it explains what they show; unset, they show no link.
+    docs_url: str | None = Field(None, pattern=ADDRESS_PATTERN)
     workers: int = Field(2, ge=1, le=64)
     memory_budget_mb: float = Field(
         default_factory=default_memory_budget_mb, gt=0, allow_inf_nan=False
@@ -146,12 +160,12 @@ def load_settings(**given: Any) -> Settings:
         return Settings(**given)
     except ValidationError as error:
         first = error.errors()[0]
-        if first.get("loc") == ("public_url",):
-            raise ValueError(
-                f"{PUBLIC_URL_VARIABLE} must be an http:// or https:// address without a query, "
-                f"such as https://normals.example.org/, not {first.get('input')!r}."
-            ) from None
         name = str(first["loc"][0]) if first.get("loc") else "upload_limit_mb"
+        if name in _ADDRESS_EXAMPLES:
+            raise ValueError(
+                f"MESH_{name.upper()} must be an http:// or https:// address without a query, "
+                f"such as {_ADDRESS_EXAMPLES[name]}, not {first.get('input')!r}."
+            ) from None
         raise ValueError(
             f"MESH_{name.upper()} must be {_EXPECTED.get(name, 'valid')}, "
             f"not {first.get('input')!r}."

@@ -174,6 +174,7 @@ def create_app(upload_limit: int | None = None, settings: config.Settings | None
     app.mount("/static", CompressedStaticFiles(directory=STATIC_DIR), name="static")
     app.add_middleware(PageCompression)
     app.state.upload_limit = settings.upload_limit if upload_limit is None else upload_limit
+    app.state.docs_url = settings.docs_url  # the pages' links to the guide (app.web.links)
     # The heavy mesh work: worker processes, started by the lifespan (or at the first job).
     app.state.jobs = Jobs(settings, warm=warm_workers, preload=PRELOAD)
     app.add_middleware(BodyLimit, upload_limit=app.state.upload_limit)

@@ -19,7 +19,7 @@ from markupsafe import Markup
 
 from app.web.formatting import number_text as people_number
 from app.web.jsonio import json_bytes
-from app.web.links import public_url
+from app.web.links import guide_url, public_url
 from app.web.static import static_url
 
 TEMPLATES_DIR = Path(__file__).resolve().parents[2] / "templates"
@@ -68,6 +68,7 @@ templates = Jinja2Templates(directory=TEMPLATES_DIR)
 templates.env.bytecode_cache = TemplateCache(str(CACHE_DIR), "%s.cache")
 templates.env.globals["static_url"] = static_url
 templates.env.globals["public_url"] = public_url
+templates.env.globals["guide_url"] = guide_url
 templates.env.filters["num"] = number_text
 templates.env.filters["json_script"] = json_script
 

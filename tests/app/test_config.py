@@ -51,3 +51,23 @@ def test_the_public_url_is_unset_by_default(monkeypatch: pytest.MonkeyPatch) -> 
     assert load_settings().public_url is None
     monkeypatch.setenv("MESH_PUBLIC_URL", "https://normals.example.org/calc/")
     assert load_settings().public_url == "https://normals.example.org/calc/"
+
+
+@pytest.mark.parametrize("text", ["docs.example.org", "ftp://x.example", "https://x.example/#a"])
+def test_a_bad_docs_url_is_one_clear_sentence(monkeypatch: pytest.MonkeyPatch, text: str) -> None:
+    monkeypatch.setenv("MESH_DOCS_URL", text)
+    with pytest.raises(ValueError, match=r"^MESH_DOCS_URL must be") as raised:
+        load_settings()
+    assert str(raised.value) == (
+        "MESH_DOCS_URL must be an http:// or https:// address without a query, such as "
+        f"https://docs.normals.example.org/, not {text!r}."
+    )
+
+
+def test_the_docs_url_is_unset_by_default(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.delenv("MESH_DOCS_URL", raising=False)
+    assert load_settings().docs_url is None
+    assert create_app().state.docs_url is None
+    monkeypatch.setenv("MESH_DOCS_URL", "https://normals.example.org/docs/")
+    assert load_settings().docs_url == "https://normals.example.org/docs/"
+    assert create_app().state.docs_url == "https://normals.example.org/docs/"
