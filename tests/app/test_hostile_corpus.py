@@ -8,12 +8,10 @@ table); :data:`CORPUS` says where each goes and what the answer must be.
 
 from __future__ import annotations
 
-import contextlib
 import os
 import socket
 import subprocess
 import sys
-import threading
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -22,6 +20,7 @@ import httpx
 import psutil
 import pytest
 
+from benchmarks.hostile import Server, Watch
 from tests.conftest import assert_error
 from tests.paths import ROOT
 
@@ -79,7 +78,7 @@ def test_the_corpus_names_every_file() -> None:
 
 
 @pytest.fixture(scope="module")
-def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[str, psutil.Process]]:
+def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
     with socket.socket() as probe:
         probe.bind(("127.0.0.1", 0))
         port = probe.getsockname()[1]
@@ -108,61 +107,18 @@ def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[str, psut
             content=b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
             timeout=120,
         )
-        yield url, psutil.Process(process.pid)
+        yield Server(url, psutil.Process(process.pid), logged)
     finally:
         process.terminate()
         process.wait(30)
         log.close()
 
 
-def tree_memory(root: psutil.Process) -> int:
-    """Resident bytes of the server and its children (fork server, workers)."""
-    total = 0
-    for process in [root, *root.children(recursive=True)]:
-        with contextlib.suppress(psutil.Error):  # a worker replaced meanwhile
-            total += process.memory_info().rss
-    return total
-
-
-class Watch:
-    """While a request runs: the server tree's peak memory and the first page's slowest answer."""
-
-    def __init__(self, url: str, root: psutil.Process) -> None:
-        self.url, self.root = url, root
-        self.peak = self.start = tree_memory(root)
-        self.slowest = 0.0
-        self.done = threading.Event()
-        self.threads = [threading.Thread(target=self._memory), threading.Thread(target=self._page)]
-
-    def _memory(self) -> None:
-        while not self.done.is_set():
-            self.peak = max(self.peak, tree_memory(self.root))
-            time.sleep(0.02)
-
-    def _page(self) -> None:
-        with httpx.Client(base_url=self.url, timeout=30) as client:
-            while not self.done.is_set():
-                began = time.monotonic()
-                client.get("/")
-                self.slowest = max(self.slowest, time.monotonic() - began)
-                time.sleep(0.05)
-
-    def __enter__(self) -> Watch:
-        for thread in self.threads:
-            thread.start()
-        return self
-
-    def __exit__(self, *_exc: object) -> None:
-        self.done.set()
-        for thread in self.threads:
-            thread.join()
-
-
 @pytest.mark.parametrize("case", CORPUS, ids=lambda case: case.name)
-def test_a_hostile_upload_is_answered(server: tuple[str, psutil.Process], case: Case) -> None:
-    url, root = server
+def test_a_hostile_upload_is_answered(server: Server, case: Case) -> None:
+    url = server.url
     data = (HOSTILE / case.name).read_bytes()
-    with Watch(url, root) as watch:
+    with Watch(server) as watch:
         began = time.monotonic()
         response = httpx.post(
             url + case.path, files={"file": (case.name, data)}, timeout=ANSWER_SECONDS
