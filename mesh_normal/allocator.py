@@ -3,11 +3,12 @@ of a server's worker (:func:`start_job` to :func:`end_job`).
 
 A large mesh's steps each take and free arrays of hundreds of megabytes. glibc gives every block
 of 32 MB or more its own mapping and unmaps it when freed, so the next step's arrays are new
-pages again; on a virtual machine whose host backs guest memory on first touch (this one), a
-new page costs far more than the arithmetic on it: touching 1 GiB measured 2.9-6.9 s the first
-time, 0.13-0.16 s after a free and remap in the same process, 0.04 s when kept. Keeping what was
-freed for the next step (:func:`keep_freed`) took the Lucy-size ``analyze`` from 24.6 to 19.5 s,
-with the same peak. Nothing happens where the C library is not glibc.
+pages again; on a virtual machine whose host backs guest memory on first touch, a new page
+costs far more than the arithmetic on it: memory touched for the first time is some twenty to
+fifty times slower than memory freed and mapped again in the same process, which is slower
+again than memory kept. Keeping what was freed for the next step (:func:`keep_freed`) takes
+about a fifth off a large mesh's ``analyze``, with the same peak. Nothing happens where the C
+library is not glibc.
 """
 
 from __future__ import annotations
@@ -36,8 +37,8 @@ _SPACER = 64
 _PAGE = 4096
 
 #: The memory a mesh's arrays take per byte of its file, as :func:`prefault` is asked for it:
-#: a binary STL of 14M faces measured 3 (2.1 GB besides its 700 MB file); text formats hold
-#: fewer faces a byte.
+#: a binary STL takes 3 (a 700 MB file of 14M faces, 2.1 GB besides the file); text formats
+#: hold fewer faces a byte.
 ARRAYS_PER_FILE_BYTE = {"binary stl": 3, "other": 2}
 
 _keeping = False
@@ -62,10 +63,10 @@ def prefault(size: int) -> threading.Thread | None:
     effect (so the blocks freed here stay in the heap, where the next arrays are cut from them).
 
     Faulting in new memory one page at a time, as arrays first write it, is what a large mesh
-    spends most on here: 1.5 GiB measured 5.4-6.7 s written by NumPy, 0.5-1.3 s populated by
-    the kernel. The bytes are never written here, so the allocator's own use of the blocks
-    (the heap's headers) is safe meanwhile; a range the heap no longer holds is refused by
-    the kernel (ENOMEM) and left. Returns the thread, or None where nothing was done.
+    spends most on here: populated by the kernel, the pages take five to ten times less time
+    than written by NumPy. The bytes are never written here, so the allocator's own use of
+    the blocks (the heap's headers) is safe meanwhile; a range the heap no longer holds is
+    refused by the kernel (ENOMEM) and left. Returns the thread, or None where nothing was done.
     """
     malloc, free, madvise = libc("malloc"), libc("free"), libc("madvise")
     if not _keeping or size < 2 * _PAGE or None in (malloc, free, madvise):

@@ -2,11 +2,11 @@
 
 Importing a large package or loading compiled kernels creates hundreds of thousands of
 objects, nearly all of them kept for the life of the process, and each pass of the collector
-over its oldest generation walks them all, again and again as they grow. Measured on this
-project's machine (median of 10): ``import numba`` 385 against 257 ms with the collector
-paused; loading every kernel from numba's cache (``compile_kernels``) 1.17 against 0.99 s;
-the server's worker processes' preload (the jobs, trimesh's glTF loader, numba's cache) 1.73
-against 0.90 s. Nothing that these steps make is garbage to collect meanwhile.
+over its oldest generation walks them all, again and again as they grow. Pausing the
+collector takes about a third off ``import numba``, a sixth off loading every kernel from
+numba's cache (``compile_kernels``) and half off the server's worker processes' preload (the
+jobs, trimesh's glTF loader, numba's cache). Nothing that these steps make is garbage to
+collect meanwhile.
 """
 
 from __future__ import annotations

@@ -257,8 +257,8 @@ def face_normals(
     else:
         into = out
     # New memory of TOUCH_FROM bytes or more: its pages first written by the worker that fills
-    # them, a unit of faces at a time (measured at the Lucy size: no slower than all pages
-    # first written on every core, then filled, and one pass fewer).
+    # them, a unit of faces at a time (as fast as all pages first written on every core, then
+    # filled, and one pass fewer).
     bytes_out = into.normals.nbytes + into.areas.nbytes + into.degenerate.nbytes
     fresh = out is None and bytes_out >= TOUCH_FROM
     unit = min(max(count // 32 // BLOCK, 1), FRESH_UNIT // BLOCK) * BLOCK if fresh else BLOCK

@@ -2,7 +2,7 @@
 
 The per-face work is compiled with numba (``cache=True``: compiled on first use, once, then
 loaded from the cache; ``NUMBA_CACHE_DIR`` moves the cache). It is the only implementation:
-NumPy alone measured 3-5 times slower than Open3D, whose times are the target (see the
+NumPy alone is 3-5 times slower than Open3D, whose times are the target (see the
 benchmarks page, docs/benchmarks.md). So this part of ``mesh_normal`` is not pure NumPy.
 ``error_model="numpy"`` drops Python's zero-division checks (no division here can be by zero,
 and IEEE rules apply); the face kernel runs its blocks of faces on every core
@@ -46,9 +46,9 @@ PARALLEL_KERNELS = threading.Lock()
 #: the largest corner, or the face is degenerate.
 AT_FIRST_CORNER, AT_LARGEST_CORNER, DEGENERATE = range(3)
 
-#: Measured: ``compile_kernels()`` into an empty cache took 9.7 s on a 2-core machine for the
-#: mesh kernels (loading them from the cache, 1.8 s); the point-cloud kernels add about two
-#: thirds (29 s and 19 s on the same machine under a load of 4).
+#: About how long ``compile_kernels()`` takes into an empty cache, in seconds: the mesh kernels
+#: take about 10 s on two cores (about 2 s to load from the cache), the point-cloud kernels
+#: about two thirds more, and a busy machine takes longer.
 COMPILE_SECONDS = 20
 
 _RECOMPUTE = MESH_RECOMPUTE_SINE**2
@@ -275,10 +275,10 @@ def is_cached(dispatcher: Any) -> bool:
 #
 # A face's corners are rows far apart in the points (and its vertices rows far apart in the sums
 # of the vertex normals): each is a cache miss on a large mesh. Asking for the rows of the face
-# ``AHEAD`` faces on before they are needed keeps many misses in flight at once: measured at the
-# Dragon size, the vertex sums' scatter took 10.5 ms instead of 19.3 ms with it.
+# ``AHEAD`` faces on before they are needed keeps many misses in flight at once: on a large
+# mesh it nearly halves the time of the vertex sums' scatter.
 
-#: How many faces ahead a kernel asks for the rows it will read (8 and 32 measured slower).
+#: How many faces ahead a kernel asks for the rows it will read (8 and 32 are slower).
 AHEAD = 16
 
 
@@ -291,9 +291,8 @@ def prefetch(array: np.ndarray, row: int) -> None:
 def prefetch_row(array: np.ndarray, row: int) -> None:
     """Ask the CPU to bring the whole of row ``row`` of a 2-D array into its cache, to be read:
     its first and its last element (a row of three doubles lies across two cache lines once
-    in about three). At the Lucy size the face normals' gather took 153 against 174 ms with
-    it, instead of one write prefetch of the row's first element. A stand-in, as
-    :func:`prefetch`."""
+    in about three). On a large mesh this makes the face normals' gather about a tenth faster
+    than one write prefetch of the row's first element. A stand-in, as :func:`prefetch`."""
 
 
 def _prefetch_intrinsic(write: bool = True, whole_row: bool = False) -> Any:
@@ -361,8 +360,8 @@ def index_range_kernel(
 ) -> None:
     """The smallest and largest index (and 0) of each block of ``RANGE_BLOCK`` faces, into
     ``lows`` and ``highs`` (one row a block), the blocks claimed by every core: a checked
-    mesh's one pass over its faces (at the Dragon size 1.7-1.9 ms cold, against 3.1-3.7 ms
-    for one thread going through them as a flat array)."""
+    mesh's one pass over its faces (about twice as fast as one thread going through them as a
+    flat array)."""
     blocks = len(lows)
     for _ in prange(workers):
         block = claim(counter)
@@ -470,11 +469,10 @@ def touch(*arrays: np.ndarray) -> None:
 
     A kernel's output is new memory: the system zeroes each page at its first write. When the
     kernel's threads write neighbouring blocks, both wait on the same huge page while one
-    zeroes it; here each core takes pages of its own. Measured at the Lucy size (462 MB of
-    face normals, areas and flags): the face normals' call 20-30 ms faster (they now write
-    each unit's pages first in the kernel, :func:`first_writes`: no slower, a pass fewer). (The
-    vertex normals' sums, touched so before their one-thread adds: 571 against 569 ms, not
-    used.)
+    zeroes it; here each core takes pages of its own. The face normals do the same inside
+    their kernel instead (each unit's pages written first, :func:`first_writes`: as fast, and
+    a pass fewer). The vertex normals' sums are not touched: their adds run on one thread,
+    and touching their pages first gains nothing.
     """
     if sum(array.nbytes for array in arrays) < TOUCH_FROM:
         return
@@ -497,7 +495,7 @@ def gather(
     """
     count = min(len(corners), len(faces) - start)
     for row in range(count):
-        ahead = start + row + AHEAD  # written out: the call measured 7% slower here
+        ahead = start + row + AHEAD  # written out: a call here costs about 7%
         if ahead < len(faces):
             prefetch_row(points, faces[ahead, 0])
             prefetch_row(points, faces[ahead, 1])
@@ -518,9 +516,9 @@ def gather(
 # ``np.argsort`` and ``np.searchsorted``. numba generates its sort and its argsort from one
 # quicksort whose functions have the same names, and compiled code of each, saved in numba's
 # cache by different processes, can carry the same symbol: a process that loads both from the
-# cache runs whichever it loaded first for both (measured with numba 0.68.1: a cached argsort
-# loaded after a cached ``.sort()`` of int64 returned the sorted values as indices, and the
-# reverse order broke the sort). Our own functions have names of their own, so no other code
+# cache runs whichever it loaded first for both (with numba 0.68, a cached argsort loaded
+# after a cached ``.sort()`` of int64 returns the sorted values as indices, and the reverse
+# order breaks the sort). Our own functions have names of their own, so no other code
 # in the process (a user's cached argsort) can take their place, nor they its.
 
 
@@ -775,8 +773,8 @@ def unit_normals_kernel(
 ) -> None:
     """Each face's cross product over its length (over 1 where degenerate) plus 0.0, into
     ``out`` (which may be ``crosses``): ``FaceGeometry.unit_normals``'s NumPy arithmetic, one
-    division a coordinate, in blocks claimed by every core (at the Dragon size 2 ms, against
-    7 ms for NumPy's three passes on one core)."""
+    division a coordinate, in blocks claimed by every core (about three times as fast as
+    NumPy's three passes on one core)."""
     blocks = (len(crosses) + UNIT_BLOCK - 1) // UNIT_BLOCK
     for _ in prange(workers):
         block = claim(counter)
@@ -837,8 +835,8 @@ def face_normals_kernel(
     ``geometry_kernel`` then ``FaceGeometry.unit_normals`` and ``geometry_areas``: the unit
     normal is the cross product over |cross| (over 1 where degenerate, where it is zero) plus
     0.0, the area ``ldexp(|cross|, exponent)``: times 2**exponent where that is a normal
-    double (the same single rounding, without a call per face; measured a third of the
-    kernel's time).
+    double (the same single rounding, without a call per face, which would take a third of
+    the kernel's time).
 
     The faces' indices are checked as they are read (:func:`gather`): one out of range sets
     ``bad[0]`` and its block is left, so the caller raises instead of returning.

@@ -19,9 +19,9 @@ which side is out:
   which more of them escape past every face of the whole mesh is out. So separate pieces are
   judged together: the inside of a bowl sees the bowl, the inner sides of a box whose sides
   are separate patches see each other, the inner side of a car's panel sees the other
-  panels, and range scans that faced their scanner see it. This replaced a cone-volume
-  heuristic per patch (the convex side out, as Blender's "Recalculate Outside" picks), which
-  judged each piece alone and turned correctly wound separate pieces over (issue 9).
+  panels, and range scans that faced their scanner see it. A cone-volume heuristic per patch
+  (the convex side out, as Blender's "Recalculate Outside" picks) would judge each piece
+  alone and turn correctly wound separate pieces over.
 
 On evidence only. A closed patch's volume decides only when it is clearly more than noise, by
 two tests relative to the patch's own size and position (so the verdict is the same wherever
@@ -52,7 +52,7 @@ A patch that fails any of these tests is *undetermined*: :func:`orient` does not
 makes it consistent, keeping the winding of the majority of its faces (of its lowest-numbered
 face on a tie). A non-orientable patch is left as it is.
 
-Measured on the benchmark torus of 871,414 faces (``benchmarks/mesh_kernels.py``), the
+On the benchmark torus of 871,414 faces (``benchmarks/mesh_kernels.py``), the
 position welding (one hash sort of the vertices) and the error bounds (one more pass in the
 cone kernel) cost about 10 to 15 percent of :func:`orient`'s time.
 
@@ -336,9 +336,8 @@ class HeadStart:
     without :meth:`start` (a closed mesh, or a small one) they are taken in turn when asked for.
 
     The topology's and the head start's one-thread kernels release the GIL (``nogil``), so
-    that each thread's Python between kernels is not held up by the other's kernel. At the
-    Dragon size (an open torus) the upload's whole job measured 429 → 371 ms best and 487 →
-    456 ms median (15 rounds, alternating in one process).
+    that each thread's Python between kernels is not held up by the other's kernel: on an
+    open mesh that takes up to a tenth off the upload's whole job.
     """
 
     def __init__(self, mesh: CheckedMesh, points: IndexArray) -> None:
@@ -642,7 +641,7 @@ def _cone_shares(
     First pass: its area times its centroid (x, y, z), its area and its largest |coordinate|.
     Second (``second``, the centroids in ``sums``): its term, into ``terms``, and its bound
     and sensitivity (see :func:`_cone_terms`). The loops are written out here: a call per
-    face to a function of this many arrays measured twice as slow.
+    face to a function of this many arrays is twice as slow.
     """
     stop = min(first + len(shares), len(faces))
     blocks = (stop - first + BLOCK - 1) // BLOCK
@@ -874,8 +873,8 @@ _FEW_TWINS = 32
 def _twinned_wide(faces: IndexArray, width: int) -> BoolArray:
     """:func:`_twinned` where two points fit one key: the faces grouped by their smallest
     point with a counting sort, then compared within each group (a face's group holds two
-    faces on average). At the Lucy size a lexsort of the rows took 10.9 s on 14M faces; at
-    the Dragon size a sort of one key a face took 57 ms (147 ms with a twin) against 49."""
+    faces on average). At the Lucy size a lexsort of the rows takes about 11 s; a sort of one
+    key a face is a little slower than this, and three times slower with a twin."""
     starts = np.zeros(width + 1, dtype=np.intp)
     order: IndexArray = np.empty(len(faces), dtype=np.int32 if len(faces) < 2**31 else np.intp)
     twinned = np.zeros(len(faces), dtype=bool)
@@ -893,8 +892,7 @@ def _twin_groups(faces: IndexArray, width: int, starts: IndexArray, order: Index
     group, ``starts`` (width + 1 zeros) then each group's end."""
     # A counting sort, asking for the places of faces ahead (far apart in a large mesh). The
     # smallest point of a face is written out at each use: called as a helper kernel (one for
-    # the smallest point, one for each request) the sort took three times as long (at the
-    # Dragon size the whole kernel 130-170 ms against 50-55 ms).
+    # the smallest point, one for each request) the sort takes three times as long.
     count = len(faces)
     for face in range(count):
         ahead = face + AHEAD

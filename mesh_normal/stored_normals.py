@@ -138,8 +138,8 @@ def _unit_rows_kernel(
     neither overflow nor underflow), then over its length, into ``unit``; whether it is
     finite and not zero into ``usable`` (a row that is not is divided by 1.0 twice).
 
-    Blocks of rows claimed by every core, each row on its own: at the Dragon size 2-4 ms,
-    where NumPy's steps over blocks of rows (six temporaries) took 35-45 ms."""
+    Blocks of rows claimed by every core, each row on its own: about ten times as fast as
+    NumPy's steps over blocks of rows (six temporaries)."""
     blocks = (len(stored) + _BLOCK - 1) // _BLOCK
     for _ in prange(workers):
         block = claim(counter)
@@ -198,8 +198,8 @@ def _half_angle_sides(
 ) -> None:
     """|a - b| and |a + b| for the file's unit normal a and ours b at each compared row (every
     row, or ``rows``), into ``differences`` and ``totals``: in blocks claimed by every core,
-    with no temporaries (a block of rows gathered and subtracted by NumPy took 50-60 ms at the
-    Dragon size)."""
+    with no temporaries (NumPy's gather and subtraction of blocks of rows is many times
+    slower)."""
     blocks = (len(differences) + _BLOCK - 1) // _BLOCK
     for _ in prange(workers):
         block = claim(counter)

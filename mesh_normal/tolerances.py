@@ -124,7 +124,7 @@ ORIENT_SEED_COSINE = 0.5
 
 #: A neighbourhood whose surface variation (λ0 / (λ0 + λ1 + λ2), at most 1/3) is over this is
 #: far from flat: it reaches across a thin wall or two sheets, a sharp edge, or heavy noise.
-#: Measured with k = 30: clean spheres, tori, cylinders and terrain stay under 0.004, a sphere
+#: With k = 30, clean spheres, tori, cylinders and terrain stay under 0.004, a sphere
 #: with noise of 1 % of its radius under 0.03, a box's edges reach 0.1 at 1 % of its points,
 #: and a slab whose neighbourhoods cross its thickness is over it at 88 %.
 POINT_FAR_FROM_FLAT = 0.1

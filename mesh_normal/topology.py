@@ -258,7 +258,7 @@ def _mark_unorientable(
 ) -> None:
     """Mark False the patch of every edge whose two faces' parities disagree with how they
     run along it: a patch that cannot be wound consistently (no temporaries of an edge's
-    size, as NumPy's gathers and mask made: 0.26 s at the Lucy size)."""
+    size, as NumPy's gathers and mask make: 0.26 s at the Lucy size)."""
     for i in range(len(one)):
         first = one[i]
         if parity[first] ^ parity[two[i]] != same[i]:
@@ -336,7 +336,7 @@ def _wide_half_edges(
     """:func:`_sorted_half_edges` where the edge key fits int64 but not with the face beside
     it (the Lucy size: 7M points): the same arrays in the same order, from a counting sort by
     the smaller vertex and a sort of each vertex's few by the larger, instead of two full sorts
-    of positions (14.7 s on 42M half-edges; this, about 1.5 s)."""
+    of positions (about ten times faster at the Lucy size)."""
     count = 3 * int(np.count_nonzero(valid))
     key = np.empty(count, dtype=np.int64)
     face: IndexArray = np.empty(count, dtype=np.int32 if len(faces) < 2**31 else np.intp)
@@ -369,7 +369,7 @@ def _sort_wide_half_edges(
     n << bits fits where n * n << bits does not); a sort of the run's few words finishes it
     (an insertion sort, as :func:`_pack_half_edges`), and one pass in order splits the words
     into the three arrays. One scattered 8-byte write a half-edge, not three into three
-    arrays: 3.7 s → about 2 s at the Lucy size."""
+    arrays: nearly twice as fast at the Lucy size."""
     _run_starts(faces, valid, vertex_count, starts)
     for face in range(len(faces)):
         _prefetch_places(faces, face, starts, key)
@@ -435,7 +435,7 @@ def _pack_half_edges(
     A counting sort by the smaller vertex, the key's leading part, then a sort of each vertex's
     few half-edges (its valence, about six on a closed surface): the same values in the same
     order as sorting the whole array, in two passes over it instead of a full sort's many
-    (measured on 2.6M half-edges: about 40 ms instead of 150-210 ms).
+    (about four times faster).
     """
     _run_starts(faces, valid, vertex_count, starts)
     # Each half-edge into its vertex's place; ``starts`` then holds each vertex's end.
@@ -470,8 +470,8 @@ def _finish_runs(
     """Sort each vertex's run of ``key`` (vertex v's ends at ``ends[v]``, starts at the end of
     v - 1's) and, where ``split``, split its words (see :func:`_sort_wide_half_edges`) into the
     key, the face and the direction; blocks of vertices claimed by every core. Each run is its
-    own, so who takes it changes nothing (the sorts measured 26 ms on one thread at the Dragon
-    size)."""
+    own, so who takes it changes nothing (the sorts take about 26 ms on one thread at the
+    Dragon size)."""
     vertices = len(ends) - 1
     mask = (1 << bits - 1) - 1
     blocks = (vertices + RUN_BLOCK - 1) // RUN_BLOCK
@@ -800,8 +800,8 @@ def row_hashes(bits: np.ndarray) -> np.ndarray:
     A product's bits depend only on its factor's bits below them, and a double holds most of
     its information in its high bits (exponent, leading mantissa): so each word is folded
     first, its high half onto its low one. Multiplied unfolded, whole numbers (a weld's grid
-    cells) and the vertices of a subdivided sphere shared keys by the hundred thousand and
-    fell back to the lexsort, ten times slower.
+    cells) and the vertices of a subdivided sphere would share keys by the hundred thousand
+    and fall back to the lexsort, ten times slower.
     """
     key = np.zeros(len(bits), dtype=np.uint64)
     for column, factor in enumerate(_HASH_FACTORS):

@@ -106,10 +106,9 @@ def face_weights(code: int, edges: Edges, length: float) -> Vector:
 #: Faces per chunk of the sums. The workers take the terms of a chunk's blocks (the products,
 #: the weights: most of the arithmetic) while one of them adds the chunks already taken into
 #: their vertices, in face order, so each vertex's sum is added in the same order on any number
-#: of cores and has the same bits (:func:`_sums_kernel`). At the Dragon size this took the
-#: area-weighted sums from 31 to 21 ms (best of 15), and 1.20 to 0.81 s at the Lucy size, against
-#: taking each chunk's terms on every core and then adding them on one (64, 16 and 256 blocks a
-#: chunk measured alike; 256 with 3 slots slower).
+#: of cores and has the same bits (:func:`_sums_kernel`). This takes about a third off the
+#: area-weighted sums, against taking each chunk's terms on every core and then adding them on
+#: one (16, 64 and 256 blocks a chunk are alike; 256 with 3 slots is slower).
 CHUNK = 64 * BLOCK
 #: Chunks whose terms are held at once: the workers run up to three chunks ahead of the adder.
 #: The terms of ``SLOTS * CHUNK`` faces (32 or 48 bytes a face: 6 MiB at most) are all the
@@ -270,7 +269,7 @@ def _add_terms(faces: IndexArray, first: int, terms: FloatArray, sums: FloatArra
 
 @kernel()
 def _add_row(sums: FloatArray, vertex: int, x: float, y: float, z: float, w: float) -> None:
-    """``sums[vertex] += (x, y, z, w)``, element by element (a view of the row measured 13-29 %
+    """``sums[vertex] += (x, y, z, w)``, element by element (through a view of the row it is
     slower)."""
     sums[vertex, 0] += x
     sums[vertex, 1] += y
@@ -296,8 +295,8 @@ def normalise_kernel(sums: FloatArray, normals: FloatArray, missing: BoolArray) 
 
     ``normals`` may share memory with ``sums``: row i is read before rows up to i are
     written, as (n, 3) is packed more densely than (n, 4). (Into the same memory, on one
-    core: measured at the Lucy size, a separate (n, 3) array normalised on two cores took
-    longer, its fresh memory costing more than the second core saved; many rows are
+    core: on a large mesh a separate (n, 3) array normalised on two cores takes longer, its
+    fresh memory costing more than the second core saves; many rows are
     normalised on every core into the same memory by :func:`normalise_packed_kernel`.)
     """
     for row in range(len(sums)):

@@ -73,7 +73,7 @@ _LEAF = 4
 _WIDEST_LEAF = 64
 #: The largest call of these kernels, in array elements, that runs in Python before numba is
 #: loaded (see :data:`mesh_normal.kernels.PYTHON_ELEMENTS`): a dozen faces. Casting rays in
-#: Python is about a hundred times slower than compiled (100 faces of a soup took 2.8 s).
+#: Python is about a hundred times slower than compiled (100 faces of a soup take about 3 s).
 PYTHON_RAYS = 600
 #: What a ray meets (see :func:`_blocked`).
 _CLEAR, _HIT, _UNSURE = range(3)
@@ -192,7 +192,8 @@ def _samples(group: IndexArray, chosen: IndexArray, per: int) -> tuple[IndexArra
     its members number (r c) // t for r = 0 .. t - 1, patch after patch in ``chosen``'s order.
 
     One pass over the faces picks them (:func:`_pick_samples`); gathering each patch's
-    members with a stable sort first took 0.56 s at the Lucy size for a patch of every face.
+    members with a stable sort first takes about half a second at the Lucy size for a patch of
+    every face.
     """
     slot = np.full(int(group.max(initial=0)) + 1, -1, dtype=np.intp)
     slot[chosen] = np.arange(len(chosen))
@@ -236,7 +237,7 @@ def leaf_size(faces: int, rays: int) -> int:
 
     Any leaf size gives the same answers (a ray meets the same faces: every box holding
     them, padded, is entered). One open patch of the Dragon-size torus casts 1024 rays: with
-    leaves of 4 its hierarchy took 107 ms to build and 2 ms to cast through.
+    leaves of 4 its hierarchy takes about fifty times longer to build than to cast through.
     """
     leaf = _LEAF
     while leaf < _WIDEST_LEAF and 16 * leaf * rays <= faces:
@@ -276,7 +277,7 @@ def _hierarchy(
 
     With leaves of 4 faces, about 140 bytes a face are kept (the corners 72, the order 8, the
     nodes about 0.7 a face at 80 bytes each), and 70 more for a moment while the nodes are
-    made (measured on 328k faces: 149 bytes a face kept, with the vertices). With larger
+    made (about 150 bytes a face kept, with the vertices). With larger
     leaves (few rays), the order and a few bytes a face for the nodes: the rays read the
     corners from the points.
     """
@@ -297,7 +298,7 @@ def _built(
     del ordered
     nodes = max(1, 2 * len(faces))  # at least one face per leaf: fewer than 2 m nodes
     # Room for every node there can be, written by _split only as far as it makes them (at
-    # the Lucy size, filling 2m rows with -1 first cost about 1 s of page faults).
+    # the Lucy size, filling 2m rows with -1 first costs about 1 s of page faults).
     children = np.empty((nodes, 2), dtype=np.intp)
     spans = np.empty((nodes, 2), dtype=np.intp)
     used = _split(codes, leaf, children, spans)
@@ -317,9 +318,9 @@ _NO_CORNERS = np.empty((0, 9))
 
 def _morton_order(unit: FloatArray, faces: IndexArray) -> tuple[IndexArray, IndexArray]:
     """The faces' Morton codes (:func:`_morton`) in increasing order, and the order: that of a
-    stable sort, by three passes of a compiled radix sort (:func:`_radix_order`; measured 5
-    times faster than NumPy's sort of code-and-number keys at 871k faces, itself 7 times
-    faster than ``argsort(kind="stable")``)."""
+    stable sort, by three passes of a compiled radix sort (:func:`_radix_order`; 5 times
+    faster than NumPy's sort of code-and-number keys, itself 7 times faster than
+    ``argsort(kind="stable")``)."""
     codes = np.empty(len(faces), dtype=np.int64)
     _morton(unit, faces, codes, *workers())
     order = np.empty(len(faces), dtype=np.intp)
@@ -417,7 +418,7 @@ def _gather_corners(
     unit: FloatArray, faces: IndexArray, order: IndexArray, corners: FloatArray,
     counter: IndexArray, workers: int,
 ) -> None:  # fmt: skip
-    """``corners[k] = unit[faces[order[k]]].ravel()`` (measured 10 times faster than NumPy's
+    """``corners[k] = unit[faces[order[k]]].ravel()`` (10 times faster than NumPy's
     two gathers, which also make a temporary of 24 bytes a face)."""
     blocks = (len(order) + BLOCK - 1) // BLOCK
     for _ in prange(workers):

@@ -22,7 +22,7 @@ from mesh_normal.files.loaded import MAX_TRIANGLES
 
 #: Memory per placed triangle and per placed vertex in the job (trimesh's arrays, the joined
 #: copy, the report): with the usual two triangles a vertex, the 250 bytes a placed triangle
-#: measured in a mesh report.
+#: takes in a mesh report.
 TRIANGLE_BYTES = 200
 VERTEX_BYTES = 100
 

@@ -2,7 +2,7 @@
 
 Its own module so that reading a file of triangles never imports numba (the readers stay light);
 polygons of four or more corners bring it in. One pass over the corners, without allocating,
-measured about 20 times faster than the same in NumPy on a million quads.
+is about 20 times faster than the same in NumPy.
 """
 
 from __future__ import annotations
@@ -69,7 +69,7 @@ def _polygon_shapes(
     folded: BoolArray,
 ) -> bool:
     """Fill ``normals``, ``deviation`` and ``folded`` for polygons of four or more corners, in
-    one pass over their corners (NumPy took 20 times as long on a million quads). Corners are
+    one pass over their corners (NumPy takes 20 times as long). Corners are
     taken relative to the polygon's centroid, so a polygon far from the origin measures as
     one at it. Returns False, having filled nothing reliable, when a corner index is not a
     vertex."""

@@ -120,7 +120,7 @@ def _read_as(found: str, named: str | None, data: bytes, source: object = None) 
 
 #: A path to a binary STL of this many bytes or more is mapped rather than read: its pages come
 #: from the system's file cache as the reader touches them, instead of a copy in fresh memory
-#: (measured for 700 MB on this machine: 0.05 s against 0.7-1.9 s, and 700 MB less memory).
+#: (for a 700 MB file, more than ten times faster, and 700 MB less memory).
 MAPPED_BYTES = 1 << 26
 
 

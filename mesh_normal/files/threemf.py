@@ -54,13 +54,13 @@ MAX_DEPTH = 32
 #: triangles (24 bytes each in arrays, from at least 28 bytes of XML each).
 XML_PER_BYTE = 1
 #: Memory of each element the parse keeps (all but vertices and triangles; a triangle's colour
-#: attributes count as one), measured with tracemalloc: 330 to 430 bytes for an element with
+#: attributes count as one): tracemalloc counts 330 to 430 bytes for an element with
 #: one to four attributes, and the object or component it becomes.
 KEPT_BYTES = 640
 #: Kept elements charged at a time.
 KEPT_BATCH = 4096
 #: Memory of each triangle and each vertex the build places, in the mesh's arrays and the
-#: report's: about 250 bytes a triangle measured, with its share of vertices.
+#: report's: about 250 bytes a triangle, with its share of vertices.
 PLACED_TRIANGLE_BYTES = 250
 PLACED_VERTEX_BYTES = 100
 

@@ -62,8 +62,8 @@ def weld(corners: NDArray[np.floating]) -> tuple[NDArray[np.float64], NDArray[np
         with PARALLEL_KERNELS:
             _row_hashes(words, digests, *workers())
         # A quarter as many slots as rows (a point is in about 6 corners), made here: NumPy
-        # asks for huge pages for a large array, and with 4 KB pages the probes waited on the
-        # page tables (the table's pass at the Dragon size 150 -> 87 ms).
+        # asks for huge pages for a large array, and with 4 KB pages the probes wait on the
+        # page tables (the table's pass takes almost twice as long).
         size = 16
         while size < count // 4:
             size *= 2
@@ -232,8 +232,7 @@ def _table_weld(
     in advance: the table is larger than the cache on a large mesh.
 
     The table is never replaced inside this loop: with the doubling written in it (the table a
-    variable the loop assigns), the pass took 2.5 times as long (136 against 53 ms at the
-    Dragon size).
+    variable the loop assigns), the pass takes 2.5 times as long.
     """
     faces, per = bits.shape[0], bits.shape[1]
     count = faces * per
@@ -299,8 +298,8 @@ def _leaders(
     points: NDArray[np.floating], is_leader: BoolArray, vertices: NDArray[np.float64]
 ) -> None:
     """The leading rows of ``points`` (f, c, 3) in turn, as float64 and with -0.0 as 0.0 (plus
-    0.0), into ``vertices`` (one pass: NumPy's mask and conversion took 1.4 s at the Lucy
-    size)."""
+    0.0), into ``vertices`` (one pass: NumPy's mask and conversion take about 1.4 s at the
+    Lucy size)."""
     point = 0
     row = 0
     for face in range(points.shape[0]):
@@ -326,7 +325,7 @@ def _group(
     False (and nothing numbered) if a group holds more than ``most`` different points.
 
     The rows' bits are gathered in key order first (a copy of ``bits``): compared where they
-    lie, the walk measured three times slower, waiting on memory at every row."""
+    lie, the walk is three times slower, waiting on memory at every row."""
     low = (1 << index_bits) - 1
     count = len(bits)
     ordered = np.empty_like(bits)
