@@ -7,8 +7,8 @@ import gc
 # Python's cyclic garbage collector is paused while the app's modules load and the app is made,
 # then everything made so far is frozen out of its later passes (``gc.freeze``) and it resumes
 # (the end of this module). Its passes over the hundreds of thousands of objects that FastAPI,
-# pydantic and our routes create at import took 50-60 ms of the 0.41 s to import the app
-# (median of 9), and the first page waits for that import.
+# pydantic and our routes create at import take about an eighth of the time to import the
+# app, and the first page waits for that import.
 _COLLECTING = gc.isenabled()
 gc.disable()
 
@@ -126,9 +126,8 @@ def end_jobs_on_stop(jobs: Jobs) -> Callable[[], None]:
 
 
 def load_heavy_modules(compile_kernels: bool) -> None:
-    """Import :data:`HEAVY_MODULES`, the garbage collector paused (:mod:`mesh_normal.collector`:
-    0.51 against 0.43 s); with ``compile_kernels`` (no workers: the jobs run in the server),
-    load the kernels too."""
+    """Import :data:`HEAVY_MODULES`, the garbage collector paused (:mod:`mesh_normal.collector`);
+    with ``compile_kernels`` (no workers: the jobs run in the server), load the kernels too."""
     with paused():
         for name in HEAVY_MODULES:
             importlib.import_module(name)
@@ -193,8 +192,8 @@ def build_routes(routes: list[Any]) -> None:
     which swaps the process's warning filters: at a request, with other threads in their own
     ``catch_warnings`` (the background imports, the workers' launchers), one thread's exit can
     put back filters that drop FastAPI's ignore of pydantic's ``UnsupportedFieldAttributeWarning``
-    while it is still building (a CI run failed on exactly that, with warnings as errors). Built
-    here, before the lifespan starts any thread, and the first request no longer pays for it.
+    while it is still building (with warnings as errors, the request fails). Built here, before
+    the lifespan starts any thread, they are safe, and the first request does not pay for them.
     """
     for route in routes:
         candidates = getattr(route, "effective_candidates", None)

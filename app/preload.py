@@ -2,8 +2,8 @@
 
 ``multiprocessing`` imports this module by name in the fork server. It imports
 :data:`MODULES` with Python's garbage collector paused (their hundreds of thousands of objects,
-walked again and again by the collector's passes as they grow, made the same imports take 1.73
-against 0.90 s; :mod:`mesh_normal.collector`), then freezes what they made out of the
+walked again and again by the collector's passes as they grow, would make the same imports
+take about twice as long; :mod:`mesh_normal.collector`), then freezes what they made out of the
 collector's later passes (``gc.freeze``: what Python's documentation advises before a fork, so
 that no collection in a worker writes to the pages those objects share with the fork server)
 and lets it run again.

@@ -1,8 +1,8 @@
 """``POST /api/normals``: a batch of triangles, parsed and computed in one step.
 
 A large batch is a heavy job (:mod:`app.web.jobs`): parsing builds a Python object for every
-number, and 12 batches of 100,000 triangles parsed at once in the server took 1.3 GB and
-stalled its pages for seconds. So a body over :data:`INLINE_BYTES` runs in a worker process,
+number, and 12 batches of 100,000 triangles parsed at once in the server would take 1.3 GB
+and stall its pages for seconds. So a body over :data:`INLINE_BYTES` runs in a worker process,
 admitted against the memory budget with :func:`estimate`, and comes back as the JSON text of
 the answer (bytes travel between processes in one piece; a dict of 100,000 rows would be
 pickled and rebuilt object by object). A smaller body (a few triangles, a few hundred) is
@@ -26,7 +26,7 @@ from mesh_normal.triangle import triangle_normal
 #: triangles, parsed and computed in about 4 ms); larger ones are a job in a worker.
 INLINE_BYTES = 16 * 1024
 
-#: Peak memory of a batch job per triangle (measured: 1,650 bytes for 100,000 triangles with
+#: Peak memory of a batch job per triangle (about 1,650 bytes for 100,000 triangles with
 #: 17 significant digits, 1,900 for one-digit coordinates; the parsed lists dominate), and
 #: per byte of the body (the body itself, in the server and in the worker).
 BYTES_PER_TRIANGLE = 2048

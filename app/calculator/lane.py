@@ -1,8 +1,8 @@
 """``POST /api/normal`` answered in one step where the fast path is sure: the fast lane.
 
 The route itself (:func:`app.calculator.api.post_normal`) passes every request through the
-middleware, the router, an included router and the route's exception wrappers: measured
-in-process, that stack took about two thirds of the request's time in the app, for the one
+middleware, the router, an included router and the route's exception wrappers: that stack
+takes about two thirds of the request's time in the app, for the one
 endpoint that people call in loops. This middleware sits outside the app's own middleware
 (FastAPI's error and telemetry layers still wrap it) and answers a request there only when it
 can write exactly what the whole stack would write:

@@ -2,7 +2,7 @@
 
 The admission control (:mod:`app.web.jobs`) charges each job this estimate against the
 server's memory budget. The factors are the peak memory measured per byte of upload by
-``make bench-memory`` (issue 10; the largest of reading, the report, the normals and the fix:
+``make bench-memory`` (the largest of reading, the report, the normals and the fix:
 binary STL 5.1, ASCII STL 3.3, OBJ 4.9, binary PLY 4.9, ASCII PLY 3.8, OFF 6.0, GLB 5.9),
 rounded up with a margin; lower them here, in this one table, when the readers take
 less.
@@ -20,8 +20,8 @@ from mesh_normal.files.expansion import expansion_limit
 from mesh_normal.files.formats import suffix_format
 
 #: Peak memory of reading and analysing a mesh, per byte of its file, by format (the larger
-#: of its binary and ASCII figures, plus a margin). glTF and 3MF were not measured: they keep
-#: the old text formats' 26.
+#: of its binary and ASCII figures, plus a margin). glTF and 3MF are not measured: they take a
+#: cautious 26.
 MEMORY_PER_BYTE: dict[str, float] = {
     "stl": 6,
     "obj": 6,
@@ -35,7 +35,7 @@ MEMORY_PER_BYTE: dict[str, float] = {
 UNKNOWN_PER_BYTE = max(MEMORY_PER_BYTE.values())
 
 #: What each task adds per byte of the file to the reading's peak: the page's figures, the
-#: fixed file written, the normals kept for the answer. Measured on a smooth torus, the fix and
+#: fixed file written, the normals kept for the answer. On a smooth torus, the fix and
 #: the normals add at most 0.2 to the report's peak; corner normals keep 4, as creased
 #: vertices take about 100 bytes a corner (not measured there); the page is not measured.
 #: JSON and CSV normals are streamed in blocks, so their text is never whole in memory.

@@ -43,13 +43,12 @@ FIXED_BY_ORIENT = frozenset({"winding", "inward", "mixed"})
 
 
 #: A binary STL of this many bytes or more keeps the memory its job frees for the job's next
-#: arrays (see ``mesh_normal.allocator``). Only binary STL: the text formats' jobs measured
-#: more memory with freed blocks kept in the heap.
+#: arrays (see ``mesh_normal.allocator``). Only binary STL: the text formats' jobs take more
+#: memory with freed blocks kept in the heap.
 PREFAULT_FROM = 8 * 2**20
 #: ... and from this many bytes on, its arrays' memory is also faulted in ahead, on another
-#: thread. Below it that thread cost more than it saved: it takes a core from the parallel
-#: kernels, and the Dragon-size upload's job (42 MB) measured 25-50 ms slower in the median
-#: with it (0.631 against 0.600 s, alternating in one worker process).
+#: thread. Below it that thread costs more than it saves: it takes a core from the parallel
+#: kernels, and the job of a 42 MB upload is slower with it.
 FAULT_AHEAD_FROM = 256 * 2**20
 
 

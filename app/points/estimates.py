@@ -1,13 +1,12 @@
 """How much memory a point-cloud job may take, estimated from the upload before it starts.
 
-Measured once (a sphere in float32 binary PLY, k = 30, ``orient="mst"``, the whole report, on
-the shared 2-core machine): the peak above the file's bytes was 271 MB for 300,000 points and
-420 MB for 1,000,000, so about 210 MB whatever the size (the k-d tree queries' neighbour
-lists, a chunk of 2**17 points at a time, and the kernels' first call) and 213 bytes a point.
+For a sphere in float32 binary PLY (k = 30, ``orient="mst"``, the whole report), the peak
+above the file's bytes is about 210 MB whatever the size (the k-d tree queries' neighbour
+lists, a chunk of 2**17 points at a time, and the kernels' first call) plus 213 bytes a point.
 The factors below are that per point over the fewest bytes a point takes in each format
 (binary PLY and PCD: 12, three floats; LAS: 20, point format 0; text: about 20; LAZ: about 4),
-plus the file itself, rounded up: binary PLY of doubles (24 bytes a point) measured 38 a byte
-at 300,000 points with the fixed part, 9.3 without, and XYZ text of 59 bytes a point 4.2.
+plus the file itself, rounded up: wider records take less a byte (binary PLY of doubles, 24
+bytes a point, about 9 besides the fixed part; XYZ text of 59 bytes a point about 4).
 Lower them here, in this one table, when they are measured per format. The readers charge
 points they unpack from compressed data (a PCD's LZF, LAZ) at the same 213 bytes a point
 (``mesh_normal.points.cloud.POINT_JOB_BYTES``) to the upload's expansion budget, so a file
@@ -29,7 +28,7 @@ MEMORY_PER_BYTE: dict[str, float] = {
 #: For a mesh file read as its vertices, or a format not known before reading: the largest.
 UNKNOWN_PER_BYTE = max(MEMORY_PER_BYTE.values())
 
-#: Bytes every job takes whatever its size (measured about 210 MB, see above), rounded up.
+#: Bytes every job takes whatever its size (about 210 MB, see above), rounded up.
 JOB_OVERHEAD = 224 * 2**20
 
 

@@ -4,11 +4,10 @@ FastAPI's own handler solves the endpoint's dependencies on every request, even 
 parameter is the :class:`~starlette.requests.Request` and the endpoint builds its response
 itself, as every JSON route of the calculator does (the body is validated by
 :func:`app.web.jsonio.read_body`, the response rendered by ``FastJSONResponse``). For
-``POST /api/normal`` that step was about a third of the request's time in the app (measured
-in-process: about 200 µs a request with it, 140-150 µs without). :class:`RequestRoute`
-calls such an endpoint with the request directly. Everything else stays FastAPI's: the
-routing, the OpenAPI schema (``openapi_extra``, ``response_model``), the exception handlers
-(``request_response`` still wraps the handler) and the middleware.
+``POST /api/normal`` that step takes about a third of the request's time in the app.
+:class:`RequestRoute` calls such an endpoint with the request directly. Everything else stays
+FastAPI's: the routing, the OpenAPI schema (``openapi_extra``, ``response_model``), the
+exception handlers (``request_response`` still wraps the handler) and the middleware.
 
 An endpoint with any other signature gets FastAPI's handler unchanged, so the class is safe on
 any router.

@@ -25,9 +25,10 @@ from app.web.static import static_url
 TEMPLATES_DIR = Path(__file__).resolve().parents[2] / "templates"
 
 #: Compiled templates, as ``__pycache__`` holds compiled modules: compiling the calculator's
-#: page and the templates it extends took 60-70 ms of the server's first answer (7 ms from
-#: then on). ``make env``, ``make run`` and the image fill it (``python -m app.web.templating``);
-#: an entry is used only while its template's source is unchanged (Jinja keeps a checksum).
+#: page and the templates it extends takes about ten times as long as loading them compiled,
+#: at the server's first answer. ``make env``, ``make run`` and the image fill it
+#: (``python -m app.web.templating``); an entry is used only while its template's source is
+#: unchanged (Jinja keeps a checksum).
 CACHE_DIR = TEMPLATES_DIR / "__pycache__"
 
 

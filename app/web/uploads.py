@@ -105,7 +105,7 @@ class _InMemory(MultiPartParser):
     temporary file on disk: ``max_size`` 0): the body's size is already bounded by
     :class:`app.web.middleware.BodyLimit`, and its bytes are read into memory whole anyway.
     Its pieces are then written without a hop to a thread each, and read without reading a
-    file back (measured for a 42 MB STL: 47 ms to parse and 30 ms to read back before)."""
+    file back."""
 
     spool_max_size = 0
 

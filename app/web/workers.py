@@ -83,8 +83,8 @@ ALLOCATION_FAILED = frozenset({-signal.SIGSEGV, -signal.SIGABRT, -signal.SIGBUS}
 logger = logging.getLogger(__name__)
 
 #: How long the first jobs wait for the first worker to be ready: compiling the kernels into
-#: an empty cache (every kernel for read-only and writable arrays, mesh_normal.precompile) took
-#: 114 s on two cores shared with other work, 2.5 times the 46 s of the writable ones alone.
+#: an empty cache (every kernel for read-only and writable arrays, mesh_normal.precompile) takes
+#: up to two minutes on two busy cores, 2.5 times as long as the writable ones alone.
 STARTUP_SECONDS = 120
 
 
@@ -144,8 +144,8 @@ def send(connection: Connection, value: Any, shared_from: int | None = None) -> 
 
     Buffers of ``shared_from`` bytes or more (where the system has ``memfd_create``) are
     written into an anonymous shared-memory file whose descriptor is passed instead of the
-    bytes: the receiver maps it read-only (:func:`receive`). For a 42 MB upload that took
-    29-31 ms against 59-72 ms through the pipe (which copies it in pieces of the socket's
+    bytes: the receiver maps it read-only (:func:`receive`). For a large upload that takes
+    half the time of the pipe (which copies it in pieces of the socket's
     buffer, twice, and once more into the bytes received). The file is gone once both
     processes have let go of it, a worker that dies included.
     """
