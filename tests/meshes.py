@@ -62,7 +62,7 @@ TETRA_OBJ = obj_text(TETRA_OBJ_POINTS, TETRA_FACES.tolist())
 HUGE_TETRA_OBJ = obj_text("v 0 0 0\nv 1e200 0 0\nv 0 1e200 0\nv 0 0 1e200\n", TETRA_FACES.tolist())
 
 #: The ``v`` lines of the unit cube as OBJ, numbered the other way round from CUBE_VERTICES:
-#: vertex 4 x + 2 y + z (the API, page, CLI and report tests were written against this file).
+#: vertex 4 x + 2 y + z (the API, page, CLI and report tests expect this file's numbering).
 CUBE_OBJ_POINTS = "".join(f"v {x} {y} {z}\n" for x in (0, 1) for y in (0, 1) for z in (0, 1))
 #: Its 12 triangles wound outward, in this numbering: sides -x, +x, -y, +y, -z, +z.
 CUBE_OBJ_FACES = [

@@ -2,8 +2,8 @@
 worker processes): each is answered within seconds with the status it deserves, the server's
 memory stays bounded, and the first page keeps answering meanwhile.
 
-Each file is a few kilobytes that once expanded into gigabytes, minutes or a crash (issue 35's
-table); :data:`CORPUS` says where each goes and what the answer must be.
+Each file is a few kilobytes that, unguarded, expand into gigabytes, minutes or a crash;
+:data:`CORPUS` says where each goes and what the answer must be.
 """
 
 from __future__ import annotations

@@ -21,7 +21,7 @@ FLIPPED = TETRA_FACES[:, [0, 2, 1]]
 
 @pytest.fixture
 def with_normals(tmp_path: Path) -> Path:
-    """An OBJ with per-vertex vn and one face flipped, like the bunny of the issue."""
+    """An OBJ with per-vertex vn and one face flipped."""
     faces = TETRA_FACES.copy()
     faces[0] = faces[0, [0, 2, 1]]
     normals = vertex_normals(TETRA_VERTICES, TETRA_FACES).normals

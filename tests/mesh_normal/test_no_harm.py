@@ -1,4 +1,4 @@
-"""The rule the fix keeps (issue 9): it never turns a mesh that is consistently wound by
+"""The rule the fix keeps: it never turns a mesh that is consistently wound by
 position into one that is not, it flips nothing on a closed mesh whose volume is already
 positive, and its verdict and flips do not depend on where the mesh is, how it is turned or
 how large it is. Checked on every real mesh in tests/data and on generated hard cases."""
@@ -136,7 +136,7 @@ def test_random_flips_of_a_decided_mesh_are_undone_exactly(name: str) -> None:
     assert np.array_equal(r.faces, faces)
 
 
-# --- the failures of issue 9, one by one ----------------------------------------------------
+# --- hard cases, one by one ------------------------------------------------------------------
 
 
 def test_a_cube_of_separate_float32_sides_is_one_closed_outward_piece() -> None:

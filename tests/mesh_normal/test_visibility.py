@@ -150,9 +150,9 @@ def test_a_random_triangle_soup_is_mostly_left_alone() -> None:
 
 @pytest.mark.parametrize("shift", [1e4, -1e4, 1e8])
 def test_the_scores_are_the_same_far_from_the_origin(shift: float) -> None:
-    # The rays are cast in the box of the mesh itself, never one stretched to the origin (a
-    # first version took the origin into the box: at 1e8 a triangle of trimesh's soup.stl
-    # scored -0.3125 instead of -0.625 and was left as it was).
+    # The rays are cast in the box of the mesh itself, never one stretched to the origin (with
+    # the origin in the box, at 1e8 a triangle of trimesh's soup.stl would score -0.3125
+    # instead of -0.625 and be left as it is).
     vertices, faces = load("soup.stl")
     here = scores(vertices, faces)
     there = scores(vertices + shift * np.array([1.0, -0.7, 0.3]), faces)
@@ -237,8 +237,8 @@ def test_the_leaves_grow_where_the_rays_are_few() -> None:
 def _samples_by_sorting(
     group: np.ndarray, chosen: np.ndarray, per: int
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The samples as they were taken before the one-pass pick: each patch's members by a
-    stable sort, then evenly spread picks."""
+    """The samples taken the slow, plain way (the one-pass pick must match it): each patch's
+    members by a stable sort, then evenly spread picks."""
     wanted = np.zeros(int(group.max(initial=0)) + 1, dtype=bool)
     wanted[chosen] = True
     members = np.flatnonzero(wanted[group])

@@ -41,7 +41,7 @@ CASES: dict[str, tuple[Point, Point, Point]] = {
     ),
     "huge": ((0.0, 0.0, 0.0), (1e200, 0.0, 0.0), (0.0, 1e200, 0.0)),
     "differences overflow": ((-1.7e308, 0.0, 0.0), (1.7e308, 1e308, 0.0), (0.0, -1.7e308, 1.7e308)),
-    # As long as the double range and 1 wide: in view space an edge is subnormal (was a 500).
+    # As long as the double range and 1 wide: in view space an edge is subnormal (not a 500).
     "sliver as long as the range": ((-1e308, 0.0, 0.0), (1e308, 1.0, 0.0), (-1e308, 0.0, 1.0)),
     "tiny": ((0.0, 0.0, 0.0), (1e-300, 0.0, 0.0), (0.0, 0.0, 1e-300)),
     "subnormal": ((0.0, 0.0, 0.0), (5e-324, 0.0, 0.0), (0.0, 5e-324, 0.0)),

@@ -778,7 +778,7 @@ def test_openapi_documents_the_weld(client: TestClient, stepped: bytes) -> None:
 
 def test_every_address_that_takes_a_file_gets_the_upload_limit(client: TestClient) -> None:
     # Each multipart endpoint in the schema streams its body against the upload limit; one
-    # left out answered 413 for any file over 64 KB (the export, once).
+    # left out would answer 413 for any file over 64 KB.
     paths = client.get("/openapi.json").json()["paths"]
     takes_files = {
         path

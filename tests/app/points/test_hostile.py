@@ -1,4 +1,4 @@
-"""Hostile point clouds through the API (issue 35): each answered within seconds, a bomb with a
+"""Hostile point clouds through the API: each answered within seconds, a bomb with a
 413 that names what expanded, a pile of coincident points with a report."""
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from tests.mesh_normal.points._hostile import (
 from tests.paths import ROOT
 
 HOSTILE = ROOT / "tests" / "data" / "hostile"
-#: Generous: each case once took a minute or more, or gigabytes.
+#: Generous: unguarded, each case takes a minute or more, or gigabytes.
 SECONDS = 10.0
 
 

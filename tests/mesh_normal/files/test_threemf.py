@@ -294,7 +294,7 @@ def test_the_hostile_packages(name: str, status: int, words: str) -> None:
     started = time.perf_counter()
     with pytest.raises(MeshFileError) as error:
         read_mesh(hostile.HOSTILE / name)
-    assert time.perf_counter() - started < 30  # seconds, not the minutes these once took
+    assert time.perf_counter() - started < 30  # seconds, not the minutes an unguarded read takes
     assert error.value.status_code == status and words in str(error.value)
     assert str(error.value).endswith(".") and ". " not in str(error.value)
 

@@ -1,4 +1,4 @@
-"""Hostile point clouds (issue 35): compressed data that expand far, piles of coincident points,
+"""Hostile point clouds: compressed data that expand far, piles of coincident points,
 LAS headers that lie. Each is answered within seconds: a sentence, or normals."""
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ from tests.mesh_normal.points._hostile import (
 from tests.paths import ROOT
 
 HOSTILE = ROOT / "tests" / "data" / "hostile"
-#: Generous: each case once took a minute or more, or gigabytes.
+#: Generous: unguarded, each case takes a minute or more, or gigabytes.
 SECONDS = 10.0
 
 
@@ -41,7 +41,7 @@ def test_zeros_lzf_unpacks_to_zeros() -> None:
 
 
 def test_an_lzf_pcd_of_3_million_points_is_refused_before_unpacking() -> None:
-    """The issue's file: 436 KB of LZF holding 3,000,000 points (36 MB unpacked)."""
+    """436 KB of LZF holding 3,000,000 points (36 MB unpacked)."""
     data = lzf_bomb_pcd(3_000_000, 4, "F")
     assert len(data) < 450_000
     began = time.monotonic()

@@ -52,7 +52,7 @@ def test_read_mesh_refuses_it_but_read_points_takes_it() -> None:
 
 def test_read_mesh_refuses_a_lying_ascii_count_before_allocating() -> None:
     # files/ply.py's read_elements checks the count against the text first (the mesh reader's
-    # path too): 10**12 vertices used to ask NumPy for 22 TiB.
+    # path too): otherwise 10**12 vertices would ask NumPy for 22 TiB.
     with pytest.raises(MeshFileError, match="1,000,000,000,000 vertex elements, but the file is"):
         read_mesh(cloud_ply("ascii", 10**12), "cloud.ply")
 
