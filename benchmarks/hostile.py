@@ -7,7 +7,7 @@ peak memory the server's processes added (server, fork server and workers: RSS e
 the slowest ``GET /`` meanwhile (asked every 50 ms) and the start of the answer's sentence.
 
 The rows: every file of ``tests/data/hostile/`` (``points_*`` to ``/api/points``, the others
-to ``/api/mesh``), then the issue's bigger originals, made in memory: a zip whose directory
+to ``/api/mesh``), then bigger versions made in memory: a zip whose directory
 lists 400,001 members, 200,000 identical points, 100,000 points each 20 times, 12 batches of
 100,000 triangles at once, 600 clients that announce 1 MB and leave after 56 bytes, and the
 sample pages asked 20 times at once while 5 uploads run.

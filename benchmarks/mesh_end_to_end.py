@@ -58,7 +58,7 @@ SIZES = (69_451, 871_414)
 LUCY = 14_000_000
 TARGET_UPLOAD = 1.5  # seconds, dragon size
 TARGET_LUCY_SECONDS, TARGET_LUCY_RSS = 30.0, 6 * 2**30
-#: Issue 13: ``mesh-normal analyze`` of the Lucy size under 15 s, in the same memory.
+#: The target for ``mesh-normal analyze`` of the Lucy size: under 15 s, in the same memory.
 TARGET_LUCY_ANALYZE_SECONDS = 15.0
 CACHE = Path(os.environ.get("MESH_E2E_DIR", "/tmp/mesh-e2e"))
 CLI = str(Path(sys.executable).with_name("mesh-normal"))

@@ -22,10 +22,10 @@ and ``compute_vertex_normals`` (area-weighted) of a ``TriangleMesh`` built befor
 starts: in the plain rows a new mesh for each call, whose call makes its output vector anew
 (as trimesh, libigl and ours make new arrays); in the rows "against Open3D's into its kept
 vector", the same mesh each time, whose call writes into the vector it kept from the last
-(ours still into new arrays: the pairing of the plain rows until session 19); "into the last
-call's arrays" is ours with ``out=`` against that kept vector, the same work. Corner normals
-have no equivalent. A second table probes what each library returns
-for degenerate and tiny faces, and a third the extra memory of our kernels (tracemalloc).
+(ours still into new arrays); "into the last call's arrays" is ours with ``out=`` against
+that kept vector, the same work. Corner normals have no equivalent. A second table probes
+what each library returns for degenerate and tiny faces, and a third the extra memory of our
+kernels (tracemalloc).
 ``--markdown PATH`` writes a summary (ours / the peer's time of each kernel, best and median)
 and the degenerate faces' table to a file, after a line naming the machine and the date.
 """
@@ -195,8 +195,7 @@ def largest_angle(ours: np.ndarray, theirs: np.ndarray) -> float:
 PEERS = ("trimesh", "libigl", "Open3D")
 #: The table's rows: ours, the peers' kernel, the label. Open3D's "face" and "area" calls are
 #: of a new mesh each (its output vector made anew, as ours are new arrays); its "kept" calls
-#: write into the vector its mesh keeps from the call before (as ours with ``out=``), the
-#: pairing of the plain rows until session 19.
+#: write into the vector its mesh keeps from the call before (as ours with ``out=``).
 ROWS = (
     ("face", "face", "face normals"),
     ("face", "face kept", "face normals, new arrays, against Open3D's into its kept vector"),

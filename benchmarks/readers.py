@@ -9,9 +9,9 @@ digits). Per round, alternating, in this process with the file's bytes in memory
 ``read_mesh(data, name)`` (every vertex kept, checked, read-only arrays); trimesh is
 ``trimesh.load(BytesIO(data), file_type=..., process=False)``. The OBJ rows are also timed as
 a whole report (``read_mesh`` + ``analyse_mesh`` + ``build_report`` and its JSON, as
-``POST /api/mesh`` does without HTTP): the issue's target is that at most 0.4 times trimesh's
-load. Best and median of ``--repeats`` rounds after one warm-up; the machine is shared, so only
-the ratios within one run count. ``--markdown PATH`` also writes the table to a file, after a
+``POST /api/mesh`` does without HTTP): the target is at most 0.4 times trimesh's load. Best
+and median of ``--repeats`` rounds after one warm-up; the machine is shared, so only the
+ratios within one run count. ``--markdown PATH`` also writes the table to a file, after a
 line naming the machine, its load and the date.
 """
 
@@ -34,7 +34,7 @@ from benchmarks.mesh_kernels import torus_mesh
 
 SIZE = 871_414
 CACHE = Path(os.environ.get("MESH_E2E_DIR", "/tmp/mesh-e2e"))
-#: The issue's target for the OBJ report, as a share of trimesh's load.
+#: The target for the OBJ report, as a share of trimesh's load.
 TARGET_OBJ = 0.4
 #: Lines written at once.
 _CHUNK = 1 << 16

@@ -1,4 +1,4 @@
-"""Side-by-side speed measurements for the calculator issue.
+"""Side-by-side speed measurements of the calculator.
 
     .venv/bin/python -m benchmarks.run [--seconds 10] [--rounds 3] [--markdown PATH]
 

@@ -17,7 +17,7 @@ whether any 5xx other than a planned 503 came back, whether the worker process l
 its resident memory before and after (each once steady for 3 s: the workers warm up as they
 start), and the probe's p50 / p99 / max; then one row of all that as a Markdown table, which
 ``--markdown PATH`` also writes to a file after a line naming the machine and the date.
-The targets of issue 10: no unplanned 5xx, no process death, resident memory back within 20 %
+The targets: no unplanned 5xx, no process death, resident memory back within 20 %
 of its start, ``GET /`` p99 under 0.5 s.
 """
 

@@ -1,14 +1,14 @@
 """Does heavy mesh work stall the pages? ``GET /`` latency while four heavy uploads run.
 
 Starts ``uvicorn app.main:app`` twice: with the jobs in threads of the server process
-(``MESH_IN_PROCESS=1``, four at once: the server as it was before the worker processes) and
+(``MESH_IN_PROCESS=1``, four at once: the server without worker processes) and
 with the worker processes (``MESH_WORKERS=2``, the default; the other two uploads wait their
 turn). Each time, four ASCII STL files (the heaviest per byte for the GIL: regular-expression
 passes in Python) are posted at once while a client asks for ``GET /`` every 20 ms; the
 figures are that page's latencies while the uploads run.
 
-Then the peak memory of corner normals as JSON, written whole (as before) and in blocks (as
-``POST /api/mesh/normals`` now streams them).
+Then the peak memory of corner normals as JSON, written whole and in blocks (as
+``POST /api/mesh/normals`` streams them).
 
     .venv/bin/python -m benchmarks.stalls [--mb 40] [--markdown PATH]
 
