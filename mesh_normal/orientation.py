@@ -337,7 +337,7 @@ class HeadStart:
 
     The topology's and the head start's one-thread kernels release the GIL (``nogil``), so
     that each thread's Python between kernels is not held up by the other's kernel: on an
-    open mesh that takes up to a tenth off the upload's whole job.
+    open mesh that takes about a tenth off the upload's whole job.
     """
 
     def __init__(self, mesh: CheckedMesh, points: IndexArray) -> None:
