@@ -24,7 +24,7 @@ from app.web.workers import run_in_server_while_starting
 from mesh_normal import allocator
 from mesh_normal.analysis import analyse_mesh, build_report, flips_by_component
 from mesh_normal.exports import FORMATS, KINDS, Normals, NormalsKind, normals_to_write
-from mesh_normal.files import LoadedMesh, MeshFileError, expansion, read_mesh, read_mesh_files, stl
+from mesh_normal.files import LoadedMesh, MeshFileError, read_mesh, read_mesh_files, stl
 from mesh_normal.files.formats import FORMATS as MESH_FORMATS
 from mesh_normal.files.formats import WRITABLE
 from mesh_normal.files.read import read_mapped, reads_as_binary_stl
@@ -66,26 +66,22 @@ def load(upload: Upload) -> LoadedMesh:
     """Read the uploaded file (or files); a broken or unknown file becomes a 4xx naming the
     problem. A file that came in shared memory (``upload.mapped``) is read from the map where
     it is a binary STL (the reader copies only what it keeps), else from a copy of its bytes.
-    All the reading expands into one budget for the upload (a 413 beyond it)."""
+    What the file expands into is charged to its one budget (``read_mesh`` and
+    ``read_mesh_files`` open it): a 413 beyond it."""
     try:
-        with expansion.expanding(upload.size):
-            return _read(upload)
+        if upload.parts:
+            return read_mesh_files(upload.parts)
+        if upload.mapped is not None:
+            mapped = upload.mapped
+            if reads_as_binary_stl(mapped[:4096], len(mapped)):
+                ahead(len(mapped))
+                return read_mapped(mapped, upload.filename or "")
+            return read_mesh(bytes(mapped), upload.filename)
+        if stl.is_binary(upload.data):
+            ahead(len(upload.data))
+        return read_mesh(upload.data, upload.filename)
     except MeshFileError as error:
         raise ApiError(error.status_code, str(error), "file") from None
-
-
-def _read(upload: Upload) -> LoadedMesh:
-    if upload.parts:
-        return read_mesh_files(upload.parts)
-    if upload.mapped is not None:
-        mapped = upload.mapped
-        if reads_as_binary_stl(mapped[:4096], len(mapped)):
-            ahead(len(mapped))
-            return read_mapped(mapped, upload.filename or "")
-        return read_mesh(bytes(mapped), upload.filename)
-    if stl.is_binary(upload.data):
-        ahead(len(upload.data))
-    return read_mesh(upload.data, upload.filename)
 
 
 def report(upload: Upload, weld: float | None) -> MeshReport:

@@ -12,7 +12,6 @@ from typing import Any
 
 from app.points.figures import histogram_figure, view_figure
 from app.web.errors import ApiError
-from mesh_normal.files import expansion
 from mesh_normal.files.errors import MeshFileError
 from mesh_normal.points.orient import OrientMode
 from mesh_normal.points.read import PointCloud, read_points
@@ -34,10 +33,9 @@ class Options:
 
 def load(data: bytes, filename: str | None) -> PointCloud:
     """Read the uploaded file; a broken or unknown file becomes a 4xx naming the problem, one
-    that expands past the upload's budget (compressed points) a 413."""
+    that expands past its budget (compressed points; ``read_points`` opens it) a 413."""
     try:
-        with expansion.expanding(len(data)):
-            return read_points(data, filename)
+        return read_points(data, filename)
     except MeshFileError as error:
         raise ApiError(error.status_code, str(error), "file") from None
 

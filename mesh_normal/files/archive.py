@@ -27,7 +27,7 @@ from collections.abc import Callable, Iterable, Iterator, Sequence
 from typing import TYPE_CHECKING
 
 from mesh_normal.files.errors import MeshFileError, failure_reason
-from mesh_normal.files.expansion import charge, expanding
+from mesh_normal.files.expansion import charge
 from mesh_normal.files.formats import suffix_format
 
 if TYPE_CHECKING:  # not NumPy at import: the app checks archives' names and sizes without it
@@ -67,7 +67,7 @@ def read_zip(data: bytes, read_file: ReadFile) -> LoadedMesh:
     """Read the one mesh file in a ``.zip`` (see the module docstring); ``read_file(data,
     name)`` reads a member other than a ``.gltf`` (it is ``read_mesh``, passed in because
     ``read_mesh`` calls this)."""
-    with expanding(len(data)), opened_zip(data, ".zip file") as (archive, members):
+    with opened_zip(data, ".zip file") as (archive, members):
         chosen = mesh_name(members, "The .zip file holds")
         per_byte = MEMORY_PER_BYTE.get(suffix_format(chosen) or "", 1)
         first = unpack(archive, members[chosen], ".zip file", per_byte)

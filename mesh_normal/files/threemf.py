@@ -39,7 +39,7 @@ from numpy.typing import NDArray
 
 from mesh_normal.files.archive import UNPACK_ERRORS, open_zip, opened_zip, unpack
 from mesh_normal.files.errors import MeshFileError, unsupported
-from mesh_normal.files.expansion import ExpansionTooLarge, charge, expanding, megabytes
+from mesh_normal.files.expansion import ExpansionTooLarge, charge, megabytes
 from mesh_normal.files.loaded import MAX_TRIANGLES, LoadedMesh, build
 
 #: Where a 3MF package keeps its model unless ``_rels/.rels`` says otherwise.
@@ -106,11 +106,6 @@ class _Object:
 
 def read_3mf(data: bytes) -> LoadedMesh:
     """Read a 3MF package (see the module docstring)."""
-    with expanding(len(data)):
-        return _read(data)
-
-
-def _read(data: bytes) -> LoadedMesh:
     root, meshes = _parse(_model_bytes(data))
     palettes = _palettes(root)
     objects = {
