@@ -110,7 +110,10 @@ def orientation(n: int, repeats: int) -> None:
     for mode in ("mst", "riemannian"):
 
         def orient(mode: str = mode) -> np.ndarray:
-            signs = along_tree(frame.points, normals, codes == 0, graph, 60.0, mode == "riemannian")
+            riemannian = mode == "riemannian"
+            signs = along_tree(
+                frame.points, normals, codes == 0, graph, 60.0, riemannian, frame.weight
+            )
             return np.where(signs.flip[:, None], -normals, normals)
 
         ours, oriented = best(orient, repeats)

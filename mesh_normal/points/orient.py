@@ -102,13 +102,13 @@ def towards(
     valid: BoolArray,
     references: FloatArray,
     what: str,
-    weight: IndexArray | None = None,
+    weight: IndexArray,
 ) -> Signs:
     """Turn each valid normal to make a positive dot product with its row of ``references``.
 
     ``references`` is (n, 3) or (3,); a zero, non-finite or perpendicular one leaves the point
-    unoriented. The one summary is the whole cloud's (``what`` names the reference); with
-    ``weight``, each row counts as that many points in it (a place and its copies).
+    unoriented. The one summary is the whole cloud's (``what`` names the reference), each row
+    counting as ``weight`` points in it (a place and its copies).
     """
     references = np.broadcast_to(references, normals.shape)
     with np.errstate(invalid="ignore", over="ignore"):
@@ -120,7 +120,6 @@ def towards(
     decided &= lengths > 0
     flip = valid & decided & (dots < 0)
     unoriented = valid & ~decided
-    weight = np.ones(len(normals), dtype=np.intp) if weight is None else weight
     left = int(weight[unoriented].sum())
     reason = f"{left} points are at right angles to the {what} or have none" if left else ""
     summary = ComponentOrientation(
@@ -136,7 +135,7 @@ def along_tree(
     graph: NDArray[np.int32],
     max_angle: float,
     offsets: bool,
-    weight: IndexArray | None = None,
+    weight: IndexArray,
 ) -> Signs:
     """Signs along minimum spanning trees of the neighbour graph; see the module docstring.
 
@@ -153,9 +152,9 @@ def along_tree(
         Degrees, in (0, 90].
     offsets : bool
         The ``"riemannian"`` graph: drop edges that leave a tangent plane by over ``max_angle``.
-    weight : (n,) int, optional
+    weight : (n,) int
         How many points each row stands for (a place and its copies), in the summaries' counts
-        and the sizes of pieces; one each when not given.
+        and the sizes of pieces.
     """
     from scipy.sparse import coo_matrix  # type: ignore[import-untyped]  # on first use
     from scipy.sparse.csgraph import (  # type: ignore[import-untyped]
@@ -165,7 +164,6 @@ def along_tree(
     )
 
     n = len(points)
-    weight = np.ones(n, dtype=np.intp) if weight is None else weight
     sharp_cosine = math.cos(math.radians(max_angle))
     rows, cols, weights = _edges(points, normals, valid, graph, offsets, sharp_cosine)
     graph_matrix = coo_matrix((weights, (rows, cols)), shape=(n, n)).tocsr()
