@@ -8,6 +8,9 @@ export UV_NATIVE_TLS := 1
 # writing it later). With it, the first page comes nearly three times sooner.
 export UV_COMPILE_BYTECODE := 1
 UV := $(shell command -v uv 2>/dev/null || echo .tools/bin/uv)
+# The environment's tools first: the editable install rebuilds the compiled core (cpp/) with the
+# `build` group's CMake and Ninja when a C++ file changed.
+export PATH := $(CURDIR)/.venv/bin:$(PATH)
 HOST ?= 127.0.0.1
 PORT ?= 8000
 
@@ -45,7 +48,11 @@ run: .venv/.web
 	$(COMPILE_SOURCES)
 	.venv/bin/uvicorn app.main:app --host $(HOST) --port $(PORT) $(SERVER_LIMITS)
 
+# Importing the core rebuilds it if a C++ file changed, and with it the stubs mypy reads.
+CORE = .venv/bin/python -c "import mesh_normal._core"
+
 lint: .venv/.test
+	$(CORE)
 	.venv/bin/ruff format --check mesh_normal app tests benchmarks docs/hooks.py
 	.venv/bin/ruff check mesh_normal app tests benchmarks docs/hooks.py
 	.venv/bin/mypy

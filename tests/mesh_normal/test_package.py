@@ -89,7 +89,10 @@ def installed(tmp_path_factory: pytest.TempPathFactory) -> Installed:
     base = tmp_path_factory.mktemp("package")
     assert not base.resolve().is_relative_to(ROOT)
     uv = find_uv()
-    built = run([uv, "build", "--wheel", "--out-dir", str(base / "dist"), str(ROOT)], ROOT)
+    # --no-config: an isolated build, as a newcomer's; the checkout's [tool.uv] builds without
+    # isolation for the editable install.
+    command = [uv, "build", "--no-config", "--wheel", "--out-dir", str(base / "dist"), str(ROOT)]
+    built = run(command, ROOT)
     assert built.returncode == 0, built.stderr
     (wheel,) = (base / "dist").glob("*.whl")
     venv = run([uv, "venv", "--quiet", "--python", sys.executable, str(base / "env")], base)
@@ -108,7 +111,8 @@ def test_the_wheel_holds_mesh_normal_and_its_metadata_only(installed: Installed)
     with zipfile.ZipFile(installed.wheel) as archive:
         names = archive.namelist()
     version = mesh_normal.__version__
-    assert installed.wheel.name == f"mesh_normal-{version}-py3-none-any.whl"
+    tag = f"cp{sys.version_info.major}{sys.version_info.minor}"
+    assert installed.wheel.name.startswith(f"mesh_normal-{version}-{tag}-{tag}-")
     assert {name.split("/")[0] for name in names} == {
         "mesh_normal",
         f"mesh_normal-{version}.dist-info",
@@ -117,6 +121,9 @@ def test_the_wheel_holds_mesh_normal_and_its_metadata_only(installed: Installed)
     sources = {path.relative_to(ROOT).as_posix() for path in (ROOT / "mesh_normal").rglob("*.py")}
     assert sources <= set(names)  # every module, files/formats.py and __main__.py too
     assert not [name for name in names if name.endswith((".pyc", ".html", ".js", ".css"))]
+    # The compiled core and its stubs.
+    core = sorted(name for name in names if name.startswith("mesh_normal/_core"))
+    assert len(core) == 2 and core[0].endswith(".so") and core[1] == "mesh_normal/_core.pyi", core
 
 
 def test_the_wheel_requires_no_web_or_test_package(installed: Installed) -> None:

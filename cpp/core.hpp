@@ -1,0 +1,69 @@
+// What every topic of the compiled core shares: the array types at the boundary, the
+// parallel loop, and each topic's binding function (called from module.cpp).
+#pragma once
+
+#include <nanobind/nanobind.h>
+#include <nanobind/ndarray.h>
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <thread>
+#include <vector>
+
+namespace mesh_normal {
+
+namespace nb = nanobind;
+
+// Arrays from Python: C-contiguous NumPy arrays on the CPU. `const` element types accept
+// read-only arrays. Arguments are bound with .noconvert(), so a wrong dtype, order or shape is a
+// TypeError instead of a silent copy.
+template <typename T, typename... Shape>
+using In = nb::ndarray<const T, nb::numpy, nb::c_contig, nb::device::cpu, Shape...>;
+// Arrays written in place (the caller allocates them).
+template <typename T, typename... Shape>
+using Out = nb::ndarray<T, nb::numpy, nb::c_contig, nb::device::cpu, Shape...>;
+
+// A new NumPy array of `count` rows of `columns` values that owns `data` (allocated with new[]).
+template <typename T>
+nb::ndarray<nb::numpy, T> owned(T* data, std::size_t count, std::size_t columns = 0) {
+  nb::capsule owner(data, [](void* p) noexcept { delete[] static_cast<T*>(p); });
+  if (columns == 0) {
+    return nb::ndarray<nb::numpy, T>(data, {count}, owner);
+  }
+  return nb::ndarray<nb::numpy, T>(data, {count, columns}, owner);
+}
+
+// Runs body(begin, end) over [0, count) in contiguous chunks, one per thread. Each chunk writes
+// its own rows, so the results are the same bits for any number of threads. Small inputs run
+// on the calling thread.
+template <typename Body>
+void parallel_for(std::int64_t count, std::int64_t grain, const Body& body) {
+  const std::int64_t cores = std::max(1u, std::thread::hardware_concurrency());
+  const std::int64_t chunks = std::min(cores, std::max<std::int64_t>(1, count / grain));
+  if (chunks <= 1) {
+    body(std::int64_t{0}, count);
+    return;
+  }
+  std::vector<std::thread> threads;
+  threads.reserve(static_cast<std::size_t>(chunks - 1));
+  const std::int64_t step = (count + chunks - 1) / chunks;
+  for (std::int64_t c = 1; c < chunks; ++c) {
+    const std::int64_t begin = std::min(count, c * step);
+    const std::int64_t end = std::min(count, begin + step);
+    threads.emplace_back([&body, begin, end] { body(begin, end); });
+  }
+  body(std::int64_t{0}, std::min(count, step));
+  for (auto& thread : threads) {
+    thread.join();
+  }
+}
+
+void bind_faces(nb::module_& m);       // faces.cpp: face normals, vertex and corner sums, bounds
+void bind_topology(nb::module_& m);    // topology.cpp: edges, patches, orientation
+void bind_visibility(nb::module_& m);  // visibility.cpp: rays and boxes
+void bind_weld(nb::module_& m);        // weld.cpp: welding and hashing, polygon shapes
+void bind_text(nb::module_& m);        // text.cpp: text and binary parsing
+void bind_points(nb::module_& m);      // points.cpp: point neighbourhoods, PCD's LZF
+
+}  // namespace mesh_normal

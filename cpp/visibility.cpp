@@ -1,0 +1,7 @@
+#include "core.hpp"
+
+namespace mesh_normal {
+
+void bind_visibility(nb::module_& m) { (void)m; }
+
+}  // namespace mesh_normal
