@@ -6,6 +6,7 @@
 #include <nanobind/ndarray.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <thread>
@@ -34,13 +35,17 @@ nb::ndarray<nb::numpy, T> owned(T* data, std::size_t count, std::size_t columns 
   return nb::ndarray<nb::numpy, T>(data, {count, columns}, owner);
 }
 
-// Runs body(begin, end) over [0, count) in contiguous chunks, one per thread. Each chunk writes
-// its own rows, so the results are the same bits for any number of threads. Small inputs run
-// on the calling thread.
+// How many threads a parallel kernel uses: MESH_NORMAL_THREADS when the module is loaded, else
+// every core; set_threads() changes it (module.cpp).
+extern std::atomic<int> thread_count;
+
+// Runs body(begin, end) over [0, count) in contiguous chunks, one per thread, each chunk at least
+// `grain` long. Each chunk writes its own rows, so the results are the same bits for any number
+// of threads. Small inputs run on the calling thread.
 template <typename Body>
 void parallel_for(std::int64_t count, std::int64_t grain, const Body& body) {
-  const std::int64_t cores = std::max(1u, std::thread::hardware_concurrency());
-  const std::int64_t chunks = std::min(cores, std::max<std::int64_t>(1, count / grain));
+  const std::int64_t most = std::max(1, thread_count.load(std::memory_order_relaxed));
+  const std::int64_t chunks = std::min(most, std::max<std::int64_t>(1, count / grain));
   if (chunks <= 1) {
     body(std::int64_t{0}, count);
     return;
