@@ -14,7 +14,7 @@ export PATH := $(CURDIR)/.venv/bin:$(PATH)
 HOST ?= 127.0.0.1
 PORT ?= 8000
 
-.PHONY: run test lint docs docs-serve bench bench-hostile bench-mesh bench-mesh-e2e bench-readers bench-orient bench-points bench-soak bench-memory bench-startup bench-batch env clean vendor
+.PHONY: run test test-sanitize lint docs docs-serve bench bench-hostile bench-mesh bench-mesh-e2e bench-readers bench-orient bench-points bench-soak bench-memory bench-startup bench-batch env clean vendor
 
 # uv itself comes from PyPI when the machine does not have it yet.
 .tools/bin/uv:
@@ -59,6 +59,28 @@ lint: .venv/.test
 
 test: lint docs
 	.venv/bin/pytest
+	$(MAKE) test-sanitize
+
+# The compiled core under AddressSanitizer and UndefinedBehaviorSanitizer, in an environment
+# (.venv-asan) and build tree of its own: the file readers' tests, the hostile and mutated files,
+# the kernels' tests. A sanitizer report ends the run with its stack. The sanitizer runtime is
+# preloaded into Python, so only tests that start no browser run here.
+SANITIZE := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
+SANITIZED_TESTS := tests/mesh_normal/files tests/mesh_normal/points \
+	tests/mesh_normal/test_faces.py tests/mesh_normal/test_vertices.py \
+	tests/mesh_normal/test_corners.py tests/mesh_normal/test_topology.py \
+	tests/mesh_normal/test_orientation.py tests/mesh_normal/test_visibility.py \
+	tests/mesh_normal/test_no_harm.py tests/mesh_normal/test_checks.py
+test-sanitize: .venv/.test
+	UV_PROJECT_ENVIRONMENT=.venv-asan $(UV) sync --locked --group test \
+		-C build-dir=build-asan -C cmake.build-type=RelWithDebInfo \
+		-C "cmake.define.CMAKE_CXX_FLAGS=$(SANITIZE)" \
+		-C "cmake.define.CMAKE_SHARED_LINKER_FLAGS=-fsanitize=address,undefined" \
+		-C cmake.define.MESH_NORMAL_STUBS=OFF
+	PATH="$(CURDIR)/.venv-asan/bin:$$PATH" \
+	LD_PRELOAD="$$(gcc -print-file-name=libasan.so) $$(gcc -print-file-name=libubsan.so)" \
+	ASAN_OPTIONS=detect_leaks=0 UBSAN_OPTIONS=print_stacktrace=1 \
+		.venv-asan/bin/pytest --capture=sys -p no:randomly -p no:cacheprovider -q $(SANITIZED_TESTS)
 
 # The documentation site (mkdocs.yml, docs/): built strictly, so that a broken link or a missing
 # reference fails; `make docs-serve` previews it at http://127.0.0.1:8001 as it is edited.
@@ -126,7 +148,7 @@ bench-mesh-e2e: .venv/.test
 	.venv/bin/python -m benchmarks.mesh_end_to_end
 
 clean:
-	rm -rf .venv .tools .pytest_cache .hypothesis
+	rm -rf .venv .venv-asan build build-asan .tools .pytest_cache .hypothesis mesh_normal/_core.pyi
 
 # Refresh the vendored front-end files from the npm registry (see static/vendor/README.md).
 PLOTLY_VERSION := 4.1.1
