@@ -14,7 +14,7 @@ export PATH := $(CURDIR)/.venv/bin:$(PATH)
 HOST ?= 127.0.0.1
 PORT ?= 8000
 
-.PHONY: run test test-sanitize lint docs docs-serve bench bench-hostile bench-mesh bench-mesh-e2e bench-readers bench-orient bench-points bench-soak bench-memory bench-startup bench-batch env clean vendor
+.PHONY: run test test-sanitize lint docs docs-serve bench bench-first bench-hostile bench-mesh bench-mesh-e2e bench-readers bench-orient bench-points bench-soak bench-memory bench-startup bench-batch env clean vendor
 
 # uv itself comes from PyPI when the machine does not have it yet.
 .tools/bin/uv:
@@ -98,6 +98,7 @@ bench: .venv/.test
 	$(COMPILE_SOURCES)
 	.venv/bin/python -m benchmarks.run --rounds 5 --loads 7 --markdown docs/benchmarks/api.md
 	.venv/bin/python -m benchmarks.startup --rounds 7 --runs 3 --markdown docs/benchmarks/startup.md
+	.venv/bin/python -m benchmarks.first_answer $(if $(MESH),--mesh $(MESH)) --markdown docs/benchmarks/first-answer.md
 	.venv/bin/python -m benchmarks.mesh_kernels --sizes 871414 14000000 --idle 7 --markdown docs/benchmarks/mesh-kernels.md
 	.venv/bin/python -m benchmarks.orientation --markdown docs/benchmarks/orientation.md
 	.venv/bin/python -m benchmarks.readers --markdown docs/benchmarks/readers.md
@@ -135,6 +136,11 @@ bench-memory: .venv/.test
 	.venv/bin/python -m benchmarks.memory
 
 # The command line's and the server's start, against a bare FastAPI app (needs hyperfine).
+# The first answer from a fresh environment, beside trimesh (MESH=path/to/bunny.obj; see
+# docs/benchmarks.md for the file).
+bench-first: .venv/.test
+	.venv/bin/python -m benchmarks.first_answer $(if $(MESH),--mesh $(MESH)) $(ARGS)
+
 bench-startup: .venv/.test
 	$(COMPILE_SOURCES)
 	.venv/bin/python -m benchmarks.startup $(ARGS)
