@@ -439,12 +439,11 @@ def _scan_fast(
     other: Counter[str],
     ignored: Counter[str],
 ) -> _Chunk | None:
-    """What :func:`_scan_chunk` finds in a chunk, read by the compiled scan
-    (:func:`_prescan`); ``None`` (nothing counted, nothing
-    changed) where it cannot certify the chunk: a line continued, a number or corner it does
-    not read exactly as the Python path does, an indented ``v``, a character that Python
-    splits lines or words at and the kernel does not. ``read`` is what the kernel read there
-    (see :func:`_prescans`)."""
+    """What :func:`_scan_chunk` finds in a chunk, read by the compiled scan (:func:`_prescan`);
+    ``None`` (nothing counted, nothing changed) where it cannot certify the chunk: a line
+    continued, a number or corner it does not read exactly as the Python path does, an
+    indented ``v``, a character that Python splits lines or words at and the scan does not.
+    ``read`` is what the scan read there (see :func:`_prescans`)."""
     kinds, vertices, colors, normals, vertex_fields, normal_fields, counts, texts = read
     chunk_other: Counter[str] = Counter()
     chunk_ignored: Counter[str] = Counter()

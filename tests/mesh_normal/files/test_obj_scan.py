@@ -352,3 +352,13 @@ def test_chunks_scanned_on_several_threads_read_as_on_one(
     for field in dataclasses.fields(alone):
         assert _plain(getattr(together, field.name)) == _plain(getattr(alone, field.name))
     assert len(alone.vertices) == 3000 and len(alone.counts) == 2000
+
+
+def test_the_scan_takes_only_bytes_as_they_are() -> None:
+    # A wrong type or a strided view is refused, not copied into another type.
+    with pytest.raises(TypeError):
+        obj.scan_obj(np.zeros(4, np.int8))  # type: ignore[arg-type]
+    with pytest.raises(TypeError):
+        obj.scan_obj(np.frombuffer(b"v 1 2 3\n" * 2, np.uint8)[::2])
+    read = obj.scan_obj(np.frombuffer(b"v 1 2 3\nf 1 1 1\n", np.uint8))
+    assert read is not None and read[1].tolist() == [[1.0, 2.0, 3.0]]

@@ -157,3 +157,21 @@ def test_items_of_a_wrong_type_are_refused_not_converted() -> None:
         binary_items(data, 0, 6, 2, True, True, np.empty((2, 3), np.int32))  # type: ignore[arg-type]
     with pytest.raises(TypeError):
         binary_items(data.astype(np.int8), 0, 6, 2, True, True, np.empty((2, 3), np.int64))  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("threads", [1, 2, 3])
+def test_the_items_do_not_depend_on_the_number_of_threads(threads: int) -> None:
+    from mesh_normal import _core
+
+    rng = np.random.default_rng(threads)
+    records = np.zeros(5 * (1 << 14) + 3, dtype=[("count", "u1"), ("items", ">i4", (3,))])
+    records["count"], records["items"] = 3, rng.integers(-(2**31), 2**31, (len(records), 3))
+    data = np.frombuffer(records.tobytes(), np.uint8)
+    items = np.empty((len(records), 3), np.int64)
+    before = _core.threads()
+    _core.set_threads(threads)
+    try:
+        binary_items(data, 1, 13, 4, True, False, items)
+    finally:
+        _core.set_threads(before)
+    np.testing.assert_array_equal(items, records["items"])
