@@ -68,7 +68,7 @@ class ReadOnlyInTreeLocator(_ReadOnlyLocator, InTreeCacheLocator):
 # files, so their entries stay valid.
 
 #: The package's modules whose kernels are called by kernels of other modules.
-SHARED_MODULES = ("kernels.py", "vertices.py", "visibility.py", "files/eisel_lemire.py")
+SHARED_MODULES = ("kernels.py", "vertices.py", "visibility.py")
 
 
 def _shared_stamp() -> tuple[bytes, ...]:

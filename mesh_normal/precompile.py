@@ -25,7 +25,6 @@ from mesh_normal.corners import corner_normals, corner_weights
 from mesh_normal.faces import face_geometry, face_normals
 from mesh_normal.files.polygons import triangulate
 from mesh_normal.files.stl import RECORD as STL_RECORD
-from mesh_normal.files.text_kernels import ObjScanner, binary_items
 from mesh_normal.files.weld import weld, weld_by_sort
 from mesh_normal.kernels import (
     coordinate_range,
@@ -59,9 +58,6 @@ _POLYGONS = (
     np.array([0, 1, 2, 3, 0, 1, 4]),
     np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0.5, -1, 0]]),
 )
-#: An OBJ chunk for the text kernel (files from ``obj.FAST_BYTES`` on): its bytes are read-only,
-#: as are a binary PLY's for its list kernel (``ply.COMPILED_ITEMS`` items on).
-_OBJ = b"v 0 0 0\nv 1.5 0 0\nv 0 1 0.12345678901234567\nvn 0 0 1\nf 1//1 2//1 3//1\n"
 
 
 def compile_kernels() -> None:
@@ -84,7 +80,6 @@ def _compile_kernels() -> None:
         )
     # Point clouds: the neighbourhood kernel (k nearest and within a radius take the same
     # types) and the signs down the spanning tree; binary_compressed PCD's LZF (one literal).
-    ObjScanner().scan(_OBJ, 0, len(_OBJ))
     for frozen in (False, True):  # a report's bounds, of the vertices as read
         column_bounds(_kept(points, frozen))
     # A large mesh's checks and fresh outputs (the checks give read-only views).
@@ -102,10 +97,6 @@ def _compile_kernels() -> None:
         weld(np.array(np.arange(192.0).reshape(64, 3), dtype))  # distinct points: it grows
     # A binary STL's corners, read where they lie in its records (a read-only view).
     weld(np.frombuffer(bytes(2 * STL_RECORD.itemsize), STL_RECORD)["corners"])
-    binary_items(
-        np.frombuffer(bytes(13), np.uint8), 1, 13, 4, True, True, True,
-        np.empty((1, 3), np.int64), *workers(),
-    )  # fmt: skip
     # A file's stored normals against ours (every row compared, and some).
     unit, usable = unit_rows(np.eye(3))
     angles_between(unit, usable, Candidate(np.eye(3), np.array([False, True, False])))

@@ -22,7 +22,6 @@ is always given the same normal vector.
 from __future__ import annotations
 
 import os
-import threading
 from collections import Counter, deque
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
@@ -32,11 +31,11 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from mesh_normal._core import scan_obj
 from mesh_normal.files.errors import MeshFileError
 from mesh_normal.files.formats import MAKER
 from mesh_normal.files.loaded import LoadedMesh, build
 from mesh_normal.files.polygons import triangulate
-from mesh_normal.files.text_kernels import ObjChunk, ObjScanner
 
 if TYPE_CHECKING:
     from concurrent.futures import Future, ThreadPoolExecutor
@@ -194,11 +193,6 @@ def _text_chunks(data: bytes) -> Iterator[tuple[int, int]]:
         end = len(data) if end < 0 else end + 1
         yield position, end
         position = end
-
-
-#: Files of this many bytes or more are scanned by the compiled kernel (:func:`_scan_fast`);
-#: smaller ones in Python, in milliseconds, where loading numba and the kernel take 1-2 s.
-FAST_BYTES = 1 << 18
 
 
 @dataclass
@@ -365,29 +359,36 @@ def _split_kind(line: str, other: Counter[str], unkept: Counter[str]) -> int:
 #: The most threads that scan an OBJ file's chunks at once (:func:`_prescans`).
 SCAN_THREADS = 4
 
+#: What the compiled scan reads in a chunk (:func:`_prescan`): each line's kind (those it
+#: leaves to Python marked -1), the ``v`` coordinates, their colours (when every ``v`` has six
+#: numbers), the ``vn`` vectors, each corner's vertex index and normal index (when every corner
+#: has one), the corners of each face, and the text of each line left to Python by its row.
+ObjChunk = tuple[
+    NDArray[np.int8],
+    NDArray[np.float64],
+    NDArray[np.float64] | None,
+    NDArray[np.float64],
+    NDArray[np.int64],
+    NDArray[np.int64] | None,
+    NDArray[np.intp],
+    dict[int, str],
+]
+
 
 @contextmanager
 def _prescans(data: bytes, spans: list[tuple[int, int]]) -> Iterator[Iterator[ObjChunk | None]]:
-    """What the compiled kernel reads in each chunk, in order (``None`` for a chunk it
-    declines, or for every chunk of a file under ``FAST_BYTES``: those are read in Python).
+    """What the compiled scan reads in each chunk, in order (``None`` for a chunk it declines:
+    those are read in Python).
 
-    The chunks are scanned ahead on up to ``SCAN_THREADS`` threads, one scanner each (the
-    kernel releases the GIL), while the caller takes each result in turn: a chunk depends on
-    the ones before only for its line and vertex numbers, which the caller adds. On two cores
-    a large OBJ is scanned in about two thirds of the time on one. At most twice as many chunks as
+    The chunks are scanned ahead on up to ``SCAN_THREADS`` threads (the scan releases the
+    GIL), while the caller takes each result in turn: a chunk depends on the ones before only
+    for its line and vertex numbers, which the caller adds. At most twice as many chunks as
     threads are scanned ahead of the caller, so the scans' results cost no more memory than
     the chunks they replace."""
-    if len(data) < FAST_BYTES:
-        yield iter([None] * len(spans))
-        return
     threads = max(1, min(SCAN_THREADS, len(spans), len(os.sched_getaffinity(0))))
-    local = threading.local()
 
     def scan(span: tuple[int, int]) -> ObjChunk | None:
-        scanner = getattr(local, "scanner", None)
-        if scanner is None:
-            scanner = local.scanner = ObjScanner()
-        return _prescan(scanner, data, *span)
+        return _prescan(data, *span)
 
     if threads == 1:
         yield map(scan, spans)
@@ -398,12 +399,19 @@ def _prescans(data: bytes, spans: list[tuple[int, int]]) -> Iterator[Iterator[Ob
         yield _ahead(pool, scan, spans, 2 * threads)
 
 
-def _prescan(scanner: ObjScanner, data: bytes, start: int, end: int) -> ObjChunk | None:
-    """What the compiled kernel reads in ``data[start:end]``, or ``None`` where it declines
-    (or the chunk holds a continued line, which the Python path joins)."""
+def _prescan(data: bytes, start: int, end: int) -> ObjChunk | None:
+    """What the compiled scan (:func:`mesh_normal._core.scan_obj`) reads in the whole lines
+    ``data[start:end]``, or ``None`` where it declines: a number or corner it does not read
+    exactly as the Python path does, a character at which Python splits lines and it does not,
+    or a continued line, which the Python path joins."""
     if data.find(b"\\", start, end) >= 0:
         return None
-    return scanner.scan(data, start, end)
+    read = scan_obj(np.frombuffer(data, np.uint8, end - start, start))
+    if read is None:
+        return None
+    kinds, vertices, colors, normals, vertex_ids, normal_ids, counts, unknown = read
+    texts = {row: data[start + a : start + b].decode("latin-1") for row, a, b in unknown.tolist()}
+    return kinds, vertices, colors, normals, vertex_ids, normal_ids, counts, texts
 
 
 def _ahead(
@@ -431,12 +439,11 @@ def _scan_fast(
     other: Counter[str],
     ignored: Counter[str],
 ) -> _Chunk | None:
-    """What :func:`_scan_chunk` finds in a chunk, read by the compiled kernel
-    (:func:`~mesh_normal.files.text_kernels.scan_obj`); ``None`` (nothing counted, nothing
-    changed) where it cannot certify the chunk: a line continued, a number or corner it does
-    not read exactly as the Python path does, an indented ``v``, a character that Python
-    splits lines or words at and the kernel does not. ``read`` is what the kernel read there
-    (see :func:`_prescans`)."""
+    """What :func:`_scan_chunk` finds in a chunk, read by the compiled scan (:func:`_prescan`);
+    ``None`` (nothing counted, nothing changed) where it cannot certify the chunk: a line
+    continued, a number or corner it does not read exactly as the Python path does, an
+    indented ``v``, a character that Python splits lines or words at and the scan does not.
+    ``read`` is what the scan read there (see :func:`_prescans`)."""
     kinds, vertices, colors, normals, vertex_fields, normal_fields, counts, texts = read
     chunk_other: Counter[str] = Counter()
     chunk_ignored: Counter[str] = Counter()

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from mesh_normal._core import binary_items
 from mesh_normal.files import ply
 from mesh_normal.files.errors import MeshFileError
 
@@ -82,12 +83,10 @@ def test_quads_still_go_through_triangulate(monkeypatch: pytest.MonkeyPatch) -> 
 
 @pytest.mark.parametrize("endian", ["<", ">"])
 @pytest.mark.parametrize("item", ["i4", "u4", "i2"])
-def test_many_blocks_of_records_read_on_every_core_match_numpy(endian: str, item: str) -> None:
-    # More records than three of the kernel's blocks (the last one partial); in this
-    # machine's byte order 4-byte items take one unaligned load each (13-byte records).
-    from mesh_normal.files.text_kernels import ITEMS_BLOCK
-
-    count = 3 * ITEMS_BLOCK + 7
+def test_many_records_read_on_every_core_match_numpy(endian: str, item: str) -> None:
+    # Enough records for several threads' chunks (the last one shorter), each item unaligned
+    # (13-byte records).
+    count = 3 * (1 << 14) + 7
     low, high = (
         (-(2**31), 2**31) if item == "i4" else (0, 2**32) if item == "u4" else (-(2**15), 2**15)
     )
@@ -122,3 +121,57 @@ def test_face_colours_and_normals_of_many_triangles_stay_in_file_order(
     np.testing.assert_array_equal(own.file_face_normals, normals)
     for name in ("faces", "face_colors", "file_face_normals"):
         np.testing.assert_array_equal(getattr(own, name), getattr(fanned, name))
+
+
+def test_the_items_of_records_that_end_in_the_last_byte_are_read() -> None:
+    data = np.frombuffer(bytes(range(1, 14)), np.uint8)  # two 6-byte records after 1 byte
+    items = np.empty((2, 3), np.int64)
+    binary_items(data, 1, 6, 2, False, False, items)
+    assert items.tolist() == [[0x0203, 0x0405, 0x0607], [0x0809, 0x0A0B, 0x0C0D]]
+
+
+@pytest.mark.parametrize(
+    ("offset", "stride", "size", "rows", "error"),
+    [
+        (2, 6, 2, 2, IndexError),  # the last item one byte past the end
+        (0, 6, 2, 3, IndexError),  # a record more than the data holds
+        (0, 2**62, 2, 2, IndexError),  # a stride past any data, without overflow
+        (-1, 6, 2, 1, ValueError),
+        (0, 5, 2, 1, ValueError),  # records shorter than their lists
+        (0, 0, 1, 1, ValueError),
+        (0, 6, 3, 1, ValueError),  # 3-byte items
+        (2**62, 6, 2, 1, IndexError),
+    ],
+)
+def test_records_past_the_data_are_refused(
+    offset: int, stride: int, size: int, rows: int, error: type[Exception]
+) -> None:
+    data = np.frombuffer(bytes(13), np.uint8)
+    with pytest.raises(error, match=r"^[A-Z][^.]*\.$"):
+        binary_items(data, offset, stride, size, True, True, np.empty((rows, 3), np.int64))
+
+
+def test_items_of_a_wrong_type_are_refused_not_converted() -> None:
+    data = np.frombuffer(bytes(13), np.uint8)
+    with pytest.raises(TypeError):
+        binary_items(data, 0, 6, 2, True, True, np.empty((2, 3), np.int32))  # type: ignore[arg-type]
+    with pytest.raises(TypeError):
+        binary_items(data.astype(np.int8), 0, 6, 2, True, True, np.empty((2, 3), np.int64))  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("threads", [1, 2, 3])
+def test_the_items_do_not_depend_on_the_number_of_threads(threads: int) -> None:
+    from mesh_normal import _core
+
+    rng = np.random.default_rng(threads)
+    records = np.zeros(5 * (1 << 14) + 3, dtype=[("count", "u1"), ("items", ">i4", (3,))])
+    records["count"], records["items"] = 3, rng.integers(-(2**31), 2**31, (len(records), 3))
+    data = np.frombuffer(records.tobytes(), np.uint8)
+    items = np.empty((len(records), 3), np.int64)
+    before = _core.threads()
+    _core.set_threads(threads)
+    try:
+        binary_items(data, 1, 13, 4, True, False, items)
+    finally:
+        _core.set_threads(before)
+    np.testing.assert_array_equal(items, records["items"])

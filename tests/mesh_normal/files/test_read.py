@@ -129,7 +129,7 @@ def _out_of_memory(*_: object, **__: object) -> None:
 @pytest.mark.parametrize(
     ("name", "module", "allocation"),
     [
-        ("cow.obj", "mesh_normal.files.obj", "_numbers"),
+        ("cow.obj", "mesh_normal.files.obj", "scan_obj"),
         ("sphere.ply", "mesh_normal.files.ply", "triangulate"),
         ("tetra.off", "mesh_normal.files.off", "triangulate"),
         ("ascii.stl", "mesh_normal.files.stl", "weld"),

@@ -1,9 +1,9 @@
 """The compiled OBJ scan against the Python one: the same statements, bits and errors.
 
-Every OBJ here is read twice, by the compiled kernel (``FAST_BYTES`` 0: every file) and by the
-Python path (``FAST_BYTES`` beyond any file), and the two must agree in every array's bytes
-and in every note and error message: the kernel reads a chunk only when it can certify it,
-and declines it to the Python path otherwise.
+Every OBJ here is read twice, by the compiled scan (as every file is read) and by the Python
+path alone (the scan made to decline every chunk), and the two must agree in every array's
+bytes and in every note and error message: the scan reads a chunk only when it can certify it,
+and declines it to the Python path otherwise. Its numbers must be the bits of ``float()``.
 """
 
 from __future__ import annotations
@@ -17,15 +17,25 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from mesh_normal._core import read_decimal
 from mesh_normal.files import MeshFileError, obj
-from mesh_normal.files.text_kernels import ObjScanner, decimal, hard_values
 
-FAST, SLOW = 0, 1 << 62
+FAST, SLOW = True, False
+PRESCAN = obj._prescan
 
 
-def scanned(monkeypatch: pytest.MonkeyPatch, data: bytes, threshold: int) -> Any:
+def declined(_data: bytes, _start: int, _end: int) -> None:
+    return None
+
+
+def compiled(monkeypatch: pytest.MonkeyPatch, fast: bool) -> None:
+    """Read with the compiled scan (``FAST``), or with the Python path alone (``SLOW``)."""
+    monkeypatch.setattr(obj, "_prescan", PRESCAN if fast else declined)
+
+
+def scanned(monkeypatch: pytest.MonkeyPatch, data: bytes, fast: bool) -> Any:
     """``obj._scan(data)``'s statements as plain values, or the error's message."""
-    monkeypatch.setattr(obj, "FAST_BYTES", threshold)
+    compiled(monkeypatch, fast)
     try:
         found = obj._scan(data)
     except (MeshFileError, OverflowError) as error:
@@ -39,9 +49,9 @@ def _plain(value: object) -> object:
     return value
 
 
-def read(monkeypatch: pytest.MonkeyPatch, data: bytes, threshold: int) -> Any:
+def read(monkeypatch: pytest.MonkeyPatch, data: bytes, fast: bool) -> Any:
     """The whole reader's answer: every array of the mesh, its notes, or the error."""
-    monkeypatch.setattr(obj, "FAST_BYTES", threshold)
+    compiled(monkeypatch, fast)
     try:
         mesh = obj.read_obj(data)
     except (MeshFileError, OverflowError) as error:
@@ -61,9 +71,9 @@ def same_both_ways(monkeypatch: pytest.MonkeyPatch, data: bytes) -> Any:
 
 
 def fast_reads(data: bytes) -> bool:
-    """Whether the kernel certifies ``data`` as one chunk (rather than declining it)."""
+    """Whether the scan certifies ``data`` as one chunk (rather than declining it)."""
     groups = obj._Groups([obj._DEFAULT_GROUP], {obj._DEFAULT_GROUP: 0})
-    read = obj._prescan(ObjScanner(), data, 0, len(data))
+    read = PRESCAN(data, 0, len(data))
     if read is None:
         return False
     return obj._scan_fast(read, 0, 0, 0, groups, Counter(), Counter()) is not None
@@ -72,14 +82,9 @@ def fast_reads(data: bytes) -> bool:
 # --- numbers: the bits of float() -------------------------------------------------------------
 
 
-def kernel_float(token: str) -> float:
-    data = np.frombuffer(token.encode(), np.uint8)
-    stop, value = decimal(data, 0, len(data))
-    assert stop != -1, token
-    if stop < -1:  # hard: Python's own conversion
-        exact = hard_values(token.encode(), 1)
-        assert exact is not None
-        value = float(exact[0])
+def scan_float(token: str) -> float:
+    value = read_decimal(token)
+    assert value is not None, token
     return value
 
 
@@ -107,7 +112,7 @@ def decimal_tokens(draw: st.DrawFn) -> str:
 @settings(max_examples=3000, deadline=None)
 @given(decimal_tokens())
 def test_every_decimal_token_reads_as_python_float(token: str) -> None:
-    assert same_bits(kernel_float(token), float(token)), token
+    assert same_bits(scan_float(token), float(token)), token
 
 
 @settings(max_examples=2000, deadline=None)
@@ -116,7 +121,7 @@ def test_doubles_written_with_any_number_of_digits_read_back_exactly(
     value: float, digits: int
 ) -> None:
     for token in (repr(value), f"{value:.{digits}g}", f"{value:.{digits}e}"):
-        assert same_bits(kernel_float(token), float(token)), token
+        assert same_bits(scan_float(token), float(token)), token
 
 
 @pytest.mark.parametrize(
@@ -126,7 +131,7 @@ def test_doubles_written_with_any_number_of_digits_read_back_exactly(
         "-0",
         "-0.0e-5",
         "9007199254740992",  # 2**53: the largest exact mantissa
-        "9007199254740993",  # one more: hard
+        "9007199254740993",  # one more: rounded
         "1e22",
         "1e23",
         "123456789012345678e-22",
@@ -140,22 +145,51 @@ def test_doubles_written_with_any_number_of_digits_read_back_exactly(
         "5.",
         "0.000000000000000000000000000000000001",
         "100000000000000000000000000000000000000000000001",
+        "1.7976931348623157e308",  # the largest double
+        "1.797693134862316e308",  # rounds to infinity
+        "-1e400",
+        "-1e-400",  # -0.0
+        "0e99999999999999999999",
+        "1e99999999999999999999",
+        "1e-99999999999999999999",
+        "0." + "0" * 400 + "1e400",
+        "1" + "0" * 400 + "e-400",
+        "0.1000000000000000055511151231257827021181583404541015625",
+        "1.e5",
+        "+.5e-3",
     ],
 )
 def test_the_edges_of_the_exact_fast_path(token: str) -> None:
-    assert same_bits(kernel_float(token), float(token))
+    assert same_bits(scan_float(token), float(token))
 
 
 @pytest.mark.parametrize(
-    "token", ["", "-", ".", "e5", "1e", "1e+", "1.2.3", "1-2", "nan", "inf", "1_0", "0x10", "1#"]
+    "token",
+    [
+        "",
+        "-",
+        ".",
+        "e5",
+        ".e5",
+        "1e",
+        "1e+",
+        "1.2.3",
+        "1-2",
+        "+-1",
+        "nan",
+        "inf",
+        "1_0",
+        "0x10",
+        "1#",
+        "1e5.5",
+        "1 2",
+    ],
 )
 def test_what_is_no_decimal_is_declined(token: str) -> None:
-    data = np.frombuffer(token.encode() or b" ", np.uint8)
-    stop, _ = decimal(data, 0, len(token))
-    assert stop == -1
+    assert read_decimal(token) is None
 
 
-# --- whole files: the kernel and the Python path agree -----------------------------------------
+# --- whole files: the scan and the Python path agree -------------------------------------------
 
 TETRA = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
 
@@ -209,7 +243,7 @@ TETRA = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
         ("# nothing\n", True),
     ],
 )
-def test_the_kernel_and_the_python_path_agree(
+def test_the_scan_and_the_python_path_agree(
     monkeypatch: pytest.MonkeyPatch, text: str, certified: bool
 ) -> None:
     data = text.encode("latin-1")
@@ -277,27 +311,30 @@ def test_random_files_read_the_same_both_ways(
     same_both_ways(monkeypatch, text.encode())
 
 
-def test_a_large_file_takes_the_kernel(monkeypatch: pytest.MonkeyPatch) -> None:
+@pytest.mark.parametrize("count", [3, 100_000])
+def test_small_and_large_files_take_the_compiled_scan(
+    monkeypatch: pytest.MonkeyPatch, count: int
+) -> None:
     calls: list[int] = []
-    scan = ObjScanner.scan
+    scan = obj.scan_obj
 
-    def counted(self: ObjScanner, data: bytes, start: int, end: int) -> object:
-        calls.append(end - start)
-        return scan(self, data, start, end)
+    def counted(chunk: Any) -> Any:
+        calls.append(len(chunk))
+        return scan(chunk)
 
-    monkeypatch.setattr(ObjScanner, "scan", counted)
-    count = obj.FAST_BYTES // 20 + 1
+    monkeypatch.setattr(obj, "scan_obj", counted)
     text = "".join(f"v {i} {i + 0.5} 0.125\n" for i in range(count)) + "f 1 2 3\n"
     found = obj._scan(text.encode())
     assert sum(calls) == len(text) and len(found.vertices) == count
-    assert found.vertices[7].tolist() == [7.0, 7.5, 0.125]
+    assert found.vertices[2].tolist() == [2.0, 2.5, 0.125]
+    assert found.vertex_fields.tolist() == [1, 2, 3] and found.counts.tolist() == [3]
 
 
 @pytest.mark.parametrize("threads", [2, 3])
 def test_chunks_scanned_on_several_threads_read_as_on_one(
     monkeypatch: pytest.MonkeyPatch, threads: int
 ) -> None:
-    # Small chunks, some declined by the kernel (a continued line, a tab-indented v) between
+    # Small chunks, some declined by the scan (a continued line, a tab-indented v) between
     # ones it reads: the same statements, in file order, however many threads scan them.
     rng = np.random.default_rng(threads)
     lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in rng.normal(size=(3000, 3)).tolist()]
@@ -306,7 +343,6 @@ def test_chunks_scanned_on_several_threads_read_as_on_one(
     lines.insert(2500, "g second")
     lines += [f"f {a} {b} {c}" for a, b, c in rng.integers(1, 3000, (2000, 3)).tolist()]
     data = ("\n".join(lines) + "\n").encode()
-    monkeypatch.setattr(obj, "FAST_BYTES", 1)
     monkeypatch.setattr(obj, "_TEXT_CHUNK", 4096)
     monkeypatch.setattr(obj, "SCAN_THREADS", 1)
     alone = obj._scan(data)
@@ -316,3 +352,13 @@ def test_chunks_scanned_on_several_threads_read_as_on_one(
     for field in dataclasses.fields(alone):
         assert _plain(getattr(together, field.name)) == _plain(getattr(alone, field.name))
     assert len(alone.vertices) == 3000 and len(alone.counts) == 2000
+
+
+def test_the_scan_takes_only_bytes_as_they_are() -> None:
+    # A wrong type or a strided view is refused, not copied into another type.
+    with pytest.raises(TypeError):
+        obj.scan_obj(np.zeros(4, np.int8))  # type: ignore[arg-type]
+    with pytest.raises(TypeError):
+        obj.scan_obj(np.frombuffer(b"v 1 2 3\n" * 2, np.uint8)[::2])
+    read = obj.scan_obj(np.frombuffer(b"v 1 2 3\nf 1 1 1\n", np.uint8))
+    assert read is not None and read[1].tolist() == [[1.0, 2.0, 3.0]]
