@@ -11,6 +11,9 @@
 #include <tuple>
 #include <utility>
 
+#include <nanobind/stl/pair.h>
+#include <nanobind/stl/tuple.h>
+
 #include "core.hpp"
 
 namespace mesh_normal {
@@ -21,6 +24,8 @@ using Int = std::int64_t;
 using Points = In<double, nb::shape<-1, 3>>;
 using Faces = In<Int, nb::shape<-1, 3>>;
 using Codes = In<Int, nb::shape<-1>>;
+template <typename T>
+using Array = nb::ndarray<nb::numpy, T>;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 // What a ray meets (see blocked()).
@@ -44,11 +49,14 @@ struct Mesh {
   Int vertices;
   const Int* faces;
   Int count;
-  double at(Int face, int corner, int axis) const { return unit[3 * faces[3 * face + corner] + axis]; }
+  double at(Int face, int corner, int axis) const {
+    return unit[3 * faces[3 * face + corner] + axis];
+  }
 };
 
 Mesh mesh_of(const Points& unit, const Faces& faces) {
-  return {unit.data(), static_cast<Int>(unit.shape(0)), faces.data(), static_cast<Int>(faces.shape(0))};
+  return {unit.data(), static_cast<Int>(unit.shape(0)), faces.data(),
+          static_cast<Int>(faces.shape(0))};
 }
 
 // Refuses a face whose vertex number is not a row of the points: every kernel reads them.
@@ -189,34 +197,51 @@ void gather_corners(const Mesh& mesh, Hierarchy& tree) {
   });
 }
 
+// Widens `box` (low x, y, z, high x, y, z) to `count` faces' corners (nine values a face),
+// each padded by kPad.
+void widen(std::array<double, 6>& box, const double* values, Int count) {
+  for (Int k = 0; k < 9 * count; k += 3) {
+    for (int axis = 0; axis < 3; ++axis) {
+      box[axis] = std::min(box[axis], values[k + axis] - kPad);
+      box[axis + 3] = std::max(box[axis + 3], values[k + axis] + kPad);
+    }
+  }
+}
+
 // Each node's box, padded by kPad: the leaves' on every core, then the others from the leaves
-// up (children come after their parent).
+// up (children come after their parent). Without gathered corners a leaf's faces are read in
+// batches, their vertex numbers first and then their points: loads that do not wait on each
+// other, so that many of them are in flight at once (the faces lie far apart in memory).
 void make_boxes(const Mesh& mesh, Hierarchy& tree) {
+  constexpr Int batch = 64;
   tree.boxes.reset(new double[6 * tree.nodes]);
   double* boxes = tree.boxes.get();
   const Int* children = tree.children.get();
   const Int* spans = tree.spans.get();
   const double* corners = tree.corners.get();
   parallel_for(tree.nodes, kGrain, [&](Int begin, Int end) {
+    std::array<Int, 3 * batch> numbers;
+    std::array<double, 9 * batch> values;
     for (Int node = begin; node < end; ++node) {
       if (children[2 * node] >= 0) {
         continue;
       }
-      double* box = boxes + 6 * node;
-      for (int axis = 0; axis < 3; ++axis) {
-        box[axis] = kInf;
-        box[axis + 3] = -kInf;
-      }
-      for (Int k = spans[2 * node]; k < spans[2 * node + 1]; ++k) {
-        for (int corner = 0; corner < 3; ++corner) {
-          for (int axis = 0; axis < 3; ++axis) {
-            const double value = corners != nullptr ? corners[9 * k + 3 * corner + axis]
-                                                    : mesh.at(tree.order[k], corner, axis);
-            box[axis] = std::min(box[axis], value - kPad);
-            box[axis + 3] = std::max(box[axis + 3], value + kPad);
-          }
+      std::array<double, 6> box{kInf, kInf, kInf, -kInf, -kInf, -kInf};
+      for (Int k = spans[2 * node]; k < spans[2 * node + 1]; k += batch) {
+        const Int count = std::min(batch, spans[2 * node + 1] - k);
+        if (corners != nullptr) {
+          widen(box, corners + 9 * k, count);
+          continue;
         }
+        for (Int i = 0; i < 3 * count; ++i) {
+          numbers[i] = mesh.faces[3 * tree.order[k + i / 3] + i % 3];
+        }
+        for (Int i = 0; i < 9 * count; ++i) {
+          values[i] = mesh.unit[3 * numbers[i / 3] + i % 3];
+        }
+        widen(box, values.data(), count);
       }
+      std::copy(box.begin(), box.end(), boxes + 6 * node);
     }
   });
   for (Int node = tree.nodes - 1; node >= 0; --node) {
@@ -224,8 +249,10 @@ void make_boxes(const Mesh& mesh, Hierarchy& tree) {
     const Int right = children[2 * node + 1];
     if (left >= 0) {
       for (int axis = 0; axis < 3; ++axis) {
-        boxes[6 * node + axis] = std::min(boxes[6 * left + axis], boxes[6 * right + axis]);
-        boxes[6 * node + axis + 3] = std::max(boxes[6 * left + axis + 3], boxes[6 * right + axis + 3]);
+        const double* low = boxes + 6 * left;
+        const double* high = boxes + 6 * right;
+        boxes[6 * node + axis] = std::min(low[axis], high[axis]);
+        boxes[6 * node + axis + 3] = std::max(low[axis + 3], high[axis + 3]);
       }
     }
   }
@@ -444,7 +471,8 @@ void cast_one(const Mesh& mesh, const Hierarchy& tree, Int s, Int face, const do
     Int free = 0, maybe = 0;
     for (Int r = 0; r < directions; ++r) {
       const double a = pattern[3 * r], b = pattern[3 * r + 1], c = sign * pattern[3 * r + 2];
-      ray.direction = {a * ux + b * wx + c * mx, a * uy + b * wy + c * my, a * uz + b * wz + c * mz};
+      ray.direction = {a * ux + b * wx + c * mx, a * uy + b * wy + c * my,
+                       a * uz + b * wz + c * mz};
       for (int axis = 0; axis < 3; ++axis) {
         ray.inverse[axis] = ray.direction[axis] != 0.0 ? 1.0 / ray.direction[axis] : kInf;
       }
@@ -462,7 +490,7 @@ T* zeros(std::size_t count) {
   return new T[count]();
 }
 
-nb::tuple face_morton_order(const Points& unit, const Faces& faces) {
+std::pair<Array<Int>, Array<Int>> face_morton_order(const Points& unit, const Faces& faces) {
   const Mesh mesh = mesh_of(unit, faces);
   check_faces(mesh);
   const auto count = static_cast<std::size_t>(mesh.count);
@@ -480,11 +508,16 @@ nb::tuple face_morton_order(const Points& unit, const Faces& faces) {
     });
     radix_order(codes.data(), mesh.count, order, ordered);
   }
-  return nb::make_tuple(ordered_array, order_array);
+  return {ordered_array, order_array};
 }
 
-nb::tuple bvh_build(const Points& unit, const Faces& faces, const Codes& codes, const Codes& order,
-                    Int leaf, bool gather) {
+// The hierarchy's boxes, children, spans and gathered corners (none where not `gather`).
+using Built = std::tuple<Array<double>, Array<Int>, Array<Int>, Array<double>>;
+// Per sample: the shares that escape and that are unsure per side, its area, its winding.
+using Casts = std::tuple<Array<double>, Array<double>, Array<double>, Array<bool>>;
+
+Built bvh_build(const Points& unit, const Faces& faces, const Codes& codes, const Codes& order,
+                Int leaf, bool gather) {
   const Mesh mesh = mesh_of(unit, faces);
   check_faces(mesh);
   check_order(mesh, codes, order, leaf);
@@ -495,14 +528,13 @@ nb::tuple bvh_build(const Points& unit, const Faces& faces, const Codes& codes, 
   }
   const auto nodes = static_cast<std::size_t>(tree.nodes);
   double* corners = tree.corners ? tree.corners.release() : new double[0];
-  return nb::make_tuple(owned(tree.boxes.release(), nodes, 6), owned(tree.children.release(), nodes, 2),
-                        owned(tree.spans.release(), nodes, 2),
-                        owned(corners, static_cast<std::size_t>(tree.corner_rows), 9));
+  return {owned(tree.boxes.release(), nodes, 6), owned(tree.children.release(), nodes, 2),
+          owned(tree.spans.release(), nodes, 2),
+          owned(corners, static_cast<std::size_t>(tree.corner_rows), 9)};
 }
 
-nb::tuple cast_rays(const Points& unit, const Faces& faces, const Codes& codes, const Codes& order,
-                    Int leaf, bool gather, const Codes& samples,
-                    const In<double, nb::shape<-1, 3>>& pattern, double t_min) {
+Casts cast_rays(const Points& unit, const Faces& faces, const Codes& codes, const Codes& order,
+                Int leaf, bool gather, const Codes& samples, const Points& pattern, double t_min) {
   const Mesh mesh = mesh_of(unit, faces);
   check_faces(mesh);
   check_order(mesh, codes, order, leaf);
@@ -514,8 +546,9 @@ nb::tuple cast_rays(const Points& unit, const Faces& faces, const Codes& codes, 
   }
   const Cast out{zeros<double>(2 * count), zeros<double>(2 * count), zeros<double>(count),
                  zeros<bool>(count)};
-  auto result = nb::make_tuple(owned(out.escaped, count, 2), owned(out.unsure, count, 2),
-                               owned(out.weights, count), owned(out.against, count));
+  Casts result{
+      owned(out.escaped, count, 2), owned(out.unsure, count, 2), owned(out.weights, count),
+      owned(out.against, count)};
   {
     nb::gil_scoped_release release;
     const Hierarchy tree = build(mesh, codes.data(), order.data(), leaf, gather);
@@ -523,7 +556,8 @@ nb::tuple cast_rays(const Points& unit, const Faces& faces, const Codes& codes, 
     parallel_for(static_cast<Int>(count), 1, [&](Int begin, Int end) {
       std::vector<Int> stack(static_cast<std::size_t>(tree.depth + 2));
       for (Int s = begin; s < end; ++s) {
-        cast_one(mesh, tree, s, samples.data()[s], pattern.data(), directions, t_min, out, stack.data());
+        cast_one(mesh, tree, s, samples.data()[s], pattern.data(), directions, t_min, out,
+                 stack.data());
       }
     });
   }
@@ -552,7 +586,8 @@ void pick_samples(const Codes& group, const Codes& slot, const Codes& counts, co
     }
   }
   nb::gil_scoped_release release;
-  std::vector<Int> seen(static_cast<std::size_t>(patches)), ranks(static_cast<std::size_t>(patches));
+  std::vector<Int> seen(static_cast<std::size_t>(patches));
+  std::vector<Int> ranks(static_cast<std::size_t>(patches));
   const auto groups = static_cast<Int>(slot.shape(0));
   for (Int face = 0; face < static_cast<Int>(group.shape(0)); ++face) {
     const Int patch = group.data()[face];
@@ -572,16 +607,19 @@ void pick_samples(const Codes& group, const Codes& slot, const Codes& counts, co
 }  // namespace
 
 void bind_visibility(nb::module_& m) {
-  m.def("face_morton_order", &face_morton_order, nb::arg("unit").noconvert(), nb::arg("faces").noconvert(),
+  m.def("face_morton_order", &face_morton_order, nb::arg("unit").noconvert(),
+        nb::arg("faces").noconvert(),
         "The Morton codes of the faces' centroids (a 1024**3 grid over [-1, 1]**3) in increasing "
         "order, and that order (stable: equal codes keep file order).");
   m.def("bvh_build", &bvh_build, nb::arg("unit").noconvert(), nb::arg("faces").noconvert(),
-        nb::arg("codes").noconvert(), nb::arg("order").noconvert(), nb::arg("leaf"), nb::arg("gather"),
+        nb::arg("codes").noconvert(), nb::arg("order").noconvert(), nb::arg("leaf"),
+        nb::arg("gather"),
         "The rays' hierarchy over the faces in Morton order: per node its padded box (low xyz, "
         "high xyz), children (-1 for a leaf) and span of the order; and the faces' corners in "
         "that order where `gather`, else an empty (0, 9) array.");
   m.def("cast_rays", &cast_rays, nb::arg("unit").noconvert(), nb::arg("faces").noconvert(),
-        nb::arg("codes").noconvert(), nb::arg("order").noconvert(), nb::arg("leaf"), nb::arg("gather"),
+        nb::arg("codes").noconvert(), nb::arg("order").noconvert(), nb::arg("leaf"),
+        nb::arg("gather"),
         nb::arg("samples").noconvert(), nb::arg("pattern").noconvert(), nb::arg("t_min"),
         "For each sample face, its rays in the pattern on each side through the hierarchy of "
         "bvh_build: the shares that surely escape and that are unsure (each (s, 2): + side, - "

@@ -76,8 +76,8 @@ def _directions() -> FloatArray:
 @kernel(python=True)  # here, not in kernels: the face normals never compile it
 def prefetch_corners(points: np.ndarray, faces: IndexArray, face: int) -> None:
     """Ask for the rows of ``points`` at ``face``'s three corners, if there is such a face
-    (a loop over faces in file order reads points far apart in a large, shuffled mesh). The
-    orientation's cone terms use it too."""
+    (a loop over faces in file order reads points far apart in a large, shuffled mesh), for
+    the orientation's cone terms (the rays here are cast by the compiled core)."""
     if face < len(faces):
         prefetch_row(points, faces[face, 0])
         prefetch_row(points, faces[face, 1])
