@@ -49,33 +49,42 @@ struct Mesh {
   Int vertices;
   const Int* faces;
   Int count;
+  // The vertex number at a face's corner. One that is not a row of the points sets `bad`
+  // and reads row 0 instead: each kernel's first pass over the faces checks them so, and the
+  // kernel refuses them once that pass is done.
+  Int vertex(Int face, int corner, bool& bad) const {
+    const Int number = faces[3 * face + corner];
+    const bool outside = static_cast<std::uint64_t>(number) >= static_cast<std::uint64_t>(vertices);
+    bad = bad || outside;
+    return outside ? 0 : number;
+  }
+  // A coordinate of a face's corner, once vertex() has passed every face.
   double at(Int face, int corner, int axis) const {
     return unit[3 * faces[3 * face + corner] + axis];
   }
 };
 
-Mesh mesh_of(const Points& unit, const Faces& faces) {
-  return {unit.data(), static_cast<Int>(unit.shape(0)), faces.data(),
-          static_cast<Int>(faces.shape(0))};
-}
+constexpr const char* kBadVertex = "a face names a vertex that the points do not have";
 
-// Refuses a face whose vertex number is not a row of the points: every kernel reads them.
-void check_faces(const Mesh& mesh) {
-  const auto rows = static_cast<std::uint64_t>(mesh.vertices);
-  for (Int k = 0; k < 3 * mesh.count; ++k) {
-    if (static_cast<std::uint64_t>(mesh.faces[k]) >= rows) {
-      throw nb::index_error("a face names a vertex that the points do not have");
-    }
+Mesh mesh_of(const Points& unit, const Faces& faces) {
+  const Mesh mesh{unit.data(), static_cast<Int>(unit.shape(0)), faces.data(),
+                  static_cast<Int>(faces.shape(0))};
+  if (mesh.count > 0 && mesh.vertices == 0) {
+    throw nb::index_error(kBadVertex);
   }
+  return mesh;
 }
 
 // The Morton code of a face's centroid on a 1024**3 grid over [-1, 1]**3: each axis's 10-bit
 // cell spread to every third bit (bit b to bit 3 b + axis).
-Int morton(const Mesh& mesh, Int face) {
+Int morton(const Mesh& mesh, Int face, bool& bad) {
+  const double* a = mesh.unit + 3 * mesh.vertex(face, 0, bad);
+  const double* b = mesh.unit + 3 * mesh.vertex(face, 1, bad);
+  const double* c = mesh.unit + 3 * mesh.vertex(face, 2, bad);
   Int value = 0;
   for (int axis = 0; axis < 3; ++axis) {
-    double total = mesh.at(face, 0, axis) + mesh.at(face, 1, axis);
-    total += mesh.at(face, 2, axis);
+    double total = a[axis] + b[axis];
+    total += c[axis];
     const double scaled = (total / 3 + 1.0) * 512.0;
     // Truncated towards zero, then clamped to [0, 1023]; NaN in cell 0.
     Int cell = scaled >= 1023.0 ? 1023 : (scaled >= 1.0 ? static_cast<Int>(scaled) : 0);
@@ -138,6 +147,7 @@ struct Hierarchy {
   std::unique_ptr<Int[]> spans;
   std::unique_ptr<double[]> corners;
   Int corner_rows = 0;
+  bool bad_vertex = false;  // a face names a vertex that the points do not have
 };
 
 // Splits each span where the highest bit that differs in its sorted Morton codes turns (the
@@ -186,15 +196,20 @@ void gather_corners(const Mesh& mesh, Hierarchy& tree) {
   tree.corner_rows = mesh.count;
   tree.corners.reset(new double[9 * mesh.count]);
   double* corners = tree.corners.get();
+  std::atomic<bool> refused{false};
   parallel_for(mesh.count, kGrain, [&](Int begin, Int end) {
+    bool bad = false;
     for (Int k = begin; k < end; ++k) {
       for (int corner = 0; corner < 3; ++corner) {
-        for (int axis = 0; axis < 3; ++axis) {
-          corners[9 * k + 3 * corner + axis] = mesh.at(tree.order[k], corner, axis);
-        }
+        const double* point = mesh.unit + 3 * mesh.vertex(tree.order[k], corner, bad);
+        std::copy(point, point + 3, corners + 9 * k + 3 * corner);
       }
     }
+    if (bad) {
+      refused.store(true);
+    }
   });
+  tree.bad_vertex = refused.load();
 }
 
 // Widens `box` (low x, y, z, high x, y, z) to `count` faces' corners (nine values a face),
@@ -219,7 +234,9 @@ void make_boxes(const Mesh& mesh, Hierarchy& tree) {
   const Int* children = tree.children.get();
   const Int* spans = tree.spans.get();
   const double* corners = tree.corners.get();
+  std::atomic<bool> refused{false};
   parallel_for(tree.nodes, kGrain, [&](Int begin, Int end) {
+    bool bad = false;
     std::array<Int, 3 * batch> numbers;
     std::array<double, 9 * batch> values;
     for (Int node = begin; node < end; ++node) {
@@ -234,7 +251,7 @@ void make_boxes(const Mesh& mesh, Hierarchy& tree) {
           continue;
         }
         for (Int i = 0; i < 3 * count; ++i) {
-          numbers[i] = mesh.faces[3 * tree.order[k + i / 3] + i % 3];
+          numbers[i] = mesh.vertex(tree.order[k + i / 3], static_cast<int>(i % 3), bad);
         }
         for (Int i = 0; i < 9 * count; ++i) {
           values[i] = mesh.unit[3 * numbers[i / 3] + i % 3];
@@ -243,16 +260,20 @@ void make_boxes(const Mesh& mesh, Hierarchy& tree) {
       }
       std::copy(box.begin(), box.end(), boxes + 6 * node);
     }
+    if (bad) {
+      refused.store(true);
+    }
   });
+  tree.bad_vertex = tree.bad_vertex || refused.load();
   for (Int node = tree.nodes - 1; node >= 0; --node) {
     const Int left = children[2 * node];
     const Int right = children[2 * node + 1];
     if (left >= 0) {
       for (int axis = 0; axis < 3; ++axis) {
-        const double* low = boxes + 6 * left;
-        const double* high = boxes + 6 * right;
-        boxes[6 * node + axis] = std::min(low[axis], high[axis]);
-        boxes[6 * node + axis + 3] = std::max(low[axis + 3], high[axis + 3]);
+        const double* one = boxes + 6 * left;
+        const double* other = boxes + 6 * right;
+        boxes[6 * node + axis] = std::min(one[axis], other[axis]);
+        boxes[6 * node + axis + 3] = std::max(one[axis + 3], other[axis + 3]);
       }
     }
   }
@@ -492,21 +513,28 @@ T* zeros(std::size_t count) {
 
 std::pair<Array<Int>, Array<Int>> face_morton_order(const Points& unit, const Faces& faces) {
   const Mesh mesh = mesh_of(unit, faces);
-  check_faces(mesh);
   const auto count = static_cast<std::size_t>(mesh.count);
   auto* ordered = new Int[count];
   auto* order = new Int[count];
   auto ordered_array = owned(ordered, count);
   auto order_array = owned(order, count);
+  std::atomic<bool> refused{false};
   {
     nb::gil_scoped_release release;
     std::vector<Int> codes(count);
     parallel_for(mesh.count, kGrain, [&](Int begin, Int end) {
+      bool bad = false;
       for (Int face = begin; face < end; ++face) {
-        codes[face] = morton(mesh, face);
+        codes[face] = morton(mesh, face, bad);
+      }
+      if (bad) {
+        refused.store(true);
       }
     });
     radix_order(codes.data(), mesh.count, order, ordered);
+  }
+  if (refused.load()) {
+    throw nb::index_error(kBadVertex);
   }
   return {ordered_array, order_array};
 }
@@ -519,12 +547,14 @@ using Casts = std::tuple<Array<double>, Array<double>, Array<double>, Array<bool
 Built bvh_build(const Points& unit, const Faces& faces, const Codes& codes, const Codes& order,
                 Int leaf, bool gather) {
   const Mesh mesh = mesh_of(unit, faces);
-  check_faces(mesh);
   check_order(mesh, codes, order, leaf);
   Hierarchy tree;
   {
     nb::gil_scoped_release release;
     tree = build(mesh, codes.data(), order.data(), leaf, gather);
+  }
+  if (tree.bad_vertex) {
+    throw nb::index_error(kBadVertex);
   }
   const auto nodes = static_cast<std::size_t>(tree.nodes);
   double* corners = tree.corners ? tree.corners.release() : new double[0];
@@ -536,7 +566,6 @@ Built bvh_build(const Points& unit, const Faces& faces, const Codes& codes, cons
 Casts cast_rays(const Points& unit, const Faces& faces, const Codes& codes, const Codes& order,
                 Int leaf, bool gather, const Codes& samples, const Points& pattern, double t_min) {
   const Mesh mesh = mesh_of(unit, faces);
-  check_faces(mesh);
   check_order(mesh, codes, order, leaf);
   const auto count = static_cast<std::size_t>(samples.shape(0));
   for (std::size_t s = 0; s < count; ++s) {
@@ -546,20 +575,26 @@ Casts cast_rays(const Points& unit, const Faces& faces, const Codes& codes, cons
   }
   const Cast out{zeros<double>(2 * count), zeros<double>(2 * count), zeros<double>(count),
                  zeros<bool>(count)};
+  bool refused = false;
   Casts result{
       owned(out.escaped, count, 2), owned(out.unsure, count, 2), owned(out.weights, count),
       owned(out.against, count)};
   {
     nb::gil_scoped_release release;
     const Hierarchy tree = build(mesh, codes.data(), order.data(), leaf, gather);
+    refused = tree.bad_vertex;
     const auto directions = static_cast<Int>(pattern.shape(0));
-    parallel_for(static_cast<Int>(count), 1, [&](Int begin, Int end) {
+    // The build read every face: the rays read only faces that it passed.
+    parallel_for(refused ? 0 : static_cast<Int>(count), 1, [&](Int begin, Int end) {
       std::vector<Int> stack(static_cast<std::size_t>(tree.depth + 2));
       for (Int s = begin; s < end; ++s) {
         cast_one(mesh, tree, s, samples.data()[s], pattern.data(), directions, t_min, out,
                  stack.data());
       }
     });
+  }
+  if (refused) {
+    throw nb::index_error(kBadVertex);
   }
   return result;
 }
@@ -596,7 +631,11 @@ void pick_samples(const Codes& group, const Codes& slot, const Codes& counts, co
     }
     const Int i = slot.data()[patch];
     const Int rank = ranks[i];
-    if (rank < take.data()[i] && seen[i] == rank * counts.data()[i] / take.data()[i]) {
+    // Unsigned: no overflow for any counts (they are checked to be non-negative).
+    const auto pick = static_cast<std::uint64_t>(rank) *
+                      static_cast<std::uint64_t>(counts.data()[i]) /
+                      static_cast<std::uint64_t>(std::max<Int>(1, take.data()[i]));
+    if (rank < take.data()[i] && static_cast<std::uint64_t>(seen[i]) == pick) {
       samples.data()[offsets.data()[i] + rank] = face;
       ranks[i] = rank + 1;
     }

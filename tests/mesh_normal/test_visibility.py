@@ -319,10 +319,13 @@ def test_the_core_refuses_faces_naming_missing_vertices() -> None:
         wrong[2, 1] = bad
         with pytest.raises(IndexError, match="vertex that the points do not have"):
             _core.face_morton_order(unit, wrong)
-        with pytest.raises(IndexError, match="vertex that the points do not have"):
-            _core.bvh_build(unit, wrong, codes, order, 4, True)
-        with pytest.raises(IndexError, match="vertex that the points do not have"):
-            _core.cast_rays(unit, wrong, codes, order, 4, True, order, unit[:1], 1e-9)
+        for gather in (True, False):  # read through the gathered corners, or from the points
+            with pytest.raises(IndexError, match="vertex that the points do not have"):
+                _core.bvh_build(unit, wrong, codes, order, 4, gather)
+            with pytest.raises(IndexError, match="vertex that the points do not have"):
+                _core.cast_rays(unit, wrong, codes, order, 4, gather, order, unit[:1], 1e-9)
+    with pytest.raises(IndexError, match="vertex that the points do not have"):
+        _core.face_morton_order(unit[:0], faces)
 
 
 def test_the_core_refuses_a_hierarchy_that_is_not_the_faces() -> None:
