@@ -7,10 +7,9 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from mesh_normal import visibility
+from mesh_normal import _core, visibility
 from mesh_normal.checks import checked_mesh
 from mesh_normal.faces import face_geometry
-from mesh_normal.kernels import load_numba
 from mesh_normal.orientation import orient
 from mesh_normal.topology import by_position, structure
 from tests.meshes import (
@@ -174,44 +173,60 @@ def _reference_morton(unit: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return code
 
 
-@pytest.mark.parametrize("count", [1, 7, 600, 5000])
+@pytest.mark.parametrize("count", [1, 7, 600, 5000, 20000])
 def test_the_hierarchy_order_is_the_stable_sort_of_the_morton_codes(count: int) -> None:
     rng = np.random.default_rng(count)
     unit = rng.uniform(-1, 1, (count + 2, 3))
     unit[: count // 3] = np.round(unit[: count // 3], 1)  # many equal codes: ties in file order
     faces = rng.integers(0, len(unit), (count, 3)).astype(np.intp)
     expected = _reference_morton(unit, faces)
-    codes, order = visibility._morton_order(unit, faces)
+    codes, order = _core.face_morton_order(unit, faces)
     np.testing.assert_array_equal(order, np.argsort(expected, kind="stable"))
     np.testing.assert_array_equal(codes, expected[order])
-    corners = visibility._corners(unit, faces, order)
+    corners = _core.bvh_build(unit, faces, codes, order, visibility._LEAF, True)[3]
     np.testing.assert_array_equal(corners, unit[faces[order]].reshape(-1, 9))
 
 
-@pytest.mark.parametrize("python", [False, True])
-def test_the_split_writes_every_node_it_makes(python: bool) -> None:
-    """The nodes' rows start as garbage (np.empty): each node made gets its children, -1 for a
-    leaf, and its span, so the hierarchy does not depend on what the memory held."""
-    from mesh_normal.kernels import load_numba
+def _reference_split(codes: np.ndarray, leaf: int) -> tuple[np.ndarray, np.ndarray]:
+    """The nodes' children and spans, made in breadth order: a span of more than ``leaf``
+    faces is cut where the highest bit in which its first and last codes differ turns, or in
+    the middle where they are equal."""
+    spans, children = [(0, len(codes))], []
+    for lo, hi in spans:  # the list grows as it is read: breadth order
+        if hi - lo <= leaf:
+            children.append((-1, -1))
+            continue
+        differ = int(codes[lo]) ^ int(codes[hi - 1])
+        if differ == 0:
+            mid = (lo + hi) // 2
+        else:
+            bit = differ.bit_length() - 1
+            mid = lo + int(np.flatnonzero((codes[lo:hi] >> bit) & 1)[0])
+        children.append((len(spans), len(spans) + 1))
+        spans += [(lo, mid), (mid, hi)]
+    return np.array(children), np.array(spans)
 
-    rng = np.random.default_rng(3)
-    codes = np.sort(rng.integers(0, 2**30, 5000)).astype(np.int64)
-    codes[1000:1400] = codes[1000]  # a run of equal codes: split in the middle
-    codes.sort()
-    run = visibility._split.py_func if python else visibility._split
-    if not python:
-        load_numba()
-    made = []
-    for fill in (-1, 12345):
-        children = np.full((2 * len(codes), 2), fill, dtype=np.intp)
-        spans = np.full((2 * len(codes), 2), fill, dtype=np.intp)
-        used = run(codes, visibility._LEAF, children, spans)
-        made.append((used, children[:used].copy(), spans[:used].copy()))
-    assert made[0][0] == made[1][0] > 1
-    assert np.array_equal(made[0][1], made[1][1]) and np.array_equal(made[0][2], made[1][2])
-    leaves = made[0][1][:, 0] == -1
-    assert np.all((made[0][2][leaves, 1] - made[0][2][leaves, 0]) <= visibility._LEAF)
-    assert np.all(made[0][1][~leaves] > 0)
+
+@pytest.mark.parametrize("leaf", [1, 4, 64])
+def test_the_hierarchy_is_split_at_the_codes_bits_and_boxes_its_faces(leaf: int) -> None:
+    rng = np.random.default_rng(leaf)
+    unit = rng.uniform(-1, 1, (3000, 3))
+    unit[:1000] = np.round(unit[:1000], 1)  # runs of equal codes: split in the middle
+    faces = rng.integers(0, len(unit), (5000, 3)).astype(np.intp)
+    codes, order = _core.face_morton_order(unit, faces)
+    for gather in (True, False):
+        boxes, children, spans, corners = _core.bvh_build(unit, faces, codes, order, leaf, gather)
+        expected_children, expected_spans = _reference_split(codes, leaf)
+        np.testing.assert_array_equal(children, expected_children)
+        np.testing.assert_array_equal(spans, expected_spans)
+        assert corners.shape == ((len(faces), 9) if gather else (0, 9))
+        # Each box: its faces' corners, widened by 2**-26 (x - pad rounds monotonically, so
+        # the least corner less the pad is the least of each corner less the pad).
+        points = unit[faces[order]].reshape(len(faces), 9, 1)
+        for node, (lo, hi) in enumerate(spans):
+            span = points[lo:hi].reshape(-1, 3)
+            expected = np.concatenate([span.min(axis=0) - 2.0**-26, span.max(axis=0) + 2.0**-26])
+            np.testing.assert_array_equal(boxes[node], expected)
 
 
 @pytest.mark.parametrize("name", ["teapot.stl", "soup.stl", "scan fragments"])
@@ -258,20 +273,93 @@ def _samples_by_sorting(
     group=st.lists(st.integers(0, 6), min_size=1, max_size=400).map(np.array),
     picked=st.sets(st.integers(0, 6), min_size=1),
     per=st.integers(1, 40),
-    compiled=st.booleans(),
 )
 @settings(max_examples=200, deadline=None)
-def test_samples_are_the_sorted_picks(
-    group: np.ndarray, picked: set[int], per: int, compiled: bool
-) -> None:
+def test_samples_are_the_sorted_picks(group: np.ndarray, picked: set[int], per: int) -> None:
     """One pass picks the same faces as sorting each patch's members did (a patch of no
     faces, the group past the patches and patches left out included)."""
     chosen = np.array(sorted(value for value in picked if value <= group.max()))
     assume(len(chosen))  # as the casting chooses them: patches that the groups number
-    if compiled:  # past the faces that run the kernel's Python source
-        load_numba()
-        group = np.tile(group, visibility.PYTHON_RAYS // len(group) + 1)
     samples, owner = visibility._samples(group, chosen, per)
     expected, expected_owner = _samples_by_sorting(group, chosen, per)
     np.testing.assert_array_equal(samples, expected)
     np.testing.assert_array_equal(owner, expected_owner)
+
+
+def test_the_scores_do_not_depend_on_the_number_of_threads() -> None:
+    # A hemisphere of 10,240 faces (the Morton codes and the corners on every thread) beside
+    # the scan fragments (many samples, cast on every thread).
+    vertices, faces = icosphere(5)
+    bowl = (vertices, faces[vertices[faces].mean(axis=1)[:, 2] > 0])
+    vertices, faces = combined(bowl, scan_fragments())
+    before = _core.threads()
+    found = []
+    try:
+        for threads in (1, 2, 3):
+            _core.set_threads(threads)
+            found.append(scores(vertices, faces))
+    finally:
+        _core.set_threads(before)
+    assert not np.isnan(found[0]).all()
+    for score in found[1:]:
+        assert score.tobytes() == found[0].tobytes()
+
+
+def _small_hierarchy() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    unit = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
+    faces = np.array([[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]], dtype=np.intp)
+    codes, order = _core.face_morton_order(unit, faces)
+    return unit, faces, codes, order
+
+
+def test_the_core_refuses_faces_naming_missing_vertices() -> None:
+    unit, faces, codes, order = _small_hierarchy()
+    for bad in (4, -1, 2**62):
+        wrong = faces.copy()
+        wrong[2, 1] = bad
+        with pytest.raises(IndexError, match="vertex that the points do not have"):
+            _core.face_morton_order(unit, wrong)
+        for gather in (True, False):  # read through the gathered corners, or from the points
+            with pytest.raises(IndexError, match="vertex that the points do not have"):
+                _core.bvh_build(unit, wrong, codes, order, 4, gather)
+            with pytest.raises(IndexError, match="vertex that the points do not have"):
+                _core.cast_rays(unit, wrong, codes, order, 4, gather, order, unit[:1], 1e-9)
+    with pytest.raises(IndexError, match="vertex that the points do not have"):
+        _core.face_morton_order(unit[:0], faces)
+
+
+def test_the_core_refuses_a_hierarchy_that_is_not_the_faces() -> None:
+    unit, faces, codes, order = _small_hierarchy()
+    pattern = unit[1:]
+    with pytest.raises(ValueError, match="one value for each face"):
+        _core.bvh_build(unit, faces, codes[:3], order, 4, True)
+    with pytest.raises(ValueError, match="increasing order"):
+        _core.bvh_build(unit, faces, np.arange(4)[::-1].copy(), order, 1, True)
+    with pytest.raises(ValueError, match="at least one face"):
+        _core.cast_rays(unit, faces, codes, order, 0, True, order, pattern, 1e-9)
+    for bad in (4, -1):
+        wrong = order.copy()
+        wrong[0] = bad
+        with pytest.raises(IndexError, match="order names a face"):
+            _core.bvh_build(unit, faces, codes, wrong, 4, False)
+        with pytest.raises(IndexError, match="sample names a face"):
+            _core.cast_rays(unit, faces, codes, order, 4, True, wrong, pattern, 1e-9)
+    with pytest.raises(TypeError):  # an int32 order is refused, not copied
+        _core.bvh_build(unit, faces, codes, order.astype(np.int32), 4, True)
+
+
+def test_the_core_refuses_samples_that_do_not_fit() -> None:
+    group = np.array([0, 1, 0, 1, 2], dtype=np.intp)
+    counts, take = np.array([2, 2], dtype=np.intp), np.array([2, 2], dtype=np.intp)
+    slot = np.array([0, 1, -1], dtype=np.intp)
+    samples = np.empty(4, dtype=np.intp)
+    _core.pick_samples(group, slot, counts, take, np.array([0, 2], dtype=np.intp), samples)
+    assert samples.tolist() == [0, 2, 1, 3]
+    with pytest.raises(IndexError, match="do not fit"):
+        _core.pick_samples(group, slot, counts, take, np.array([0, 3], dtype=np.intp), samples)
+    with pytest.raises(IndexError, match="do not fit"):
+        _core.pick_samples(group, slot, counts, take, np.array([-1, 2], dtype=np.intp), samples)
+    with pytest.raises(IndexError, match="chosen patch that there is not"):
+        _core.pick_samples(group, np.array([0, 2, -1]), counts, take, counts - 2, samples)
+    with pytest.raises(ValueError, match="each chosen patch"):
+        _core.pick_samples(group, slot, counts, take[:1], counts - 2, samples)
