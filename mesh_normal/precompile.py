@@ -5,15 +5,13 @@ includes whether it is read-only. The file readers give both kinds: an array mad
 ``np.frombuffer`` over the uploaded bytes is read-only, one parsed from text is not, and the
 checks keep the caller's array when it already has the right type and layout. The mesh
 kernels see only read-only views (:class:`~mesh_normal.checks.CheckedMesh` makes them), so
-each is compiled once; the polygon kernels, which take a file's corners as the reader found
-them, are compiled here for each combination. A job never compiles one at run time (in a
+each is compiled once. A job never compiles one at run time (in a
 read-only container it would compile in memory, for seconds, in every worker;
 ``tests/app/mesh/test_warmup.py`` checks that the jobs on every test file need nothing else).
 """
 
 from __future__ import annotations
 
-import itertools
 from typing import TypeVar
 
 import numpy as np
@@ -23,9 +21,6 @@ from mesh_normal.bounds import column_bounds
 from mesh_normal.collector import paused
 from mesh_normal.corners import corner_normals, corner_weights
 from mesh_normal.faces import face_geometry, face_normals
-from mesh_normal.files.polygons import triangulate
-from mesh_normal.files.stl import RECORD as STL_RECORD
-from mesh_normal.files.weld import weld, weld_by_sort
 from mesh_normal.kernels import (
     coordinate_range,
     load_numba,
@@ -52,12 +47,8 @@ _NESTED = (
     np.concatenate([_SIDES, _SIDES + 4]),
 )
 _OPEN = (_TETRAHEDRON, _SIDES[:3])
-#: A square and a triangle as polygons (the polygon kernels run for four corners or more).
-_POLYGONS = (
-    np.array([4, 3]),
-    np.array([0, 1, 2, 3, 0, 1, 4]),
-    np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0.5, -1, 0]]),
-)
+#: A few points, for the kernels of a report's bounds and the coordinate range.
+_POINTS = np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0.5, -1, 0]])
 
 
 def compile_kernels() -> None:
@@ -73,11 +64,7 @@ def _compile_kernels() -> None:
     load_numba()
     for vertices, faces in (_NESTED, _OPEN):  # the checks give the kernels read-only views
         _mesh_kernels(vertices, faces)
-    counts, corners, points = _POLYGONS
-    for read_only in itertools.product((False, True), repeat=3):
-        triangulate(
-            _kept(counts, read_only[0]), _kept(corners, read_only[1]), _kept(points, read_only[2])
-        )
+    points = _POINTS
     # Point clouds: the neighbourhood kernel (k nearest and within a radius take the same
     # types) and the signs down the spanning tree; binary_compressed PCD's LZF (one literal).
     for frozen in (False, True):  # a report's bounds, of the vertices as read
@@ -90,13 +77,6 @@ def _compile_kernels() -> None:
     sums = np.ones((1, 4))  # many vertices' normals, packed into their sums' memory
     packed = sums.reshape(-1)[:3].reshape(1, 3)
     normalise_packed_kernel(sums, packed, np.empty(1, bool), np.zeros(1, np.int64), 1, *workers())
-    for dtype in (np.float32, np.float64):  # binary STL corners, and text ones
-        corners = np.array([[0.0, 0, 0], [1, 0, 0], [0, 0, 0]], dtype)
-        weld(corners)
-        weld_by_sort(corners)  # where a file crowds the table's slots
-        weld(np.array(np.arange(192.0).reshape(64, 3), dtype))  # distinct points: it grows
-    # A binary STL's corners, read where they lie in its records (a read-only view).
-    weld(np.frombuffer(bytes(2 * STL_RECORD.itemsize), STL_RECORD)["corners"])
     # A file's stored normals against ours (every row compared, and some).
     unit, usable = unit_rows(np.eye(3))
     angles_between(unit, usable, Candidate(np.eye(3), np.array([False, True, False])))

@@ -13,16 +13,12 @@ counted in a note.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import mapbox_earcut
 import numpy as np
 from numpy.typing import NDArray
 
+from mesh_normal.files.polygon_shapes import Shapes, measure_polygons
 from mesh_normal.types import FloatArray, IndexArray
-
-if TYPE_CHECKING:
-    from mesh_normal.files.polygon_shapes import Shapes
 
 #: A polygon is not planar when a corner lies farther from its plane than this share of its size
 #: (the diagonal of its bounding box).
@@ -68,8 +64,6 @@ def triangulate(
     points = np.ascontiguousarray(vertices, dtype=np.float64).reshape(-1, 3)
     shapes = None
     if np.any(sizes >= 4):
-        from mesh_normal.files.polygon_shapes import measure_polygons  # numba: polygons only
-
         shapes = measure_polygons(sizes, indices, points)
     clipped, crossing = (0, 0)
     if shapes is not None:

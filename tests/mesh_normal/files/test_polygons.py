@@ -9,7 +9,9 @@ import pytest
 from numpy.typing import NDArray
 
 import mesh_normal as mn
+from mesh_normal import _core
 from mesh_normal.files import LoadedMesh, MeshFileError, read_mesh
+from mesh_normal.files.polygon_shapes import measure_polygons
 from mesh_normal.files.polygons import fan, triangulate
 
 Points = NDArray[np.float64]
@@ -255,3 +257,84 @@ def test_a_polygon_that_crosses_itself_keeps_its_fan_and_says_so() -> None:
     corners, _, notes = triangulate(np.array([5]), np.arange(5), ring)
     np.testing.assert_array_equal(corners, fan(np.array([5]))[0])
     assert notes == ["1 polygon crosses itself; its fan from the first corner is kept."]
+
+
+def shapes_reference(
+    counts: NDArray[np.intp], corners: NDArray[np.intp], vertices: Points
+) -> tuple[Points, NDArray[np.bool_], Points]:
+    """The measures of each polygon of four or more corners, one polygon at a time in NumPy."""
+    normals, folded = np.full((len(counts), 3), np.nan), np.zeros(len(counts), dtype=bool)
+    deviation = np.zeros(len(counts))
+    for polygon, start in enumerate(np.cumsum(counts) - counts):
+        if counts[polygon] < 4:
+            continue
+        points = vertices[corners[start : start + counts[polygon]]]
+        size = np.linalg.norm(points.max(axis=0) - points.min(axis=0))
+        normals[polygon] = newell(points)
+        deviation[polygon] = np.abs((points - points.mean(axis=0)) @ normals[polygon]).max() / size
+        b, c = points[1:-1] - points[0], points[2:] - points[0]
+        folded[polygon] = bool((np.cross(b, c) @ normals[polygon] < -1e-10 * size**2).any())
+    return normals, folded, deviation
+
+
+def test_the_measures_match_a_numpy_reference() -> None:
+    rng = np.random.default_rng(21)
+    vertices = rng.standard_normal((50, 3))
+    counts = rng.integers(0, 9, 400)
+    corners = rng.integers(0, 50, counts.sum())
+    shapes = measure_polygons(counts, corners, vertices)
+    assert shapes is not None
+    normals, folded, deviation = shapes_reference(counts, corners, vertices)
+    big = counts >= 4
+    np.testing.assert_allclose(shapes.normals[big], normals[big], rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(shapes.deviation, deviation, rtol=1e-9, atol=1e-12)
+    np.testing.assert_array_equal(shapes.folded, folded)
+    assert folded[big].any() and not folded[big].all()
+
+
+def test_the_measures_do_not_depend_on_the_number_of_threads() -> None:
+    rng = np.random.default_rng(22)
+    vertices = rng.standard_normal((5000, 3))
+    counts = rng.integers(3, 9, 60_000)
+    corners = rng.integers(0, 5000, counts.sum())
+    before, answers = _core.threads(), set()
+    try:
+        for threads in (1, 2, 3):
+            _core.set_threads(threads)
+            shapes = measure_polygons(counts, corners, vertices)
+            assert shapes is not None
+            answers.add(b"".join(np.asarray(a).tobytes() for a in vars(shapes).values()))
+    finally:
+        _core.set_threads(before)
+    assert len(answers) == 1
+
+
+def test_corners_or_counts_that_are_not_the_files_measure_nothing() -> None:
+    square = np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]])
+    assert measure_polygons(np.array([4]), np.array([0, 1, 2, 3]), square) is not None
+    for counts, corners in (
+        ([4], [0, 1, 2, 4]),  # past the vertices
+        ([4], [0, -1, 2, 3]),
+        ([4], [0, 1, 2]),  # fewer corners than the counts say
+        ([-4, 8], [0, 1, 2, 3]),  # a negative count: the next polygon starts before the first
+    ):
+        assert measure_polygons(np.array(counts), np.array(corners), square) is None
+    # Starts past the corners, or arrays of other lengths, given to the compiled pass itself.
+    counts, corners = np.array([4]), np.array([0, 1, 2, 3])
+    normals, deviation, folded = np.empty((1, 3)), np.zeros(1), np.zeros(1, dtype=bool)
+    for starts in ([1], [-1], [2**62]):
+        assert not _core.polygon_shapes(
+            counts, np.array(starts), corners, square, normals, deviation, folded
+        )
+    with pytest.raises(ValueError, match="one row per polygon"):
+        _core.polygon_shapes(counts, np.array([0, 4]), corners, square, normals, deviation, folded)
+    with pytest.raises(TypeError):  # int32 corners are not copied behind the caller's back
+        _core.polygon_shapes(
+            counts,
+            np.array([0]),
+            corners.astype(np.int32),  # type: ignore[arg-type]
+            square,
+            normals,
+            deviation,
+            folded,
+        )
