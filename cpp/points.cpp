@@ -33,8 +33,10 @@ struct Limits {
   double gap_ratio;   // ambiguous: the two smallest within this fraction of the largest
 };
 
-// One Jacobi rotation that zeroes a[p][q]: a = J^T a J and v = v J.
-void rotate(Matrix& a, Matrix& v, int p, int q) {
+// One Jacobi rotation that zeroes a[p][q]: a = J^T a J and v = v J. The indices are constants,
+// so that the matrices stay in registers.
+template <int p, int q>
+void rotate(Matrix& a, Matrix& v) {
   const double apq = a[p][q];
   if (apq == 0.0) {
     return;
@@ -88,9 +90,9 @@ void symmetric_eigen(Matrix& a, Matrix& v) {
     if (off <= 1e-36 * diagonal || off == 0.0) {
       return;
     }
-    rotate(a, v, 0, 1);
-    rotate(a, v, 0, 2);
-    rotate(a, v, 1, 2);
+    rotate<0, 1>(a, v);
+    rotate<0, 2>(a, v);
+    rotate<1, 2>(a, v);
   }
 }
 
