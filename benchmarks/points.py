@@ -14,7 +14,7 @@ Rows (``--quick``: a fifth of the sizes, for a smoke run):
   with how many points each turned inward;
 - memory: the peak resident memory of ``point_normals`` on 10M points, in a child process.
 
-Times are the best of ``--repeats`` runs (after one warm-up for ours: numba's cache loads).
+Times are the best of ``--repeats`` runs (after one warm-up for ours).
 """
 
 from __future__ import annotations
@@ -34,9 +34,15 @@ from benchmarks import tables
 from mesh_normal.points import estimate, point_normals
 from mesh_normal.points.orient import along_tree
 
-# Launch numba's threads before Open3D loads its own (older) TBB, which numba would try to use.
-point_normals(np.random.default_rng(0).normal(size=(100, 3)), orient="none")
-import open3d  # noqa: E402
+# Launch numba's threads (the mesh kernels') before Open3D loads its own (older) TBB, which
+# numba would try to use.
+try:
+    from numba.np.ufunc.parallel import _launch_threads
+except ImportError:  # no numba: nothing to launch
+    pass
+else:
+    _launch_threads()
+import open3d
 
 #: The table as printed; main() gives it the path of ``--markdown``.
 OUT = tables.Report(None)

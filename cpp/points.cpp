@@ -1,7 +1,487 @@
+// Point clouds: each point's normal from the covariance of its neighbourhood, the orientation
+// graph's edges and the signs carried down its spanning tree, and PCD's LZF decompression.
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <tuple>
+
+#include <nanobind/stl/tuple.h>
+
 #include "core.hpp"
 
 namespace mesh_normal {
 
-void bind_points(nb::module_& m) { (void)m; }
+namespace {
+
+using Index = std::int64_t;
+using Matrix = double[3][3];
+
+// The estimation codes (the values of mesh_normal.points.estimate.PointStatus).
+constexpr Index kOk = 0;
+constexpr Index kTooFewNeighbours = 2;
+constexpr Index kDuplicates = 3;
+constexpr Index kCollinear = 4;
+constexpr Index kAmbiguous = 5;
+
+// Jacobi sweeps at most: a 3 x 3 matrix converges quadratically, in 4 or 5.
+constexpr int kSweeps = 16;
+
+// The tolerances of the classification, in the frame's units (see estimate.py).
+struct Limits {
+  double tiny;        // the variance that rounding of the coordinates alone could give
+  double line_ratio;  // collinear: the middle eigenvalue within this fraction of the largest
+  double gap_ratio;   // ambiguous: the two smallest within this fraction of the largest
+};
+
+// One Jacobi rotation that zeroes a[p][q]: a = J^T a J and v = v J. The indices are constants,
+// so that the matrices stay in registers.
+template <int p, int q>
+void rotate(Matrix& a, Matrix& v) {
+  const double apq = a[p][q];
+  if (apq == 0.0) {
+    return;
+  }
+  const double theta = (a[q][q] - a[p][p]) / (2.0 * apq);
+  double t = 0.0;
+  if (std::fabs(theta) > 1e150) {  // theta * theta would overflow: t is 1 / (2 theta) to rounding
+    t = 0.5 / theta;
+  } else {
+    t = 1.0 / (std::fabs(theta) + std::sqrt(theta * theta + 1.0));
+    if (theta < 0.0) {
+      t = -t;
+    }
+  }
+  const double c = 1.0 / std::sqrt(t * t + 1.0);
+  const double s = t * c;
+  for (int k = 0; k < 3; ++k) {
+    const double akp = a[k][p];
+    const double akq = a[k][q];
+    a[k][p] = c * akp - s * akq;
+    a[k][q] = s * akp + c * akq;
+  }
+  for (int k = 0; k < 3; ++k) {
+    const double apk = a[p][k];
+    const double aqk = a[q][k];
+    a[p][k] = c * apk - s * aqk;
+    a[q][k] = s * apk + c * aqk;
+  }
+  a[p][q] = 0.0;
+  a[q][p] = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    const double vkp = v[k][p];
+    const double vkq = v[k][q];
+    v[k][p] = c * vkp - s * vkq;
+    v[k][q] = s * vkp + c * vkq;
+  }
+}
+
+// Diagonalises the symmetric `a` in place by cyclic Jacobi rotations (accurate for flat, linear
+// and isotropic neighbourhoods alike); `v` gets the eigenvectors as columns. The eigenvalues are
+// left on the diagonal of `a`, unsorted.
+void symmetric_eigen(Matrix& a, Matrix& v) {
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      v[i][j] = i == j ? 1.0 : 0.0;
+    }
+  }
+  for (int sweep = 0; sweep < kSweeps; ++sweep) {
+    const double off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+    const double diagonal = a[0][0] * a[0][0] + a[1][1] * a[1][1] + a[2][2] * a[2][2];
+    if (off <= 1e-36 * diagonal || off == 0.0) {
+      return;
+    }
+    rotate<0, 1>(a, v);
+    rotate<0, 2>(a, v);
+    rotate<1, 2>(a, v);
+  }
+}
+
+// The covariance of points[neighbours[start:stop]] about its mean (two passes), into `a`.
+// Entries that are not rows of the points (a k-d tree's "missing") are skipped; returns how many
+// points were used.
+Index covariance(const double* points, Index n, const Index* neighbours, Index start, Index stop,
+                 Matrix& a) {
+  Index count = 0;
+  double mx = 0.0;
+  double my = 0.0;
+  double mz = 0.0;
+  for (Index e = start; e < stop; ++e) {
+    const Index j = neighbours[e];
+    if (0 <= j && j < n) {
+      mx += points[3 * j];
+      my += points[3 * j + 1];
+      mz += points[3 * j + 2];
+      ++count;
+    }
+  }
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      a[i][j] = 0.0;
+    }
+  }
+  if (count == 0) {
+    return 0;
+  }
+  const double used = static_cast<double>(count);
+  mx /= used;
+  my /= used;
+  mz /= used;
+  for (Index e = start; e < stop; ++e) {
+    const Index j = neighbours[e];
+    if (0 <= j && j < n) {
+      const double x = points[3 * j] - mx;
+      const double y = points[3 * j + 1] - my;
+      const double z = points[3 * j + 2] - mz;
+      a[0][0] += x * x;
+      a[0][1] += x * y;
+      a[0][2] += x * z;
+      a[1][1] += y * y;
+      a[1][2] += y * z;
+      a[2][2] += z * z;
+    }
+  }
+  for (int i = 0; i < 3; ++i) {
+    for (int j = i; j < 3; ++j) {
+      a[i][j] /= used;
+      a[j][i] = a[i][j];
+    }
+  }
+  return count;
+}
+
+// The estimation code of a neighbourhood with sorted eigenvalues low <= middle <= high.
+Index classify(double low, double middle, double high, Index count, const Limits& limits) {
+  if (count < 3) {
+    return kTooFewNeighbours;
+  }
+  if (high <= limits.tiny) {
+    return kDuplicates;
+  }
+  if (middle <= limits.tiny + limits.line_ratio * high) {
+    return kCollinear;
+  }
+  if (middle - low <= limits.tiny + limits.gap_ratio * high) {
+    return kAmbiguous;
+  }
+  return kOk;
+}
+
+struct Row {
+  double normal[3];
+  double curvature;
+  Index used;
+  Index status;
+};
+
+// One neighbourhood's normal: the eigenvector of the smallest eigenvalue, its largest component
+// positive (a canonical sign: orientation comes later), or zero where the status is not OK; the
+// curvature low / (low + middle + high), or 0 where the points coincide or are fewer than three.
+Row estimate(const double* points, Index n, const Index* neighbours, Index start, Index stop,
+             const Limits& limits) {
+  Matrix a;
+  Matrix v;
+  const Index count = covariance(points, n, neighbours, start, stop, a);
+  symmetric_eigen(a, v);
+  const double e0 = std::max(a[0][0], 0.0);
+  const double e1 = std::max(a[1][1], 0.0);
+  const double e2 = std::max(a[2][2], 0.0);
+  // The column of the smallest eigenvalue; the other two sorted.
+  int column = 2;
+  double low = e2;
+  double middle = std::min(e0, e1);
+  double high = std::max(e0, e1);
+  if (e0 <= e1 && e0 <= e2) {
+    column = 0;
+    low = e0;
+    middle = std::min(e1, e2);
+    high = std::max(e1, e2);
+  } else if (e1 <= e2) {
+    column = 1;
+    low = e1;
+    middle = std::min(e0, e2);
+    high = std::max(e0, e2);
+  }
+  Row row{};
+  row.used = count;
+  row.status = classify(low, middle, high, count, limits);
+  const double trace = low + middle + high;
+  row.curvature = count >= 3 && high > limits.tiny ? low / trace : 0.0;
+  const double x = v[0][column];
+  const double y = v[1][column];
+  const double z = v[2][column];
+  const double ax = std::fabs(x);
+  const double ay = std::fabs(y);
+  const double az = std::fabs(z);
+  const double largest = ax >= ay && ax >= az ? x : (ay >= az ? y : z);
+  const double scale =
+      row.status != kOk ? 0.0 : (largest > 0 ? 1.0 : -1.0) / std::sqrt(x * x + y * y + z * z);
+  row.normal[0] = x * scale + 0.0;  // -0.0 becomes 0.0
+  row.normal[1] = y * scale + 0.0;
+  row.normal[2] = z * scale + 0.0;
+  return row;
+}
+
+// The CSR row pointers must run from 0 or more, never backwards, to within the neighbour list.
+void check_rows(const Index* indptr, Index rows, Index entries) {
+  if (indptr[0] < 0 || indptr[rows] > entries) {
+    throw nb::index_error("the neighbour lists' row pointers run outside the neighbour list");
+  }
+  for (Index r = 0; r < rows; ++r) {
+    if (indptr[r + 1] < indptr[r]) {
+      throw nb::value_error("the neighbour lists' row pointers run backwards");
+    }
+  }
+}
+
+void neighbourhood_normals(In<double, nb::shape<-1, 3>> points, In<Index, nb::ndim<1>> indptr,
+                           In<Index, nb::ndim<1>> neighbours, double tiny, double line_ratio,
+                           double gap_ratio, Out<double, nb::shape<-1, 3>> normals,
+                           Out<double, nb::ndim<1>> curvature, Out<Index, nb::ndim<1>> used,
+                           Out<Index, nb::ndim<1>> status) {
+  if (indptr.shape(0) == 0) {
+    throw nb::value_error("the neighbour lists need at least one row pointer");
+  }
+  const Index rows = static_cast<Index>(indptr.shape(0)) - 1;
+  for (const std::size_t size :
+       {normals.shape(0), curvature.shape(0), used.shape(0), status.shape(0)}) {
+    if (static_cast<Index>(size) != rows) {
+      throw nb::value_error("every output needs one row per neighbour list");
+    }
+  }
+  const Index* rows_at = indptr.data();
+  check_rows(rows_at, rows, static_cast<Index>(neighbours.shape(0)));
+  const double* coordinates = points.data();
+  const Index n = static_cast<Index>(points.shape(0));
+  const Index* lists = neighbours.data();
+  const Limits limits{tiny, line_ratio, gap_ratio};
+  double* normal_out = normals.data();
+  double* curvature_out = curvature.data();
+  Index* used_out = used.data();
+  Index* status_out = status.data();
+  nb::gil_scoped_release release;
+  parallel_for(rows, 256, [&](Index begin, Index end) {
+    for (Index r = begin; r < end; ++r) {
+      const Row row = estimate(coordinates, n, lists, rows_at[r], rows_at[r + 1], limits);
+      std::memcpy(normal_out + 3 * r, row.normal, sizeof row.normal);
+      curvature_out[r] = row.curvature;
+      used_out[r] = row.used;
+      status_out[r] = row.status;
+    }
+  });
+}
+
+double dot(const double* p, const double* q) { return p[0] * q[0] + p[1] * q[1] + p[2] * q[2]; }
+
+// Whether `value` is in row `row` of the graph.
+bool listed(const std::int32_t* graph, Index columns, Index row, std::int32_t value) {
+  const std::int32_t* list = graph + row * columns;
+  return std::find(list, list + columns, value) != list + columns;
+}
+
+using Edges = std::tuple<nb::ndarray<nb::numpy, std::int32_t>, nb::ndarray<nb::numpy, std::int32_t>,
+                         nb::ndarray<nb::numpy, double>>;
+
+// The edges of the neighbour graph between valid points, each once, in the order of the graph's
+// rows: weight 1 - |n_i . n_j| + floor. With sine_limit below 1, an edge is left out where the
+// step between the points leaves either tangent plane by a sine over it, and otherwise weighs
+// that sine more.
+Edges graph_edges(In<double, nb::shape<-1, 3>> points, In<double, nb::shape<-1, 3>> normals,
+                  In<bool, nb::ndim<1>> valid, In<std::int32_t, nb::ndim<2>> graph, double floor,
+                  double sine_limit) {
+  const Index n = static_cast<Index>(points.shape(0));
+  if (static_cast<Index>(normals.shape(0)) != n || static_cast<Index>(valid.shape(0)) != n ||
+      static_cast<Index>(graph.shape(0)) != n) {
+    throw nb::value_error("the points, normals, valid flags and graph need one row per point");
+  }
+  const Index columns = static_cast<Index>(graph.shape(1));
+  const std::int32_t* links = graph.data();
+  for (Index e = 0; e < n * columns; ++e) {
+    if (links[e] >= n) {
+      throw nb::index_error("a neighbour in the orientation graph is not one of the points");
+    }
+  }
+  const double* xyz = points.data();
+  const double* lines = normals.data();
+  const bool* usable = valid.data();
+  auto* rows = new std::int32_t[static_cast<std::size_t>(n * columns)];
+  auto* cols = new std::int32_t[static_cast<std::size_t>(n * columns)];
+  auto* weights = new double[static_cast<std::size_t>(n * columns)];
+  Index count = 0;
+  {
+    nb::gil_scoped_release release;
+    for (Index i = 0; i < n; ++i) {
+      if (!usable[i]) {
+        continue;
+      }
+      const double* ni = lines + 3 * i;
+      for (Index c = 0; c < columns; ++c) {
+        const std::int32_t j = links[i * columns + c];
+        if (j < 0 || j == i || !usable[j] ||
+            (j < i && listed(links, columns, j, static_cast<std::int32_t>(i)))) {
+          continue;  // (j, i) was written from j's list
+        }
+        const double* nj = lines + 3 * static_cast<Index>(j);
+        double weight = 1.0 - std::fabs(dot(ni, nj)) + floor;
+        if (sine_limit < 1.0) {
+          const double* pi = xyz + 3 * i;
+          const double* pj = xyz + 3 * static_cast<Index>(j);
+          const double step[3] = {pj[0] - pi[0], pj[1] - pi[1], pj[2] - pi[2]};
+          const double length = std::sqrt(dot(step, step));
+          const double sine = length == 0.0 ? 0.0
+                                             : std::max(std::fabs(dot(step, ni)),
+                                                        std::fabs(dot(step, nj))) /
+                                                   length;
+          if (sine > sine_limit) {
+            continue;
+          }
+          weight += sine;
+        }
+        rows[count] = static_cast<std::int32_t>(i);
+        cols[count] = j;
+        weights[count] = weight;
+        ++count;
+      }
+    }
+  }
+  const auto written = static_cast<std::size_t>(count);
+  return {owned(rows, written), owned(cols, written), owned(weights, written)};
+}
+
+using Flags = std::tuple<nb::ndarray<nb::numpy, bool>, nb::ndarray<nb::numpy, bool>>;
+
+// Signs carried from each tree's root down a breadth-first `order`: `flip` and `cut` (a point
+// is cut, left unoriented and not flipped, when the path from its root crosses a sharp edge).
+Flags propagate_signs(In<std::int32_t, nb::ndim<1>> order, In<std::int32_t, nb::ndim<1>> parent,
+                      In<bool, nb::ndim<1>> agrees, In<bool, nb::ndim<1>> sharp,
+                      In<bool, nb::ndim<1>> seed_flip) {
+  const Index n = static_cast<Index>(parent.shape(0));
+  if (static_cast<Index>(agrees.shape(0)) != n || static_cast<Index>(sharp.shape(0)) != n ||
+      static_cast<Index>(seed_flip.shape(0)) != n) {
+    throw nb::value_error("the parents and the flags need one row per point");
+  }
+  const std::int32_t* walk = order.data();
+  const std::int32_t* up = parent.data();
+  const Index steps = static_cast<Index>(order.shape(0));
+  for (Index s = 0; s < steps; ++s) {
+    if (walk[s] < 0 || walk[s] >= n) {
+      throw nb::index_error("a point in the tree's order is not one of the points");
+    }
+  }
+  for (Index i = 0; i < n; ++i) {
+    if (up[i] >= n) {
+      throw nb::index_error("a parent in the tree is not one of the points");
+    }
+  }
+  const bool* agree = agrees.data();
+  const bool* steep = sharp.data();
+  const bool* seeded = seed_flip.data();
+  auto* flip = new bool[static_cast<std::size_t>(n)]();
+  auto* cut = new bool[static_cast<std::size_t>(n)]();
+  {
+    nb::gil_scoped_release release;
+    for (Index s = 0; s < steps; ++s) {
+      const Index i = walk[s];
+      const std::int32_t p = up[i];
+      if (p < 0) {
+        flip[i] = seeded[i];
+      } else {
+        cut[i] = steep[i] || cut[p];
+        flip[i] = (flip[p] != !agree[i]) && !cut[i];
+      }
+    }
+  }
+  return {owned(flip, static_cast<std::size_t>(n)), owned(cut, static_cast<std::size_t>(n))};
+}
+
+// What lzf returns for data that would write past the end of `out`, and for data that break
+// the format.
+constexpr Index kPastTheEnd = -2;
+constexpr Index kBroken = -1;
+
+// Unpacks LZF (Marc Lehmann's format) `source` into `out`: the bytes written, kBroken where the
+// data break the format, kPastTheEnd where they would write past the end of `out`. Every offset
+// and length read from the data is checked before it is used.
+Index unpack_lzf(const std::uint8_t* source, Index end, std::uint8_t* out, Index size) {
+  Index i = 0;
+  Index o = 0;
+  while (i < end) {
+    const Index control = source[i];
+    ++i;
+    if (control < 32) {  // a literal run of control + 1 bytes
+      const Index length = control + 1;
+      if (o + length > size) {
+        return kPastTheEnd;
+      }
+      if (i + length > end) {
+        return kBroken;
+      }
+      std::memcpy(out + o, source + i, static_cast<std::size_t>(length));
+      i += length;
+      o += length;
+      continue;
+    }
+    Index length = control >> 5;
+    if (length == 7) {
+      if (i >= end) {
+        return kBroken;
+      }
+      length += source[i];
+      ++i;
+    }
+    if (i >= end) {
+      return kBroken;
+    }
+    const Index reference = o - ((control & 31) << 8) - source[i] - 1;
+    ++i;
+    length += 2;
+    if (o + length > size) {
+      return kPastTheEnd;
+    }
+    if (reference < 0) {
+      return kBroken;
+    }
+    for (Index k = 0; k < length; ++k) {  // byte by byte: an overlapping copy repeats what it wrote
+      out[o + k] = out[reference + k];
+    }
+    o += length;
+  }
+  return o;
+}
+
+Index lzf(In<std::uint8_t, nb::ndim<1>> source, Out<std::uint8_t, nb::ndim<1>> out) {
+  const std::uint8_t* packed = source.data();
+  const Index end = static_cast<Index>(source.shape(0));
+  std::uint8_t* unpacked = out.data();
+  const Index size = static_cast<Index>(out.shape(0));
+  nb::gil_scoped_release release;
+  return unpack_lzf(packed, end, unpacked, size);
+}
+
+}  // namespace
+
+void bind_points(nb::module_& m) {
+  m.def("neighbourhood_normals", &neighbourhood_normals, nb::arg("points").noconvert(),
+        nb::arg("indptr").noconvert(), nb::arg("neighbours").noconvert(), nb::arg("tiny"),
+        nb::arg("line_ratio"), nb::arg("gap_ratio"), nb::arg("normals").noconvert(),
+        nb::arg("curvature").noconvert(), nb::arg("used").noconvert(),
+        nb::arg("status").noconvert(),
+        "Row r of the outputs from the points neighbours[indptr[r]:indptr[r + 1]] (entries that "
+        "are not rows of the points are skipped): the unit normal with its largest component "
+        "positive (zero unless the status is 0), the curvature, how many points were used and "
+        "the status code.");
+  m.def("graph_edges", &graph_edges, nb::arg("points").noconvert(), nb::arg("normals").noconvert(),
+        nb::arg("valid").noconvert(), nb::arg("graph").noconvert(), nb::arg("floor"),
+        nb::arg("sine_limit"),
+        "The edges of the neighbour graph between valid points, each once: rows, columns and "
+        "weights 1 - |n_i . n_j| + floor; with sine_limit below 1, edges that leave a tangent "
+        "plane by a sine over it are left out and the others weigh that sine more.");
+  m.def("propagate_signs", &propagate_signs, nb::arg("order").noconvert(),
+        nb::arg("parent").noconvert(), nb::arg("agrees").noconvert(),
+        nb::arg("sharp").noconvert(), nb::arg("seed_flip").noconvert(),
+        "Signs carried from each tree's root down a breadth-first order: (flip, cut).");
+  m.def("lzf", &lzf, nb::arg("source").noconvert(), nb::arg("out").noconvert(),
+        "Unpack LZF source into out: the bytes written, -1 where the data break the format, -2 "
+        "where they would write past the end of out.");
+}
 
 }  // namespace mesh_normal

@@ -29,8 +29,6 @@ from mesh_normal.kernels import (
     workers,
 )
 from mesh_normal.orientation import _twinned_wide, orient
-from mesh_normal.points import point_normals
-from mesh_normal.points.pcd import lzf_decompress
 from mesh_normal.stored_normals import Candidate, angles_between, unit_rows
 from mesh_normal.topology import _wide_half_edges
 from mesh_normal.types import FloatArray, IndexArray
@@ -80,8 +78,6 @@ def _compile_kernels() -> None:
     # A file's stored normals against ours (every row compared, and some).
     unit, usable = unit_rows(np.eye(3))
     angles_between(unit, usable, Candidate(np.eye(3), np.array([False, True, False])))
-    point_normals(np.random.default_rng(0).normal(size=(40, 3)), k=10)
-    lzf_decompress(b"\x00a", 1)
 
 
 def _mesh_kernels(vertices: FloatArray, faces: IndexArray) -> None:

@@ -9,9 +9,11 @@ queried with the places in Morton (Z-curve) order, so that neighbouring queries 
 neighbouring memory; the results go back to input order. Coordinates are first moved so that
 the bounding box is centred on the origin and scaled by a power of two (exact) into [-1, 1]:
 the normals do not depend on where the cloud sits or its unit. The compiled kernel
-(:mod:`mesh_normal.points._kernels`) centres each neighbourhood on its mean, takes the
-covariance in float64 and solves it by Jacobi rotations; the normal is the eigenvector of the
-smallest eigenvalue, the curvature (surface variation) that eigenvalue over their sum.
+(``mesh_normal._core.neighbourhood_normals``, ``cpp/points.cpp``) centres each neighbourhood on
+its mean, takes the covariance in float64 and solves it by cyclic Jacobi rotations (accurate
+for flat, linear and isotropic neighbourhoods alike); the normal is the eigenvector of the
+smallest eigenvalue, the curvature (surface variation) that eigenvalue over their sum. Rows
+are independent, so the results are the same bits for any number of threads.
 
 Where the neighbourhood does not determine a plane there is no normal (a zero row and a status
 that says why; never NaN, never a made-up direction). A place alone in its neighbourhood, or
@@ -33,9 +35,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from mesh_normal.kernels import PARALLEL_KERNELS, announce_compiling
-from mesh_normal.points._kernels import KERNELS as POINT_KERNELS
-from mesh_normal.points._kernels import neighbourhood_normals
+from mesh_normal import _core
 from mesh_normal.points.orient import (
     ORIENT_MODES,
     ComponentOrientation,
@@ -48,6 +48,8 @@ from mesh_normal.tolerances import (
     EPSILON,
     ORIENT_MAX_ANGLE,
     ORIENT_NEIGHBOURS,
+    POINT_GAP_RATIO,
+    POINT_LINE_RATIO,
     POINT_ROUNDING_FACTOR,
 )
 from mesh_normal.types import BoolArray, FloatArray, IndexArray
@@ -405,20 +407,20 @@ def _estimate(
     g = min(ORIENT_NEIGHBOURS, m if k is None else min(k, m))
     graph = np.full((m, g), -1, dtype=np.int32)
     bound = math.inf if radius is None else np.nextafter(radius / frame.scale, math.inf)
-    announce_compiling(*POINT_KERNELS)  # these alone: the mesh kernels imported do not run
     for start, indptr, indices, nearest in _neighbourhoods(tree, k, bound, g):
         stop = start + len(indptr) - 1
-        with PARALLEL_KERNELS:
-            neighbourhood_normals(
-                frame.points,
-                indptr,
-                indices,
-                frame.tiny,
-                normals[start:stop],
-                curvature[start:stop],
-                used[start:stop],
-                codes[start:stop],
-            )
+        _core.neighbourhood_normals(
+            frame.points,
+            indptr,
+            indices,
+            frame.tiny,
+            POINT_LINE_RATIO,
+            POINT_GAP_RATIO,
+            normals[start:stop],
+            curvature[start:stop],
+            used[start:stop],
+            codes[start:stop],
+        )
         graph[start:stop] = np.where(nearest < m, nearest, -1)
         if progress is not None:
             progress(stop, m)

@@ -34,8 +34,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from mesh_normal import _core
 from mesh_normal.choices import OrientMode as OrientMode
-from mesh_normal.points._kernels import graph_edges, propagate_signs
 from mesh_normal.tolerances import ORIENT_POINT_COSINE, ORIENT_SEED_COSINE
 from mesh_normal.types import BoolArray, FloatArray, IndexArray
 
@@ -198,7 +198,8 @@ def along_tree(
     agrees, sharp = _tree_steps(normals, parent, reached, sharp_cosine)
     flags = np.zeros(n, dtype=bool)
     flags[seeds[decided]] = seed_flip[decided]
-    flip, cut = propagate_signs(order, parent, agrees, sharp, flags)
+    order32, parent32 = order.astype(np.int32, copy=False), parent.astype(np.int32, copy=False)
+    flip, cut = _core.propagate_signs(order32, parent32, agrees, sharp, flags)
     unoriented = valid & (cut | ~reached)
     flip &= valid & ~unoriented
     summaries = _summaries(
@@ -216,15 +217,9 @@ def _edges(
     sharp_cosine: float,
 ) -> tuple[NDArray[np.int32], NDArray[np.int32], FloatArray]:
     """The graph's edges between valid points, each once: their ends and weights."""
-    size = graph.size
-    rows, cols = np.empty(size, dtype=np.int32), np.empty(size, dtype=np.int32)
-    weights = np.empty(size)
     # Leaving a tangent plane by more than max_angle: a neighbour across a wall.
     sine_limit = math.sqrt(max(0.0, 1.0 - sharp_cosine**2)) if offsets else 1.0
-    count = graph_edges(
-        points, normals, valid, graph, _WEIGHT_FLOOR, sine_limit, rows, cols, weights
-    )
-    return rows[:count], cols[:count], weights[:count]
+    return _core.graph_edges(points, normals, valid, graph, _WEIGHT_FLOOR, sine_limit)
 
 
 def _main_pieces(

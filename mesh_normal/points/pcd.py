@@ -16,10 +16,11 @@ points returned to the file's rows. A NaN normal (PCL's "no normal") stays NaN.
 
 ``binary_compressed`` is LZF (Marc Lehmann's format, as PCL writes it) over the fields one after
 another (all the points' ``x``, then all their ``y``...); :func:`lzf_decompress` unpacks it
-with a small compiled loop that never writes past the size the header states. Before that, the
-unpacked bytes and what the points will cost in the job (:data:`POINT_JOB_BYTES` each) are
-charged to the upload's expansion budget (:mod:`mesh_normal.files.expansion`): a few hundred
-kilobytes of LZF can hold millions of points.
+with a small compiled loop (``cpp/points.cpp``) that checks every offset and length it reads
+and never writes past the size the header states. Before that, the unpacked bytes and what the
+points will cost in the job (:data:`POINT_JOB_BYTES` each) are charged to the upload's
+expansion budget (:mod:`mesh_normal.files.expansion`): a few hundred kilobytes of LZF can hold
+millions of points.
 """
 
 from __future__ import annotations
@@ -30,9 +31,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from mesh_normal import _core
 from mesh_normal.files import expansion
 from mesh_normal.files.errors import MeshFileError
-from mesh_normal.kernels import kernel
 from mesh_normal.points.cloud import POINT_JOB_BYTES, PointCloud, make_cloud
 from mesh_normal.points.xyz import read_rows
 
@@ -267,7 +268,7 @@ def lzf_decompress(source: bytes, size: int) -> NDArray[np.uint8]:
     format (a back reference before the start, a run past either end) or unpack to another
     size."""
     out = np.empty(size, dtype=np.uint8)
-    written = _lzf(np.frombuffer(source, dtype=np.uint8), out)
+    written = _core.lzf(np.frombuffer(source, dtype=np.uint8), out)
     if written == _PAST_THE_END:
         raise MeshFileError(
             f"The compressed PCD data unpack to more than the {size:,} bytes the file says."
@@ -281,51 +282,8 @@ def lzf_decompress(source: bytes, size: int) -> NDArray[np.uint8]:
     return out
 
 
-#: What :func:`_lzf` returns for data that would write past the end of ``out``.
+#: What ``_core.lzf`` returns for data that would write past the end of its output.
 _PAST_THE_END = -2
-
-
-@kernel()
-def _lzf(source: NDArray[np.uint8], out: NDArray[np.uint8]) -> int:
-    """Unpack LZF ``source`` into ``out``: the bytes written, -1 where the data break the
-    format, -2 where they would write past the end of ``out``. Compiled (Python did 5 MB/s);
-    numba does not check indices, so every read and write is checked here first."""
-    i = 0
-    o = 0
-    end = source.shape[0]
-    size = out.shape[0]
-    while i < end:
-        control = int(source[i])
-        i += 1
-        if control < 32:  # a literal run of control + 1 bytes
-            length = control + 1
-            if o + length > size:
-                return -2
-            if i + length > end:
-                return -1
-            out[o : o + length] = source[i : i + length]
-            i += length
-            o += length
-            continue
-        length = control >> 5
-        if length == 7:
-            if i >= end:
-                return -1
-            length += int(source[i])
-            i += 1
-        if i >= end:
-            return -1
-        reference = o - ((control & 31) << 8) - int(source[i]) - 1
-        i += 1
-        length += 2
-        if o + length > size:
-            return -2
-        if reference < 0:
-            return -1
-        for k in range(length):  # byte by byte: an overlapping copy repeats what it wrote
-            out[o + k] = out[reference + k]
-        o += length
-    return o
 
 
 def _truncated(points: int, held: str) -> MeshFileError:
