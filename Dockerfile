@@ -4,12 +4,12 @@
 #   docker run --rm -p 8000:8000 mesh-normal-calculator
 #   docker run --rm --read-only --tmpfs /tmp -p 8000:8000 mesh-normal-calculator   # read-only root
 #
-# Nothing is written at run time but the worker processes' sockets in /tmp (a tmpfs is enough):
-# the mesh kernels are compiled into the image, and numba reads their cache without writing it.
+# Nothing is written at run time but the worker processes' sockets in /tmp (a tmpfs is enough).
 #
 # Two stages: the builder installs the locked runtime dependencies (uv.lock: the library's own and
-# the `web` group) into /opt/venv; the final image gets that venv plus mesh_normal/, app/,
-# templates/ and static/ in /app.
+# the `web` group) into /opt/venv, compiles the library's wheel (its C++ core, with g++) and
+# installs it there; the final image gets that venv plus app/, templates/ and static/ in /app,
+# and no compiler.
 
 FROM python:3.11-slim AS builder
 
@@ -27,7 +27,15 @@ ENV PIP_DISABLE_PIP_VERSION_CHECK=1 \
     UV_LINK_MODE=copy \
     UV_NO_CACHE=1
 
-# uv only lives in the builder stage.
+# uv and the C++ compiler only live in the builder stage (CMake, Ninja and nanobind come from
+# PyPI into the wheel's isolated build). Python's headers: the official image has them; a
+# Debian-based stand-in may not.
+# hadolint ignore=DL3008
+RUN apt-get update \
+    && apt-get install -y --no-install-recommends g++ \
+    && (python3 -c 'import os, sys, sysconfig; sys.exit(not os.path.exists(os.path.join(sysconfig.get_paths()["include"], "Python.h")))' \
+        || apt-get install -y --no-install-recommends python3-dev) \
+    && rm -rf /var/lib/apt/lists/*
 RUN python -m venv /opt/uv \
     && /opt/uv/bin/pip install --no-cache-dir "uv==${UV_VERSION}"
 
@@ -40,16 +48,21 @@ COPY pyproject.toml uv.lock ./
 RUN /opt/uv/bin/uv sync --frozen --no-default-groups --group web --no-install-project \
     --python python3
 
+# The library itself, as a wheel: built in isolation (--no-config: the checkout's [tool.uv]
+# settings are for its editable install) and installed into the same venv.
+COPY README.md CMakeLists.txt ./
+COPY cpp ./cpp
+COPY mesh_normal ./mesh_normal
+RUN /opt/uv/bin/uv build --no-config --wheel --out-dir /tmp/dist . \
+    && /opt/uv/bin/uv pip install --python /opt/venv/bin/python --no-deps /tmp/dist/*.whl \
+    && rm -rf /tmp/dist
+
 
 FROM python:3.11-slim
 
-# NUMBA_CACHE_DIR: the mesh kernels are compiled by numba while the image is built and
-# cached there. The folder stays root's: at run time it is only read (mesh_normal.kernels reads
-# a cache it may not write; a kernel missing from it, e.g. on another CPU, is compiled in memory).
 ENV PATH=/opt/venv/bin:$PATH \
     PYTHONDONTWRITEBYTECODE=1 \
-    PYTHONUNBUFFERED=1 \
-    NUMBA_CACHE_DIR=/var/cache/numba
+    PYTHONUNBUFFERED=1
 
 RUN groupadd --gid 10001 app \
     && useradd --no-log-init --uid 10001 --gid app --no-create-home \
@@ -58,16 +71,15 @@ RUN groupadd --gid 10001 app \
 COPY --from=builder /opt/venv /opt/venv
 
 # The app reads templates/ and static/ from the checkout's layout, so it runs from the source
-# folder; uvicorn puts the working directory on sys.path (for both app and mesh_normal).
+# folder; uvicorn puts the working directory on sys.path (for app; mesh_normal is the installed
+# wheel's, so no copy of its sources may be here to shadow it).
 WORKDIR /app
-COPY mesh_normal ./mesh_normal
 COPY app ./app
 COPY templates ./templates
 COPY static ./static
-RUN python -m compileall -q mesh_normal app \
+RUN python -m compileall -q app \
     && python -m app.web.templating \
-    && python -c "import mesh_normal as mn; mn.compile_kernels()" \
-    && chmod -R a+rX,go-w /var/cache/numba templates/__pycache__
+    && chmod -R a+rX,go-w templates/__pycache__
 
 USER 10001:10001
 
