@@ -73,23 +73,11 @@ from typing import overload
 import numpy as np
 from numpy.typing import ArrayLike
 
+from mesh_normal import _core
 from mesh_normal.checks import CheckedMesh
 from mesh_normal.choices import Method as Method
 from mesh_normal.choices import Verdict as Verdict
 from mesh_normal.faces import FaceGeometry, MeshInput, checked_input, face_geometry
-from mesh_normal.kernels import (
-    AHEAD,
-    BLOCK,
-    PARALLEL_KERNELS,
-    announce_compiling,
-    claim,
-    kernel,
-    lower_bound,
-    prange,
-    prefetch,
-    sort_run,
-    workers,
-)
 from mesh_normal.tolerances import (
     EPSILON,
     FLOAT32_UNIT,
@@ -100,7 +88,7 @@ from mesh_normal.topology import KEY_LIMIT, Structure, by_position, structure
 from mesh_normal.topology import MeshTopology as MeshTopology  # re-exported: Orientation has one
 from mesh_normal.types import BoolArray, FloatArray, IndexArray, ParityArray
 from mesh_normal.visibility import MARGIN as VISIBILITY_MARGIN
-from mesh_normal.visibility import Framed, framed, prefetch_corners, visible_sides
+from mesh_normal.visibility import Framed, framed, visible_sides
 
 VERDICTS: tuple[Verdict, ...] = ("outward", "inward", "mixed", "undetermined")
 METHODS: tuple[Method, ...] = ("volume", "visibility", "none")
@@ -335,9 +323,8 @@ class HeadStart:
     topology's one-thread passes (union-find) keep one core. The same arrays as taken in turn;
     without :meth:`start` (a closed mesh, or a small one) they are taken in turn when asked for.
 
-    The topology's and the head start's one-thread kernels release the GIL (``nogil``), so
-    that each thread's Python between kernels is not held up by the other's kernel: on an
-    open mesh that takes about a tenth off the upload's whole job.
+    The compiled kernels release the GIL while they run, so that each thread's Python between
+    kernels is not held up by the other's kernel.
     """
 
     def __init__(self, mesh: CheckedMesh, points: IndexArray) -> None:
@@ -416,11 +403,10 @@ def oriented(
         # np.bincount's sums (in face order, the same bits), without the copies it makes of
         # a read-only group array (8 bytes a face) and of weights that are not float64.
         sums = np.zeros(bins)
-        announce_compiling()
         if weights is None:
-            _count_by_group(group, sums)
+            _core.count_by_group(group, sums)
         else:
-            _sum_by_group(group, weights, sums)
+            _core.sum_by_group(group, weights, sums)
         return sums[:-1]
 
     size, against = per_patch(), per_patch(parity)
@@ -516,21 +502,10 @@ def _cone_terms(geometry: FaceGeometry, group: IndexArray, groups: int) -> _Cone
     # the bounds and the sensitivities (summed in face order, as np.bincount sums them: the
     # same bits, without two arrays of 8 bytes a face).
     sums = np.zeros((groups, 7))
-    announce_compiling()
     # Chunk by chunk, each face's share is taken on every core and then added into its group
     # in face order on one (the same bits on any number of cores); first the centroids, then
     # the terms and their bounds, which need them.
-    scratch = np.empty((min(_CONE_CHUNK, count), 5))
-    with PARALLEL_KERNELS:
-        for second in (False, True):
-            if second:
-                _centroids(sums)
-            for first in range(0, count, _CONE_CHUNK):
-                _cone_shares(
-                    mesh.points, mesh.factor, mesh.faces, crosses, recomputed, group, sums,
-                    second, first, terms, scratch, *workers(),
-                )  # fmt: skip
-                _add_shares(group, second, first, scratch, sums)
+    _core.cone_sums(mesh.points, mesh.factor, mesh.faces, crosses, recomputed, group, terms, sums)
     unit = FLOAT32_UNIT if _single(mesh.vertices) else EPSILON
     return _Cone(terms, sums[:, 5].copy(), sums[:, 6].copy(), sums[:, 4].copy(), unit, mesh.scale)
 
@@ -547,20 +522,6 @@ def _single(points: FloatArray) -> bool:
             if not np.array_equal(block.astype(np.float32), block):
                 return False
     return True
-
-
-@kernel(python=True, nogil=True)
-def _sum_by_group(group: IndexArray, weights: FloatArray | ParityArray, sums: FloatArray) -> None:
-    """``sums[g]`` += the weights of the faces of group g, in face order."""
-    for face in range(len(group)):
-        sums[group[face]] += weights[face]
-
-
-@kernel(python=True, nogil=True)
-def _count_by_group(group: IndexArray, counts: FloatArray) -> None:
-    """``counts[g]``: how many faces group g has."""
-    for face in range(len(group)):
-        counts[group[face]] += 1.0
 
 
 def _evident(
@@ -584,138 +545,6 @@ def _evident(
     magnitude = 6 * np.abs(volume)
     flat = MESH_FLAT_SINE * bounds
     return (magnitude > flat) & (magnitude > ORIENT_EVIDENCE * error)
-
-
-@kernel(python=True)
-def _cone_face(
-    points: FloatArray,
-    factor: float,
-    faces: IndexArray,
-    crosses: FloatArray,
-    recomputed: BoolArray,
-    face: int,
-) -> tuple[
-    float, float, float, float, float, float, float, float, float, float, float, float, float
-]:
-    """A, the edges u = B - A and v = C - A, and the cross product n = u x v, scaled; and the
-    largest |coordinate| of the face."""
-    a, b, c = faces[face, 0], faces[face, 1], faces[face, 2]
-    ax, ay, az = points[a, 0] * factor, points[a, 1] * factor, points[a, 2] * factor
-    bx, by, bz = points[b, 0] * factor, points[b, 1] * factor, points[b, 2] * factor
-    cx, cy, cz = points[c, 0] * factor, points[c, 1] * factor, points[c, 2] * factor
-    ux, uy, uz = bx - ax, by - ay, bz - az
-    vx, vy, vz = cx - ax, cy - ay, cz - az
-    if recomputed[face]:
-        nx, ny, nz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
-    else:
-        nx, ny, nz = crosses[face, 0], crosses[face, 1], crosses[face, 2]
-    largest = max(abs(ax), abs(ay), abs(az), abs(bx), abs(by), abs(bz))
-    largest = max(largest, abs(cx), abs(cy), abs(cz))
-    return ax, ay, az, ux, uy, uz, vx, vy, vz, nx, ny, nz, largest
-
-
-#: Faces per chunk of :func:`_cone_terms`: their shares (40 bytes a face) stay in the cache
-#: between being taken and being added.
-_CONE_CHUNK = 1 << 16
-
-
-@kernel(parallel=True, python=True)
-def _cone_shares(
-    points: FloatArray,
-    factor: float,
-    faces: IndexArray,
-    crosses: FloatArray,
-    recomputed: BoolArray,
-    group: IndexArray,
-    sums: FloatArray,
-    second: bool,
-    first: int,
-    terms: FloatArray,
-    shares: FloatArray,
-    counter: IndexArray,
-    workers: int,
-) -> None:
-    """Each face's share of its group's sums, for faces ``first`` on, into row ``face - first``
-    of ``shares``, in blocks claimed by the workers.
-
-    First pass: its area times its centroid (x, y, z), its area and its largest |coordinate|.
-    Second (``second``, the centroids in ``sums``): its term, into ``terms``, and its bound
-    and sensitivity (see :func:`_cone_terms`). The loops are written out here: a call per
-    face to a function of this many arrays is twice as slow.
-    """
-    stop = min(first + len(shares), len(faces))
-    blocks = (stop - first + BLOCK - 1) // BLOCK
-    for _ in prange(workers):  # blocks write disjoint rows: any worker may take any block
-        block = claim(counter)
-        while block < blocks:
-            start = first + block * BLOCK
-            end = min(start + BLOCK, stop)
-            if not second:
-                for face in range(start, end):
-                    prefetch_corners(points, faces, face + AHEAD)
-                    ax, ay, az, ux, uy, uz, vx, vy, vz, nx, ny, nz, largest = _cone_face(
-                        points, factor, faces, crosses, recomputed, face
-                    )
-                    area = math.sqrt(nx * nx + ny * ny + nz * nz)
-                    row = face - first
-                    shares[row, 0] = area * ((ux + vx) / 3 + ax)
-                    shares[row, 1] = area * ((uy + vy) / 3 + ay)
-                    shares[row, 2] = area * ((uz + vz) / 3 + az)
-                    shares[row, 3] = area
-                    shares[row, 4] = largest
-            else:
-                for face in range(start, end):
-                    prefetch_corners(points, faces, face + AHEAD)
-                    ax, ay, az, ux, uy, uz, vx, vy, vz, nx, ny, nz, _largest = _cone_face(
-                        points, factor, faces, crosses, recomputed, face
-                    )
-                    centre = group[face]
-                    dx, dy, dz = ax - sums[centre, 0], ay - sums[centre, 1], az - sums[centre, 2]
-                    terms[face] = nx * dx + ny * dy + nz * dz
-                    normal = math.sqrt(nx * nx + ny * ny + nz * nz)
-                    to_a = math.sqrt(dx * dx + dy * dy + dz * dz)
-                    # Squares as products: numba compiles x ** 2 to x * x, NumPy's scalar
-                    # power may not.
-                    bx, by, bz = dx + ux, dy + uy, dz + uz
-                    cx, cy, cz = dx + vx, dy + vy, dz + vz
-                    ex, ey, ez = vx - ux, vy - uy, vz - uz
-                    to_b = math.sqrt(bx * bx + by * by + bz * bz)
-                    to_c = math.sqrt(cx * cx + cy * cy + cz * cz)
-                    ab = math.sqrt(ux * ux + uy * uy + uz * uz)
-                    ac = math.sqrt(vx * vx + vy * vy + vz * vz)
-                    bc = math.sqrt(ex * ex + ey * ey + ez * ez)
-                    row = face - first
-                    shares[row, 0] = normal * to_a
-                    shares[row, 1] = 4 * normal + to_a * bc + to_b * ac + to_c * ab
-            block = claim(counter)
-
-
-@kernel(python=True, nogil=True)
-def _add_shares(
-    group: IndexArray, second: bool, first: int, shares: FloatArray, sums: FloatArray
-) -> None:
-    """Add the shares of faces ``first`` on into their groups' sums, in face order: the
-    centroid sums, the area and the largest |coordinate| (columns 0-4), or the bounds and the
-    sensitivities (columns 5, 6)."""
-    for face in range(first, min(first + len(shares), len(group))):
-        row, at = group[face], face - first
-        if second:
-            sums[row, 5] += shares[at, 0]
-            sums[row, 6] += shares[at, 1]
-        else:
-            sums[row, 0] += shares[at, 0]
-            sums[row, 1] += shares[at, 1]
-            sums[row, 2] += shares[at, 2]
-            sums[row, 3] += shares[at, 3]
-            sums[row, 4] = max(sums[row, 4], shares[at, 4])
-
-
-@kernel(python=True)
-def _centroids(sums: FloatArray) -> None:
-    """Each group's area-weighted centroid from its sums (columns 0-2; 0 for no area)."""
-    for row in sums:
-        total = row[3] if row[3] != 0.0 else 1.0
-        row[0], row[1], row[2] = row[0] / total, row[1] / total, row[2] / total
 
 
 # --- shells inside shells ----------------------------------------------------------------------
@@ -777,7 +606,6 @@ def _nested(geometry: FaceGeometry, found: Structure, candidates: BoolArray) -> 
     turned = found.parity[order].astype(bool)
     oriented[turned, 1:] = oriented[turned, :0:-1]
     work = 0
-    announce_compiling()
     for k, j in zip(*np.nonzero(inside), strict=True):
         if nested[shells[k]]:
             continue
@@ -788,7 +616,9 @@ def _nested(geometry: FaceGeometry, found: Structure, candidates: BoolArray) -> 
             nested[shells[k]] = True
             continue
         winding = np.empty(len(samples))
-        _winding_numbers(mesh.points, mesh.factor, oriented[starts[j] : ends[j]], samples, winding)
+        _core.winding_numbers(
+            mesh.points, mesh.factor, oriented[starts[j] : ends[j]], samples, winding
+        )
         if (np.abs(winding) > 0.5).all():
             nested[shells[k]] = True
     return nested
@@ -804,46 +634,6 @@ def _inside_largest(low: FloatArray, high: FloatArray) -> BoolArray:
     inside[largest, np.arange(len(largest))] = False  # a box lies inside itself
     found: BoolArray = inside.any(axis=1)
     return found
-
-
-@kernel(python=True)
-def _winding_numbers(
-    points: FloatArray,
-    factor: float,
-    faces: IndexArray,
-    samples: FloatArray,
-    winding: FloatArray,
-) -> None:
-    """The generalized winding number of ``faces`` at each sample (Van Oosterom and
-    Strackee's solid angle of each triangle, summed, over 4 pi)."""
-    for s in range(len(samples)):
-        px, py, pz = samples[s, 0], samples[s, 1], samples[s, 2]
-        total = 0.0
-        for f in range(len(faces)):
-            a, b, c = faces[f, 0], faces[f, 1], faces[f, 2]
-            ax, ay, az = (
-                points[a, 0] * factor - px,
-                points[a, 1] * factor - py,
-                points[a, 2] * factor - pz,
-            )
-            bx, by, bz = (
-                points[b, 0] * factor - px,
-                points[b, 1] * factor - py,
-                points[b, 2] * factor - pz,
-            )
-            cx, cy, cz = (
-                points[c, 0] * factor - px,
-                points[c, 1] * factor - py,
-                points[c, 2] * factor - pz,
-            )
-            la = math.sqrt(ax * ax + ay * ay + az * az)
-            lb = math.sqrt(bx * bx + by * by + bz * bz)
-            lc = math.sqrt(cx * cx + cy * cy + cz * cz)
-            det = ax * (by * cz - bz * cy) - ay * (bx * cz - bz * cx) + az * (bx * cy - by * cx)
-            dot = la * lb * lc + (ax * bx + ay * by + az * bz) * lc
-            dot += (ax * cx + ay * cy + az * cz) * lb + (bx * cx + by * cy + bz * cz) * la
-            total += 2.0 * math.atan2(det, dot)
-        winding[s] = total / (4.0 * math.pi)
 
 
 def _twinned(faces: IndexArray) -> BoolArray:
@@ -866,128 +656,14 @@ def _even(faces: IndexArray) -> BoolArray:
     return even
 
 
-#: Groups of :func:`_twin_groups` up to this many faces compare each pair, in a buffer made once.
-_FEW_TWINS = 32
-
-
 def _twinned_wide(faces: IndexArray, width: int) -> BoolArray:
     """:func:`_twinned` where two points fit one key: the faces grouped by their smallest
     point with a counting sort, then compared within each group (a face's group holds two
     faces on average). At the Lucy size a lexsort of the rows takes about 11 s; a sort of one
     key a face is a little slower than this, and three times slower with a twin."""
-    starts = np.zeros(width + 1, dtype=np.intp)
-    order: IndexArray = np.empty(len(faces), dtype=np.int32 if len(faces) < 2**31 else np.intp)
     twinned = np.zeros(len(faces), dtype=bool)
-    announce_compiling()
-    _twin_groups(faces, width, starts, order)
-    with PARALLEL_KERNELS:
-        _twin_runs(faces, width, starts, order, twinned, *workers())
+    _core.twinned_faces(faces, width, twinned)
     return twinned
-
-
-@kernel(python=True, nogil=True)
-def _twin_groups(faces: IndexArray, width: int, starts: IndexArray, order: IndexArray) -> None:
-    """Group the faces by their smallest point for :func:`_twin_runs`, which marks the faces
-    whose three points another face has, wound the other way: ``order`` (m) the faces by
-    group, ``starts`` (width + 1 zeros) then each group's end."""
-    # A counting sort, asking for the places of faces ahead (far apart in a large mesh). The
-    # smallest point of a face is written out at each use: called as a helper kernel (one for
-    # the smallest point, one for each request) the sort takes three times as long.
-    count = len(faces)
-    for face in range(count):
-        ahead = face + AHEAD
-        if ahead < count:
-            prefetch(starts, min(faces[ahead, 0], min(faces[ahead, 1], faces[ahead, 2])) + 1)
-        starts[min(faces[face, 0], min(faces[face, 1], faces[face, 2])) + 1] += 1
-    for point in range(width):
-        starts[point + 1] += starts[point]
-    for face in range(count):
-        far, ahead = face + 2 * AHEAD, face + AHEAD
-        if far < count:
-            prefetch(starts, min(faces[far, 0], min(faces[far, 1], faces[far, 2])))
-        if ahead < count:
-            prefetch(order, starts[min(faces[ahead, 0], min(faces[ahead, 1], faces[ahead, 2]))])
-        low = min(faces[face, 0], min(faces[face, 1], faces[face, 2]))
-        order[starts[low]] = face
-        starts[low] += 1
-    # ``starts`` now holds each point's end: _twin_runs compares the groups, on every core.
-
-
-#: Points per task of :func:`_twin_runs`.
-_TWIN_BLOCK = 4096
-
-
-@kernel(parallel=True, python=True)
-def _twin_runs(
-    faces: IndexArray,
-    width: int,
-    ends: IndexArray,
-    order: IndexArray,
-    twinned: BoolArray,
-    counter: IndexArray,
-    workers: int,
-) -> None:
-    """The comparisons of :func:`_twin_groups`: each group of faces (those whose smallest point
-    is the group's, in ``order``, ending at ``ends``), blocks of points claimed by every core.
-    A face is in one group, so each writes only its own faces' marks."""
-    count = len(faces)
-    blocks = (width + _TWIN_BLOCK - 1) // _TWIN_BLOCK
-    for _ in prange(workers):
-        few = np.empty(_FEW_TWINS, dtype=np.int64)  # a small group's keys: no allocation each
-        block = claim(counter)
-        while block < blocks:
-            low_point = block * _TWIN_BLOCK
-            first = ends[low_point - 1] if low_point > 0 else 0
-            for point in range(low_point, min(width, low_point + _TWIN_BLOCK)):
-                last = ends[point]
-                if last - first > 1:
-                    _compare_group(faces, width, order, first, last, count, few, twinned)
-                first = last
-            block = claim(counter)
-
-
-@kernel(python=True)
-def _compare_group(
-    faces: IndexArray,
-    width: int,
-    order: IndexArray,
-    first: int,
-    last: int,
-    count: int,
-    few: IndexArray,
-    twinned: BoolArray,
-) -> None:
-    """Mark the twins among the faces ``order[first:last]``, which share their smallest point."""
-    # Each face of the group as (middle * width + highest) * 2 + even, even meaning wound as
-    # its sorted points: twins share all but the last bit.
-    keys = few if last - first <= _FEW_TWINS else np.empty(last - first, dtype=np.int64)
-    for row in range(first, last):
-        if row + AHEAD < count:
-            prefetch(faces, order[row + AHEAD])
-        a, b, c = faces[order[row], 0], faces[order[row], 1], faces[order[row], 2]
-        low, high = min(a, min(b, c)), max(a, max(b, c))
-        ascents = (1 if a < b else 0) + (1 if b < c else 0) + (1 if c < a else 0)
-        even = ascents == 2 or a == b or b == c or c == a
-        keys[row - first] = ((a + b + c - low - high) * width + high) * 2 + (1 if even else 0)
-    if last - first <= _FEW_TWINS:
-        for i in range(last - first):
-            for j in range(i + 1, last - first):
-                if keys[i] ^ keys[j] == 1:
-                    twinned[order[first + i]] = True
-                    twinned[order[first + j]] = True
-    else:
-        # A face is twinned when its key with the last bit flipped is in the group: looked up
-        # in a sorted copy of the keys (our sort and search, not numba's: its argsort here,
-        # loaded from the cache into a process that had loaded a sort, ranked these keys
-        # wrongly; see mesh_normal.kernels).
-        size = last - first
-        ranked = keys[:size].copy()
-        sort_run(ranked, 0, size)
-        for row in range(size):
-            other = keys[row] ^ 1
-            at = lower_bound(ranked, 0, size, other)
-            if at < size and ranked[at] == other:
-                twinned[order[first + row]] = True
 
 
 def _twinned_lexsorted(faces: IndexArray, even: BoolArray) -> BoolArray:

@@ -24,13 +24,13 @@ from mesh_normal.faces import face_geometry, face_normals
 from mesh_normal.kernels import (
     coordinate_range,
     load_numba,
+    sort_run,
     touch_kernel,
     unit_normals_kernel,
     workers,
 )
-from mesh_normal.orientation import _twinned_wide, orient
+from mesh_normal.orientation import orient
 from mesh_normal.stored_normals import Candidate, angles_between, unit_rows
-from mesh_normal.topology import _wide_half_edges
 from mesh_normal.types import FloatArray, IndexArray
 from mesh_normal.vertices import normalise_packed_kernel, vertex_normals
 
@@ -63,6 +63,7 @@ def _compile_kernels() -> None:
     for vertices, faces in (_NESTED, _OPEN):  # the checks give the kernels read-only views
         _mesh_kernels(vertices, faces)
     points = _POINTS
+    sort_run(np.arange(20, 0, -1), 0, 20)  # called by no kernel, yet looked up as one
     # Point clouds: the neighbourhood kernel (k nearest and within a radius take the same
     # types) and the signs down the spanning tree; binary_compressed PCD's LZF (one literal).
     for frozen in (False, True):  # a report's bounds, of the vertices as read
@@ -89,13 +90,6 @@ def _mesh_kernels(vertices: FloatArray, faces: IndexArray) -> None:
     corner_weights(geometry, "angle")  # corner_normals needs them only at creased vertices
     orient(geometry)
     orient(geometry, weld=1e-6)
-    # The sorts for more points than one key packs with a face (the Lucy size), on the faces
-    # by position (read-only as the checks give them, or a new array where points repeat).
-    for frozen in (False, True):
-        points = _kept(np.asarray(faces, dtype=np.intp), frozen)
-        valid = np.ones(len(points), dtype=bool)
-        _wide_half_edges(points, valid, len(vertices))
-        _twinned_wide(points, len(vertices))
 
 
 def _kept(array: NDArray[Scalar], read_only: bool) -> NDArray[Scalar]:

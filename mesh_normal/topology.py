@@ -32,8 +32,8 @@ raw faces without coordinates, :func:`mesh_topology` can only go by index.
   of its faces can make its winding consistent; a Moebius strip is not.
 
 Speed. One integer sort of the 3m half-edges groups them by edge, and a union-find with
-parities (one loop compiled with numba, like the kernels of :mod:`mesh_normal.kernels`; path
-compression, the smaller root wins) labels the patches in nearly O(m) work.
+parities (one loop of the compiled core, :mod:`mesh_normal._core`; path compression, the
+smaller root wins) labels the patches in nearly O(m) work.
 """
 
 from __future__ import annotations
@@ -46,19 +46,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from mesh_normal import _core
 from mesh_normal.checks import CheckedMesh, check_faces, read_only
 from mesh_normal.faces import FaceGeometry
-from mesh_normal.kernels import (
-    AHEAD,
-    PARALLEL_KERNELS,
-    announce_compiling,
-    claim,
-    kernel,
-    prange,
-    prefetch,
-    sort_run,
-    workers,
-)
 from mesh_normal.types import BoolArray, FloatArray, IndexArray, ParityArray
 
 #: Sort keys (edge * 3m + half-edge, vertex * 3m + corner) must stay below this to fit int64
@@ -180,35 +170,37 @@ def structure(
     """The edges, patches and components of ``faces`` (by position) over ``vertex_count``
     points; ``on_open`` is called as soon as a boundary edge is known (the mesh is open), so
     that what only an open mesh needs can start ahead (``orientation.HeadStart``)."""
-    faces = read_only(faces)  # one signature for the kernels (see CheckedMesh)
+    faces = np.ascontiguousarray(faces, dtype=np.intp)  # as the compiled kernels take them
     valid = (faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2])
     valid &= faces[:, 2] != faces[:, 0]
     key, face, forward = _sorted_half_edges(faces, valid, vertex_count)
     # The runs of equal keys: edges used once (boundary), twice (paired: their positions in 4
     # bytes where they fit) and more (non-manifold: their first position and how many use
     # it), found in one compiled walk with nothing kept a half-edge.
-    counts = np.zeros(3, dtype=np.intp)
-    announce_compiling()
-    _count_runs(key, counts)
+    counts = _core.count_runs(key)
     if counts[0] and on_open is not None:  # a boundary edge: what an open mesh needs, ahead
         on_open()
     boundary, nonmanifold, uses = (np.empty(counts[i], dtype=np.intp) for i in (0, 2, 2))
-    paired = np.empty(counts[1], dtype=np.int32 if len(key) < 2**31 else np.intp)
-    _find_runs(key, boundary, paired, nonmanifold, uses)
+    paired: NDArray[np.int32] | IndexArray = (
+        np.empty(counts[1], dtype=np.int32)
+        if len(key) < 2**31
+        else np.empty(counts[1], dtype=np.intp)
+    )
+    _core.find_runs(key, boundary, paired, nonmanifold, uses)
     boundary_edge_list = _edge_list(key[boundary], forward[boundary], vertex_count)
     nonmanifold_edge_list = _edge_list(key[nonmanifold], None, vertex_count)
     del key
     # The two faces of each manifold edge, and whether they run along it the same way.
     one, two = np.empty(len(paired), dtype=face.dtype), np.empty(len(paired), dtype=face.dtype)
     same = np.empty(len(paired), dtype=np.int8)
-    _pair_faces(face, forward, paired, one, two, same)
+    _core.pair_faces(face, forward, paired, one, two, same)
     del paired, forward
     root, parity = _connected(len(faces), one, two, same)
     patch, firsts = _numbered(root, valid)
     del root
     patches = len(firsts)
     orientable = np.ones(patches, dtype=bool)
-    _mark_unorientable(one, two, same, parity, patch, orientable)
+    _core.mark_unorientable(one, two, same, parity, patch, orientable)
     del one, two
     face_component, components = _merged(patch, patches, face, nonmanifold, uses)
     closed = np.ones(components, dtype=bool)
@@ -227,42 +219,6 @@ def structure(
     # Every face valid (the common case): the groups are the patches, not a copy of them.
     group = read_only(patch) if valid.all() else np.where(valid, patch, patches)
     return Structure(topology, group, patches, parity, orientable, face_component[firsts], closed)
-
-
-@kernel(python=True, nogil=True)
-def _pair_faces(
-    face: IndexArray,
-    forward: NDArray[np.int8],
-    paired: IndexArray,
-    one: IndexArray,
-    two: IndexArray,
-    same: NDArray[np.int8],
-) -> None:
-    """For each manifold edge (its first half-edge at ``paired[i]`` of the sorted half-edges,
-    the second just after): its two faces, and 1 in ``same`` where they run along it the same
-    way. One pass instead of NumPy's six over the edges (0.34 s at the Lucy size)."""
-    for i in range(len(paired)):
-        first = paired[i]
-        one[i], two[i] = face[first], face[first + 1]
-        same[i] = forward[first] ^ forward[first + 1] ^ 1
-
-
-@kernel(python=True, nogil=True)
-def _mark_unorientable(
-    one: IndexArray,
-    two: IndexArray,
-    same: NDArray[np.int8],
-    parity: ParityArray,
-    patch: IndexArray,
-    orientable: BoolArray,
-) -> None:
-    """Mark False the patch of every edge whose two faces' parities disagree with how they
-    run along it: a patch that cannot be wound consistently (no temporaries of an edge's
-    size, as NumPy's gathers and mask make: 0.26 s at the Lucy size)."""
-    for i in range(len(one)):
-        first = one[i]
-        if parity[first] ^ parity[two[i]] != same[i]:
-            orientable[patch[first]] = False
 
 
 def _edge_list(key: IndexArray, forward: NDArray[np.int8] | None, vertex_count: int) -> IndexArray:
@@ -288,12 +244,11 @@ def _sorted_half_edges(
     if vertex_count * vertex_count << bits < KEY_LIMIT:
         # Packed in one pass, straight into the array that is sorted: 8 bytes a half-edge
         # (NumPy's minimum, maximum and shifts held three (m, 3) int64 arrays at once).
+        # A counting sort by the smaller vertex, the key's leading part, then a sort of each
+        # vertex's few half-edges (about six on a closed surface): the same values in the same
+        # order as sorting the whole array, in two passes over it (about four times faster).
         packed = np.empty(3 * int(np.count_nonzero(valid)), dtype=np.int64)
-        starts = np.zeros(vertex_count + 1, dtype=np.intp)
-        announce_compiling()
-        _pack_half_edges(faces, valid, vertex_count, bits, packed, starts)
-        with PARALLEL_KERNELS:
-            _finish_runs(packed, _NO_FACES, _NO_DIRECTIONS, starts, bits, False, *workers())
+        _core.sorted_half_edges(faces, valid, vertex_count, bits, packed)
         direction = np.empty(len(packed), dtype=np.int8)  # a byte, not eight, for a 0 or 1
         if bits <= 32 and sys.byteorder == "little":
             # The face and direction are in the low 32 bits: read them there, 4 bytes a face.
@@ -341,160 +296,9 @@ def _wide_half_edges(
     key = np.empty(count, dtype=np.int64)
     face: IndexArray = np.empty(count, dtype=np.int32 if len(faces) < 2**31 else np.intp)
     forward = np.empty(count, dtype=np.int8)
-    starts = np.zeros(vertex_count + 1, dtype=np.intp)
     bits = len(faces).bit_length() + 1
-    announce_compiling()
-    _sort_wide_half_edges(faces, valid, vertex_count, bits, key, starts)
-    with PARALLEL_KERNELS:
-        _finish_runs(key, face, forward, starts, bits, True, *workers())
+    _core.wide_half_edges(faces, valid, vertex_count, bits, key, face, forward)
     return key, face, forward
-
-
-@kernel(python=True)
-def _sort_wide_half_edges(
-    faces: IndexArray,
-    valid: BoolArray,
-    vertex_count: int,
-    bits: int,
-    key: IndexArray,
-    starts: IndexArray,
-) -> None:
-    """The words of the valid faces' half-edges in their smaller vertex's runs of ``key``,
-    for :func:`_finish_runs` to sort and split into ``key`` (min * n + max), ``face_of`` and
-    ``forward``, sorted by key, then by face; ``starts`` (n + 1 zeros) ends holding each
-    vertex's end.
-
-    A counting sort by the smaller vertex puts each half-edge in its vertex's run as one word,
-    max << bits | face << 1 | forward (the smaller vertex is the run's, so it needs no bits:
-    n << bits fits where n * n << bits does not); a sort of the run's few words finishes it
-    (an insertion sort, as :func:`_pack_half_edges`), and one pass in order splits the words
-    into the three arrays. One scattered 8-byte write a half-edge, not three into three
-    arrays: nearly twice as fast at the Lucy size."""
-    _run_starts(faces, valid, vertex_count, starts)
-    for face in range(len(faces)):
-        _prefetch_places(faces, face, starts, key)
-        if not valid[face]:
-            continue
-        for corner in range(3):
-            start, end = faces[face, corner], faces[face, (corner + 1) % 3]
-            ahead = 1 if start < end else 0
-            low, high = (start, end) if ahead else (end, start)
-            key[starts[low]] = high << bits | face << 1 | ahead
-            starts[low] += 1
-    # ``starts`` now holds each vertex's end: _finish_runs sorts and splits each run, on every core.
-
-
-@kernel(python=True)
-def _run_starts(faces: IndexArray, valid: BoolArray, vertex_count: int, starts: IndexArray) -> None:
-    """``starts`` (n + 1 zeros): where each vertex's run of half-edges (those whose smaller
-    vertex it is) starts in the sorted order, the counting sort's first pass."""
-    for face in range(len(faces)):
-        if face + AHEAD < len(faces):  # a later face's vertices: far apart in a large mesh
-            _prefetch_lows(faces, face + AHEAD, starts, 1)
-        if valid[face]:
-            for corner in range(3):
-                start, end = faces[face, corner], faces[face, (corner + 1) % 3]
-                starts[min(start, end) + 1] += 1
-    for vertex in range(vertex_count):
-        starts[vertex + 1] += starts[vertex]
-
-
-@kernel(python=True)
-def _prefetch_lows(faces: IndexArray, face: int, starts: IndexArray, offset: int) -> None:
-    """Ask for ``starts[low + offset]`` of each of ``face``'s edges (low: its smaller vertex)."""
-    for corner in range(3):
-        prefetch(starts, min(faces[face, corner], faces[face, (corner + 1) % 3]) + offset)
-
-
-@kernel(python=True)
-def _prefetch_places(faces: IndexArray, face: int, starts: IndexArray, placed: IndexArray) -> None:
-    """For a counting sort's scatter at ``face``: ask for the run starts of a face two steps
-    ahead, and for the places in ``placed`` of a face one step ahead (its starts asked for
-    a step ago; a start that moves meanwhile only makes the hint miss, never the sort)."""
-    if face + 2 * AHEAD < len(faces):
-        _prefetch_lows(faces, face + 2 * AHEAD, starts, 0)
-    if face + AHEAD < len(faces):
-        for corner in range(3):
-            low = min(faces[face + AHEAD, corner], faces[face + AHEAD, (corner + 1) % 3])
-            prefetch(placed, starts[low])
-
-
-@kernel(python=True)
-def _pack_half_edges(
-    faces: IndexArray,
-    valid: BoolArray,
-    vertex_count: int,
-    bits: int,
-    packed: IndexArray,
-    starts: IndexArray,
-) -> None:
-    """``packed``: (min * n + max) << bits | face << 1 | forward for the valid faces' edges,
-    in their smaller vertex's runs (:func:`_finish_runs` sorts each). ``starts`` (n + 1 zeros)
-    ends holding each vertex's end.
-
-    A counting sort by the smaller vertex, the key's leading part, then a sort of each vertex's
-    few half-edges (its valence, about six on a closed surface): the same values in the same
-    order as sorting the whole array, in two passes over it instead of a full sort's many
-    (about four times faster).
-    """
-    _run_starts(faces, valid, vertex_count, starts)
-    # Each half-edge into its vertex's place; ``starts`` then holds each vertex's end.
-    for face in range(len(faces)):
-        _prefetch_places(faces, face, starts, packed)
-        if not valid[face]:
-            continue
-        for corner in range(3):
-            start, end = faces[face, corner], faces[face, (corner + 1) % 3]
-            forward = 1 if start < end else 0
-            low, high = (start, end) if forward else (end, start)
-            packed[starts[low]] = (low * vertex_count + high) << bits | face << 1 | forward
-            starts[low] += 1
-    # ``starts`` now holds each vertex's end: _finish_runs sorts each run, on every core.
-
-
-#: Vertices per task of :func:`_finish_runs`.
-RUN_BLOCK = 4096
-
-
-@kernel(parallel=True, python=True)
-def _finish_runs(
-    key: IndexArray,
-    face_of: NDArray[np.int32] | IndexArray,
-    forward: NDArray[np.int8],
-    ends: IndexArray,
-    bits: int,
-    split: bool,
-    counter: IndexArray,
-    workers: int,
-) -> None:
-    """Sort each vertex's run of ``key`` (vertex v's ends at ``ends[v]``, starts at the end of
-    v - 1's) and, where ``split``, split its words (see :func:`_sort_wide_half_edges`) into the
-    key, the face and the direction; blocks of vertices claimed by every core. Each run is its
-    own, so who takes it changes nothing (the sorts take about 26 ms on one thread at the
-    Dragon size)."""
-    vertices = len(ends) - 1
-    mask = (1 << bits - 1) - 1
-    blocks = (vertices + RUN_BLOCK - 1) // RUN_BLOCK
-    for _ in prange(workers):
-        block = claim(counter)
-        while block < blocks:
-            low = block * RUN_BLOCK
-            first = ends[low - 1] if low > 0 else 0
-            for vertex in range(low, min(vertices, low + RUN_BLOCK)):
-                last = ends[vertex]
-                sort_run(key, first, last)  # a few values, mostly in order (faces in turn)
-                if split:
-                    for row in range(first, last):
-                        value = key[row]
-                        forward[row] = value & 1
-                        face_of[row] = value >> 1 & mask
-                        key[row] = vertex * vertices + (value >> bits)
-                first = last
-            block = claim(counter)
-
-
-#: What :func:`_finish_runs` is given for the arrays it does not split into.
-_NO_FACES, _NO_DIRECTIONS = np.empty(0, dtype=np.int32), np.empty(0, dtype=np.int8)
 
 
 def _connected(
@@ -509,11 +313,11 @@ def _connected(
     """
     root = np.empty(count, dtype=np.intp)
     parity = np.empty(count, dtype=np.int8)  # 0 or 1: one byte a face
-    # The edges' nodes in 4 bytes (as the half-edge sort gives them; one compiled kernel for
-    # every graph of fewer than 2**31 nodes), the parities in one.
+    # The edges' nodes in 4 bytes (as the half-edge sort gives them) for every graph of fewer
+    # than 2**31 nodes, the parities in one. Edges in order, so the labels and parities are
+    # the same on any number of threads.
     node = np.int32 if count < 2**31 else np.intp
-    announce_compiling()
-    _union_find(
+    _core.union_find(
         count,
         np.ascontiguousarray(one, dtype=node),
         np.ascontiguousarray(two, dtype=node),
@@ -522,54 +326,6 @@ def _connected(
         parity,
     )
     return root, parity
-
-
-@kernel(error_model="python", python=True)
-def _find(parent: IndexArray, relation: ParityArray, node: int) -> tuple[int, int]:
-    """The root of ``node`` and its parity to it; compresses the path on the way."""
-    top, parity = node, 0
-    while parent[top] != top:
-        parity ^= relation[top]
-        top = parent[top]
-    step, step_parity = node, parity
-    while parent[step] != step:
-        following, following_parity = parent[step], step_parity ^ relation[step]
-        parent[step], relation[step] = top, step_parity
-        step, step_parity = following, following_parity
-    return top, parity
-
-
-@kernel(error_model="python", python=True, nogil=True)
-def _union_find(
-    count: int,
-    one: IndexArray,
-    two: IndexArray,
-    same: IndexArray,
-    root: IndexArray,
-    parity: ParityArray,
-) -> None:
-    """Union-find with parities, one pass over the edges; the smaller root always wins.
-
-    ``root`` and ``parity`` serve as the forest's parents and relations: once every path is
-    compressed, each node's parent is its root and its relation its parity to it.
-    """
-    parent, relation = root, parity
-    for node in range(count):
-        parent[node], relation[node] = node, 0
-    for edge in range(len(one)):
-        ahead = edge + AHEAD
-        if ahead < len(one):  # the nodes of a later edge: far apart in a large mesh
-            prefetch(parent, one[ahead])
-            prefetch(parent, two[ahead])
-        a, a_parity = _find(parent, relation, one[edge])
-        b, b_parity = _find(parent, relation, two[edge])
-        if a == b:
-            continue
-        low, high = (a, b) if a < b else (b, a)
-        parent[high] = low
-        relation[high] = a_parity ^ b_parity ^ same[edge]
-    for node in range(count):
-        _find(parent, relation, node)
 
 
 def _merged(
@@ -592,86 +348,14 @@ def _merged(
     return np.where(patch >= 0, number[patch], -1), len(firsts)
 
 
-@kernel(python=True)
-def _count_runs(key: IndexArray, counts: IndexArray) -> None:
-    """How many runs of equal sorted keys are one long, two, and more."""
-    start, count = 0, len(key)
-    while start < count:
-        end = start + 1
-        while end < count and key[end] == key[start]:
-            end += 1
-        counts[min(end - start, 3) - 1] += 1
-        start = end
-
-
-@kernel(python=True, nogil=True)
-def _find_runs(
-    key: IndexArray,
-    boundary: IndexArray,
-    paired: IndexArray,
-    nonmanifold: IndexArray,
-    uses: IndexArray,
-) -> None:
-    """The first position of each run of equal sorted keys, by its length (one, two, more),
-    and the length of the longer ones."""
-    start, count = 0, len(key)
-    ones = twos = more = 0
-    while start < count:
-        end = start + 1
-        while end < count and key[end] == key[start]:
-            end += 1
-        if end - start == 1:
-            boundary[ones] = start
-            ones += 1
-        elif end - start == 2:
-            paired[twos] = start
-            twos += 1
-        else:
-            nonmanifold[more] = start
-            uses[more] = end - start
-            more += 1
-        start = end
-
-
 def _numbered(root: IndexArray, valid: BoolArray) -> tuple[IndexArray, IndexArray]:
     """Number the roots 0, 1, ... in order; -1 for invalid nodes. Also returns the roots.
 
     ``root`` (each node's smallest connected node, as :func:`_connected` labels them) is
     overwritten with the numbers: one array a face instead of four at once.
     """
-    announce_compiling()
-    count = _number_roots(root, valid)
-    firsts = np.empty(count, dtype=np.intp)
-    _first_of_each(root, firsts)
+    firsts = _core.number_roots(root, valid)
     return root, firsts
-
-
-@kernel(python=True)
-def _number_roots(root: IndexArray, valid: BoolArray) -> int:
-    """Replace each valid node's root by its root's number (roots numbered in order), -1 for
-    an invalid node; return how many roots. In place: a root comes before every node that it
-    labels, so its number is written before they read it."""
-    count = 0
-    for node in range(len(root)):
-        top = root[node]
-        if not valid[node]:
-            root[node] = -1
-        elif top == node:
-            root[node] = count
-            count += 1
-        else:
-            root[node] = root[top]
-    return count
-
-
-@kernel(python=True)
-def _first_of_each(numbered: IndexArray, firsts: IndexArray) -> None:
-    """The first node of each number (the numbers first appear in increasing order)."""
-    following = 0
-    for node in range(len(numbered)):
-        if numbered[node] == following:
-            firsts[following] = node
-            following += 1
 
 
 # --- corners around vertices ------------------------------------------------------------------

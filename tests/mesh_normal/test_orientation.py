@@ -415,39 +415,6 @@ def test_reversing_every_face_negates_the_volume(name: str) -> None:
     assert r.orientation == "inward" and r.flipped.all()
 
 
-TWINS_AFTER_THE_TOPOLOGY = """
-import numpy as np
-from mesh_normal import kernels, topology
-from mesh_normal.orientation import _twinned
-kernels.load_numba()
-topology.structure(topology.read_only(np.array([[0, 1, 2], [2, 1, 3]])), 4)
-rng = np.random.default_rng(7)
-faces = rng.integers(0, 3, (400, 3))  # groups of over _FEW_TWINS faces: the sorted way
-print(int(_twinned(faces).sum()))
-"""
-
-
-def test_twins_are_right_with_the_kernels_loaded_from_the_cache() -> None:
-    """The topology's kernels first, then the twins' from numba's cache, as a worker loads
-    them: twice, so that the second process loads what the first compiled. (With np.argsort
-    in the twins' kernel, a process like the second counted too few twinned faces.)"""
-    import subprocess
-    import sys
-
-    from tests.paths import ROOT
-
-    faces = np.random.default_rng(7).integers(0, 3, (400, 3))
-    expected = int(orientation._twinned_lexsorted(faces, orientation._even(faces)).sum())
-    assert expected > 0
-    for _ in range(2):
-        done = subprocess.run(
-            [sys.executable, "-c", TWINS_AFTER_THE_TOPOLOGY],
-            cwd=ROOT, capture_output=True, text=True, timeout=300, check=False,
-        )  # fmt: skip
-        assert done.returncode == 0, done.stderr[-2000:]
-        assert int(done.stdout.split()[-1]) == expected
-
-
 def test_twinned_faces_match_the_rotations_definition() -> None:
     """A face is twinned when another has its points wound the other way: by rotations of the
     sorted points, as it was computed before (without the rolled copies)."""
@@ -472,37 +439,20 @@ def test_twinned_faces_match_the_rotations_definition() -> None:
     # Points too many for one key a face: the lexsorted way, same definition.
     faces = rng.integers(0, 6, (400, 3)).astype(np.intp) * 2**21
     np.testing.assert_array_equal(_twinned(faces), by_rotations(faces))
-    # Too many for one key, but a pair fits: groups by the smallest point (a few, many).
-    from mesh_normal.kernels import load_numba
-    from mesh_normal.orientation import (
-        _compare_group,
-        _even,
-        _twin_groups,
-        _twin_runs,
-        _twinned_lexsorted,
-    )
+    # Too many for one key, but a pair fits: groups by the smallest point (a few, many), on
+    # any number of threads.
+    from mesh_normal import _core
+    from mesh_normal.orientation import _even, _twinned_lexsorted, _twinned_wide
 
-    def python_claim(counter: np.ndarray) -> int:
-        counter[0] += 1
-        return int(counter[0]) - 1
-
-    load_numba()
-    for top in (3, 6, 30, 300, 9000):  # 9000: more points than one task of _twin_runs
-        faces = rng.integers(0, top, (600 if top < 9000 else 30_000, 3)).astype(np.intp)
-        for python in (False, True):
-            twinned = np.zeros(len(faces), dtype=bool)
-            order = np.empty(len(faces), dtype=np.int32)
-            starts = np.zeros(top + 1, dtype=np.intp)
-            with pytest.MonkeyPatch.context() as patch:
-                groups, runs = _twin_groups, _twin_runs
-                if python:  # the kernels' Python source (numba's intrinsics are compiled only)
-                    patch.setattr(orientation, "prefetch", lambda *_: None)
-                    patch.setattr(orientation, "claim", python_claim)
-                    patch.setattr(orientation, "_compare_group", _compare_group.py_func)
-                    groups, runs = _twin_groups.py_func, _twin_runs.py_func
-                groups(faces, top, starts, order)
-                runs(faces, top, starts, order, twinned, np.zeros(1, dtype=np.int64), 2)
-            np.testing.assert_array_equal(twinned, by_rotations(faces))
+    before = _core.threads()
+    try:
+        for top in (3, 6, 30, 300, 9000):  # 9000: more points than one thread's piece
+            faces = rng.integers(0, top, (600 if top < 9000 else 30_000, 3)).astype(np.intp)
+            for threads in (1, 2, 3):
+                _core.set_threads(threads)
+                np.testing.assert_array_equal(_twinned_wide(faces, top), by_rotations(faces))
+    finally:
+        _core.set_threads(before)
     faces = rng.integers(0, 6, (400, 3)).astype(np.intp) * 2**21 + 2**22
     np.testing.assert_array_equal(_twinned_lexsorted(faces, _even(faces)), by_rotations(faces))
 

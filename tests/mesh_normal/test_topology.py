@@ -8,8 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from mesh_normal import topology
-from mesh_normal.kernels import PARALLEL_KERNELS, load_numba, workers
+from mesh_normal import _core, topology
 
 
 def reference(faces: np.ndarray, valid: np.ndarray, vertex_count: int) -> np.ndarray:
@@ -23,18 +22,10 @@ def reference(faces: np.ndarray, valid: np.ndarray, vertex_count: int) -> np.nda
     return np.sort(packed[valid].ravel())
 
 
-def packed_sorted(faces: np.ndarray, valid: np.ndarray, vertex_count: int, python: bool):  # type: ignore[no-untyped-def]
+def packed_sorted(faces: np.ndarray, valid: np.ndarray, vertex_count: int):  # type: ignore[no-untyped-def]
     bits = len(faces).bit_length() + 1
     packed = np.empty(3 * int(valid.sum()), dtype=np.int64)
-    starts = np.zeros(vertex_count + 1, dtype=np.intp)
-    run = topology._pack_half_edges.py_func if python else topology._pack_half_edges
-    if not python:
-        load_numba()
-    run(faces, valid, vertex_count, bits, packed, starts)
-    with PARALLEL_KERNELS:  # each run sorted on every core (as Python too, before numba loads)
-        topology._finish_runs(
-            packed, topology._NO_FACES, topology._NO_DIRECTIONS, starts, bits, False, *workers()
-        )
+    _core.sorted_half_edges(faces, valid, vertex_count, bits, packed)
     return packed
 
 
@@ -48,17 +39,15 @@ def valid_of(faces: np.ndarray) -> np.ndarray:
 @given(
     vertex_count=st.integers(3, 40),
     faces=arrays(np.int64, st.tuples(st.integers(0, 120), st.just(3)), elements=st.integers(0, 39)),
-    python=st.booleans(),
 )
-def test_random_faces_come_out_as_a_full_sort_gives_them(vertex_count, faces, python) -> None:  # type: ignore[no-untyped-def]
+def test_random_faces_come_out_as_a_full_sort_gives_them(vertex_count, faces) -> None:  # type: ignore[no-untyped-def]
     faces = faces % vertex_count  # repeated edges, non-manifold ones and degenerate faces
     valid = valid_of(faces)
     expected = reference(faces, valid, vertex_count)
-    assert np.array_equal(packed_sorted(faces, valid, vertex_count, python), expected)
+    assert np.array_equal(packed_sorted(faces, valid, vertex_count), expected)
 
 
-@pytest.mark.parametrize("python", [False, True])
-def test_a_vertex_of_high_valence_and_shuffled_faces(python: bool) -> None:
+def test_a_vertex_of_high_valence_and_shuffled_faces() -> None:
     rng = np.random.default_rng(7)
     rim = 400  # a fan of 400 faces around vertex 0, then a shuffled strip
     fan = np.stack([np.zeros(rim, np.int64), 1 + np.arange(rim), 1 + (np.arange(rim) + 1) % rim], 1)
@@ -67,7 +56,7 @@ def test_a_vertex_of_high_valence_and_shuffled_faces(python: bool) -> None:
     faces[::3] = faces[::3, ::-1].copy()  # both directions along the edges
     valid = valid_of(faces)
     expected = reference(faces, valid, rim + 1)
-    assert np.array_equal(packed_sorted(faces, valid, rim + 1, python), expected)
+    assert np.array_equal(packed_sorted(faces, valid, rim + 1), expected)
 
 
 def test_the_sorted_half_edges_give_key_face_and_direction() -> None:
@@ -99,43 +88,42 @@ def lexsorted(faces: np.ndarray, valid: np.ndarray, vertex_count: int):  # type:
     vertex_count=st.integers(3, 40),
     faces=arrays(np.int64, st.tuples(st.integers(0, 120), st.just(3)), elements=st.integers(0, 39)),
     fan=st.integers(0, 60),
-    python=st.booleans(),
 )
-def test_the_wide_sort_gives_what_a_lexsort_gives(vertex_count, faces, fan, python) -> None:  # type: ignore[no-untyped-def]
+def test_the_wide_sort_gives_what_a_lexsort_gives(vertex_count, faces, fan) -> None:  # type: ignore[no-untyped-def]
     """The counting sort for meshes of more points than a packed key holds (the Lucy size),
-    with a vertex of high valence (the merge sort of its run) and without."""
+    with a vertex of high valence and without."""
     rim = np.arange(fan) % (vertex_count - 1)
     faces = np.concatenate([faces % vertex_count, np.stack([0 * rim, 1 + rim, 2 + rim], 1)])
     faces %= vertex_count
     valid = valid_of(faces)
     count = 3 * int(valid.sum())
-    key, face = np.empty(count, np.int64), np.empty(count, np.int32)
-    forward, starts = np.empty(count, np.int8), np.zeros(vertex_count + 1, np.intp)
-    run = topology._sort_wide_half_edges
-    if python:
-        run = run.py_func
-    else:
-        load_numba()
+    key, face, forward = (
+        np.empty(count, np.int64),
+        np.empty(count, np.int32),
+        np.empty(count, np.int8),
+    )
     bits = len(faces).bit_length() + 1
-    run(faces, valid, vertex_count, bits, key, starts)
-    with PARALLEL_KERNELS:
-        topology._finish_runs(key, face, forward, starts, bits, True, *workers())
+    _core.wide_half_edges(faces, valid, vertex_count, bits, key, face, forward)
     expected = lexsorted(faces, valid, vertex_count)
     for got, want in zip((key, face, forward), expected, strict=True):
         assert np.array_equal(got, want)
 
 
-def test_runs_of_many_vertex_blocks_are_each_sorted() -> None:
-    """More vertices than one task of the run sorts takes (``RUN_BLOCK``): the blocks claimed
-    by every core join up, in the packed sort and in the wide one."""
+@pytest.mark.parametrize("threads", [1, 2, 3])
+def test_runs_of_many_vertex_blocks_are_each_sorted(threads: int) -> None:
+    """More vertices than one thread's piece of the run sorts: the pieces join up, in the
+    packed sort and in the wide one, on any number of threads."""
     rng = np.random.default_rng(11)
-    vertex_count = 3 * topology.RUN_BLOCK + 5
+    vertex_count = 3 * 4096 + 5
     faces = rng.integers(0, vertex_count, size=(40_000, 3))
     valid = valid_of(faces)
-    load_numba()
-    assert np.array_equal(
-        packed_sorted(faces, valid, vertex_count, False), reference(faces, valid, vertex_count)
-    )
-    key, face, forward = topology._wide_half_edges(faces, valid, vertex_count)
+    before = _core.threads()
+    _core.set_threads(threads)
+    try:
+        packed = packed_sorted(faces, valid, vertex_count)
+        key, face, forward = topology._wide_half_edges(faces, valid, vertex_count)
+    finally:
+        _core.set_threads(before)
+    assert np.array_equal(packed, reference(faces, valid, vertex_count))
     for got, want in zip((key, face, forward), lexsorted(faces, valid, vertex_count), strict=True):
         assert np.array_equal(got, want)
