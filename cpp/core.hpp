@@ -35,6 +35,22 @@ nb::ndarray<nb::numpy, T> owned(T* data, std::size_t count, std::size_t columns 
   return nb::ndarray<nb::numpy, T>(data, {count, columns}, owner);
 }
 
+// Asks the CPU to bring `address` into its cache ahead of a scattered access (a loop over faces
+// reads points far apart in a large, shuffled mesh; a hash table's slots are random). Only a
+// hint: the results do not depend on it; where the compiler has no such builtin, nothing.
+inline void prefetch(const void* address, bool write = false) {
+#if defined(__GNUC__) || defined(__clang__)
+  if (write) {
+    __builtin_prefetch(address, 1, 3);
+  } else {
+    __builtin_prefetch(address, 0, 3);
+  }
+#else
+  (void)address;
+  (void)write;
+#endif
+}
+
 // How many threads a parallel kernel uses: MESH_NORMAL_THREADS when the module is loaded, else
 // every core; set_threads() changes it (module.cpp).
 extern std::atomic<int> thread_count;

@@ -31,17 +31,6 @@ constexpr double pi = 3.141592653589793;
 // How many faces ahead a loop over faces asks for their corners' points.
 constexpr std::int64_t ahead = 16;
 
-// Asks the CPU to bring `address` into its cache, to be read: a loop over faces in file order
-// reads points far apart in a large, shuffled mesh, and so does a loop over faces grouped by
-// point (about twice as fast with the hint). Only a hint: the results do not depend on it.
-void prefetch(const void* address) {
-#if defined(__GNUC__) || defined(__clang__)
-  __builtin_prefetch(address, 0, 3);
-#else
-  (void)address;
-#endif
-}
-
 // The point rows of face `face`'s corners: a row of three doubles may span two cache lines, so
 // its first and last value.
 void prefetch_corners(const double* points, const std::int64_t* faces, std::int64_t face) {
