@@ -1,17 +1,10 @@
-"""The compiled per-face loops that the face, vertex and corner normals share.
+"""The numba machinery of the kernels not yet in the compiled core, and their shared helpers.
 
-The per-face work is compiled with numba (``cache=True``: compiled on first use, once, then
-loaded from the cache; ``NUMBA_CACHE_DIR`` moves the cache). It is the only implementation:
-NumPy alone is 3-5 times slower than Open3D, whose times are the target (see the
-benchmarks page, docs/benchmarks.md). So this part of ``mesh_normal`` is not pure NumPy.
-``error_model="numpy"`` drops Python's zero-division checks (no division here can be by zero,
-and IEEE rules apply); the face kernel runs its blocks of faces on every core
-(``parallel=True``: blocks write disjoint rows, so the bits do not depend on the number of
-cores).
-
-Each kernel goes through the faces in blocks: it first copies the scaled corners of a block
-of faces (independent loads, so their cache misses overlap), then does its work for each
-face, through :func:`face_edges` and :func:`face_cross`. Constants are frozen at compile time.
+A kernel here is compiled with numba (``cache=True``: compiled on first use, once, then
+loaded from the cache; ``NUMBA_CACHE_DIR`` moves the cache). ``error_model="numpy"`` drops
+Python's zero-division checks (IEEE rules apply); a parallel kernel's blocks write disjoint
+rows, so the bits do not depend on the number of cores. The face, vertex and corner normals'
+loops are in the compiled core instead (``mesh_normal._core``, ``cpp/faces.cpp``).
 
 The first use of a kernel that is not in the cache says so on stderr, once per process
 (:func:`announce_compiling`): the compile takes several seconds.
@@ -20,7 +13,6 @@ The first use of a kernel that is not in the cache says so on stderr, once per p
 from __future__ import annotations
 
 import functools
-import math
 import sys
 import threading
 from collections.abc import Callable
@@ -29,8 +21,7 @@ from typing import Any, Literal, TypeVar
 import numpy as np
 
 from mesh_normal.collector import paused
-from mesh_normal.tolerances import MESH_DEGENERATE_SINE, MESH_RECOMPUTE_SINE
-from mesh_normal.types import BoolArray, ByteArray, Edges, FloatArray, IndexArray, Vector
+from mesh_normal.types import IndexArray, Vector
 
 Function = TypeVar("Function", bound=Callable[..., Any])
 
@@ -42,17 +33,10 @@ BLOCK = 512
 #: parallel work at once; the web server calls the kernels from several worker threads.
 PARALLEL_KERNELS = threading.Lock()
 
-#: What :func:`face_cross` found: the product at corner A is good, it was taken again at
-#: the largest corner, or the face is degenerate.
-AT_FIRST_CORNER, AT_LARGEST_CORNER, DEGENERATE = range(3)
-
 #: About how long ``compile_kernels()`` takes into an empty cache, in seconds: the mesh kernels
 #: take about 10 s on two cores (about 2 s to load from the cache), the point-cloud kernels
 #: about two thirds more, and a busy machine takes longer.
 COMPILE_SECONDS = 20
-
-_RECOMPUTE = MESH_RECOMPUTE_SINE**2
-_DEGENERATE = MESH_DEGENERATE_SINE**2
 
 # --- the compile announcement -----------------------------------------------------------------
 
@@ -350,166 +334,6 @@ def _prefetch_intrinsic(write: bool = True, whole_row: bool = False) -> Any:
 # --- the kernels -------------------------------------------------------------------------------
 
 
-#: Faces per task of :func:`index_range_kernel`.
-RANGE_BLOCK = 1 << 14
-
-
-@kernel(parallel=True, python=True)
-def index_range_kernel(
-    faces: IndexArray, lows: IndexArray, highs: IndexArray, counter: IndexArray, workers: int
-) -> None:
-    """The smallest and largest index (and 0) of each block of ``RANGE_BLOCK`` faces, into
-    ``lows`` and ``highs`` (one row a block), the blocks claimed by every core: a checked
-    mesh's one pass over its faces (about twice as fast as one thread going through them as a
-    flat array)."""
-    blocks = len(lows)
-    for _ in prange(workers):
-        block = claim(counter)
-        while block < blocks:
-            low, high = 0, 0
-            for face in range(block * RANGE_BLOCK, min((block + 1) * RANGE_BLOCK, len(faces))):
-                a, b, c = faces[face, 0], faces[face, 1], faces[face, 2]
-                low, high = min(low, a, b, c), max(high, a, b, c)
-            lows[block], highs[block] = low, high
-            block = claim(counter)
-
-
-def index_range(faces: IndexArray) -> tuple[int, int]:
-    """The smallest and largest of the indices of ``(m, 3)`` faces and 0."""
-    blocks = (len(faces) + RANGE_BLOCK - 1) // RANGE_BLOCK
-    if not blocks:
-        return 0, 0
-    lows, highs = np.empty(blocks, np.int64), np.empty(blocks, np.int64)
-    with PARALLEL_KERNELS:
-        index_range_kernel(faces, lows, highs, *workers())
-    return int(lows.min()), int(highs.max())
-
-
-#: Coordinates per task of :func:`coordinate_range_kernel`.
-COORDINATE_BLOCK = 1 << 15
-
-
-@kernel(parallel=True, python=True)
-def coordinate_range_kernel(
-    flat: FloatArray,
-    lows: FloatArray,
-    highs: FloatArray,
-    probes: FloatArray,
-    counter: IndexArray,
-    workers: int,
-) -> None:
-    """The smallest and largest coordinate (and 0) of each block of ``COORDINATE_BLOCK``
-    coordinates of ``flat``, and the sum of each coordinate times 0 (NaN where one is not
-    finite: a comparison alone would pass a NaN by), the blocks claimed by every core."""
-    blocks = len(lows)
-    for _ in prange(workers):
-        block = claim(counter)
-        while block < blocks:
-            low, high, probe = 0.0, 0.0, 0.0
-            for at in range(
-                block * COORDINATE_BLOCK, min((block + 1) * COORDINATE_BLOCK, len(flat))
-            ):
-                value = flat[at]
-                low = value if value < low else low
-                high = value if value > high else high
-                probe += value * 0.0
-            lows[block], highs[block], probes[block] = low, high, probe
-            block = claim(counter)
-
-
-def coordinate_range(points: FloatArray) -> tuple[float, float]:
-    """The smallest and largest coordinate of C-contiguous float64 ``points`` and 0, in one
-    pass on every core; NaN for both where a coordinate is not finite (what NumPy's ``min``
-    and ``max`` carry through, at a third of their time at the Lucy size)."""
-    flat = points.reshape(-1)
-    blocks = (len(flat) + COORDINATE_BLOCK - 1) // COORDINATE_BLOCK
-    if not blocks:
-        return 0.0, 0.0
-    lows, highs, probes = np.empty(blocks), np.empty(blocks), np.empty(blocks)
-    with PARALLEL_KERNELS:
-        coordinate_range_kernel(flat, lows, highs, probes, *workers())
-    if not math.isfinite(float(probes.sum())):
-        return math.nan, math.nan
-    return float(lows.min()), float(highs.max())
-
-
-#: Bytes per task of :func:`touch_kernel`: a huge page's (where the system gives them).
-TOUCH_BLOCK = 1 << 21
-#: Bytes apart that :func:`touch_kernel` writes: a small page's.
-PAGE = 1 << 12
-#: From how many bytes :func:`fresh_empty` touches its arrays on every core.
-TOUCH_FROM = 1 << 23
-
-
-@kernel(parallel=True, python=True)
-def touch_kernel(memory: ByteArray, counter: IndexArray, workers: int) -> None:
-    """Write a zero into every page of ``memory``, in blocks of ``TOUCH_BLOCK`` bytes claimed by
-    every core."""
-    blocks = (len(memory) + TOUCH_BLOCK - 1) // TOUCH_BLOCK
-    for _ in prange(workers):
-        block = claim(counter)
-        while block < blocks:
-            for at in range(block * TOUCH_BLOCK, min((block + 1) * TOUCH_BLOCK, len(memory)), PAGE):
-                memory[at] = 0
-            block = claim(counter)
-
-
-def fresh_empty(*specs: tuple[int | tuple[int, ...], Any]) -> list[np.ndarray]:
-    """``np.empty`` of each (shape, dtype), its pages first written on every core when they are
-    ``TOUCH_FROM`` bytes or more together (:func:`touch`)."""
-    arrays = [np.empty(shape, dtype=dtype) for shape, dtype in specs]
-    touch(*arrays)
-    return arrays
-
-
-def touch(*arrays: np.ndarray) -> None:
-    """Write a zero into every page of the C-contiguous ``arrays`` on every core, when they are
-    ``TOUCH_FROM`` bytes or more together (a page that held zeros, as from ``np.zeros``,
-    still does).
-
-    A kernel's output is new memory: the system zeroes each page at its first write. When the
-    kernel's threads write neighbouring blocks, both wait on the same huge page while one
-    zeroes it; here each core takes pages of its own. The face normals do the same inside
-    their kernel instead (each unit's pages written first, :func:`first_writes`: as fast, and
-    a pass fewer). The vertex normals' sums are not touched: their adds run on one thread,
-    and touching their pages first gains nothing.
-    """
-    if sum(array.nbytes for array in arrays) < TOUCH_FROM:
-        return
-    with PARALLEL_KERNELS:
-        for array in arrays:
-            touch_kernel(array.reshape(-1).view(np.uint8), *workers())
-
-
-@kernel(python=True)
-def gather(
-    points: FloatArray, factor: float, faces: IndexArray, start: int, corners: FloatArray
-) -> int:
-    """Copy A, B, C of faces ``start`` on, times ``factor``, into the rows of ``corners``.
-
-    ``corners`` is (block, 9); returns how many rows were filled, or -1 (and the rows half
-    filled) at the first index that is not a row of ``points``: the face kernels of raw faces
-    check their indices here, as they read them (a checked mesh's never are). The points of
-    the face ``AHEAD`` rows on are asked for in advance (:func:`prefetch`; an address asked
-    for is never read, so it needs no check).
-    """
-    count = min(len(corners), len(faces) - start)
-    for row in range(count):
-        ahead = start + row + AHEAD  # written out: a call here costs about 7%
-        if ahead < len(faces):
-            prefetch_row(points, faces[ahead, 0])
-            prefetch_row(points, faces[ahead, 1])
-            prefetch_row(points, faces[ahead, 2])
-        for k in range(3):
-            vertex = faces[start + row, k]
-            if vertex < 0 or vertex >= len(points):
-                return -1
-            corners[row, 3 * k] = points[vertex, 0] * factor
-            corners[row, 3 * k + 1] = points[vertex, 1] * factor
-            corners[row, 3 * k + 2] = points[vertex, 2] * factor
-    return count
-
-
 # --- sorting and searching, ours ----------------------------------------------------------
 #
 # The kernels sort and search with these instead of numba's ``.sort()``, ``np.sort``,
@@ -578,50 +402,6 @@ def lower_bound(values: IndexArray, first: int, last: int, target: int) -> int:
 @kernel(python=True)
 def dot(p: Vector, q: Vector) -> float:
     return p[0] * q[0] + p[1] * q[1] + p[2] * q[2]
-
-
-@kernel(python=True)
-def cross(p: Vector, q: Vector) -> Vector:
-    return (p[1] * q[2] - p[2] * q[1], p[2] * q[0] - p[0] * q[2], p[0] * q[1] - p[1] * q[0])
-
-
-@kernel(python=True)
-def face_edges(corners: FloatArray, row: int) -> Edges:
-    """The edges B - A, C - B, A - C of one face: corner k lies between edges k - 1 and k."""
-    ax, ay, az = corners[row, 0], corners[row, 1], corners[row, 2]
-    bx, by, bz = corners[row, 3], corners[row, 4], corners[row, 5]
-    cx, cy, cz = corners[row, 6], corners[row, 7], corners[row, 8]
-    return (bx - ax, by - ay, bz - az), (cx - bx, cy - by, cz - bz), (ax - cx, ay - cy, az - cz)
-
-
-@kernel(python=True)
-def face_cross(edges: Edges) -> tuple[Vector, float, int]:
-    """(B - A) x (C - A) from its most accurate corner, its squared length, and where from.
-
-    The product is taken at corner A (``AT_FIRST_CORNER``); if that corner's sine is small,
-    again at the largest corner (opposite the longest edge, edge k being opposite corner
-    k + 2; ``AT_LARGEST_CORNER``). There a sine of at most ``MESH_DEGENERATE_SINE`` makes the
-    face degenerate: zero normal, ``DEGENERATE``. At corner A, (A - C) x (B - A) has the same
-    bits as (B - A) x (C - A): negating a difference is exact.
-    """
-    normal = cross(edges[2], edges[0])
-    square = dot(normal, normal)
-    if square > _RECOMPUTE * dot(edges[2], edges[2]) * dot(edges[0], edges[0]):
-        return normal, square, AT_FIRST_CORNER
-    e0, e1, e2 = edges
-    s0, s1, s2 = dot(e0, e0), dot(e1, e1), dot(e2, e2)
-    # The two edges after the longest, by name: a tuple indexed at run time is slow.
-    if s0 >= s1 and s0 >= s2:
-        p, q, sp, sq = e1, e2, s1, s2
-    elif s1 >= s2:
-        p, q, sp, sq = e2, e0, s2, s0
-    else:
-        p, q, sp, sq = e0, e1, s0, s1
-    normal = cross(p, q)
-    square = dot(normal, normal)
-    if square <= _DEGENERATE * sp * sq:
-        return (0.0, 0.0, 0.0), 0.0, DEGENERATE
-    return normal, square, AT_LARGEST_CORNER
 
 
 # --- dynamic blocks -------------------------------------------------------------------------
@@ -756,137 +536,3 @@ def workers() -> tuple[IndexArray, int]:
     import numba
 
     return counter, numba.get_num_threads()
-
-
-#: Faces per task of :func:`unit_normals_kernel`, and from how many faces it is used.
-UNIT_BLOCK = 1 << 14
-
-
-@kernel(parallel=True, python=True)
-def unit_normals_kernel(
-    crosses: FloatArray,
-    lengths: FloatArray,
-    degenerate: BoolArray,
-    out: FloatArray,
-    counter: IndexArray,
-    workers: int,
-) -> None:
-    """Each face's cross product over its length (over 1 where degenerate) plus 0.0, into
-    ``out`` (which may be ``crosses``): ``FaceGeometry.unit_normals``'s NumPy arithmetic, one
-    division a coordinate, in blocks claimed by every core (about three times as fast as
-    NumPy's three passes on one core)."""
-    blocks = (len(crosses) + UNIT_BLOCK - 1) // UNIT_BLOCK
-    for _ in prange(workers):
-        block = claim(counter)
-        while block < blocks:
-            for face in range(block * UNIT_BLOCK, min((block + 1) * UNIT_BLOCK, len(crosses))):
-                divisor = 1.0 if degenerate[face] else lengths[face]
-                out[face, 0] = crosses[face, 0] / divisor + 0.0  # -0.0 becomes 0.0
-                out[face, 1] = crosses[face, 1] / divisor + 0.0
-                out[face, 2] = crosses[face, 2] / divisor + 0.0
-            block = claim(counter)
-
-
-@kernel(parallel=True, python=True, named=True)
-def geometry_kernel(
-    points: FloatArray,
-    factor: float,
-    faces: IndexArray,
-    crosses: FloatArray,
-    lengths: FloatArray,
-    degenerate: BoolArray,
-    recomputed: BoolArray,
-    counter: IndexArray,
-    workers: int,
-) -> None:
-    """Each face's cross product, |cross| and flags (see ``FaceGeometry``)."""
-    blocks = (len(faces) + BLOCK - 1) // BLOCK
-    for _ in prange(workers):  # blocks write disjoint rows: any worker may take any block
-        corners = np.empty((BLOCK, 9))
-        block = claim(counter)
-        while block < blocks:
-            start = block * BLOCK
-            for row in range(gather(points, factor, faces, start, corners)):
-                face = start + row
-                (x, y, z), square, found = face_cross(face_edges(corners, row))
-                crosses[face, 0], crosses[face, 1], crosses[face, 2] = x, y, z
-                lengths[face] = math.sqrt(square)
-                degenerate[face] = found == DEGENERATE
-                recomputed[face] = found != AT_FIRST_CORNER
-            block = claim(counter)
-
-
-@kernel(parallel=True, python=True, named=True)
-def face_normals_kernel(
-    points: FloatArray,
-    factor: float,
-    faces: IndexArray,
-    exponent: int,
-    normals: FloatArray,
-    areas: FloatArray,
-    degenerate: BoolArray,
-    bad: IndexArray,
-    unit: int,
-    fresh: bool,
-    counter: IndexArray,
-    workers: int,
-) -> None:
-    """Each face's unit normal, area and degenerate flag in one pass, with the arithmetic of
-    ``geometry_kernel`` then ``FaceGeometry.unit_normals`` and ``geometry_areas``: the unit
-    normal is the cross product over |cross| (over 1 where degenerate, where it is zero) plus
-    0.0, the area ``ldexp(|cross|, exponent)``: times 2**exponent where that is a normal
-    double (the same single rounding, without a call per face, which would take a third of
-    the kernel's time).
-
-    The faces' indices are checked as they are read (:func:`gather`): one out of range sets
-    ``bad[0]`` and its block is left, so the caller raises instead of returning.
-
-    Workers claim ``unit`` faces at a time: a positive multiple of ``BLOCK`` (0 would write
-    nothing). ``fresh``: the outputs are new memory, never written; a worker first writes a zero
-    into each page of its unit's rows (:func:`first_writes`), so the system hands out those
-    pages just before the worker fills them (a huge page of areas or flags spans several units:
-    the first worker to write it takes it for the others).
-    """
-    units = (len(faces) + unit - 1) // unit
-    power = math.ldexp(1.0, exponent) if -1022 <= exponent <= 1023 else 0.0
-    for _ in prange(workers):
-        corners = np.empty((BLOCK, 9))
-        task = claim(counter)
-        while task < units:
-            first, stop = task * unit, min((task + 1) * unit, len(faces))
-            if fresh:
-                first_writes(normals, areas, degenerate, first, stop)
-            for start in range(first, stop, BLOCK):
-                filled = gather(points, factor, faces, start, corners)
-                if filled < 0:
-                    bad[0], filled = 1, 0
-                for row in range(filled):
-                    face = start + row
-                    (x, y, z), square, found = face_cross(face_edges(corners, row))
-                    length = math.sqrt(square)
-                    divisor = 1.0 if found == DEGENERATE else length
-                    normals[face, 0] = x / divisor + 0.0  # -0.0 becomes 0.0
-                    normals[face, 1] = y / divisor + 0.0
-                    normals[face, 2] = z / divisor + 0.0
-                    if power:
-                        areas[face] = length * power
-                    elif exponent > 0 and length and math.frexp(length)[1] + exponent > 1024:
-                        areas[face] = math.inf  # what ldexp gives, where Python's would raise
-                    else:
-                        areas[face] = math.ldexp(length, exponent)
-                    degenerate[face] = found == DEGENERATE
-            task = claim(counter)
-
-
-@kernel(python=True)
-def first_writes(
-    normals: FloatArray, areas: FloatArray, degenerate: BoolArray, first: int, stop: int
-) -> None:
-    """Write a zero into rows ``first`` to ``stop`` of the face kernel's outputs, less than a
-    small page (``PAGE`` bytes) apart: the system hands out each new page there now."""
-    for face in range(first, stop, PAGE // 24):  # 24 bytes a row
-        normals[face, 0] = 0.0
-    for face in range(first, stop, PAGE // 8):
-        areas[face] = 0.0
-    for face in range(first, stop, PAGE):
-        degenerate[face] = False

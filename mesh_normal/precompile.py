@@ -27,20 +27,14 @@ from mesh_normal.files.polygons import triangulate
 from mesh_normal.files.stl import RECORD as STL_RECORD
 from mesh_normal.files.text_kernels import ObjScanner, binary_items
 from mesh_normal.files.weld import weld, weld_by_sort
-from mesh_normal.kernels import (
-    coordinate_range,
-    load_numba,
-    touch_kernel,
-    unit_normals_kernel,
-    workers,
-)
+from mesh_normal.kernels import load_numba, workers
 from mesh_normal.orientation import _twinned_wide, orient
 from mesh_normal.points import point_normals
 from mesh_normal.points.pcd import lzf_decompress
 from mesh_normal.stored_normals import Candidate, angles_between, unit_rows
 from mesh_normal.topology import _wide_half_edges
 from mesh_normal.types import FloatArray, IndexArray
-from mesh_normal.vertices import normalise_packed_kernel, vertex_normals
+from mesh_normal.vertices import vertex_normals
 
 Scalar = TypeVar("Scalar", bound=np.generic)
 
@@ -87,14 +81,6 @@ def _compile_kernels() -> None:
     ObjScanner().scan(_OBJ, 0, len(_OBJ))
     for frozen in (False, True):  # a report's bounds, of the vertices as read
         column_bounds(_kept(points, frozen))
-    # A large mesh's checks and fresh outputs (the checks give read-only views).
-    coordinate_range(_kept(points, True))
-    touch_kernel(np.empty(1, np.uint8), *workers())
-    crosses = np.zeros((1, 3))
-    unit_normals_kernel(crosses, np.ones(1), np.zeros(1, bool), crosses, *workers())
-    sums = np.ones((1, 4))  # many vertices' normals, packed into their sums' memory
-    packed = sums.reshape(-1)[:3].reshape(1, 3)
-    normalise_packed_kernel(sums, packed, np.empty(1, bool), np.zeros(1, np.int64), 1, *workers())
     for dtype in (np.float32, np.float64):  # binary STL corners, and text ones
         corners = np.array([[0.0, 0, 0], [1, 0, 0], [0, 0, 0]], dtype)
         weld(corners)

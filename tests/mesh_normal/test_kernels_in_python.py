@@ -110,8 +110,7 @@ in_python = results()
 assert "numba" not in sys.modules, "a kernel loaded numba"
 kernels.load_numba()
 compiled = results()
-compiled_kernels = (kernels.geometry_kernel, kernels.face_normals_kernel)
-assert all(kernel.signatures for kernel in compiled_kernels), "nothing was compiled"
+assert any(kernel.signatures for kernel in kernels._KERNELS), "nothing was compiled"
 print(json.dumps({"python": in_python, "compiled": compiled}))
 """
 
@@ -138,7 +137,7 @@ def test_a_tiny_mesh_is_reported_without_numba_and_a_larger_one_loads_it() -> No
         "assert 'numba' not in sys.modules, 'numba was imported for 4 faces'\n"
         f"faces = np.zeros(({PYTHON_ELEMENTS} // 3 + 1, 3), dtype=np.intp)\n"
         "faces[:, 1:] = [1, 2]\n"
-        "mn.face_normals(tetra, faces)\n"
+        "mn.orient(tetra, faces)\n"
         "assert 'numba' in sys.modules, 'numba was not loaded for a large call'\n"
     )
     completed = subprocess.run(
@@ -155,7 +154,7 @@ def test_compile_kernels_compiles_them_although_its_meshes_are_tiny() -> None:
         "from mesh_normal.precompile import compile_kernels\n"
         "compile_kernels()\n"
         "assert 'numba' in sys.modules\n"
-        "assert kernels.geometry_kernel.signatures, 'nothing compiled'\n"
+        "assert any(k.signatures for k in kernels._KERNELS), 'nothing compiled'\n"
     )
     completed = subprocess.run(
         [sys.executable, "-c", script], cwd=ROOT, capture_output=True, text=True, check=False

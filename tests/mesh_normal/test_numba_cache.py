@@ -44,11 +44,9 @@ def test_a_kernel_s_entry_is_stamped_with_its_file_and_the_shared_modules() -> N
     from mesh_normal._numba_cache import SHARED_MODULES, _shared_stamp, _SharedStamp
 
     kernels.load_numba()
-    from mesh_normal.vertices import normalise_kernel
-
-    cache = normalise_kernel._cache
+    cache = kernels.dot._cache
     locator = cache._impl.locator
-    own = super(_SharedStamp, locator).get_source_stamp()  # numba's stamp of vertices.py
+    own = super(_SharedStamp, locator).get_source_stamp()  # numba's stamp of kernels.py
     stamp = locator.get_source_stamp()
     assert stamp == (own, _shared_stamp())
     assert cache._cache_file._source_stamp == stamp  # what numba compares an index with
