@@ -54,10 +54,11 @@ def said_once_then_not(script: str, cache: Path) -> subprocess.CompletedProcess[
 
 
 def test_one_kernel_alone_is_announced_when_not_cached(tmp_path: Path) -> None:
-    # A first use that compiles only the orientation's kernels still says so.
+    # A first use that compiles only the point-cloud kernels still says so.
     script = (
-        COMPILED + "import mesh_normal as mn\n"
-        "mn.orient([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]])\n"
+        COMPILED + "import numpy as np\n"
+        "import mesh_normal as mn\n"
+        "mn.point_normals(np.random.default_rng(0).normal(size=(50, 3)), k=8)\n"
     )
     first = run(script, tmp_path)
     assert first.returncode == 0, first.stderr[-2000:]
