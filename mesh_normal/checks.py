@@ -14,6 +14,7 @@ from typing import NoReturn, TypeVar
 import numpy as np
 from numpy.typing import ArrayLike
 
+from mesh_normal import _core
 from mesh_normal.types import FloatArray, IndexArray
 
 ArrayType = TypeVar("ArrayType", bound=np.ndarray)
@@ -53,9 +54,8 @@ class CheckedMesh:
     distinct_points: bool = False
 
     def __post_init__(self) -> None:
-        # Read-only views (the caller's arrays stay as they were): numba compiles a kernel
-        # once for each signature, and whether an array is read-only is part of it. Readers
-        # give both kinds; the kernels see one, so each is compiled once, not four times.
+        # Read-only views (the caller's arrays stay as they were): nothing that is given the
+        # checked mesh writes into them.
         vertices = read_only(self.vertices)
         points = vertices if self.points is self.vertices else read_only(self.points)
         object.__setattr__(self, "vertices", vertices)
@@ -177,7 +177,7 @@ def check_faces(faces: ArrayLike, vertex_count: int, *, ranged: bool = True) -> 
         raise ValueError(f"faces must have shape (m, 3), not {array.shape}.")
     if not ranged and array.dtype == np.intp:
         return np.ascontiguousarray(array)
-    low, high = _index_range(read_only(array))  # one signature (see CheckedMesh)
+    low, high = _index_range(array)
     if low < 0:
         row, column = np.argwhere(array < 0)[0]
         raise ValueError(f"faces[{row}] has a negative vertex index, {array[row, column]}.")
@@ -199,35 +199,21 @@ def refuse_faces(faces: IndexArray, vertex_count: int) -> NoReturn:
     raise AssertionError("a kernel found an index out of range that the check did not")
 
 
-def _index_range(array: np.ndarray, *, large_only: bool = False) -> tuple[int, int]:
-    """The smallest and largest index (and 0, where compiled): for the usual dtype one compiled
-    pass on every core; ``large_only``, only from ``COMPILED_RANGE_FROM`` indices (a file's
-    reader, which needs numba only then)."""
-    if array.dtype != np.intp or (large_only and array.size < COMPILED_RANGE_FROM):
+def _index_range(array: np.ndarray) -> tuple[int, int]:
+    """The smallest and largest index (and 0, for the usual dtype): for C-contiguous intp
+    indices one compiled pass on every core, else NumPy's ``min`` and ``max``."""
+    if array.dtype != np.intp or not array.flags.c_contiguous:
         return array.min(), array.max()
-    # One compiled pass for the usual dtype instead of two NumPy reductions; imported here so
-    # that checking (and so reading and writing files) needs numba only when it is used.
-    from mesh_normal.kernels import announce_compiling, index_range
-
-    announce_compiling()
-    return index_range(array)
-
-
-#: From how many coordinates :func:`_coordinate_range` takes them in one pass on every core.
-COMPILED_RANGE_FROM = 1 << 18
+    return _core.index_range(array.reshape(-1))
 
 
 def _coordinate_range(points: FloatArray) -> tuple[float, float]:
-    """The smallest and largest coordinate and 0, NaN where one is not finite (a NaN or an
-    infinity goes through ``min`` and ``max``: two NumPy passes, no temporary array). From
-    ``COMPILED_RANGE_FROM`` coordinates, one compiled pass on every core instead (almost three
-    times as fast); below, numba need not be loaded."""
-    if points.size < COMPILED_RANGE_FROM:
+    """The smallest and largest coordinate and 0, NaN where one is not finite: for
+    C-contiguous float64 points one compiled pass on every core (a third of the time of
+    NumPy's ``min`` and ``max``), else those two (through which a NaN or an infinity goes)."""
+    if points.dtype != np.float64 or not points.flags.c_contiguous:
         return float(points.min(initial=0.0)), float(points.max(initial=0.0))
-    from mesh_normal.kernels import announce_compiling, coordinate_range
-
-    announce_compiling()
-    return coordinate_range(read_only(points))  # one signature (see CheckedMesh)
+    return _core.coordinate_range(points.reshape(-1))
 
 
 def scaling(

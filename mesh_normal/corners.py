@@ -14,12 +14,13 @@ from numbers import Real
 import numpy as np
 from numpy.typing import ArrayLike
 
+from mesh_normal import _core
+from mesh_normal.checks import refuse_faces
 from mesh_normal.faces import FaceGeometry, MeshInput, checked_input, face_geometry
-from mesh_normal.kernels import BLOCK, face_edges, gather, kernel
 from mesh_normal.tolerances import MESH_CORNER_BLOCK, MESH_CREASE_SLACK, MESH_PAIR_CHUNK
 from mesh_normal.topology import VertexCorners, vertex_corners
 from mesh_normal.types import BoolArray, FloatArray, IndexArray
-from mesh_normal.vertices import Weighting, face_weights, normalise_kernel, smooth, weighting_code
+from mesh_normal.vertices import Weighting, normalised, smooth, weighting_code
 
 
 @dataclass(frozen=True, slots=True)
@@ -239,29 +240,6 @@ def _crease_cosine(crease_angle: float) -> float:
     return math.cos(math.radians(angle)) - MESH_CREASE_SLACK
 
 
-@kernel()
-def _weights_kernel(
-    code: int,
-    points: FloatArray,
-    factor: float,
-    faces: IndexArray,
-    lengths: FloatArray,
-    degenerate: BoolArray,
-    weights: FloatArray,
-) -> None:
-    corners = np.empty((BLOCK, 9))
-    for start in range(0, len(faces), BLOCK):
-        for row in range(gather(points, factor, faces, start, corners)):
-            face = start + row
-            weight = (
-                (0.0, 0.0, 0.0)
-                if degenerate[face]
-                else face_weights(code, face_edges(corners, row), lengths[face])
-            )
-            for k in range(3):
-                weights[k, face] = weight[k]
-
-
 def corner_weights(geometry: FaceGeometry, weighting: str) -> FloatArray:
     """The weight of each face's normal at each of its corners.
 
@@ -280,9 +258,10 @@ def corner_weights(geometry: FaceGeometry, weighting: str) -> FloatArray:
     code = weighting_code(weighting)
     mesh = geometry.mesh
     weights = np.empty((3, len(geometry)))
-    _weights_kernel(
+    if not _core.corner_weights(
         code, mesh.points, mesh.factor, mesh.faces, geometry.lengths, geometry.degenerate, weights
-    )
+    ):
+        refuse_faces(mesh.faces, len(mesh.points))
     return weights
 
 
@@ -313,10 +292,7 @@ def put_rows(array: FloatArray, index: IndexArray, values: FloatArray) -> None:
 
 def _normalised(sums: FloatArray, totals: FloatArray) -> tuple[FloatArray, BoolArray]:
     """Unit rows of ``sums`` (r, 3) and where a row cancels against its total ``totals`` (r,)."""
-    both = np.concatenate([sums, totals[:, None]], axis=1)
-    missing = np.empty(len(totals), dtype=bool)
-    normalise_kernel(both, sums, missing)
-    return sums, missing
+    return normalised(np.concatenate([sums, totals[:, None]], axis=1))
 
 
 def _creased(

@@ -25,9 +25,9 @@ count as degenerate), and only areas beyond the double range (coordinates beyond
 are infinite; nothing else overflows.
 
 One pass. :func:`face_geometry` computes the cross products of a mesh once, in one compiled
-loop (see :mod:`mesh_normal.kernels`), into a :class:`FaceGeometry`; the face, vertex and
-corner normals and :func:`mesh_normal.orientation.orient` all take one instead of
-recomputing them.
+loop on every core (``mesh_normal._core``, ``cpp/faces.cpp``), into a :class:`FaceGeometry`;
+the face, vertex and corner normals and :func:`mesh_normal.orientation.orient` all take one
+instead of recomputing them.
 """
 
 from __future__ import annotations
@@ -38,24 +38,9 @@ from typing import TypeAlias
 import numpy as np
 from numpy.typing import ArrayLike
 
+from mesh_normal import _core
 from mesh_normal.checks import CheckedMesh, as_checked, checked_mesh, read_only, refuse_faces
-from mesh_normal.kernels import (
-    BLOCK,
-    PARALLEL_KERNELS,
-    TOUCH_FROM,
-    UNIT_BLOCK,
-    announce_compiling,
-    face_normals_kernel,
-    fresh_empty,
-    geometry_kernel,
-    unit_normals_kernel,
-    workers,
-)
 from mesh_normal.types import BoolArray, FloatArray, IndexArray
-
-#: The most faces a worker of :func:`face_normals` claims at a time into new memory: 2.1 MB of
-#: results in all (the fewer of 1/32 of the faces, in whole blocks, and this).
-FRESH_UNIT = 1 << 16
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -112,10 +97,9 @@ class FaceGeometry:
         """(k, 3) float64: the unit normals of a slice (or a list) of the faces, not kept
         (a writer taking them a block at a time); into ``out`` if given (``crosses`` itself,
         by a caller that needs nothing more of this geometry and not 24 bytes a face more)."""
-        if isinstance(rows, slice) and rows == slice(None) and len(self.crosses) >= UNIT_BLOCK:
-            found = fresh_empty((self.crosses.shape, np.float64))[0] if out is None else out
-            with PARALLEL_KERNELS:
-                unit_normals_kernel(self.crosses, self.lengths, self.degenerate, found, *workers())
+        if isinstance(rows, slice) and rows == slice(None):  # one compiled pass on every core
+            found = np.empty(self.crosses.shape) if out is None else out
+            _core.unit_normals(self.crosses, self.lengths, self.degenerate, found)
             return found
         divisor = np.where(self.degenerate[rows], 1.0, self.lengths[rows])
         found = np.divide(self.crosses[rows], divisor[:, None], out=out)
@@ -172,18 +156,10 @@ def face_geometry(vertices: MeshInput, faces: ArrayLike | None = None) -> FaceGe
     crosses = np.empty((count, 3))
     lengths, degenerate = np.empty(count), np.empty(count, dtype=bool)
     recomputed = np.empty(count, dtype=bool)
-    announce_compiling(geometry_kernel)
-    with PARALLEL_KERNELS:
-        geometry_kernel(
-            mesh.points,
-            mesh.factor,
-            mesh.faces,
-            crosses,
-            lengths,
-            degenerate,
-            recomputed,
-            *workers(),
-        )
+    if not _core.face_geometry(
+        mesh.points, mesh.factor, mesh.faces, crosses, lengths, degenerate, recomputed
+    ):
+        refuse_faces(mesh.faces, len(mesh.points))
     return FaceGeometry(mesh, crosses, lengths, degenerate, recomputed)
 
 
@@ -198,8 +174,8 @@ def checked_input(vertices: MeshInput, faces: ArrayLike | None) -> CheckedMesh |
 
 def kernel_ranged_input(vertices: MeshInput, faces: ArrayLike | None) -> CheckedMesh | FaceGeometry:
     """:func:`checked_input`, for a caller whose kernel checks each index of raw faces as it
-    reads it (``gather``) and then calls ``refuse_faces`` for the error: raw intp faces
-    are not checked against the vertices here (one pass over them fewer)."""
+    reads it and then calls ``refuse_faces`` for the error: raw intp faces are not checked
+    against the vertices here (one pass over them fewer)."""
     if faces is not None and not isinstance(vertices, (CheckedMesh, FaceGeometry)):
         return checked_mesh(vertices, faces, ranged=False)
     return checked_input(vertices, faces)
@@ -251,42 +227,28 @@ def face_normals(
         np.copyto(out.degenerate, mesh.degenerate)
         return out
     # From the mesh, one pass (no cross products kept): the same bits, a third of the traffic.
-    announce_compiling(face_normals_kernel)
     if out is None:
         into = FaceNormals(np.empty((count, 3)), np.empty(count), np.empty(count, bool))
     else:
         into = out
-    # New memory of TOUCH_FROM bytes or more: its pages first written by the worker that fills
-    # them, a unit of faces at a time (as fast as all pages first written on every core, then
-    # filled, and one pass fewer).
-    bytes_out = into.normals.nbytes + into.areas.nbytes + into.degenerate.nbytes
-    fresh = out is None and bytes_out >= TOUCH_FROM
-    unit = min(max(count // 32 // BLOCK, 1), FRESH_UNIT // BLOCK) * BLOCK if fresh else BLOCK
-    if run_face_kernel(mesh, into, unit, fresh):
+    if not run_face_kernel(mesh, into):
         refuse_faces(mesh.faces, len(mesh.points))
     return into
 
 
-def run_face_kernel(mesh: CheckedMesh, into: FaceNormals, unit: int, fresh: bool) -> bool:
-    """Run :func:`~mesh_normal.kernels.face_normals_kernel` of ``mesh`` into the arrays of
-    ``into``, ``unit`` faces (a positive multiple of ``BLOCK``) claimed at a time, ``fresh``
-    memory first written unit by unit; True if a face has an index out of range."""
-    bad = np.zeros(1, dtype=np.int64)
-    with PARALLEL_KERNELS:
-        face_normals_kernel(
-            mesh.points,
-            mesh.factor,
-            mesh.faces,
-            2 * mesh.scale - 1,
-            into.normals,
-            into.areas,
-            into.degenerate,
-            bad,
-            unit,
-            fresh,
-            *workers(),
-        )
-    return bool(bad[0])
+def run_face_kernel(mesh: CheckedMesh, into: FaceNormals) -> bool:
+    """Write the unit normals, areas and degenerate flags of ``mesh``'s faces into the arrays
+    of ``into``, in one compiled pass on every core; False if a face has an index out of
+    range (then ``into`` holds no result)."""
+    return _core.face_normals(
+        mesh.points,
+        mesh.factor,
+        mesh.faces,
+        2 * mesh.scale - 1,
+        into.normals,
+        into.areas,
+        into.degenerate,
+    )
 
 
 def _check_out(out: FaceNormals, count: int, mesh: CheckedMesh | FaceGeometry) -> None:

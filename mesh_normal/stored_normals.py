@@ -25,14 +25,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mesh_normal.checks import read_only
+from mesh_normal import _core
 from mesh_normal.corners import corner_normals
 from mesh_normal.faces import FaceGeometry
 from mesh_normal.files import LoadedMesh
-from mesh_normal.kernels import PARALLEL_KERNELS, announce_compiling, claim, kernel, prange, workers
 from mesh_normal.medians import median
 from mesh_normal.report import AGREEMENT_DEGREES, COMPARISON_CREASE, FileNormals, StoredKind
-from mesh_normal.types import BoolArray, FloatArray, IndexArray
+from mesh_normal.types import BoolArray, FloatArray
 from mesh_normal.vertices import Weighting, vertex_normals
 
 #: The weightings tried, in the order that breaks ties (angle first: ours by default).
@@ -122,38 +121,13 @@ def unit_rows(stored: FloatArray) -> tuple[FloatArray, BoolArray]:
         Unit rows; rows that are not usable are left as they were divided (ignore them).
     usable : (k,) bool
     """
-    stored = read_only(np.ascontiguousarray(stored, dtype=np.float64))
+    stored = np.ascontiguousarray(stored, dtype=np.float64)
     unit, usable = np.empty(np.shape(stored)), np.empty(len(stored), dtype=bool)
-    announce_compiling()
-    with PARALLEL_KERNELS:
-        _unit_rows_kernel(stored, unit, usable, *workers())
+    # Each row over its largest |component| first (so that the length can neither overflow
+    # nor underflow), then over its length; a row that is not finite or is zero is divided
+    # by 1.0 twice. One compiled pass on every core.
+    _core.unit_rows(stored, unit, usable)
     return unit, usable
-
-
-@kernel(parallel=True, python=True)
-def _unit_rows_kernel(
-    stored: FloatArray, unit: FloatArray, usable: BoolArray, counter: IndexArray, workers: int
-) -> None:
-    """Each row of ``stored`` over its largest |component| first (so that the length can
-    neither overflow nor underflow), then over its length, into ``unit``; whether it is
-    finite and not zero into ``usable`` (a row that is not is divided by 1.0 twice).
-
-    Blocks of rows claimed by every core, each row on its own: about ten times as fast as
-    NumPy's steps over blocks of rows (six temporaries)."""
-    blocks = (len(stored) + _BLOCK - 1) // _BLOCK
-    for _ in prange(workers):
-        block = claim(counter)
-        while block < blocks:
-            for row in range(block * _BLOCK, min((block + 1) * _BLOCK, len(stored))):
-                x, y, z = stored[row, 0], stored[row, 1], stored[row, 2]
-                largest = max(abs(x), max(abs(y), abs(z)))
-                ok = math.isfinite(x) and math.isfinite(y) and math.isfinite(z) and largest > 0
-                scale = largest if ok else 1.0
-                x, y, z = x / scale, y / scale, z / scale
-                length = math.sqrt(x * x + y * y + z * z) if ok else 1.0
-                unit[row, 0], unit[row, 1], unit[row, 2] = x / length, y / length, z / length
-                usable[row] = ok
-            block = claim(counter)
 
 
 def angles_between(unit: FloatArray, usable: BoolArray, candidate: Candidate) -> Angles:
@@ -172,51 +146,16 @@ def angles_between(unit: FloatArray, usable: BoolArray, candidate: Candidate) ->
     # tan(angle / 2) = |a - b| / |a + b| for unit a and b: no rounding to 0 near 0 (as an
     # arccosine of a dot product has) nor loss of precision near 180 degrees.
     differences, totals = np.empty(count), np.empty(count)
-    ours = read_only(np.ascontiguousarray(candidate.normals, dtype=np.float64))
-    announce_compiling()
-    with PARALLEL_KERNELS:
-        _half_angle_sides(read_only(unit), ours, every, rows, differences, totals, *workers())
+    ours = np.ascontiguousarray(candidate.normals, dtype=np.float64)
+    _core.half_angle_sides(unit, ours, every, rows, differences, totals)  # every core, no copies
     radians = np.arctan2(differences, totals, out=differences)
     radians *= 2.0
     return Angles(candidate, radians)
 
 
-#: What :func:`_half_angle_sides` is given for ``rows`` when every row is compared.
+#: What :func:`mesh_normal._core.half_angle_sides` is given for ``rows`` when every row is
+#: compared.
 _EVERY_ROW = np.empty(0, dtype=np.intp)
-
-
-@kernel(parallel=True, python=True)
-def _half_angle_sides(
-    unit: FloatArray,
-    ours: FloatArray,
-    every: bool,
-    rows: IndexArray,
-    differences: FloatArray,
-    totals: FloatArray,
-    counter: IndexArray,
-    workers: int,
-) -> None:
-    """|a - b| and |a + b| for the file's unit normal a and ours b at each compared row (every
-    row, or ``rows``), into ``differences`` and ``totals``: in blocks claimed by every core,
-    with no temporaries (NumPy's gather and subtraction of blocks of rows is many times
-    slower)."""
-    blocks = (len(differences) + _BLOCK - 1) // _BLOCK
-    for _ in prange(workers):
-        block = claim(counter)
-        while block < blocks:
-            for at in range(block * _BLOCK, min((block + 1) * _BLOCK, len(differences))):
-                row = at if every else rows[at]
-                ax, ay, az = unit[row, 0], unit[row, 1], unit[row, 2]
-                bx, by, bz = ours[row, 0], ours[row, 1], ours[row, 2]
-                dx, dy, dz = ax - bx, ay - by, az - bz
-                sx, sy, sz = ax + bx, ay + by, az + bz
-                differences[at] = math.sqrt(dx * dx + dy * dy + dz * dz)
-                totals[at] = math.sqrt(sx * sx + sy * sy + sz * sz)
-            block = claim(counter)
-
-
-#: Rows a task of the kernels above.
-_BLOCK = 1 << 14
 
 
 def best_match(

@@ -41,7 +41,6 @@ import numpy as np
 
 from mesh_normal import _core
 from mesh_normal.bounds import column_bounds
-from mesh_normal.kernels import kernel, prefetch_row
 from mesh_normal.types import BoolArray, FloatArray, IndexArray, ParityArray
 
 #: Rays per side of each sample.
@@ -71,17 +70,6 @@ def _directions() -> FloatArray:
     turn = i * math.pi * (3.0 - math.sqrt(5.0))
     around = np.sqrt(1.0 - up * up)
     return np.column_stack([around * np.cos(turn), around * np.sin(turn), up])
-
-
-@kernel(python=True)  # here, not in kernels: the face normals never compile it
-def prefetch_corners(points: np.ndarray, faces: IndexArray, face: int) -> None:
-    """Ask for the rows of ``points`` at ``face``'s three corners, if there is such a face
-    (a loop over faces in file order reads points far apart in a large, shuffled mesh), for
-    the orientation's cone terms (the rays here are cast by the compiled core)."""
-    if face < len(faces):
-        prefetch_row(points, faces[face, 0])
-        prefetch_row(points, faces[face, 1])
-        prefetch_row(points, faces[face, 2])
 
 
 def visible_sides(

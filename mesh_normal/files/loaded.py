@@ -186,7 +186,7 @@ def first_bad_vertex(points: NDArray[np.floating]) -> int | None:
     if not points.size:
         return None
     if points.dtype == np.float64 and points.flags.c_contiguous:
-        extremes = _coordinate_range(np.asarray(points, np.float64))  # compiled when large
+        extremes = _coordinate_range(np.asarray(points, np.float64))
         if math.isfinite(extremes[0]) and math.isfinite(extremes[1]):
             return None
     elif np.isfinite(points.min()) and np.isfinite(points.max()):
@@ -205,7 +205,7 @@ def _check_finite(points: FloatArray, describe: Describe) -> None:
 
 
 def _check_indices(triangles: IndexArray, count: int, describe: Describe) -> None:
-    low, high = (int(value) for value in _index_range(triangles, large_only=True))
+    low, high = (int(value) for value in _index_range(triangles))
     if low >= 0 and high < count:
         return
     bad = (triangles < 0) | (triangles >= count)

@@ -10,8 +10,6 @@ import numpy as np
 import pytest
 
 from mesh_normal import checks
-from mesh_normal import faces as faces_module
-from mesh_normal import vertices as vertices_module
 from mesh_normal.checks import check_mesh, checked_mesh
 from mesh_normal.corners import corner_normals
 from mesh_normal.faces import face_geometry, face_normals
@@ -151,32 +149,29 @@ def test_a_checked_mesh_and_its_geometry_give_the_same_bits_as_raw_arrays(scale:
 def test_a_checked_mesh_is_checked_once_and_its_cross_products_computed_once(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
+    from mesh_normal import _core
+
     vertices, faces = sliver_soup()
     counts = {"checks": 0, "crosses": 0}
-    real_check, real_kernel = checks._as_vertices, faces_module.geometry_kernel
+    real_check = checks._as_vertices
 
     def counted_check(array: object) -> np.ndarray:
         counts["checks"] += 1
         return real_check(array)  # type: ignore[arg-type]
 
-    def counted_kernel(*arguments: object) -> None:
-        counts["crosses"] += 1
-        real_kernel(*arguments)
-
-    def counting(real: Callable[..., None], crosses: Callable[..., bool]) -> Callable[..., None]:
-        def counted(*arguments: object) -> None:
+    def counting(real: Callable[..., bool], crosses: Callable[..., bool]) -> Callable[..., bool]:
+        def counted(*arguments: object) -> bool:
             counts["crosses"] += crosses(*arguments)
-            real(*arguments)
+            return real(*arguments)
 
         return counted
 
     # The one-pass kernels take the cross products too: of faces from a mesh, and the vertex
     # sums' terms when fused (their eighth argument).
-    real_faces, real_sums = faces_module.face_normals_kernel, vertices_module._sums_kernel
-    monkeypatch.setattr(faces_module, "face_normals_kernel", counting(real_faces, lambda *_: True))
-    monkeypatch.setattr(vertices_module, "_sums_kernel", counting(real_sums, lambda *a: bool(a[7])))
+    monkeypatch.setattr(_core, "face_normals", counting(_core.face_normals, lambda *_: True))
+    monkeypatch.setattr(_core, "vertex_sums", counting(_core.vertex_sums, lambda *a: bool(a[7])))
+    monkeypatch.setattr(_core, "face_geometry", counting(_core.face_geometry, lambda *_: True))
     monkeypatch.setattr(checks, "_as_vertices", counted_check)
-    monkeypatch.setattr(faces_module, "geometry_kernel", counted_kernel)
     geometry = face_geometry(vertices, faces)
     every_result(geometry)
     assert counts == {"checks": 1, "crosses": 1}
@@ -207,65 +202,67 @@ def test_a_checked_mesh_holds_converted_arrays_and_their_scale() -> None:
     assert np.array_equal(tiny.points, TETRA_VERTICES / 2)
 
 
-@pytest.mark.parametrize("planted", [0, 1, 16383, 16384, 40000, 49156])
-def test_the_index_range_over_many_blocks_finds_any_bad_index(planted: int) -> None:
-    # Faces over several of the parallel pass's blocks (the last one partial): a negative or
-    # too large index in any block, even the last row, is found, as NumPy finds it.
-    from mesh_normal.kernels import RANGE_BLOCK, index_range
+#: Enough faces (or coordinates) for each of three threads to take a part of the range pass.
+MANY = 3 * 2**16 + 5
 
+
+@pytest.mark.parametrize("planted", [0, 1, 16383, 65536, 131072, MANY - 1])
+def test_the_index_range_on_every_core_finds_any_bad_index(planted: int) -> None:
+    # Faces over every thread's part of the pass (the last one short): a negative or too
+    # large index anywhere, even the last row, is found, as NumPy finds it.
     rng = np.random.default_rng(planted)
-    count = 3 * RANGE_BLOCK + 5
-    faces = rng.integers(0, 1000, (count, 3))
-    assert index_range(faces) == (0, int(faces.max()))
+    faces = rng.integers(0, 1000, (MANY, 3))
+    assert checks._index_range(faces) == (0, int(faces.max()))
     for bad, words in ((-7, "negative vertex index, -7"), (5000, "refers to vertex 5000")):
         broken = faces.copy()
-        broken[min(planted, count - 1), 2] = bad
-        assert index_range(broken) == (min(0, bad), max(int(faces.max()), bad))
-        with pytest.raises(ValueError, match=re.escape(f"faces[{min(planted, count - 1)}]")):
+        broken[planted, 2] = bad
+        assert checks._index_range(broken) == (min(0, bad), max(int(faces.max()), bad))
+        with pytest.raises(ValueError, match=re.escape(f"faces[{planted}]")):
             checked_mesh(rng.random((1000, 3)), broken)
         with pytest.raises(ValueError, match=words):
             checked_mesh(rng.random((1000, 3)), broken)
+    strided = np.asfortranarray(faces)  # NumPy's min and max (no 0 among them)
+    assert checks._index_range(strided) == (int(faces.min()), int(faces.max()))
 
 
-@pytest.mark.parametrize("planted", [0, 1, 32767, 32768, 65536, 98306])
+@pytest.mark.parametrize("planted", [0, 1, 32767, 65536, 131072, 3 * MANY - 1])
 @pytest.mark.parametrize("bad", [math.nan, math.inf, -math.inf])
-def test_the_coordinate_range_over_many_blocks_finds_any_bad_coordinate(
+def test_the_coordinate_range_on_every_core_finds_any_bad_coordinate(
     planted: int, bad: float
 ) -> None:
-    # Coordinates over several of the parallel pass's blocks (the last one partial): a NaN or
-    # an infinity anywhere, even the last coordinate, is found, and the check names its row.
-    from mesh_normal.kernels import COORDINATE_BLOCK, coordinate_range
-
+    # Coordinates over every thread's part of the pass (the last one short): a NaN or an
+    # infinity anywhere, even the last coordinate, is found, and the check names its row.
     rng = np.random.default_rng(planted)
-    points = rng.normal(size=(COORDINATE_BLOCK + 1, 3)) + 0.25  # 98,307 coordinates
-    assert coordinate_range(points) == (min(0.0, points.min()), max(0.0, points.max()))
+    points = rng.normal(size=(MANY, 3)) + 0.25
+    assert checks._coordinate_range(points) == (min(0.0, points.min()), max(0.0, points.max()))
     broken = points.copy()
     broken.reshape(-1)[planted] = bad
-    assert all(map(math.isnan, coordinate_range(broken)))
-    large = np.tile(broken, (3, 1))  # over the check's compiled-pass threshold
-    assert large.size >= checks.COMPILED_RANGE_FROM
+    assert all(map(math.isnan, checks._coordinate_range(broken)))
     with pytest.raises(ValueError, match=re.escape(f"vertices[{planted // 3}] has a coordinate")):
-        checked_mesh(large, [[0, 1, 2]])
+        checked_mesh(broken, [[0, 1, 2]])
 
 
-def test_the_coordinate_range_includes_zero_and_matches_numpy_over_the_threshold() -> None:
-    positive = np.random.default_rng(5).random((checks.COMPILED_RANGE_FROM, 3)) + 3.0
+def test_the_coordinate_range_includes_zero_and_matches_numpy() -> None:
+    positive = np.random.default_rng(5).random((MANY, 3)) + 3.0
     mesh = checked_mesh(positive, [[0, 1, 2]])
     assert mesh.scale == math.frexp(float(positive.max()))[1]
     assert checks._coordinate_range(positive) == (0.0, float(positive.max()))
     assert checks._coordinate_range(-positive) == (float(-positive.max()), 0.0)
     assert checks._coordinate_range(positive[:10]) == (0.0, float(positive[:10].max()))
+    assert checks._coordinate_range(positive[::2]) == (0.0, float(positive[::2].max()))
+    signed = np.zeros((MANY, 3))
+    signed[7, 1] = -0.0  # never below the 0 the range starts from
+    low, high = checks._coordinate_range(signed)
+    assert (low, high) == (0.0, 0.0) and not math.copysign(1.0, low) < 0
 
 
 @pytest.mark.parametrize("planted", [0, 511, 512, 16384, 40000, 49156])
 def test_normals_find_a_bad_index_as_their_kernel_reads_it(planted: int) -> None:
     # Raw intp faces skip the range pass: the one-pass kernel checks each index it reads, in
-    # any of its blocks, and the check then names the face, as it would have up front.
-    from mesh_normal.kernels import RANGE_BLOCK
-
+    # any thread's part, and the check then names the face, as it would have up front.
     rng = np.random.default_rng(planted)
     vertices = rng.random((1000, 3))
-    faces = rng.integers(0, 1000, (3 * RANGE_BLOCK + 5, 3))
+    faces = rng.integers(0, 1000, (3 * 16384 + 5, 3))
     assert faces.dtype == np.intp
     expected = face_normals(checked_mesh(vertices, faces))
     assert np.array_equal(face_normals(vertices, faces).normals, expected.normals)

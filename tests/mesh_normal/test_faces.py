@@ -251,60 +251,35 @@ def test_small_integer_meshes_match_the_exact_cross_product(mesh: tuple) -> None
 # --- vertex normals -----------------------------------------------------------------------------
 
 
-def test_large_outputs_are_first_written_by_their_worker_and_hold_the_same_normals(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
-    # From TOUCH_FROM bytes of new output, each worker first writes a zero into the pages of
-    # the unit of faces it claims, then fills them: the same arrays as without that step, and
-    # as from the face geometry.
-    from mesh_normal import faces as faces_module
-    from mesh_normal import kernels
+def test_large_outputs_on_every_core_hold_the_same_normals() -> None:
+    # Many faces, split between the threads: new arrays, given arrays and the geometry's.
     from mesh_normal.faces import face_geometry
 
     rng = np.random.default_rng(13)
-    count = 280_000  # 9.2 MB of normals, areas and flags: units of 8,704 faces, the last short
+    count = 280_000
     vertices = rng.normal(size=(count // 2, 3))
     faces = rng.integers(0, len(vertices), (count, 3))
     faces[::1000, 1] = faces[::1000, 0]  # some degenerate
-    assert (3 * 8 + 8 + 1) * count >= kernels.TOUCH_FROM == faces_module.TOUCH_FROM
-    calls: list[tuple[int, bool]] = []
-    real = faces_module.face_normals_kernel
-
-    def recording(*arguments: object) -> None:
-        calls.append((int(arguments[8]), bool(arguments[9])))  # type: ignore[call-overload]
-        real(*arguments)
-
-    monkeypatch.setattr(faces_module, "face_normals_kernel", recording)
-    touched = face_normals(vertices, faces)
+    fresh = face_normals(vertices, faces)
     given = FaceNormals(np.full((count, 3), np.nan), np.full(count, np.nan), np.ones(count, bool))
-    into = face_normals(vertices, faces, out=given)  # arrays already written: not fresh
-    monkeypatch.setattr(faces_module, "TOUCH_FROM", 1 << 62)
-    untouched = face_normals(vertices, faces)
-    assert calls == [(17 * kernels.BLOCK, True), (kernels.BLOCK, False), (kernels.BLOCK, False)]
+    into = face_normals(vertices, faces, out=given)
+    assert into is given
     geometry = face_normals(face_geometry(vertices, faces))
-    for other in (into, untouched, geometry):
-        assert np.array_equal(touched.normals, other.normals)
-        assert np.array_equal(touched.areas, other.areas)
-        assert np.array_equal(touched.degenerate, other.degenerate)
-    assert touched.degenerate[::1000].all() and not touched.degenerate.all()
-    arrays = kernels.fresh_empty(((count, 3), np.float64), (count, np.float64), (count, bool))
-    assert [(a.shape, a.dtype) for a in arrays] == [
-        ((count, 3), np.float64),
-        ((count,), np.float64),
-        ((count,), np.bool_),
-    ]
-    assert all(a.flags.c_contiguous and a.flags.writeable for a in arrays)
+    for other in (into, geometry):
+        assert np.array_equal(fresh.normals, other.normals)
+        assert np.array_equal(fresh.areas, other.areas)
+        assert np.array_equal(fresh.degenerate, other.degenerate)
+    assert fresh.degenerate[::1000].all() and not fresh.degenerate.all()
 
 
-@pytest.mark.parametrize("unit_blocks", [1, 2, 7])
-@pytest.mark.parametrize("fresh", [False, True])
-def test_the_face_kernel_gives_the_same_bits_for_any_unit(unit_blocks: int, fresh: bool) -> None:
-    # Units of 1, 2 or 7 blocks, the last one short, first written or not: every row once,
-    # the same bits as the library's call (a zero first written is always overwritten).
-    from mesh_normal import kernels
+@pytest.mark.parametrize("threads", [1, 2, 3])
+def test_the_face_kernel_writes_every_row_once_and_nothing_else(threads: int) -> None:
+    # Split between 1, 2 or 3 threads, the last part short: every row written, the same bits
+    # as the library's call, and nothing outside the rows.
+    from mesh_normal import _core
 
-    rng = np.random.default_rng(unit_blocks)
-    count = 9 * kernels.BLOCK + 77
+    rng = np.random.default_rng(threads)
+    count = 3 * 4096 + 77
     vertices = rng.normal(size=(count // 2, 3)) * 1e3
     faces = rng.integers(0, len(vertices), (count, 3))
     faces[::50, 2] = faces[::50, 0]
@@ -318,9 +293,12 @@ def test_the_face_kernel_gives_the_same_bits_for_any_unit(unit_blocks: int, fres
     normals, areas = normals_buffer[pad:-pad], areas_buffer[pad:-pad]
     degenerate = flags_buffer[pad:-pad].view(bool)
     into = FaceNormals(normals, areas, degenerate)
-    assert not run_face_kernel(
-        checked_mesh(vertices, faces), into, unit_blocks * kernels.BLOCK, fresh
-    )
+    before = _core.threads()
+    _core.set_threads(threads)
+    try:
+        assert run_face_kernel(checked_mesh(vertices, faces), into)
+    finally:
+        _core.set_threads(before)
     assert np.isnan(normals_buffer[:pad]).all() and np.isnan(normals_buffer[-pad:]).all()
     assert np.isnan(areas_buffer[:pad]).all() and np.isnan(areas_buffer[-pad:]).all()
     assert not flags_buffer[:pad].any() and not flags_buffer[-pad:].any()
@@ -329,27 +307,21 @@ def test_the_face_kernel_gives_the_same_bits_for_any_unit(unit_blocks: int, fres
     assert np.array_equal(degenerate, expected.degenerate)
 
 
-def test_a_large_geometrys_unit_normals_on_every_core_are_numpys(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
-    # From UNIT_BLOCK faces the unit normals are one compiled pass on every core: the same
-    # bits as NumPy's where, divide and + 0.0, into a new array or into the crosses.
-    from mesh_normal import faces as faces_module
+def test_a_geometrys_unit_normals_on_every_core_are_numpys() -> None:
+    # All the faces' unit normals are one compiled pass on every core: the same bits as
+    # NumPy's where, divide and + 0.0 (a list of rows), into a new array or into the crosses.
     from mesh_normal.faces import face_geometry
-    from mesh_normal.kernels import UNIT_BLOCK
 
     rng = np.random.default_rng(21)
-    count = 2 * UNIT_BLOCK + 3
+    count = 40_003
     vertices = rng.normal(size=(count, 3)) * 1e-3
     faces = rng.integers(0, count, (count, 3))
     faces[::97, 2] = faces[::97, 0]  # degenerate
     geometry = face_geometry(vertices, faces)
     compiled = geometry.unit_normals()
-    monkeypatch.setattr(faces_module, "UNIT_BLOCK", 1 << 62)
-    numpys = geometry.unit_normals()
+    numpys = geometry.unit_normals(np.arange(count))
     assert compiled.tobytes() == numpys.tobytes()
     assert not np.signbit(compiled[geometry.degenerate]).any()
-    monkeypatch.setattr(faces_module, "UNIT_BLOCK", UNIT_BLOCK)
     again = face_geometry(vertices, faces)
     assert again.unit_normals(out=again.crosses) is again.crosses
     assert again.crosses.tobytes() == numpys.tobytes()

@@ -3,8 +3,7 @@
 ``face_normals`` and ``vertex_normals`` of raw arrays (or a checked mesh) take the cross
 products as they go; given a :class:`FaceGeometry` they read its arrays. Both must agree bit
 for bit with each other and with a straightforward NumPy reference of the documented
-arithmetic, and a run on one thread, two or three (either threading layer) must give the
-same bytes.
+arithmetic, and a run on one thread, two or three must give the same bytes.
 """
 
 from __future__ import annotations
@@ -21,13 +20,12 @@ import pytest
 from mesh_normal import face_normals, vertex_normals
 from mesh_normal.checks import checked_mesh
 from mesh_normal.faces import face_geometry
-from mesh_normal.kernels import BLOCK
 from mesh_normal.tolerances import MESH_CANCELLED_SUM
 from mesh_normal.vertices import WEIGHTINGS
 from tests.paths import ROOT
 
 
-def soup(seed: int = 0, count: int = 3000, faces: int = 5 * BLOCK + 17) -> tuple:
+def soup(seed: int = 0, count: int = 3000, faces: int = 2577) -> tuple:
     """Random faces with repeated indices, coincident, collinear and nearly coincident points."""
     rng = np.random.default_rng(seed)
     points = rng.normal(size=(count, 3))
@@ -153,8 +151,10 @@ def test_vertex_normals_match_the_reference_sums_bit_for_bit(weighting: str, sca
 SCRIPT = """
 import hashlib
 import numpy as np
-from mesh_normal import face_normals, vertex_normals
+from mesh_normal import corner_normals, face_normals, vertex_normals
+from mesh_normal.corners import corner_weights
 from mesh_normal.faces import face_geometry
+from mesh_normal.stored_normals import unit_rows
 from tests.mesh_normal.test_kernel_bits import soup
 
 digest = hashlib.sha256()
@@ -171,20 +171,18 @@ for seed, count, faces in ((0, 3000, 40_000), (1, 600, 1500), (2, 500, 1)):
             result = vertex_normals(*source, weighting=weighting)
             digest.update(result.normals.tobytes())
             digest.update(result.missing.tobytes())
-# Many small chunks, two held at once: the workers wait on each other often.
-import mesh_normal.vertices as vertices_module
-vertices_module.CHUNK, vertices_module.SLOTS = 513, 2
-# Normalised on every core in many small blocks of rows, packed into the sums' memory.
-vertices_module.PACK_FROM, vertices_module.PACK_BLOCK = 0, 37
-vertices, indices = soup(0, 3000, 40_000)
-for weighting in ("area", "angle"):
-    digest.update(vertex_normals(vertices, indices, weighting=weighting).normals.tobytes())
+        digest.update(corner_weights(geometry, weighting).tobytes())
+    corners = corner_normals(geometry, crease_angle=45.0)
+    digest.update(corners.normals.tobytes())
+    digest.update(corners.missing.tobytes())
+    for array in unit_rows(geometry.crosses * 3.0):
+        digest.update(array.tobytes())
 print(digest.hexdigest())
 """
 
 
-def digest_with(threads: int, layer: str) -> str:
-    environment = {**os.environ, "NUMBA_NUM_THREADS": str(threads), "NUMBA_THREADING_LAYER": layer}
+def digest_with(threads: int) -> str:
+    environment = {**os.environ, "MESH_NORMAL_THREADS": str(threads)}
     result = subprocess.run(
         [sys.executable, "-c", SCRIPT],
         cwd=ROOT,
@@ -199,36 +197,7 @@ def digest_with(threads: int, layer: str) -> str:
 
 
 def test_the_bits_do_not_depend_on_the_number_of_threads() -> None:
-    digests = {
-        (threads, layer): digest_with(threads, layer)
-        for threads, layer in ((1, "default"), (2, "default"), (3, "default"), (2, "workqueue"))
-    }
+    digests = {threads: digest_with(threads) for threads in (1, 2, 3)}
     assert len(set(digests.values())) == 1, digests
     assert len(next(iter(digests.values()))) == 64
     assert hashlib.sha256(b"").hexdigest() not in digests.values()
-
-
-@pytest.mark.parametrize(("chunk", "slots"), [(1, 1), (1, 2), (700, 2), (BLOCK, 3), (5000, 4)])
-def test_the_vertex_sums_do_not_depend_on_the_chunks(
-    chunk: int, slots: int, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    # The terms are taken chunk by chunk and added in face order: any chunk, any number of
-    # chunks held at once, the same bits.
-    from mesh_normal import vertices as vertices_module
-
-    points, indices = soup(seed=3)
-    expected = {w: vertex_normals(points, indices, weighting=w) for w in WEIGHTINGS}
-    monkeypatch.setattr(vertices_module, "CHUNK", chunk)
-    monkeypatch.setattr(vertices_module, "SLOTS", slots)
-    geometry = face_geometry(points, indices)
-    for weighting, reference in expected.items():
-        for source in ((points, indices), (geometry, None)):
-            result = vertex_normals(*source, weighting=weighting)  # type: ignore[arg-type]
-            assert result.normals.tobytes() == reference.normals.tobytes()
-            assert result.missing.tobytes() == reference.missing.tobytes()
-
-
-def test_the_terms_held_at_once_stay_small() -> None:
-    from mesh_normal.vertices import CHUNK, SLOTS
-
-    assert SLOTS * CHUNK * 6 * 8 <= 6 * 2**20  # the widest terms, six doubles a face

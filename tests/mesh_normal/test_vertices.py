@@ -144,58 +144,34 @@ def _sums(count: int, seed: int = 0) -> np.ndarray:
     return sums
 
 
-@pytest.mark.parametrize("count", [1, 2, 3, 4, 5, 17, 64, 1000, 4099])
-@pytest.mark.parametrize("size", [1, 2, 3, 5, 64, 1024])
-def test_normalising_on_every_core_gives_the_one_core_bits(count: int, size: int) -> None:
-    # The rows packed into the sums' own memory, block by block in any order the workers
-    # finish them: the bytes of the one-thread kernel, which reads each row before it writes.
-    from mesh_normal.kernels import workers
-    from mesh_normal.vertices import normalise_kernel, normalise_packed_kernel
+@pytest.mark.parametrize("count", [0, 1, 2, 3, 4, 5, 17, 64, 1000, 4099, 20_011])
+@pytest.mark.parametrize("threads", [1, 2, 3])
+def test_normalising_packs_the_documented_unit_rows_into_the_sums_memory(
+    count: int, threads: int
+) -> None:
+    # Each row over its length, zero where it cancels against its weight (and 0.0, never
+    # -0.0), packed as (n, 3) into the first 3 n doubles of the sums themselves, on any number
+    # of threads.
+    from mesh_normal import _core
+    from mesh_normal.tolerances import MESH_CANCELLED_SUM
+    from mesh_normal.vertices import normalised
 
     sums = _sums(count)
-    one = sums.copy()
-    normals = one.reshape(-1)[: 3 * count].reshape(count, 3)
-    missing = np.empty(count, dtype=bool)
-    normalise_kernel(one, normals, missing)
-    if count > 7:
+    x, y, z, total = sums.T
+    square = x * x + y * y + z * z
+    cancel = MESH_CANCELLED_SUM * total
+    missing = square <= cancel * cancel
+    length = np.where(missing, np.inf, np.sqrt(square))
+    expected = sums[:, :3] / length[:, None] + 0.0
+    if count > 13:
         assert missing.any() and not missing.all()
-
-    every = sums.copy()
-    packed = every.reshape(-1)[: 3 * count].reshape(count, 3)
-    flags = np.empty(count, dtype=bool)
-    read = np.zeros((count + size - 1) // size, dtype=np.int64)
-    normalise_packed_kernel(every, packed, flags, read, size, *workers())
-    assert packed.tobytes() == normals.tobytes()
+    before = _core.threads()
+    _core.set_threads(threads)
+    try:
+        normals, flags = normalised(sums)
+    finally:
+        _core.set_threads(before)
+    assert normals.shape == (count, 3) and normals.flags.c_contiguous
+    assert count == 0 or np.shares_memory(normals, sums)
+    assert normals.tobytes() == expected.tobytes()
     assert flags.tobytes() == missing.tobytes()
-    assert (read == 1).all()  # every block read once
-
-
-def test_many_vertices_are_normalised_on_every_core(monkeypatch: pytest.MonkeyPatch) -> None:
-    # smooth() takes the packed kernel from PACK_FROM vertices on: the same normals and mask.
-    from mesh_normal import vertices as vertices_module
-
-    rng = np.random.default_rng(5)
-    points = rng.normal(size=(3000, 3))
-    faces = rng.integers(0, 3000, size=(9000, 3))
-    expected = {w: vertex_normals(points, faces, w) for w in WEIGHTINGS}
-    monkeypatch.setattr(vertices_module, "PACK_FROM", 10)
-    monkeypatch.setattr(vertices_module, "PACK_BLOCK", 37)
-    for weighting, reference in expected.items():
-        result = vertex_normals(points, faces, weighting)
-        assert result.normals.tobytes() == reference.normals.tobytes()
-        assert result.missing.tobytes() == reference.missing.tobytes()
-        assert result.normals.flags.c_contiguous and result.normals.shape == (3000, 3)
-
-
-def test_each_block_waits_for_every_block_its_packed_rows_lie_over() -> None:
-    # Byte by byte: the packed rows of a block (24 bytes each) lie over the sums rows (32 bytes
-    # each) up to the last one the kernel waits for, and never over a later block's sums.
-    from mesh_normal.vertices import last_block_under
-
-    for size in (1, 2, 3, 5, 7, 37, 64):
-        for block in range(40):
-            first, stop = block * size, (block + 1) * size
-            covered = {byte // 32 for byte in range(24 * first, 24 * stop)}
-            assert last_block_under(stop, size) == max(covered) // size
-            assert max(covered) // size <= block  # earlier blocks, or this one
-            assert min(covered) // size <= block
