@@ -47,14 +47,6 @@ enum Weighting : int { kUniform = 0, kArea = 1, kAngle = 2, kMax = 3 };
 // Faces (or rows) a thread takes at least: fewer run on the calling thread.
 constexpr std::int64_t kGrain = 4096;
 
-// Inlined into each kernel's loop: a call per face (its result returned through memory)
-// costs about a fifth of the face normals' time, and a prefetch must be inlined to stay.
-#if defined(__GNUC__) || defined(__clang__)
-#define MESH_NORMAL_INLINE inline __attribute__((always_inline))
-#else
-#define MESH_NORMAL_INLINE inline
-#endif
-
 struct Vec {
   double x, y, z;
 };
@@ -85,26 +77,6 @@ struct Cross {
 constexpr std::int64_t kBlock = 512;
 // How many faces ahead the gather asks for the points it will read.
 constexpr std::int64_t kAhead = 16;
-
-// Asks the CPU to bring the cache line at `address` in, to be read (a hint: it never faults).
-// Inlined where it is asked: GCC drops a call to a function that only prefetches (it finds
-// the call has no effect).
-MESH_NORMAL_INLINE void prefetch(const double* address) {
-#if defined(__GNUC__) || defined(__clang__)
-  __builtin_prefetch(address, 0, 3);
-#else
-  (void)address;
-#endif
-}
-
-// The same, for a cache line about to be written.
-MESH_NORMAL_INLINE void prefetch_for_write(double* address) {
-#if defined(__GNUC__) || defined(__clang__)
-  __builtin_prefetch(address, 1, 3);
-#else
-  (void)address;
-#endif
-}
 
 // The points as a kernel reads them: each index checked against the rows before it is read.
 struct Mesh {

@@ -33,7 +33,7 @@ constexpr std::int64_t ahead = 16;
 
 // The point rows of face `face`'s corners: a row of three doubles may span two cache lines, so
 // its first and last value.
-void prefetch_corners(const double* points, const std::int64_t* faces, std::int64_t face) {
+MESH_NORMAL_INLINE void prefetch_corners(const double* points, const std::int64_t* faces, std::int64_t face) {
   for (int k = 0; k < 3; ++k) {
     const double* row = points + 3 * faces[3 * face + k];
     prefetch(row);

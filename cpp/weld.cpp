@@ -216,7 +216,7 @@ bool table_weld(const Corners<W>& corners, std::uint32_t mask, std::int64_t most
   for (std::int64_t face = 0; face < corners.faces; ++face) {
     for (std::int64_t corner = 0; corner < corners.per; ++corner, ++row) {
       if (row + kAhead < count) {
-        prefetch(&table[digests[row + kAhead] & mask & (size - 1)], true);
+        prefetch_for_write(&table[digests[row + kAhead] & mask & (size - 1)]);
       }
       const Words<W> words = corners.words(face, corner);
       std::size_t slot = digests[row] & mask & (size - 1);
