@@ -16,7 +16,7 @@ import pytest
 from tests.paths import ROOT
 
 #: Modules every start imports: the library's and the app's heaviest dependencies, and ours.
-MODULES = ("numba", "numba.core.compiler", "numpy", "pydantic", "fastapi", "uvicorn", "starlette")
+MODULES = ("numpy", "pydantic", "fastapi", "uvicorn", "starlette")
 # The checkout's own modules change between runs: the recipes compile them (tested below).
 
 

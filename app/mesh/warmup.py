@@ -1,11 +1,9 @@
 """A worker's warm-up: everything a job can need, loaded before the first job.
 
 A worker that loads something on its first glTF, its first 3MF or its first page keeps it for
-good (a module, a compiled kernel), so that its resident memory grows during its first jobs
-and the growth looks like a leak. :func:`warm` loads it all as the worker starts instead: the
-kernels from numba's cache (:func:`mesh_normal.precompile.compile_kernels`, the same call that
-compiles them into the image's cache, so nothing is compiled at run time), then every job of
-:mod:`app.mesh.work` on a small mesh in each kind of file, so that each reader's imports
+good (a module, a cache), so that its resident memory grows during its first jobs and the
+growth looks like a leak. :func:`warm` loads it all as the worker starts instead: it runs every
+job of :mod:`app.mesh.work` on a small mesh in each kind of file, so that each reader's imports
 (trimesh's glTF loader, DracoPy, the 3MF XML parser, zip archives, earcut for polygons), the
 page's figures and the writers are part of the worker's baseline.
 
@@ -34,7 +32,6 @@ from app.mesh.uploads import Upload
 from app.mesh.work import FIX_FORMATS, fix, normals, page, report
 from mesh_normal.exports import KINDS
 from mesh_normal.files import write_mesh
-from mesh_normal.precompile import compile_kernels
 from mesh_normal.vertices import Weighting
 
 #: A closed tetrahedron, wound outward.
@@ -69,8 +66,7 @@ MODEL_3MF = (
 
 
 def warm() -> None:
-    """Load every kernel, then run each job once on each of the small files (milliseconds)."""
-    compile_kernels()
+    """Run each job once on each of the small files (milliseconds)."""
     import DracoPy  # noqa: F401 (the glTF reader imports it only for a Draco-compressed file)
 
     for upload in uploads():
