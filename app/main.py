@@ -40,10 +40,9 @@ from app.web.static import STATIC_DIR, CompressedStaticFiles
 from app.web.workers import tune_allocator
 from mesh_normal.collector import paused
 
-#: The modules of the heavy work: the jobs with their readers, kernels and NumPy (the mesh
-#: jobs also name the small ones a starting server may run itself). The server answers its
-#: first page without them, and imports them in a thread once it is up (:func:`lifespan`), so
-#: that neither the first page nor the first upload waits for them.
+#: The modules of the heavy work: the jobs with their readers, the compiled core and NumPy.
+#: The server answers its first page without them, and imports them in a thread once it is up
+#: (:func:`lifespan`), so that neither the first page nor the first upload waits for them.
 HEAVY_MODULES = ("app.mesh.work", "app.points.work")
 #: What the fork server imports once, before it forks each worker: :mod:`app.preload` (the jobs,
 #: the warm-up and trimesh's glTF loader, the garbage collector paused meanwhile).

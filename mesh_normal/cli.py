@@ -11,8 +11,8 @@ Exit codes a script can use:
 - 4: the output file cannot be written.
 
 It starts fast: this module imports only the standard library and the format table, and each
-command imports the library (numpy, the compiled core, pydantic) when it runs, so ``--help`` and usage
-errors answer at once.
+command imports the library (numpy, the compiled core, pydantic) when it runs, so ``--help``
+and usage errors answer at once.
 """
 
 from __future__ import annotations

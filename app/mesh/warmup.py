@@ -6,13 +6,6 @@ growth looks like a leak. :func:`warm` loads it all as the worker starts instead
 job of :mod:`app.mesh.work` on a small mesh in each kind of file, so that each reader's imports
 (trimesh's glTF loader, DracoPy, the 3MF XML parser, zip archives, earcut for polygons), the
 page's figures and the writers are part of the worker's baseline.
-
-Until the first worker is ready, the report, the fix and the face normals of a small file in a
-format read without trimesh run in the server instead
-(:func:`app.web.workers.run_in_server_while_starting`): the first upload after a start does
-not wait seconds for the fork server and the warm-up. These jobs run every kernel in Python on
-such a file, so the server loads neither numba nor trimesh (the page's figures and the vertex
-and corner normals call a kernel that always loads numba: they wait for a worker).
 """
 
 from __future__ import annotations
@@ -25,9 +18,6 @@ from typing import get_args
 
 import numpy as np
 
-from app.mesh.early import SMALL_FILE_BYTES as SMALL_FILE_BYTES
-from app.mesh.early import small_face_normals as small_face_normals
-from app.mesh.early import small_file as small_file
 from app.mesh.uploads import Upload
 from app.mesh.work import FIX_FORMATS, fix, normals, page, report
 from mesh_normal.exports import KINDS

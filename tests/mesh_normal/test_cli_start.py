@@ -1,5 +1,6 @@
 """The mesh-normal command starts fast: --help, --version and usage errors load neither the
-compiled core nor numpy, pydantic or trimesh; ``python -m mesh_normal``; ``serve`` says how to start the app."""
+compiled core nor numpy, pydantic or trimesh; ``python -m mesh_normal``; ``serve`` says how
+to start the app."""
 
 from __future__ import annotations
 
