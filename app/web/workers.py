@@ -22,10 +22,10 @@ the server instead of waiting; any other job waits for a worker.
 
 Each job has a time limit, and each worker a memory cap (``RLIMIT_DATA``: the memory it
 writes, not the address space it merely reserves, so that glibc's arenas, reserved but not
-yet written, do not trip it). A job whose time is up, or whose client left, is stopped in the worker
-(:func:`run_in_worker`: an exception raised in its Python code), so the warm worker lives on;
-only a job that does not stop within ``GRACE_SECONDS`` (a native loop) costs its worker. A
-worker ends with the server, and with its parent, the fork server, however they end.
+yet written, do not trip it). A job whose time is up, or whose client left, is stopped in the
+worker (:func:`run_in_worker`: an exception raised in its Python code), so the warm worker
+lives on; only a job that does not stop within ``GRACE_SECONDS`` (a native loop) costs its
+worker. A worker ends with the server, and with its parent, the fork server, however they end.
 
 Jobs travel as pickles of protocol 5: large buffers (``pickle.PickleBuffer``, NumPy arrays)
 go out of band, so a 200 MB upload is not copied into a pickle on its way; to a worker, those of
