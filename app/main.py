@@ -40,13 +40,12 @@ from app.web.static import STATIC_DIR, CompressedStaticFiles
 from app.web.workers import tune_allocator
 from mesh_normal.collector import paused
 
-#: The modules of the heavy work: the jobs with their readers, kernels and NumPy (the mesh
-#: jobs also name the small ones a starting server may run itself). The server answers its
-#: first page without them, and imports them in a thread once it is up (:func:`lifespan`), so
-#: that neither the first page nor the first upload waits for them.
+#: The modules of the heavy work: the jobs with their readers, the compiled core and NumPy.
+#: The server answers its first page without them, and imports them in a thread once it is up
+#: (:func:`lifespan`), so that neither the first page nor the first upload waits for them.
 HEAVY_MODULES = ("app.mesh.work", "app.points.work")
 #: What the fork server imports once, before it forks each worker: :mod:`app.preload` (the jobs,
-#: the warm-up, trimesh's glTF loader and numba, the garbage collector paused meanwhile).
+#: the warm-up and trimesh's glTF loader, the garbage collector paused meanwhile).
 PRELOAD = ("app.preload",)
 #: Seconds after start-up before :data:`HEAVY_MODULES` load: the first page, which a
 #: supervisor's health check or a reader often asks for at once, does not share the CPU with
@@ -74,12 +73,12 @@ oriented normals in the file's order). The server keeps no file after its respon
 @asynccontextmanager
 async def lifespan(app: FastAPI) -> AsyncIterator[None]:
     """Start the worker processes for the heavy mesh work, in the background (each loads
-    everything a job can need as it starts: :func:`app.mesh.warmup.warm`); with
-    ``MESH_IN_PROCESS``, load the kernels here, in the background, so that the first mesh
-    upload does not wait for them. A signal to stop ends the running jobs at once
-    (:func:`end_jobs_on_stop`)."""
+    everything a job can need as it starts: :func:`app.mesh.warmup.warm`), and import the jobs'
+    modules here, in the background, so that the first mesh upload does not wait for them
+    (with ``MESH_IN_PROCESS`` the jobs run in the server). A signal to stop ends the running
+    jobs at once (:func:`end_jobs_on_stop`)."""
     jobs: Jobs = app.state.jobs
-    heavy = threading.Timer(HEAVY_IMPORT_DELAY, load_heavy_modules, (jobs.pool is None,))
+    heavy = threading.Timer(HEAVY_IMPORT_DELAY, load_heavy_modules)
     heavy.daemon = True
     heavy.start()
     jobs.start()
@@ -125,16 +124,11 @@ def end_jobs_on_stop(jobs: Jobs) -> Callable[[], None]:
     return restore
 
 
-def load_heavy_modules(compile_kernels: bool) -> None:
-    """Import :data:`HEAVY_MODULES`, the garbage collector paused (:mod:`mesh_normal.collector`);
-    with ``compile_kernels`` (no workers: the jobs run in the server), load the kernels too."""
+def load_heavy_modules() -> None:
+    """Import :data:`HEAVY_MODULES`, the garbage collector paused (:mod:`mesh_normal.collector`)."""
     with paused():
         for name in HEAVY_MODULES:
             importlib.import_module(name)
-    if compile_kernels:
-        from mesh_normal.precompile import compile_kernels as load_kernels
-
-        load_kernels()
 
 
 def warm_workers() -> None:

@@ -16,16 +16,15 @@ import importlib
 
 from mesh_normal.collector import paused
 
-#: The jobs, the warm-up each worker runs, trimesh's glTF loader, which takes seconds to import,
-#: and numba's cache (numba itself: the library imports it only for a kernel's first compiled
-#: call). A worker, the first or a replacement, starts without importing them itself, and the
-#: pages they touch are shared until written.
+#: The jobs (and with them the compiled core, ``mesh_normal._core``), the warm-up each worker
+#: runs, and trimesh's glTF loader, which takes seconds to import. A worker, the first or a
+#: replacement, starts without importing them itself, and the pages they touch are shared until
+#: written.
 MODULES = (
     "app.mesh.work",
     "app.points.work",
     "app.mesh.warmup",
     "trimesh.exchange.gltf",
-    "mesh_normal._numba_cache",
 )
 
 

@@ -5,12 +5,12 @@
 
 Each format gets a torus of about ``--mb`` megabytes of file (its own vertices, shared by its
 triangles; STL repeats them per corner as STL does). Each (format, path) runs in a fresh
-process: after the imports, ``compile_kernels()`` and a warm-up run of the same path on a small
-torus (so numba's kernels are loaded and Python's caches are warm, as in the server's job
-workers) and with the allocator set as the server's job workers set it (``tune_allocator``:
-blocks of 1 MB or more mapped on their own; for a large binary STL, freed memory kept within the
-job and its memory faulted in ahead, ``app.mesh.work.ahead``, whose pages count), the peak
-resident set is reset
+process: after the imports, the workers' warm-up (``app.mesh.warmup.warm``: every job once on
+small files) and a warm-up run of the same path on a small torus (so every module a job needs
+is loaded and Python's caches are warm, as in the server's job workers) and with the allocator
+set as the server's job workers set it (``tune_allocator``: blocks of 1 MB or more mapped on
+their own; for a large binary STL, freed memory kept within the job and its memory faulted in
+ahead, ``app.mesh.work.ahead``, whose pages count), the peak resident set is reset
 (``/proc/self/clear_refs``), the file's bytes are read into memory as an upload is, and the path
 runs once. The figure is the peak resident memory above that baseline (``VmHWM`` minus
 ``VmRSS`` before the upload was read), divided by the file's size: the upload's own bytes count
@@ -185,16 +185,16 @@ def _status(field: str) -> int:
 
 def child(path_name: str, file: Path, small: Path) -> None:
     """Measure one path in this (fresh) process and print its peak in bytes."""
+    from app.mesh.warmup import warm
     from app.mesh.work import ahead
     from app.web.workers import _MAPPED_FROM, tune_allocator
     from mesh_normal import allocator
     from mesh_normal.files import stl
-    from mesh_normal.precompile import compile_kernels
 
     tune_allocator()  # as the server's job workers do when they start
     allocator.enable_jobs()
-    compile_kernels()  # so do they (app/mesh/warmup.py): every kernel, a large file's too
-    run_path(path_name, small.read_bytes(), small.name)  # warm-up: kernels loaded
+    warm()  # so do they: every job once, on small files
+    run_path(path_name, small.read_bytes(), small.name)  # warm-up: this path's modules loaded
     gc.collect()
     Path("/proc/self/clear_refs").write_text("5")  # reset the peak to the current size
     baseline = _status("VmRSS")

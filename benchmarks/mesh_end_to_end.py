@@ -23,7 +23,8 @@
 2. ``mesh-normal normals LUCY.stl --kind vertex -o OUT.npy`` (and ``analyze``) as a
    subprocess on a 14,000,000-face binary STL (about 700 MB): wall time, peak RSS of that
    child (GNU time's ``%M``, see :func:`run_cli`) and the CLI's own stage times
-   (``--progress``), against 30 s and 6 GiB. A small run first makes sure numba's cache is filled.
+   (``--progress``), against 30 s and 6 GiB. A small run first reads the library's files once
+   (the system's cache).
 
 ``--markdown PATH`` also writes tables 1 and 2 to a file, after a line naming the machine and
 the date (the readers write their own: ``benchmarks.readers --markdown``).
@@ -281,7 +282,7 @@ def run_cli(args: list[str]) -> tuple[float, int, dict[str, float], str]:
 def bench_lucy(runs: int) -> list[str]:
     small = stl_file(SIZES[0])
     output = CACHE / "normals.npy"
-    run_cli(["normals", str(small), "--kind", "vertex", "-o", str(output)])  # numba's cache
+    run_cli(["normals", str(small), "--kind", "vertex", "-o", str(output)])  # the files read once
     lucy = stl_file(LUCY)
     rows = []
     commands = [

@@ -29,20 +29,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import open3d
 
 from benchmarks import tables
 from mesh_normal.points import estimate, point_normals
 from mesh_normal.points.orient import along_tree
-
-# Launch numba's threads (the mesh kernels') before Open3D loads its own (older) TBB, which
-# numba would try to use.
-try:
-    from numba.np.ufunc.parallel import _launch_threads
-except ImportError:  # no numba: nothing to launch
-    pass
-else:
-    _launch_threads()
-import open3d
 
 #: The table as printed; main() gives it the path of ``--markdown``.
 OUT = tables.Report(None)

@@ -155,7 +155,7 @@ def main() -> None:
     print(f"mesh-normal analyze tetra.obj: best {tiny_best:.3f} s, median {tiny_median:.3f} s "
           f"(target 1); {tiny_best / numpy_best:.2f} times import numpy (best)")  # fmt: skip
     ratios, ours, bare, gaps = [], [], [], []
-    serve("app.main:app", PORTS[0], "/", 1)  # numba's cache filled, the files read once
+    serve("app.main:app", PORTS[0], "/", 1)  # the files read once (the system's cache)
     for _ in range(args.rounds):
         first, (one, two) = serve("app.main:app", PORTS[0], "/", 2)
         baseline, _ = serve("benchmarks.echo_app:app", PORTS[1], "/docs", 0)

@@ -8,7 +8,7 @@
 >>> mn.write_mesh(mesh.vertices, fixed.faces, path="bunny-fixed.ply")   # or "ply": the bytes
 
 Every name below is loaded on first use, so that ``import mesh_normal`` (and the command line's
-``--help``) does not pay for numba until a kernel is needed. The command line is
+``--help``) does not pay for NumPy and the readers until a name is needed. The command line is
 ``mesh-normal`` (or ``python -m mesh_normal``).
 """
 
@@ -39,7 +39,6 @@ if TYPE_CHECKING:
         read_points,
         write_points,
     )
-    from mesh_normal.precompile import compile_kernels
     from mesh_normal.report import MeshReport
     from mesh_normal.topology import MeshTopology, mesh_topology
     from mesh_normal.triangle import TriangleNormal, triangle_normal
@@ -80,7 +79,6 @@ _HOMES = {
     "analyse": "analysis",  # mn.analyse(path) is the report
     "MeshTopology": "topology",
     "mesh_topology": "topology",
-    "compile_kernels": "precompile",
     "TriangleNormal": "triangle",
     "triangle_normal": "triangle",
     "VertexNormals": "vertices",
@@ -108,7 +106,6 @@ __all__ = [
     "analyse",
     "batch",
     "checked_mesh",
-    "compile_kernels",
     "corner_normals",
     "face_areas",
     "face_geometry",

@@ -11,8 +11,8 @@ Exit codes a script can use:
 - 4: the output file cannot be written.
 
 It starts fast: this module imports only the standard library and the format table, and each
-command imports the library (numpy, numba, pydantic) when it runs, so ``--help`` and usage
-errors answer at once.
+command imports the library (numpy, the compiled core, pydantic) when it runs, so ``--help``
+and usage errors answer at once.
 """
 
 from __future__ import annotations
@@ -745,7 +745,7 @@ class Choices(Collection[str]):
     """An argument's choices named by the module that defines them, imported on first use.
 
     ``mesh-normal --help`` never looks at a subcommand's choices (given a ``metavar``), so it
-    does not import the module (and numba behind it); ``mesh-normal normals --help`` and
+    does not import the module (and NumPy behind it); ``mesh-normal normals --help`` and
     parsing do.
     """
 

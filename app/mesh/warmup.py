@@ -1,20 +1,11 @@
 """A worker's warm-up: everything a job can need, loaded before the first job.
 
 A worker that loads something on its first glTF, its first 3MF or its first page keeps it for
-good (a module, a compiled kernel), so that its resident memory grows during its first jobs
-and the growth looks like a leak. :func:`warm` loads it all as the worker starts instead: the
-kernels from numba's cache (:func:`mesh_normal.precompile.compile_kernels`, the same call that
-compiles them into the image's cache, so nothing is compiled at run time), then every job of
-:mod:`app.mesh.work` on a small mesh in each kind of file, so that each reader's imports
+good (a module, a cache), so that its resident memory grows during its first jobs and the
+growth looks like a leak. :func:`warm` loads it all as the worker starts instead: it runs every
+job of :mod:`app.mesh.work` on a small mesh in each kind of file, so that each reader's imports
 (trimesh's glTF loader, DracoPy, the 3MF XML parser, zip archives, earcut for polygons), the
 page's figures and the writers are part of the worker's baseline.
-
-Until the first worker is ready, the report, the fix and the face normals of a small file in a
-format read without trimesh run in the server instead
-(:func:`app.web.workers.run_in_server_while_starting`): the first upload after a start does
-not wait seconds for the fork server and the warm-up. These jobs run every kernel in Python on
-such a file, so the server loads neither numba nor trimesh (the page's figures and the vertex
-and corner normals call a kernel that always loads numba: they wait for a worker).
 """
 
 from __future__ import annotations
@@ -27,14 +18,10 @@ from typing import get_args
 
 import numpy as np
 
-from app.mesh.early import SMALL_FILE_BYTES as SMALL_FILE_BYTES
-from app.mesh.early import small_face_normals as small_face_normals
-from app.mesh.early import small_file as small_file
 from app.mesh.uploads import Upload
 from app.mesh.work import FIX_FORMATS, fix, normals, page, report
 from mesh_normal.exports import KINDS
 from mesh_normal.files import write_mesh
-from mesh_normal.precompile import compile_kernels
 from mesh_normal.vertices import Weighting
 
 #: A closed tetrahedron, wound outward.
@@ -69,8 +56,7 @@ MODEL_3MF = (
 
 
 def warm() -> None:
-    """Load every kernel, then run each job once on each of the small files (milliseconds)."""
-    compile_kernels()
+    """Run each job once on each of the small files (milliseconds)."""
     import DracoPy  # noqa: F401 (the glTF reader imports it only for a Draco-compressed file)
 
     for upload in uploads():

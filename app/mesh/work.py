@@ -16,11 +16,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from app.mesh.classes import CLASSES
-from app.mesh.early import small_face_normals, small_file
 from app.mesh.figures import mesh_figures
 from app.mesh.uploads import Upload
 from app.web.errors import ApiError
-from app.web.workers import run_in_server_while_starting
 from mesh_normal import allocator
 from mesh_normal.analysis import analyse_mesh, build_report, flips_by_component
 from mesh_normal.exports import FORMATS, KINDS, Normals, NormalsKind, normals_to_write
@@ -213,10 +211,3 @@ def files_read(upload: Upload, read: tuple[str, ...]) -> list[tuple[str, bool]]:
     if not upload.parts:
         return [(name, True) for name in read]
     return [(name, posixpath.normpath(name.replace("\\", "/")) in read) for name in upload.names]
-
-
-# The small jobs a starting server may run itself (app.mesh.early), named as the jobs are
-# defined: a test that replaces one of them later replaces only what the workers run.
-run_in_server_while_starting(report, small_file)
-run_in_server_while_starting(fix, small_file)
-run_in_server_while_starting(normals, small_face_normals)

@@ -8,24 +8,24 @@ dies, or that is killed because its client left, is replaced; the server process
 
 The workers come from the ``forkserver`` context (a clean process, never a fork of the
 server's threads) with ``preload`` imported once in the fork server, and each runs ``warm``
-once as it starts (the numba kernels, loaded from their cache). The first worker warms alone,
-before the others start, so that a cold cache is compiled once, not by every worker at once.
+once as it starts (every job once, on small files). The first worker warms alone, before the
+others start, so that it has the cores to itself and the first jobs wait less.
 Starting a process blocks (the first start waits for the fork server to import ``preload``,
 seconds), so it happens in a thread: the event loop serves pages meanwhile, at start-up and
 while a worker is replaced.
 
-Until the first worker is ready (seconds after the server's first page: the fork server imports
-``preload``, the worker warms), a job that its module has marked as safe to run in the server
-(:func:`run_in_server_while_starting`: the real mesh jobs, on a file of a few kilobytes, which
-end in milliseconds in the kernels' Python path, with nothing to cancel and no memory to run
-out of) runs in a thread of the server instead of waiting; any other job waits for a worker.
+Until the first worker is ready (a second or two after the server's first page: the fork server
+imports ``preload``, the worker warms), a job that its module has marked as safe to run in the
+server (:func:`run_in_server_while_starting`: the calculator's batch of a small body, which
+ends in milliseconds, with nothing to cancel and no memory to run out of) runs in a thread of
+the server instead of waiting; any other job waits for a worker.
 
 Each job has a time limit, and each worker a memory cap (``RLIMIT_DATA``: the memory it
-writes, not the address space it merely reserves, so that numba's threads and glibc's arenas
-do not trip it). A job whose time is up, or whose client left, is stopped in the worker
-(:func:`run_in_worker`: an exception raised in its Python code), so the warm worker lives on;
-only a job that does not stop within ``GRACE_SECONDS`` (a native loop) costs its worker. A
-worker ends with the server, and with its parent, the fork server, however they end.
+writes, not the address space it merely reserves, so that glibc's arenas, reserved but not
+yet written, do not trip it). A job whose time is up, or whose client left, is stopped in the
+worker (:func:`run_in_worker`: an exception raised in its Python code), so the warm worker
+lives on; only a job that does not stop within ``GRACE_SECONDS`` (a native loop) costs its
+worker. A worker ends with the server, and with its parent, the fork server, however they end.
 
 Jobs travel as pickles of protocol 5: large buffers (``pickle.PickleBuffer``, NumPy arrays)
 go out of band, so a 200 MB upload is not copied into a pickle on its way; to a worker, those of
@@ -82,9 +82,9 @@ ALLOCATION_FAILED = frozenset({-signal.SIGSEGV, -signal.SIGABRT, -signal.SIGBUS}
 
 logger = logging.getLogger(__name__)
 
-#: How long the first jobs wait for the first worker to be ready: compiling the kernels into
-#: an empty cache (every kernel for read-only and writable arrays, mesh_normal.precompile) takes
-#: up to two minutes on two busy cores, 2.5 times as long as the writable ones alone.
+#: How long the first jobs wait for the first worker to be ready: it takes a second or two
+#: (the fork server's imports, then the warm-up), far longer only on a machine whose cores are
+#: busy with other work.
 STARTUP_SECONDS = 120
 
 
@@ -635,7 +635,7 @@ class WorkerPool:
         self, timeout: float, job: tuple[Callable[..., Any], Sequence[Any]] | None = None
     ) -> Worker | ServerThread | None:
         """An idle worker within ``timeout`` seconds, or ``None``. Before the first worker is
-        ready (the kernels load, or compile into an empty cache), up to STARTUP_SECONDS; or,
+        ready (the fork server's imports, then the warm-up), up to STARTUP_SECONDS; or,
         for a small ``job`` marked so (:func:`run_in_server_while_starting`), a thread of the
         server at once."""
         self.start()

@@ -45,9 +45,10 @@ def run_local(
     """The rows of ``tasks`` as their files finish, on ``workers`` processes (every core).
 
     Each worker is a thread here driving its own :class:`~mesh_normal.datasets.runner.FileRunner`
-    (a child process, so numba and NumPy run in parallel); closing the iterator early (Ctrl-C,
-    ``break``) stops the children, and the files not finished have no row. A batch in
-    ``memory://`` runs in this process instead (see :func:`in_process`).
+    (a child process, so the files' Python work runs in parallel, each child on one thread);
+    closing the iterator early (Ctrl-C, ``break``) stops the children, and the files not
+    finished have no row. A batch in ``memory://`` runs in this process instead (see
+    :func:`in_process`).
     """
     if in_process(tasks, options):
         from mesh_normal.datasets.job import run_file

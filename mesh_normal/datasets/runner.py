@@ -1,7 +1,7 @@
 """A persistent worker process that runs one file at a time, within a time and memory limit.
 
 :class:`FileRunner` starts a child Python once (``python -m mesh_normal.datasets.runner``), which
-imports the library and warms its compiled kernels, then runs
+imports the library and runs a report once (:func:`warm`), then runs
 :func:`~mesh_normal.datasets.job.run_file` for each file sent to it over a pipe: no process
 start per file, yet a file that hangs or eats the machine's memory costs only the child. A file
 over ``timeout`` seconds kills the child (a ``timed_out`` row) and the next file gets a new
@@ -28,9 +28,9 @@ from typing import Any
 from mesh_normal.datasets.schema import failed_row
 from mesh_normal.datasets.tasks import BatchOptions, FileTask
 
-#: Seconds a new child may take to import and warm the kernels (numba's cache is on disk;
-#: a cold cache compiles them, which takes a minute on a slow machine).
-START_SECONDS = 600.0
+#: Seconds a new child may take to import the library and warm up (a second or two; far more
+#: only on a machine whose cores are all busy).
+START_SECONDS = 120.0
 
 
 class RunnerError(RuntimeError):
@@ -40,8 +40,8 @@ class RunnerError(RuntimeError):
 class FileRunner:
     """One child process, reused file after file; ``run`` is thread-safe (one file at a time).
 
-    ``threads`` is the child's numba thread count: 1 by default, since a batch runs a child
-    for every core.
+    ``threads`` is the child's compiled core's thread count (``MESH_NORMAL_THREADS``): 1 by
+    default, since a batch runs a child for every core.
     """
 
     def __init__(self, threads: int = 1) -> None:
@@ -124,7 +124,7 @@ class _Child:
     def __init__(self, threads: int, killed: threading.Event | None = None) -> None:
         to_child_read, to_child_write = os.pipe()
         from_child_read, from_child_write = os.pipe()
-        env = {**os.environ, "NUMBA_NUM_THREADS": str(threads)}
+        env = {**os.environ, "MESH_NORMAL_THREADS": str(threads)}
         command = [sys.executable, "-m", "mesh_normal.datasets.runner"]
         command += [str(to_child_read), str(from_child_write)]
         self.process = subprocess.Popen(
@@ -139,8 +139,8 @@ class _Child:
         os.close(from_child_write)
         self.to_child = Connection(to_child_write, readable=False)
         self.from_child = Connection(from_child_read, writable=False)
-        # Waited for in steps, so that a runner killed meanwhile (Ctrl-C while the kernels
-        # load) does not leave this child running on.
+        # Waited for in steps, so that a runner killed meanwhile (Ctrl-C while the child
+        # starts) does not leave this child running on.
         deadline = time.monotonic() + START_SECONDS
         while not self.from_child.poll(min(0.2, max(0.0, deadline - time.monotonic()))):
             if (killed is not None and killed.is_set()) or time.monotonic() >= deadline:
@@ -186,13 +186,9 @@ def shared_runner() -> FileRunner:
 
 
 def warm() -> None:
-    """Load every compiled kernel (numba's cache), and run the mesh report once on a
-    tetrahedron, so that no file pays for a first call."""
+    """Run the mesh report once on a tetrahedron, so that no file pays for the first call's
+    imports (the readers, the report's modules)."""
     import numpy as np
-
-    from mesh_normal.precompile import compile_kernels
-
-    compile_kernels()
 
     from mesh_normal.analysis import analyse_mesh, build_report
     from mesh_normal.files import read_mesh, write_mesh

@@ -4,12 +4,10 @@ when called). They find their folder of marker files from the upload's name."""
 
 from __future__ import annotations
 
-import functools
 import os
 import signal
 import threading
 import time
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -78,9 +76,9 @@ def crash(*_args: Any) -> None:
 
 
 def warm_numeric() -> None:
-    """A worker's warm-up for :func:`allocate` and :func:`allocate_in_kernel`: NumPy and numba
-    loaded, the kernel compiled, so that what a job may take is all theirs."""
-    allocate_in_kernel(1)
+    """A worker's warm-up for :func:`allocate`: NumPy loaded and its first array made, so that
+    what a job may take is all the job's."""
+    allocate(1)
 
 
 def allocate(megabytes: int) -> int:
@@ -88,23 +86,6 @@ def allocate(megabytes: int) -> int:
     import numpy as np
 
     return int(np.ones(megabytes * 2**20, dtype=np.uint8).sum())
-
-
-@functools.cache
-def _ones_kernel() -> Callable[[int], int]:
-    import numba
-    import numpy as np
-
-    @numba.njit(cache=False)  # type: ignore[misc]
-    def ones(size: int) -> int:
-        return int(np.ones(size, dtype=np.uint8).sum())
-
-    return ones  # type: ignore[no-any-return]
-
-
-def allocate_in_kernel(megabytes: int) -> int:
-    """Write ``megabytes`` of an array made in a compiled (numba) kernel."""
-    return int(_ones_kernel()(megabytes * 2**20))
 
 
 def refuse(*_args: Any) -> None:

@@ -8,15 +8,6 @@ import pytest
 from mesh_normal.points import point_normals
 from tests.mesh_normal.points import _clouds as clouds
 
-# numba (the mesh kernels' until they are compiled too) picks its threading layer when it
-# launches its threads. Open3D brings a TBB too old for numba, which then warns (an error
-# here) if it is loaded first: launch them before.
-try:
-    from numba.np.ufunc.parallel import _launch_threads
-except ImportError:  # no numba: nothing to launch
-    pass
-else:
-    _launch_threads()
 open3d = pytest.importorskip("open3d")
 
 #: Radians. Measured: at most 3.9e-8 between the two on these clouds (Open3D solves the 3 x 3
