@@ -9,6 +9,7 @@
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <thread>
 #include <vector>
 
@@ -33,6 +34,19 @@ nb::ndarray<nb::numpy, T> owned(T* data, std::size_t count, std::size_t columns 
     return nb::ndarray<nb::numpy, T>(data, {count}, owner);
   }
   return nb::ndarray<nb::numpy, T>(data, {count, columns}, owner);
+}
+
+// The same from a buffer still held by a unique_ptr, so that a throw between allocating the
+// buffers of a kernel's results and handing them over frees them: the capsule is made first.
+template <typename T>
+nb::ndarray<nb::numpy, T> owned(std::unique_ptr<T[]> data, std::size_t count,
+                                std::size_t columns = 0) {
+  nb::capsule owner(data.get(), [](void* p) noexcept { delete[] static_cast<T*>(p); });
+  T* held = data.release();
+  if (columns == 0) {
+    return nb::ndarray<nb::numpy, T>(held, {count}, owner);
+  }
+  return nb::ndarray<nb::numpy, T>(held, {count, columns}, owner);
 }
 
 // Forced inline: a per-element helper called through memory costs a kernel about a fifth of

@@ -303,9 +303,10 @@ Edges graph_edges(In<double, nb::shape<-1, 3>> points, In<double, nb::shape<-1, 
   const double* xyz = points.data();
   const double* lines = normals.data();
   const bool* usable = valid.data();
-  auto* rows = new std::int32_t[static_cast<std::size_t>(n * columns)];
-  auto* cols = new std::int32_t[static_cast<std::size_t>(n * columns)];
-  auto* weights = new double[static_cast<std::size_t>(n * columns)];
+  const auto most = static_cast<std::size_t>(n * columns);
+  std::unique_ptr<std::int32_t[]> rows(new std::int32_t[most]);
+  std::unique_ptr<std::int32_t[]> cols(new std::int32_t[most]);
+  std::unique_ptr<double[]> weights(new double[most]);
   Index count = 0;
   {
     nb::gil_scoped_release release;
@@ -344,7 +345,8 @@ Edges graph_edges(In<double, nb::shape<-1, 3>> points, In<double, nb::shape<-1, 
     }
   }
   const auto written = static_cast<std::size_t>(count);
-  return {owned(rows, written), owned(cols, written), owned(weights, written)};
+  return {owned(std::move(rows), written), owned(std::move(cols), written),
+          owned(std::move(weights), written)};
 }
 
 using Flags = std::tuple<nb::ndarray<nb::numpy, bool>, nb::ndarray<nb::numpy, bool>>;
@@ -375,8 +377,8 @@ Flags propagate_signs(In<std::int32_t, nb::ndim<1>> order, In<std::int32_t, nb::
   const bool* agree = agrees.data();
   const bool* steep = sharp.data();
   const bool* seeded = seed_flip.data();
-  auto* flip = new bool[static_cast<std::size_t>(n)]();
-  auto* cut = new bool[static_cast<std::size_t>(n)]();
+  std::unique_ptr<bool[]> flip(new bool[static_cast<std::size_t>(n)]());
+  std::unique_ptr<bool[]> cut(new bool[static_cast<std::size_t>(n)]());
   {
     nb::gil_scoped_release release;
     for (Index s = 0; s < steps; ++s) {
@@ -390,7 +392,8 @@ Flags propagate_signs(In<std::int32_t, nb::ndim<1>> order, In<std::int32_t, nb::
       }
     }
   }
-  return {owned(flip, static_cast<std::size_t>(n)), owned(cut, static_cast<std::size_t>(n))};
+  return {owned(std::move(flip), static_cast<std::size_t>(n)),
+          owned(std::move(cut), static_cast<std::size_t>(n))};
 }
 
 // What lzf returns for data that would write past the end of `out`, and for data that break

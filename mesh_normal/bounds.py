@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from mesh_normal import _core
+import mesh_normal._core as _core
 from mesh_normal.types import FloatArray, IndexArray
 
 

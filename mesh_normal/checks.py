@@ -14,7 +14,7 @@ from typing import NoReturn, TypeVar
 import numpy as np
 from numpy.typing import ArrayLike
 
-from mesh_normal import _core
+import mesh_normal._core as _core
 from mesh_normal.types import FloatArray, IndexArray
 
 ArrayType = TypeVar("ArrayType", bound=np.ndarray)

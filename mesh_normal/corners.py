@@ -14,7 +14,7 @@ from numbers import Real
 import numpy as np
 from numpy.typing import ArrayLike
 
-from mesh_normal import _core
+import mesh_normal._core as _core
 from mesh_normal.checks import refuse_faces
 from mesh_normal.faces import FaceGeometry, MeshInput, checked_input, face_geometry
 from mesh_normal.tolerances import MESH_CORNER_BLOCK, MESH_CREASE_SLACK, MESH_PAIR_CHUNK

@@ -38,7 +38,7 @@ from typing import TypeAlias
 import numpy as np
 from numpy.typing import ArrayLike
 
-from mesh_normal import _core
+import mesh_normal._core as _core
 from mesh_normal.checks import CheckedMesh, as_checked, checked_mesh, read_only, refuse_faces
 from mesh_normal.types import BoolArray, FloatArray, IndexArray
 

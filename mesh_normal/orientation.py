@@ -73,7 +73,7 @@ from typing import overload
 import numpy as np
 from numpy.typing import ArrayLike
 
-from mesh_normal import _core
+import mesh_normal._core as _core
 from mesh_normal.checks import CheckedMesh
 from mesh_normal.choices import Method as Method
 from mesh_normal.choices import Verdict as Verdict

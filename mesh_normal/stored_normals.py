@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mesh_normal import _core
+import mesh_normal._core as _core
 from mesh_normal.corners import corner_normals
 from mesh_normal.faces import FaceGeometry
 from mesh_normal.files import LoadedMesh

@@ -46,7 +46,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from mesh_normal import _core
+import mesh_normal._core as _core
 from mesh_normal.checks import CheckedMesh, check_faces, read_only
 from mesh_normal.faces import FaceGeometry
 from mesh_normal.types import BoolArray, FloatArray, IndexArray, ParityArray

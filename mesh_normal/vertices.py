@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from mesh_normal import _core
+import mesh_normal._core as _core
 from mesh_normal.checks import CheckedMesh, refuse_faces
 from mesh_normal.choices import Weighting as Weighting
 from mesh_normal.faces import FaceGeometry, MeshInput, kernel_ranged_input

@@ -39,7 +39,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from mesh_normal import _core
+import mesh_normal._core as _core
 from mesh_normal.bounds import column_bounds
 from mesh_normal.types import BoolArray, FloatArray, IndexArray, ParityArray
 

@@ -110,11 +110,14 @@ class LoadedMesh:
 
         A mesh the reader built is not checked again: :func:`build` checked its arrays by the
         rules of :func:`~mesh_normal.checks.check_mesh` and made them read-only. One built by
-        hand is checked now, with a ``ValueError`` for the first problem.
+        hand is checked now, with a ``ValueError`` for the first problem, and so is a reader's
+        mesh whose arrays were replaced by views in another layout (the compiled core reads
+        C-contiguous rows only).
         """
         from mesh_normal.checks import CheckedMesh, checked_mesh, scaling  # numpy only
 
-        if not self.from_reader:
+        laid_out = self.vertices.flags.c_contiguous and self.faces.flags.c_contiguous
+        if not self.from_reader or not laid_out:
             return checked_mesh(self.vertices, self.faces)
         return CheckedMesh(self.vertices, self.faces, *scaling(self.vertices), self.distinct_points)
 

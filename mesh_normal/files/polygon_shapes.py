@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mesh_normal import _core
+import mesh_normal._core as _core
 from mesh_normal.types import BoolArray, FloatArray, IndexArray
 
 

@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from mesh_normal import _core
+import mesh_normal._core as _core
 from mesh_normal.points.orient import (
     ORIENT_MODES,
     ComponentOrientation,

@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mesh_normal import _core
+import mesh_normal._core as _core
 from mesh_normal.choices import OrientMode as OrientMode
 from mesh_normal.tolerances import ORIENT_POINT_COSINE, ORIENT_SEED_COSINE
 from mesh_normal.types import BoolArray, FloatArray, IndexArray

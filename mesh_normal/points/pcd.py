@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from mesh_normal import _core
+import mesh_normal._core as _core
 from mesh_normal.files import expansion
 from mesh_normal.files.errors import MeshFileError
 from mesh_normal.points.cloud import POINT_JOB_BYTES, PointCloud, make_cloud
