@@ -371,7 +371,8 @@ struct Ring {
   }
 };
 
-// Python's min and max as numba compiles them: the new value where it compares less (more).
+// The running minimum and maximum take the new value only where it compares less (more), so a
+// NaN never replaces a number and a number never replaces a NaN already taken (not std::min).
 double lesser(double acc, double value) { return value < acc ? value : acc; }
 double greater(double acc, double value) { return value > acc ? value : acc; }
 
