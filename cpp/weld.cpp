@@ -372,7 +372,7 @@ struct Ring {
 };
 
 // The running minimum and maximum take the new value only where it compares less (more), so a
-// NaN never replaces a number and a number never replaces a NaN already taken (not std::min).
+// NaN never replaces a number and a number never replaces a NaN already taken.
 double lesser(double acc, double value) { return value < acc ? value : acc; }
 double greater(double acc, double value) { return value > acc ? value : acc; }
 
