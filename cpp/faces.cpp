@@ -156,6 +156,19 @@ struct Mesh {
     return good;
   }
 
+  // each_face over faces 0 .. count - 1 on every thread (parallel_for); false if a block held
+  // an index out of range.
+  template <typename Body>
+  bool each_face_in_parallel(std::int64_t count, const Body& body) const {
+    std::atomic<bool> bad{false};
+    parallel_for(count, kGrain, [&](std::int64_t begin, std::int64_t end) {
+      if (!each_face(begin, end, body)) {
+        bad.store(true, std::memory_order_relaxed);
+      }
+    });
+    return !bad.load();
+  }
+
   // The edges B - A, C - B, A - C of a face's gathered corners.
   static Edges edges_of(const double* c) {
     const Vec a{c[0], c[1], c[2]}, b{c[3], c[4], c[5]}, d{c[6], c[7], c[8]};
@@ -240,24 +253,17 @@ bool face_normals(Points points, double factor, Faces faces, int exponent,
   bool* flag = degenerate.data();
   // 2**exponent where it is a normal double (one rounding, as ldexp's); ldexp beyond.
   const double power = exponent >= -1022 && exponent <= 1023 ? std::ldexp(1.0, exponent) : 0.0;
-  std::atomic<bool> bad{false};
   nb::gil_scoped_release release;
-  parallel_for(count, kGrain, [&](std::int64_t begin, std::int64_t end) {
-    const bool good = mesh.each_face(begin, end, [&](std::int64_t face, const Edges& edges) {
-      const Cross made = face_cross(edges);
-      const double length = std::sqrt(made.square);
-      const double divisor = made.found == kDegenerateFace ? 1.0 : length;
-      normal[3 * face] = made.normal.x / divisor + 0.0;  // -0.0 becomes 0.0
-      normal[3 * face + 1] = made.normal.y / divisor + 0.0;
-      normal[3 * face + 2] = made.normal.z / divisor + 0.0;
-      area[face] = power != 0.0 ? length * power : std::ldexp(length, exponent);
-      flag[face] = made.found == kDegenerateFace;
-    });
-    if (!good) {
-      bad.store(true, std::memory_order_relaxed);
-    }
+  return mesh.each_face_in_parallel(count, [&](std::int64_t face, const Edges& edges) {
+    const Cross made = face_cross(edges);
+    const double length = std::sqrt(made.square);
+    const double divisor = made.found == kDegenerateFace ? 1.0 : length;
+    normal[3 * face] = made.normal.x / divisor + 0.0;  // -0.0 becomes 0.0
+    normal[3 * face + 1] = made.normal.y / divisor + 0.0;
+    normal[3 * face + 2] = made.normal.z / divisor + 0.0;
+    area[face] = power != 0.0 ? length * power : std::ldexp(length, exponent);
+    flag[face] = made.found == kDegenerateFace;
   });
-  return !bad.load();
 }
 
 bool face_geometry(Points points, double factor, Faces faces, Rows crosses,
@@ -272,23 +278,16 @@ bool face_geometry(Points points, double factor, Faces faces, Rows crosses,
   double* length = lengths.data();
   bool* flat = degenerate.data();
   bool* again = recomputed.data();
-  std::atomic<bool> bad{false};
   nb::gil_scoped_release release;
-  parallel_for(count, kGrain, [&](std::int64_t begin, std::int64_t end) {
-    const bool good = mesh.each_face(begin, end, [&](std::int64_t face, const Edges& edges) {
-      const Cross made = face_cross(edges);
-      product[3 * face] = made.normal.x;
-      product[3 * face + 1] = made.normal.y;
-      product[3 * face + 2] = made.normal.z;
-      length[face] = std::sqrt(made.square);
-      flat[face] = made.found == kDegenerateFace;
-      again[face] = made.found != kAtFirstCorner;
-    });
-    if (!good) {
-      bad.store(true, std::memory_order_relaxed);
-    }
+  return mesh.each_face_in_parallel(count, [&](std::int64_t face, const Edges& edges) {
+    const Cross made = face_cross(edges);
+    product[3 * face] = made.normal.x;
+    product[3 * face + 1] = made.normal.y;
+    product[3 * face + 2] = made.normal.z;
+    length[face] = std::sqrt(made.square);
+    flat[face] = made.found == kDegenerateFace;
+    again[face] = made.found != kAtFirstCorner;
   });
-  return !bad.load();
 }
 
 void unit_normals(Points crosses, Values lengths, Marks degenerate,
@@ -529,20 +528,13 @@ bool corner_weights(int code, Points points, double factor, Faces faces,
   const double* length = lengths.data();
   const bool* flat = degenerate.data();
   double* weight = weights.data();
-  std::atomic<bool> bad{false};
   nb::gil_scoped_release release;
-  parallel_for(count, kGrain, [&](std::int64_t begin, std::int64_t end) {
-    const bool good = mesh.each_face(begin, end, [&](std::int64_t face, const Edges& edges) {
-      const Vec w = flat[face] ? Vec{0.0, 0.0, 0.0} : face_weights(code, edges, length[face]);
-      weight[face] = w.x;
-      weight[count + face] = w.y;
-      weight[2 * count + face] = w.z;
-    });
-    if (!good) {
-      bad.store(true, std::memory_order_relaxed);
-    }
+  return mesh.each_face_in_parallel(count, [&](std::int64_t face, const Edges& edges) {
+    const Vec w = flat[face] ? Vec{0.0, 0.0, 0.0} : face_weights(code, edges, length[face]);
+    weight[face] = w.x;
+    weight[count + face] = w.y;
+    weight[2 * count + face] = w.z;
   });
-  return !bad.load();
 }
 
 // --- bounds and ranges ----------------------------------------------------------------------
