@@ -32,7 +32,7 @@ from pathlib import Path
 
 from benchmarks import tables
 from benchmarks.mesh_kernels import torus_mesh
-from benchmarks.startup import free, get, post
+from benchmarks.startup import serve
 
 ROOT = Path(__file__).resolve().parent.parent
 VENV_BIN = Path(sys.executable).parent
@@ -88,24 +88,8 @@ def torus_obj(path: Path) -> None:
 
 def first_upload(mesh: Path) -> float:
     """Seconds from a fresh server's first page to the answer of its first mesh upload."""
-    free(PORT)
-    server = subprocess.Popen(
-        [str(VENV_BIN / "uvicorn"), "app.main:app", "--host", "127.0.0.1", "--port", str(PORT)],
-        cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-    )  # fmt: skip
-    try:
-        while True:
-            try:
-                get(f"http://127.0.0.1:{PORT}/")
-                break
-            except OSError:
-                if server.poll() is not None:
-                    raise RuntimeError(f"the server exited with {server.returncode}") from None
-                time.sleep(0.01)
-        return post(f"http://127.0.0.1:{PORT}/api/mesh?filename={mesh.name}", mesh.read_bytes())
-    finally:
-        server.terminate()
-        server.wait(timeout=30)
+    _, (seconds,) = serve("app.main:app", PORT, "/", 1, (mesh.name, mesh.read_bytes()))
+    return seconds
 
 
 def figures(values: list[float]) -> tuple[float, float]:

@@ -69,9 +69,15 @@ def post(url: str, data: bytes) -> float:
     return time.perf_counter() - started
 
 
-def serve(app: str, port: int, path: str, uploads: int) -> tuple[float, list[float]]:
+def serve(
+    app: str,
+    port: int,
+    path: str,
+    uploads: int,
+    mesh: tuple[str, bytes] = ("tetra.obj", TETRAHEDRON),
+) -> tuple[float, list[float]]:
     """Seconds from starting uvicorn to the first answer of ``path``; then ``uploads`` uploads
-    of the tetrahedron, each timed."""
+    of ``mesh`` (a file name and its bytes; the tetrahedron by default), each timed."""
     free(port)
     started = time.perf_counter()
     server = subprocess.Popen(
@@ -88,8 +94,9 @@ def serve(app: str, port: int, path: str, uploads: int) -> tuple[float, list[flo
                     raise RuntimeError(f"{app} exited with {server.returncode}") from None
                 time.sleep(0.005)
         first_page = time.perf_counter() - started
-        url = f"http://127.0.0.1:{port}/api/mesh?filename=tetra.obj"
-        return first_page, [post(url, TETRAHEDRON) for _ in range(uploads)]
+        name, data = mesh
+        url = f"http://127.0.0.1:{port}/api/mesh?filename={name}"
+        return first_page, [post(url, data) for _ in range(uploads)]
     finally:
         server.send_signal(signal.SIGINT)
         try:
