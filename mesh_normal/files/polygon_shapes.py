@@ -22,7 +22,7 @@ from mesh_normal.types import BoolArray, FloatArray, IndexArray
 @dataclass(frozen=True)
 class Shapes:
     """Every polygon measured on its own plane (full length; polygons under four corners are
-    never folded and have deviation 0).
+    never folded and have a zero normal and deviation 0).
 
     Attributes
     ----------
@@ -49,7 +49,7 @@ def measure_polygons(
     if len(corner_vertices) != counts.sum():
         return None
     starts = np.cumsum(counts) - counts
-    normals, deviation = np.empty((len(counts), 3)), np.zeros(len(counts))
+    normals, deviation = np.zeros((len(counts), 3)), np.zeros(len(counts))
     folded = np.zeros(len(counts), dtype=bool)
     if not _core.polygon_shapes(
         counts, starts, corner_vertices, vertices, normals, deviation, folded
