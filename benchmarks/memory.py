@@ -160,7 +160,7 @@ def run_path(path_name: str, data: bytes, filename: str) -> None:
 
     mesh = read_mesh(data, filename)
     if path_name == "report":
-        build_report(analyse_mesh(mesh, filename, len(data))).model_dump_json()
+        build_report(analyse_mesh(mesh, filename, len(data))).to_json()
     elif path_name in ("face", "vertex", "corner", "corner-json"):
         # As the server answers: the normals computed (corner normals made a block at a time
         # as they are written), then written in blocks as they are sent.

@@ -112,7 +112,7 @@ def ours_report(data: bytes, name: str) -> None:
     from mesh_normal.files import read_mesh
 
     mesh = read_mesh(data, name)
-    build_report(analyse_mesh(mesh, name, len(data))).model_dump_json()
+    build_report(analyse_mesh(mesh, name, len(data))).to_json()
 
 
 def trimesh_load(data: bytes, file_type: str) -> None:

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 import numbers
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -173,7 +173,7 @@ def analyse(
     -------
     MeshReport
         Counts, checks, the fix and the diagnosis, as ``POST /api/mesh`` answers them:
-        ``report.model_dump_json()`` is that JSON, ``report.problems`` the diagnosis.
+        ``report.to_json()`` is that JSON, ``report.problems`` the diagnosis.
 
     Raises
     ------
@@ -230,7 +230,7 @@ def build_report(analysis: MeshAnalysis) -> MeshReport:
         notes=list(mesh.notes),
         problems=[],  # the diagnosis reads the rest of the report
     )
-    return report.model_copy(update={"problems": problems(report)})
+    return replace(report, problems=problems(report))
 
 
 def _objects(analysis: MeshAnalysis) -> list[ObjectReport]:

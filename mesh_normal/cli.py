@@ -11,7 +11,7 @@ Exit codes a script can use:
 - 4: the output file cannot be written.
 
 It starts fast: this module imports only the standard library and the format table, and each
-command imports the library (numpy, the compiled core, pydantic) when it runs, so ``--help``
+command imports the library (numpy, the compiled core) when it runs, so ``--help``
 and usage errors answer at once.
 """
 
@@ -151,7 +151,7 @@ def analyze(args: argparse.Namespace, progress: Progress) -> int:
     report = build_report(analyse_mesh(mesh, Path(args.file).name, size, weld=args.weld))
     progress.done()
     if args.json:  # the JSON of POST /api/mesh, indented; allow_nan=False: never NaN
-        print(json.dumps(report.model_dump(mode="json"), indent=2, allow_nan=False))
+        print(json.dumps(report.to_dict(), indent=2, allow_nan=False))
     else:
         print(summary(report))
     serious = any(item.severity == "error" for item in report.problems)

@@ -159,7 +159,7 @@ def page(upload: Upload, stem: str, base_url: str) -> dict[str, Any]:
         "report": built,
         # The JSON twin is the API's own JSON (non-finite floats already null), parsed back
         # so that the template's json_script escapes it for a <script> block.
-        "report_json": json.loads(built.model_dump_json()),
+        "report_json": json.loads(built.to_json()),
         "figures": mesh_figures(analysis),
         "classes": CLASSES,
         "stem": stem,

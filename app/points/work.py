@@ -112,7 +112,7 @@ def page(data: bytes, filename: str | None, options: Options) -> dict[str, Any]:
         "report": result.report,
         # The API's own JSON (non-finite floats already null), parsed back so that the
         # template's json_script escapes it for a <script> block.
-        "report_json": json.loads(result.report.model_dump_json()),
+        "report_json": json.loads(result.report.to_json()),
         "view": view_figure(result),
         "histogram": histogram_figure(result),
     }

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import dataclasses
 import io
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -53,7 +53,7 @@ def _read(
     header: dict[str, Any],
     chunk: memoryview | None,
     resolve: Resolver | None,
-    file_format: str,
+    file_format: Literal["glb", "gltf"],
 ) -> LoadedMesh:
     from trimesh.exchange.gltf import load_gltf  # imported on first use: trimesh is slow
 
@@ -105,7 +105,7 @@ def _world_transforms(scene: dict[str, Any]) -> list[tuple[NDArray[np.float64], 
     return placed
 
 
-def _flatten(scene: dict[str, Any], file_format: str) -> LoadedMesh:
+def _flatten(scene: dict[str, Any], file_format: Literal["glb", "gltf"]) -> LoadedMesh:
     geometry = scene.get("geometry") or {}
     parts: list[tuple[NDArray[np.float64], NDArray[np.intp], NDArray[np.float64] | None]] = []
     colors: list[NDArray[Any] | None] = []

@@ -12,6 +12,7 @@ from numpy.typing import NDArray
 
 from mesh_normal.checks import _coordinate_range, _index_range
 from mesh_normal.files.errors import MeshFileError
+from mesh_normal.report import MeshFormat
 from mesh_normal.types import FloatArray, IndexArray
 
 if TYPE_CHECKING:
@@ -90,7 +91,7 @@ class LoadedMesh:
 
     vertices: FloatArray
     faces: IndexArray
-    format: str
+    format: MeshFormat
     source_faces: int
     file_face_normals: FloatArray | None = None
     file_vertex_normals: FloatArray | None = None
@@ -123,7 +124,7 @@ class LoadedMesh:
 
 
 def build(
-    file_format: str,
+    file_format: MeshFormat,
     vertices: NDArray[np.floating],
     faces: NDArray[np.integer],
     *,

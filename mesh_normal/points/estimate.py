@@ -120,7 +120,7 @@ class PointNormals:
     neighbours: IndexArray
     valid: BoolArray
     status: NDArray[np.uint8]
-    orient: str
+    orient: OrientMode
     components: tuple[ComponentOrientation, ...]
 
     @property

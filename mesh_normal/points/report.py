@@ -4,7 +4,7 @@
 sums them up in a :class:`PointReport`: the file, the bounds, how far apart the points are, the
 neighbourhood used, how many points got each :class:`~mesh_normal.points.PointStatus`, how
 each part was oriented, how the normals the file stores agree with ours, and a diagnosis in
-plain sentences. ``report.model_dump_json()`` is the JSON of ``POST /api/points``; like the
+plain sentences. ``report.to_json()`` is the JSON of ``POST /api/points``; like the
 mesh report's, it never holds ``NaN`` or ``Infinity``.
 """
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import json
 import math
@@ -10,7 +11,7 @@ from typing import Any, get_args
 
 import numpy as np
 import pytest
-from pydantic import BaseModel, ValidationError
+from pydantic import TypeAdapter, ValidationError
 
 import mesh_normal as mn
 from mesh_normal.analysis import analyse, analyse_mesh, build_report
@@ -108,7 +109,7 @@ def test_open_box_is_a_warning() -> None:
 
 def test_the_json_keys_keep_their_names_and_order() -> None:
     report = report_of(CUBE_ONE_FLIPPED_OBJ)
-    data = strict_json(report.model_dump_json())
+    data = strict_json(report.to_json())
     assert list(data) == KEYS
     assert list(data["file"]) == ["name", "format", "bytes"]
     assert list(data["fix"]) == [
@@ -134,7 +135,7 @@ def test_file_normals_of_an_stl() -> None:
     data = write_mesh(mesh.vertices, mesh.faces, "stl")
     stored = build_report(analyse_mesh(read_mesh(data, "t.stl"), "t.stl", len(data))).file_normals
     assert stored is not None
-    data_keys = list(strict_json(stored.model_dump_json()))
+    data_keys = list(strict_json(stored.to_json()))
     assert data_keys == [
         "kind",
         "compared_with",
@@ -159,38 +160,45 @@ def test_an_overflowing_area_is_null_never_nan() -> None:
     report = report_of(HUGE_TETRA_OBJ)
     assert report.area is None and report.volume is None
     assert "overflow" in [p.code for p in report.problems]
-    data = strict_json(report.model_dump_json())
+    data = strict_json(report.to_json())
     assert data["area"] is None and data["volume"] is None
     assert data["bounds"]["max"] == [1e200, 1e200, 1e200]
 
 
-@pytest.mark.parametrize("value", [math.inf, -math.inf, math.nan])
+@pytest.mark.parametrize("value", [math.inf, -math.inf, math.nan, np.float64(math.nan)])
 def test_a_measure_that_is_not_finite_becomes_none(value: float) -> None:
-    report = report_of(CUBE_OBJ).model_copy(update={"area": value})  # model_copy skips validation
-    assert report.area is not None and not math.isfinite(report.area)
-    assert strict_json(report.model_dump_json())["area"] is None  # the models write null
-    rebuilt = MeshReport.model_validate({**report.model_dump(), "area": value})
-    assert rebuilt.area is None
-    strict_json(rebuilt.model_dump_json())
+    report = dataclasses.replace(report_of(CUBE_OBJ), area=value)
+    assert report.area is None
+    assert strict_json(report.to_json())["area"] is None
+    assert report.to_dict()["area"] is None
 
 
-def test_bounds_refuse_coordinates_that_are_not_finite() -> None:
-    with pytest.raises(ValidationError, match="finite"):
-        Bounds(min=[0.0, 0.0, 0.0], max=[math.inf, 0.0, 0.0])
+def test_numpy_scalars_become_python_values() -> None:
+    report = dataclasses.replace(
+        report_of(CUBE_OBJ), vertices=np.int64(8), watertight=np.bool_(True), area=np.float64(6)
+    )
+    assert [type(value) for value in (report.vertices, report.watertight, report.area)] == [
+        int,
+        bool,
+        float,
+    ]
+    assert strict_json(report.to_json())["vertices"] == 8
 
 
-def test_the_models_check_what_they_hold() -> None:
-    fields = report_of(CUBE_OBJ).model_dump()
+def test_the_schema_checks_what_a_report_holds() -> None:
+    adapter = TypeAdapter(MeshReport)
+    fields = report_of(CUBE_OBJ).to_dict()
+    assert adapter.validate_python(fields) == report_of(CUBE_OBJ)
     for update in ({"orientation": "sideways"}, {"vertices": -1}, {"surplus": 1}):
         with pytest.raises(ValidationError):
-            MeshReport.model_validate({**fields, **update})
+            adapter.validate_python({**fields, **update})
     with pytest.raises(ValidationError):
-        FileInfo(name=None, format="xyz", bytes=1)  # type: ignore[arg-type]
+        adapter.validate_python({**fields, "bounds": {"min": [0, 0, 0], "max": [0, 0]}})
 
 
 def test_the_report_is_frozen() -> None:
     report = report_of(CUBE_OBJ)
-    with pytest.raises(ValidationError, match="frozen"):
+    with pytest.raises(dataclasses.FrozenInstanceError):
         report.area = 1.0  # type: ignore[misc]
 
 
@@ -198,25 +206,21 @@ def test_the_format_literal_lists_every_readable_format() -> None:
     assert set(get_args(MeshFormat)) == set(SUFFIXES.values())
 
 
-def _described(model: type[BaseModel]) -> list[str]:
-    """The fields of ``model`` and its nested models that have no description."""
-    missing = []
-    for name, field in model.model_fields.items():
-        if not field.description:
-            missing.append(f"{model.__name__}.{name}")
-        for argument in _models_in(field.annotation):
-            missing += _described(argument)
-    return missing
-
-
-def _models_in(annotation: Any) -> list[type[BaseModel]]:
-    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
-        return [annotation]
-    return [model for argument in get_args(annotation) for model in _models_in(argument)]
+def _described(schema: dict[str, Any]) -> list[str]:
+    """The properties of the schema and its definitions that have no description."""
+    parts = {"MeshReport": schema, **schema.get("$defs", {})}
+    return [
+        f"{name}.{key}"
+        for name, part in parts.items()
+        for key, field in part["properties"].items()
+        if not field.get("description")
+    ]
 
 
 def test_every_field_has_a_description() -> None:
-    assert _described(MeshReport) == []
+    schema = TypeAdapter(MeshReport).json_schema()
+    assert _described(schema) == []
+    assert len(schema["$defs"]) == 8  # every nested part was looked at
 
 
 # --- mn.analyse: the report from a path, bytes, a file object or a mesh already read ----------
@@ -242,9 +246,7 @@ def test_mn_analyse_takes_bytes_a_file_object_or_a_loaded_mesh(tmp_path: Path) -
         assert mn.analyse(stream).file.name == "cube.obj"
     from_mesh = mn.analyse(read_mesh(data, "cube.obj"))
     assert from_mesh.file == FileInfo(name=None, format="obj", bytes=0)
-    assert from_mesh.model_dump(exclude={"file"}) == report_of(CUBE_OBJ).model_dump(
-        exclude={"file"}
-    )
+    assert from_mesh == dataclasses.replace(report_of(CUBE_OBJ), file=from_mesh.file)
 
 
 def test_mn_analyse_is_the_report_and_the_arrays_stay_available() -> None:
@@ -324,9 +326,7 @@ def test_a_weld_of_zero_is_shown_and_joins_nothing() -> None:
     report = mn.analyse(stepped_cube(), weld=0.0)
     assert report.weld is not None
     assert (report.weld.tolerance, report.weld.distance, report.weld.joined_vertices) == (0, 0, 0)
-    assert report.model_dump(exclude={"weld"}) == mn.analyse(stepped_cube()).model_dump(
-        exclude={"weld"}
-    )
+    assert dataclasses.replace(report, weld=None) == mn.analyse(stepped_cube())
 
 
 @pytest.mark.parametrize("weld", [-1e-6, 0.0101, 1.0, math.nan, math.inf, "1e-6", True])
@@ -336,10 +336,10 @@ def test_a_weld_out_of_range_is_a_value_error_naming_it(weld: Any) -> None:
 
 
 def test_the_weld_in_the_json() -> None:
-    data = strict_json(mn.analyse(stepped_cube(), weld=1e-6).model_dump_json())
+    data = strict_json(mn.analyse(stepped_cube(), weld=1e-6).to_json())
     assert list(data["weld"]) == ["tolerance", "distance", "joined_vertices"]
     assert data["weld"]["joined_vertices"] == 40
-    assert strict_json(mn.analyse(stepped_cube()).model_dump_json())["weld"] is None
+    assert strict_json(mn.analyse(stepped_cube()).to_json())["weld"] is None
 
 
 def test_a_weld_over_a_box_beyond_the_double_range_joins_nothing_wrongly() -> None:

@@ -140,7 +140,7 @@ def strict(report: MeshReport) -> Any:
     def refuse(name: str) -> None:
         pytest.fail(f"{name} in the report")
 
-    return json.loads(report.model_dump_json(), parse_constant=refuse)
+    return json.loads(report.to_json(), parse_constant=refuse)
 
 
 def assert_all_agree(report: MeshReport) -> FileNormals:
