@@ -18,17 +18,17 @@ and usage errors answer at once.
 from __future__ import annotations
 
 import argparse
-import importlib
 import json
 import math
 import os
 import sys
 import time
-from collections.abc import Callable, Collection, Iterator
+from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, TextIO, TypeVar
+from typing import TYPE_CHECKING, Any, TextIO, TypeVar, get_args
 
 from mesh_normal import __version__
+from mesh_normal.choices import NormalsChoice, NormalsKind, OrientMode, Weighting, Winding
 from mesh_normal.files.formats import SUFFIXES, WRITABLE
 from mesh_normal.tolerances import ORIENT_MAX_ANGLE, WELD_LIMIT
 
@@ -741,30 +741,6 @@ def serve(_args: argparse.Namespace, _progress: Progress) -> int:
     return EXIT_USAGE
 
 
-class Choices(Collection[str]):
-    """An argument's choices named by the module that defines them, imported on first use.
-
-    ``mesh-normal --help`` never looks at a subcommand's choices (given a ``metavar``), so it
-    does not import the module (and NumPy behind it); ``mesh-normal normals --help`` and
-    parsing do.
-    """
-
-    def __init__(self, module: str, name: str) -> None:
-        self.module, self.name = module, name
-
-    def values(self) -> tuple[str, ...]:
-        return tuple(getattr(importlib.import_module(self.module), self.name))
-
-    def __contains__(self, value: object) -> bool:
-        return value in self.values()
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(self.values())
-
-    def __len__(self) -> int:
-        return len(self.values())
-
-
 def parser() -> argparse.ArgumentParser:
     formats = ", ".join(sorted(SUFFIXES))
     main_parser = argparse.ArgumentParser(
@@ -795,14 +771,14 @@ def parser() -> argparse.ArgumentParser:
     # A metavar, because argparse formats a metavar from the choices as each is added.
     normals_parser.add_argument(
         "--kind",
-        choices=Choices("mesh_normal.exports", "KINDS"),
+        choices=get_args(NormalsKind),
         default="vertex",
         metavar="KIND",
         help="%(choices)s (default: %(default)s)",
     )
     normals_parser.add_argument(
         "--weighting",
-        choices=Choices("mesh_normal.vertices", "WEIGHTINGS"),
+        choices=get_args(Weighting),
         default="angle",
         metavar="WEIGHTING",
         help="of vertex normals: %(choices)s (default: %(default)s)",
@@ -846,7 +822,7 @@ def parser() -> argparse.ArgumentParser:
     add_output(export_parser)
     export_parser.add_argument(
         "--winding",
-        choices=Choices("mesh_normal.mesh_export", "WINDINGS"),
+        choices=get_args(Winding),
         default="keep",
         metavar="WINDING",
         help="%(choices)s: keep the faces, fix them (consistent and outward) or flip every "
@@ -881,7 +857,7 @@ def parser() -> argparse.ArgumentParser:
     )
     points_parser.add_argument(
         "--orient",
-        choices=Choices("mesh_normal.points.orient", "ORIENT_MODES"),
+        choices=get_args(OrientMode),
         metavar="MODE",
         help="%(choices)s (default: mst, or viewpoint/direction when that option is given)",
     )
@@ -929,7 +905,7 @@ def add_output(command: argparse.ArgumentParser) -> None:
     command.add_argument("--format", choices=FIX_FORMATS)
     command.add_argument(
         "--normals",
-        choices=Choices("mesh_normal.mesh_export", "NORMALS_CHOICES"),
+        choices=get_args(NormalsChoice),
         default="auto",
         metavar="KIND",
         help="%(choices)s: the normals to write, computed on the faces written (default: "
@@ -937,7 +913,7 @@ def add_output(command: argparse.ArgumentParser) -> None:
     )
     command.add_argument(
         "--weighting",
-        choices=Choices("mesh_normal.vertices", "WEIGHTINGS"),
+        choices=get_args(Weighting),
         default="angle",
         metavar="WEIGHTING",
         help="of vertex and corner normals: %(choices)s (default: %(default)s)",

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import io
 from collections.abc import Iterator
-from typing import Literal, TypeAlias
+from typing import Literal, TypeAlias, get_args
 
 import numpy as np
 from numpy.typing import NDArray
@@ -18,7 +18,7 @@ from mesh_normal.files.ply import ply_bytes
 from mesh_normal.vertices import Weighting, vertex_normals
 
 NormalsFormat = Literal["json", "csv", "npy"]
-KINDS: tuple[NormalsKind, ...] = ("face", "vertex", "corner")
+KINDS: tuple[NormalsKind, ...] = get_args(NormalsKind)
 FORMATS: tuple[NormalsFormat, ...] = ("json", "csv", "npy")
 #: Normals a block of a streamed file holds (faces for corner normals): each block is a
 #: short step, a few milliseconds.
@@ -152,11 +152,6 @@ def _npy_blocks(normals: Normals, rows: int) -> Iterator[bytes]:
     yield header.getvalue()
     for start in range(0, len(normals), rows):
         yield np.ascontiguousarray(_rows(normals, start, start + rows), dtype="<f8").tobytes()
-
-
-def normals_csv(normals: NDArray[np.float64], kind: NormalsKind) -> bytes:
-    """One row per face, vertex or corner; 17 significant digits, so every value round-trips."""
-    return b"".join(_csv_blocks(normals, kind, BLOCK_ROWS))
 
 
 def _csv_blocks(normals: Normals, kind: NormalsKind, rows: int) -> Iterator[bytes]:

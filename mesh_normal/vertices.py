@@ -22,6 +22,7 @@ gets a zero row and ``True`` in the ``missing`` mask; nothing is NaN.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import get_args
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -32,7 +33,7 @@ from mesh_normal.choices import Weighting as Weighting
 from mesh_normal.faces import FaceGeometry, MeshInput, kernel_ranged_input
 from mesh_normal.types import BoolArray, FloatArray
 
-WEIGHTINGS: tuple[Weighting, ...] = ("uniform", "area", "angle", "max")
+WEIGHTINGS: tuple[Weighting, ...] = get_args(Weighting)
 
 
 @dataclass(frozen=True, slots=True)

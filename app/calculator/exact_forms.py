@@ -32,7 +32,7 @@ from app.calculator.mathml import (
     row,
     sqrt,
 )
-from mesh_normal.exact import OutOfRange, root_over, square_root
+from mesh_normal.exact import root_over, square_root
 from mesh_normal.triangle import AXES, rational_exact
 
 RationalPoint = tuple[Fraction, Fraction, Fraction]
@@ -45,19 +45,6 @@ _LIMIT = 10**MAX_DIGITS
 
 #: The largest decimal exponent read exactly: ``Fraction("1e-99999999")`` would never finish.
 MAX_EXACT_EXPONENT = 30
-
-
-def exact_decimal(text: str) -> Fraction | None:
-    """The exact value of decimal text that :func:`parse_decimal` accepted, or ``None``.
-
-    ``None`` when the exponent is beyond ±``MAX_EXACT_EXPONENT``; the exponent is checked
-    before any Fraction is built.
-    """
-    stripped = text.strip(" \t\n\r\f\v")  # params.SPACE
-    _, _, exponent = stripped.lower().partition("e")
-    if exponent and abs(int(exponent)) > MAX_EXACT_EXPONENT:
-        return None
-    return Fraction(stripped)
 
 
 @dataclass(frozen=True, slots=True)
@@ -261,13 +248,6 @@ def rounded_exact(x: Fraction) -> float | None:
     except OverflowError:
         return None
     return None if value == 0 and x != 0 else value
-
-
-def rounded_surd(s: Surd) -> float | None:
-    try:
-        return s.rounded()
-    except OutOfRange:
-        return None
 
 
 # --- MathML for the result card ---------------------------------------------------------------

@@ -34,7 +34,6 @@ from mesh_normal.files.formats import (
     MeshFormat,
     suffix_format,
 )
-from mesh_normal.files.loaded import LoadedMesh
 
 StrPath = str | os.PathLike[str]
 NormalsKind = Literal["face", "vertex", "corner"]
@@ -208,21 +207,6 @@ def unkept(
     if objects > 1 and file_format not in HOLDS_GROUPS:
         dropped.append(f"the division into {objects:,} objects (the {title} written is one mesh)")
     return dropped
-
-
-def write_fixed(mesh: LoadedMesh, faces: ArrayLike, file_format: str) -> tuple[bytes, list[str]]:
-    """``mesh`` with new ``faces`` (the fix's) as a file of ``file_format``, its vertex and face
-    colours kept where the format holds them, and what it leaves out, in words (:func:`unkept`,
-    with the mesh's objects): what the fix's callers must say, never drop silently."""
-    data = write_mesh(
-        mesh.vertices,
-        faces,
-        file_format,
-        vertex_colors=mesh.vertex_colors,
-        face_colors=mesh.face_colors,
-    )
-    objects = len(mesh.group_names or ())
-    return data, unkept(file_format, mesh.vertex_colors, mesh.face_colors, objects=objects)
 
 
 def checked_normals(

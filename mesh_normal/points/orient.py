@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, get_args
 
 import numpy as np
 from numpy.typing import NDArray
@@ -39,14 +39,7 @@ from mesh_normal.choices import OrientMode as OrientMode
 from mesh_normal.tolerances import ORIENT_POINT_COSINE, ORIENT_SEED_COSINE
 from mesh_normal.types import BoolArray, FloatArray, IndexArray
 
-ORIENT_MODES: tuple[OrientMode, ...] = (
-    "mst",
-    "riemannian",
-    "viewpoint",
-    "direction",
-    "file",
-    "none",
-)
+ORIENT_MODES: tuple[OrientMode, ...] = get_args(OrientMode)
 
 #: Added to every edge weight: scipy's graphs take a zero weight for no edge. Adding the same
 #: amount to every edge does not change which spanning tree is least.

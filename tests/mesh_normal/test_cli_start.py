@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 import mesh_normal
-from mesh_normal.cli import SERVE_HINT, Choices, main
+from mesh_normal.cli import SERVE_HINT, main
 from tests.paths import ROOT
 
 HEAVY = ("numpy", "pydantic", "pydantic_core", "trimesh", "scipy")
@@ -115,16 +115,6 @@ def test_serve_rejects_an_unknown_option(capsys: pytest.CaptureFixture[str]) -> 
         main(["serve", "--reload"])
     assert exit_info.value.code == 2
     assert "unrecognized arguments: --reload" in capsys.readouterr().err
-
-
-def test_lazy_choices_are_the_library_s() -> None:
-    from mesh_normal.exports import KINDS
-    from mesh_normal.vertices import WEIGHTINGS
-
-    kinds = Choices("mesh_normal.exports", "KINDS")
-    assert tuple(kinds) == KINDS and len(kinds) == len(KINDS)
-    assert "corner" in kinds and "edge" not in kinds
-    assert tuple(Choices("mesh_normal.vertices", "WEIGHTINGS")) == WEIGHTINGS
 
 
 def test_a_bad_choice_names_the_choices(capsys: pytest.CaptureFixture[str]) -> None:
