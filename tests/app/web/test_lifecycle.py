@@ -224,3 +224,58 @@ def test_a_job_past_its_time_is_a_422_and_its_worker_lives_on(
         tmp_path / "quick" / "started"
     ).read_text()
     assert same, "the worker was replaced"
+
+
+def session_members(session: int) -> list[int]:
+    """The live processes of a session (a worker that outlived its parent keeps the session)."""
+    members = []
+    for entry in filter(str.isdigit, os.listdir("/proc")):
+        try:
+            with open(f"/proc/{entry}/stat") as stat:
+                fields = stat.read().rsplit(") ", 1)[1].split()
+        except (FileNotFoundError, ProcessLookupError):
+            continue
+        if fields[0] != "Z" and int(fields[3]) == session:
+            members.append(int(entry))
+    return members
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/self/stat"), reason="reads /proc")
+@pytest.mark.parametrize("after", [0.0, 0.5])
+def test_a_server_stopped_while_it_starts_leaves_no_process(tmp_path: Path, after: float) -> None:
+    """SIGTERM just after the first page, while the fork server imports and the workers warm:
+    the server and every process it started are gone within 5 s."""
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    command = [sys.executable, "-m", "uvicorn", "app.main:app", "--port", str(port)]
+    with (tmp_path / "server.log").open("wb") as log:
+        process = subprocess.Popen(
+            [*command, "--host", "127.0.0.1"],
+            cwd=ROOT,
+            stdout=log,
+            stderr=subprocess.STDOUT,
+            env={**os.environ, "MESH_WORKERS": "2"},
+            start_new_session=True,
+        )
+    try:
+
+        def answers() -> bool:
+            assert process.poll() is None, (tmp_path / "server.log").read_text()
+            try:
+                return httpx.get(f"http://127.0.0.1:{port}/").status_code == 200
+            except httpx.TransportError:
+                return False
+
+        eventually(answers)
+        time.sleep(after)
+        process.send_signal(signal.SIGTERM)
+        stopped = time.monotonic()
+        process.wait(GONE_WITHIN_S)
+        eventually(lambda: not session_members(process.pid), 5 - (time.monotonic() - stopped))
+    finally:
+        for member in session_members(process.pid):
+            with suppress(ProcessLookupError):
+                os.kill(member, signal.SIGKILL)
+        with suppress(ProcessLookupError):
+            process.kill()
