@@ -2,16 +2,6 @@
 
 from __future__ import annotations
 
-import gc
-
-# Python's cyclic garbage collector is paused while the app's modules load and the app is made,
-# then everything made so far is frozen out of its later passes (``gc.freeze``) and it resumes
-# (the end of this module). Its passes over the hundreds of thousands of objects that FastAPI,
-# pydantic and our routes create at import take about an eighth of the time to import the
-# app, and the first page waits for that import.
-_COLLECTING = gc.isenabled()
-gc.disable()
-
 import asyncio
 import importlib
 import signal
@@ -38,7 +28,6 @@ from app.web.jsonio import FastJSONResponse
 from app.web.middleware import BodyLimit, HeadAsGet, PageCompression, SecurityHeaders
 from app.web.static import STATIC_DIR, CompressedStaticFiles
 from app.web.workers import tune_allocator
-from mesh_normal.collector import paused
 
 #: The modules of the heavy work: the jobs with their readers, the compiled core and NumPy.
 #: The server answers its first page without them, and imports them in a thread once it is up
@@ -125,10 +114,9 @@ def end_jobs_on_stop(jobs: Jobs) -> Callable[[], None]:
 
 
 def load_heavy_modules() -> None:
-    """Import :data:`HEAVY_MODULES`, the garbage collector paused (:mod:`mesh_normal.collector`)."""
-    with paused():
-        for name in HEAVY_MODULES:
-            importlib.import_module(name)
+    """Import :data:`HEAVY_MODULES`."""
+    for name in HEAVY_MODULES:
+        importlib.import_module(name)
 
 
 def warm_workers() -> None:
@@ -196,9 +184,4 @@ def build_routes(routes: list[Any]) -> None:
             route.effective_low_priority_routes()
 
 
-try:
-    app = create_app()
-    gc.freeze()
-finally:
-    if _COLLECTING:  # as it was before (an import that failed above leaves the process anyway)
-        gc.enable()
+app = create_app()
