@@ -218,6 +218,19 @@ def test_python_dash_m_help_imports_no_numpy_there(installed: Installed) -> None
     assert "numpy" not in imported and "mesh_normal._core" not in imported
 
 
+def test_a_report_and_its_json_load_no_pydantic(installed: Installed) -> None:
+    # The reports are dataclasses: a new process's first answer does not pay for pydantic, and
+    # the library does not install it.
+    script = (
+        "import json, sys, mesh_normal as mn\n"
+        "report = mn.analyse('cow.obj')\n"
+        "print(report.faces, json.loads(report.to_json())['faces'], 'pydantic' in sys.modules)\n"
+    )
+    completed = installed.run("python", "-c", script)
+    assert completed.returncode == 0, completed.stderr
+    assert completed.stdout == "5804 5804 False\n"
+
+
 def test_sizes(installed: Installed, record_property: pytest.RecordProperty) -> None:
     wheel_kb = installed.wheel.stat().st_size / 1024
     installed_mb = (
