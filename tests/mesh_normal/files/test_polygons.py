@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 import pytest
@@ -290,6 +291,26 @@ def test_the_measures_match_a_numpy_reference() -> None:
     np.testing.assert_allclose(shapes.deviation, deviation, rtol=1e-9, atol=1e-12)
     np.testing.assert_array_equal(shapes.folded, folded)
     assert folded[big].any() and not folded[big].all()
+
+
+def test_polygons_under_four_corners_measure_zero_whatever_new_memory_holds(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # The compiled pass skips them: their rows must be filled before it, not by chance.
+    empty = np.empty
+
+    def poisoned(*args: Any, **kwargs: Any) -> Any:
+        found = empty(*args, **kwargs)
+        found.view(np.uint8)[...] = 0xA5
+        return found
+
+    monkeypatch.setattr(np, "empty", poisoned)
+    square = np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]])
+    shapes = measure_polygons(np.array([3, 4, 2]), np.array([0, 1, 2, 0, 1, 2, 3, 2, 3]), square)
+    assert shapes is not None
+    np.testing.assert_array_equal(shapes.normals, [[0, 0, 0], [0, 0, 1], [0, 0, 0]])
+    np.testing.assert_array_equal(shapes.deviation, [0, 0, 0])
+    np.testing.assert_array_equal(shapes.folded, [False, False, False])
 
 
 def test_the_measures_do_not_depend_on_the_number_of_threads() -> None:
