@@ -212,18 +212,14 @@ def _binary_lists(element: _Element, data: bytes, offset: int, endian: str) -> i
     return _binary_records(element, data, offset, endian)
 
 
-#: Lists of this many items or more are read by the compiled loop (:func:`_items`).
-COMPILED_ITEMS = 1 << 16
-
-
 def _items(records: NDArray[np.void], name: str, data: bytes, offset: int) -> NDArray[Any]:
     """The items of the list ``name`` of binary records whose lists have one length: integers
     as int64, read by the compiled loop (:func:`mesh_normal._core.binary_items`: NumPy's cast
-    of the records' unaligned, strided view takes three times as long) when there are many,
-    else (and floats) the records' own view."""
+    of the records' unaligned, strided view takes three times as long); floats (and 64-bit
+    integers) as the records' own view."""
     items = records[name]["items"]
     kind = items.dtype
-    if items.size < COMPILED_ITEMS or kind.kind not in "iu" or kind.itemsize > 4:
+    if kind.kind not in "iu" or kind.itemsize > 4:
         return items
     out = np.empty(items.shape, np.int64)
     fields, inner = records.dtype.fields, records.dtype[name].fields
@@ -576,9 +572,9 @@ def _mesh(elements: list[_Element], notes: list[str]) -> LoadedMesh:
     column = None if face is None or key is None else face.data[key]
     source: NDArray[np.intp] | None = None  # None: face i is the file's face i
     faces: NDArray[np.integer]
-    if _many_triangles(column):
-        # Many triangles read as integers (the compiled loop's): their own faces, as below,
-        # without the counts and their check.
+    if _triangle_rows(column):
+        # Triangles read as integers (the compiled loop's): their own faces, as below, without
+        # the counts and their check.
         faces, polygons = column, len(column)
     else:
         if face is None or key is None:
@@ -586,8 +582,8 @@ def _mesh(elements: list[_Element], notes: list[str]) -> LoadedMesh:
         else:
             counts, flat = _polygons(column)
         polygons = len(counts)
-        if len(flat) >= COMPILED_ITEMS and counts[0] == 3 and np.all(counts == 3):
-            # Many triangles: they are their own fans (what triangulate gives, without
+        if len(counts) and np.all(counts == 3):
+            # Only triangles: they are their own fans (what triangulate gives, without
             # building the fans' corner positions and gathering the corners through them).
             faces = flat.reshape(-1, 3)
         else:
@@ -793,15 +789,14 @@ def _face_normals(
     return normals if normals is None or source is None else normals[source]
 
 
-def _many_triangles(column: object) -> TypeGuard[NDArray[np.int64]]:
-    """Whether a list column holds many triangles read as one int64 array of rows (binary
-    lists of one length, by the compiled loop): every face has 3 corners, unlooked at."""
+def _triangle_rows(column: object) -> TypeGuard[NDArray[np.int64]]:
+    """Whether a list column holds triangles read as one int64 array of rows (binary lists of
+    one length, by the compiled loop): every face has 3 corners, unlooked at."""
     return (
         isinstance(column, np.ndarray)
         and column.dtype == np.int64
         and column.ndim == 2
         and column.shape[1] == 3
-        and column.size >= COMPILED_ITEMS
     )
 
 

@@ -130,7 +130,7 @@ def _out_of_memory(*_: object, **__: object) -> None:
     ("name", "module", "allocation"),
     [
         ("cow.obj", "mesh_normal.files.obj", "scan_obj"),
-        ("sphere.ply", "mesh_normal.files.ply", "triangulate"),
+        ("sphere.ply", "mesh_normal.files.ply", "binary_items"),
         ("tetra.off", "mesh_normal.files.off", "triangulate"),
         ("ascii.stl", "mesh_normal.files.stl", "weld"),
         ("box.glb", "trimesh.exchange.gltf", "load_gltf"),
