@@ -20,7 +20,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import sys
 import time
 from collections.abc import Callable
@@ -89,28 +88,23 @@ def load(path: str, progress: Progress) -> tuple[LoadedMesh, int]:
     from mesh_normal.files.read import mapped_binary_stl, read_mapped
 
     mapped = mapped_binary_stl(path)  # a large binary STL: mapped, not copied into memory
-    _prefault(path, mapped is not None)
     if mapped is not None:
         progress.step(f"reading {path}")
         size = len(mapped)
+        _fault_ahead(size)
         return _parsed(path, lambda: read_mapped(mapped, Path(path).name)), size
     data = read_input(path, progress)
     return _parsed(path, lambda: read_mesh(data, Path(path).name)), len(data)
 
 
-def _prefault(path: str, binary_stl: bool) -> None:
-    """For a large file, in a process of the command's own: the memory its arrays will take,
-    faulted in on another thread while this one reads (see ``mesh_normal.allocator``)."""
+def _fault_ahead(size: int) -> None:
+    """For a large binary STL of ``size`` bytes, in a process of the command's own: keep freed
+    memory for the next step and fault the arrays' memory in on another thread while this one
+    reads (``mesh_normal.allocator``). Smaller files and the text formats gain no time from it
+    and take more memory."""
     from mesh_normal import allocator
-    from mesh_normal.files.read import MAPPED_BYTES
 
-    try:
-        size = os.path.getsize(path)
-    except OSError:
-        return  # reading it says why
-    if size >= MAPPED_BYTES:
-        per_byte = allocator.ARRAYS_PER_FILE_BYTE["binary stl" if binary_stl else "other"]
-        allocator.prefault(per_byte * size)
+    allocator.start_job(allocator.ARRAYS_PER_FILE_BYTE["binary stl"] * size)
 
 
 def read_input(path: str, progress: Progress) -> bytes:
@@ -954,10 +948,10 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_USAGE
     enabled = sys.stderr.isatty() if args.progress is None else args.progress
     progress = Progress(sys.stderr, enabled)
-    if argv is None:  # a process of its own: one job, so keep freed memory for its next step
+    if argv is None:  # a process of its own: one job, whose allocator it may tune
         from mesh_normal import allocator
 
-        allocator.keep_freed()
+        allocator.enable_jobs()
     try:
         return int(args.run(args, progress))
     except Failure as failure:

@@ -8,6 +8,7 @@ import sys
 import textwrap
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from mesh_normal import allocator, cli
@@ -49,27 +50,20 @@ def test_freed_memory_is_kept_then_given_back() -> None:
     assert kept < held - 200
 
 
-def test_the_command_line_keeps_freed_memory_only_in_its_own_process(
-    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+def test_the_command_line_tunes_the_allocator_only_in_its_own_process(
+    monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    calls: list[bool] = []
-
-    def keep_freed() -> bool:
-        calls.append(True)
-        return True
-
-    monkeypatch.setattr(allocator, "keep_freed", keep_freed)
+    enabled: list[bool] = []
+    monkeypatch.setattr(allocator, "enable_jobs", lambda: enabled.append(True))
     monkeypatch.setattr(sys, "argv", ["mesh-normal", "normals", "--help"])
     with pytest.raises(SystemExit):
         cli.main()
-    assert calls == []  # --help ends before any work
-    path = tmp_path / "one.obj"
-    path.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
-    monkeypatch.setattr(sys, "argv", ["mesh-normal", "analyze", str(path)])
-    assert cli.main() == 0
-    assert calls == [True]
-    assert cli.main(["analyze", str(path)]) == 0  # called in a host's process: left alone
-    assert calls == [True]
+    assert enabled == []  # --help ends before any work
+    monkeypatch.setattr(sys, "argv", ["mesh-normal", "analyze", "/nonexistent.obj"])
+    cli.main()
+    assert enabled == [True]
+    cli.main(["analyze", "/nonexistent.obj"])  # called in a host's process: left alone
+    assert enabled == [True]
 
 
 @pytest.mark.skipif(not GLIBC, reason="the settings are glibc's")
@@ -99,20 +93,25 @@ def test_prefault_brings_in_the_memory_the_next_arrays_use() -> None:
     assert total == 128
 
 
-def test_the_command_line_prefaults_for_large_files_only(
+def test_the_command_line_keeps_and_prefaults_for_large_binary_stl_only(
     monkeypatch: pytest.MonkeyPatch, tmp_path: Path
 ) -> None:
     from mesh_normal.files import read
 
     asked: list[int] = []
-    monkeypatch.setattr(allocator, "prefault", lambda size: asked.append(size))
-    path = tmp_path / "one.obj"
-    path.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
-    assert cli.main(["analyze", str(path)]) == 0
+    monkeypatch.setattr(allocator, "start_job", asked.append)
+    obj = tmp_path / "one.obj"
+    obj.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    stl = tmp_path / "one.stl"
+    normal, corners = b"\0" * 12, np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], "<f4").tobytes()
+    stl.write_bytes(b"\0" * 80 + (1).to_bytes(4, "little") + normal + corners + b"\0\0")
+    assert cli.main(["analyze", str(stl)]) == 0
     assert asked == []  # a small file: nothing to gain
     monkeypatch.setattr(read, "MAPPED_BYTES", 10)
-    assert cli.main(["analyze", str(path)]) == 0
-    assert asked == [allocator.ARRAYS_PER_FILE_BYTE["other"] * path.stat().st_size]
+    assert cli.main(["analyze", str(obj)]) == 0
+    assert asked == []  # a text format: more memory, no time gained
+    assert cli.main(["analyze", str(stl)]) == 0
+    assert asked == [allocator.ARRAYS_PER_FILE_BYTE["binary stl"] * stl.stat().st_size]
 
 
 @pytest.mark.skipif(not GLIBC, reason="the settings are glibc's")
