@@ -7,7 +7,10 @@ back). The rules:
 - no cycle among the modules of ``app`` and ``mesh_normal``;
 - ``app.calculator`` never imports ``app.mesh``, nor ``app.mesh`` ``app.calculator``;
 - ``app.web`` (the plumbing) imports no feature;
-- ``mesh_normal`` (the library) imports nothing from ``app``.
+- ``mesh_normal`` (the library) imports nothing from ``app``;
+- in ``mesh_normal``, only the entry points (the command line) import the command line and
+  the process-wide settings (``mesh_normal.allocator``): the geometry, the readers and the
+  reports change nothing in the process that imports them.
 """
 
 from __future__ import annotations
@@ -20,6 +23,9 @@ from tests.paths import ROOT
 
 PACKAGES = ("app", "mesh_normal")
 FEATURES = ("app.calculator", "app.mesh", "app.points")
+#: What only an entry point may import, and the library's entry points.
+RUNTIME = ("mesh_normal.cli", "mesh_normal.allocator")
+ENTRY_POINTS = ("mesh_normal.cli", "mesh_normal.__main__")
 Graph = Mapping[str, set[str]]
 
 
@@ -102,6 +108,11 @@ def violations(graph: Graph) -> list[str]:
                 )
                 or (within(module, "app.web") and any(within(target, f) for f in FEATURES))
                 or (within(module, "mesh_normal") and within(target, "app"))
+                or (
+                    within(module, "mesh_normal")
+                    and module not in ENTRY_POINTS
+                    and target in RUNTIME
+                )
             )
             if crossing:
                 found.append(f"{module} -> {target}")
@@ -157,6 +168,10 @@ def test_crossings_are_named() -> None:
             ("app.mesh.view", "app.calculator.view3d"),
             ("app.web.errors", "app.calculator.pages"),
             ("mesh_normal.report", "app.web.formatting"),
+            ("mesh_normal.faces", "mesh_normal.allocator"),
+            ("mesh_normal.files.read", "mesh_normal.cli"),
+            ("mesh_normal.cli", "mesh_normal.allocator"),  # allowed: an entry point
+            ("app.mesh.work", "mesh_normal.allocator"),  # allowed: a worker's job
             ("app.calculator.pages", "app.web.templating"),  # allowed: features use the plumbing
             ("app.main", "app.mesh.page"),  # allowed: the app builds every room
         ]
@@ -164,6 +179,8 @@ def test_crossings_are_named() -> None:
     assert violations(graph) == [
         "app.mesh.view -> app.calculator.view3d",
         "app.web.errors -> app.calculator.pages",
+        "mesh_normal.faces -> mesh_normal.allocator",
+        "mesh_normal.files.read -> mesh_normal.cli",
         "mesh_normal.report -> app.web.formatting",
     ]
 
