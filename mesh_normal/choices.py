@@ -1,6 +1,6 @@
 """The names of the library's choices and verdicts, as ``Literal`` types, in a module that
 imports nothing heavy: the report models (:mod:`mesh_normal.report`,
-:mod:`mesh_normal.points.models`) and the web app's routes declare them without loading NumPy
+:mod:`mesh_normal.points.report`) and the web app's routes declare them without loading NumPy
 and the kernels (the server answers its first page sooner). The modules that act on them
 (:mod:`mesh_normal.orientation`, :mod:`mesh_normal.vertices`, ...) import them from here, and
 their names there stay the same."""

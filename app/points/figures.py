@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from app.web.plotly import ACCENT, DEEP_ACCENT, FONT, MUTED, TRANSPARENT, Trace, histogram_layout
-from mesh_normal.points.report import PointAnalysis
+from mesh_normal.points.analysis import PointAnalysis
 from mesh_normal.types import BoolArray, FloatArray, IndexArray
 
 #: The most points the 3D view draws, and of those the most with a normal stroke.

@@ -20,7 +20,7 @@ from mesh_normal.datasets.tasks import BatchOptions, FileTask
 
 if TYPE_CHECKING:
     from mesh_normal.analysis import MeshAnalysis
-    from mesh_normal.points.report import PointAnalysis
+    from mesh_normal.points.analysis import PointAnalysis
 
 #: Bytes of the digest in the ``hash`` column (BLAKE2b, 128 bits: 32 hex digits).
 DIGEST_BYTES = 16
@@ -159,8 +159,8 @@ def _normals(analysis: MeshAnalysis, options: BatchOptions) -> bytes:
 
 
 def _points(task: FileTask, options: BatchOptions, data: bytes, row: dict[str, Any]) -> None:
+    from mesh_normal.points.analysis import analyse_points
     from mesh_normal.points.read import read_points
-    from mesh_normal.points.report import analyse_points
 
     name = _name(task)
     cloud = read_points(data, name)

@@ -16,10 +16,11 @@ from typing import TYPE_CHECKING
 from mesh_normal._lazy import lazy_names
 
 if TYPE_CHECKING:
+    from mesh_normal.points.analysis import PointAnalysis, analyse_points
     from mesh_normal.points.estimate import PointNormals, PointStatus, point_normals
     from mesh_normal.points.orient import ORIENT_MODES, ComponentOrientation, OrientMode
     from mesh_normal.points.read import POINT_SUFFIXES, PointCloud, read_points
-    from mesh_normal.points.report import PointAnalysis, PointReport, analyse_points
+    from mesh_normal.points.report import PointReport
     from mesh_normal.points.write import POINT_WRITE_FORMATS, write_points
 
 #: Public name to the module under ``mesh_normal.points`` that defines it.
@@ -34,9 +35,9 @@ _HOMES = {
     "PointCloud": "read",
     "read_points": "read",
     "POINT_WRITE_FORMATS": "write",
-    "PointAnalysis": "report",
+    "PointAnalysis": "analysis",
     "PointReport": "report",
-    "analyse_points": "report",
+    "analyse_points": "analysis",
     "write_points": "write",
 }
 
