@@ -54,6 +54,7 @@ class MeshAnalysis:
     unused_vertices: int
     weld: Weld | None
     points: IndexArray  # (m, 3): the faces as the topology saw them, each vertex by its point
+    file_normals: FileNormals | None  # the normals the file stores, compared with ours
     _areas: list[FloatArray] = field(default_factory=list, repr=False)
 
     @property
@@ -138,6 +139,8 @@ def analyse_mesh(
         orientation = oriented(geometry, points, found, ahead)  # the vertices matched once
     finally:
         ahead.finish()
+    # The file's own normals against ours of their kind (see mesh_normal.stored_normals).
+    file_normals = stored_normal_agreement(mesh, geometry)
     used = np.zeros(len(mesh.vertices), dtype=bool)
     used[mesh.faces.ravel()] = True
     return MeshAnalysis(
@@ -150,6 +153,7 @@ def analyse_mesh(
         unused_vertices=int(len(used) - np.count_nonzero(used)),
         weld=summary,
         points=points,
+        file_normals=file_normals,
     )
 
 
@@ -223,7 +227,7 @@ def build_report(analysis: MeshAnalysis) -> MeshReport:
         nonorientable_components=int(np.count_nonzero(~orientation.components.orientable)),
         bounds=_bounds(mesh.vertices),
         fix=_fix(orientation),
-        file_normals=file_normal_agreement(analysis),
+        file_normals=analysis.file_normals,
         object_count=0 if mesh.group_names is None else len(mesh.group_names),
         objects=_objects(analysis),
         weld=analysis.weld,
@@ -280,11 +284,3 @@ def _fix(orientation: Orientation) -> Fix:
             for part in orientation.components[:INDEX_LIST_LIMIT]
         ],
     )
-
-
-def file_normal_agreement(analysis: MeshAnalysis) -> FileNormals | None:
-    """How well the normals stored in the file agree with ours, or ``None`` without any.
-
-    Like with like: see :mod:`mesh_normal.stored_normals`.
-    """
-    return stored_normal_agreement(analysis.mesh, analysis.geometry)
