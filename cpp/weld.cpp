@@ -114,17 +114,19 @@ class Table {
  public:
   explicit Table(std::size_t size) : size_(size) {
     const std::size_t bytes = size * sizeof(T);
-    if (bytes < kHuge) {
-      data_ = static_cast<T*>(std::malloc(bytes));
-    } else {
+#ifdef MADV_HUGEPAGE
+    if (bytes >= kHuge) {
       const std::size_t pages = (bytes + kHuge - 1) / kHuge * kHuge;
       data_ = static_cast<T*>(std::aligned_alloc(kHuge, pages));
-#ifdef MADV_HUGEPAGE
       if (data_ != nullptr) {
         madvise(data_, pages, MADV_HUGEPAGE);  // a hint, whatever it answers
       }
-#endif
+    } else {
+      data_ = static_cast<T*>(std::malloc(bytes));
     }
+#else  // no such request (and, on Windows, no std::aligned_alloc): the system's own pages
+    data_ = static_cast<T*>(std::malloc(bytes));
+#endif
     if (data_ == nullptr) {
       throw std::bad_alloc();
     }
