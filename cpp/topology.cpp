@@ -407,7 +407,7 @@ nb::ndarray<nb::numpy, int64_t> number_roots(Out<int64_t, nb::shape<-1>> root, F
   if (bad) {
     throw nb::value_error("a node's root must be a node at or before it.");
   }
-  auto* firsts = new int64_t[static_cast<std::size_t>(numbers)];
+  std::unique_ptr<int64_t[]> firsts(new int64_t[static_cast<std::size_t>(numbers)]);
   {
     nb::gil_scoped_release release;
     int64_t following = 0;
@@ -417,7 +417,7 @@ nb::ndarray<nb::numpy, int64_t> number_roots(Out<int64_t, nb::shape<-1>> root, F
       }
     }
   }
-  return owned(firsts, static_cast<std::size_t>(numbers));
+  return owned(std::move(firsts), static_cast<std::size_t>(numbers));
 }
 
 // Marks False the patch of every edge whose two faces' parities disagree with how they run

@@ -514,10 +514,12 @@ T* zeros(std::size_t count) {
 std::pair<Array<Int>, Array<Int>> face_morton_order(const Points& unit, const Faces& faces) {
   const Mesh mesh = mesh_of(unit, faces);
   const auto count = static_cast<std::size_t>(mesh.count);
-  auto* ordered = new Int[count];
-  auto* order = new Int[count];
-  auto ordered_array = owned(ordered, count);
-  auto order_array = owned(order, count);
+  std::unique_ptr<Int[]> ordered_buffer(new Int[count]);
+  std::unique_ptr<Int[]> order_buffer(new Int[count]);
+  Int* ordered = ordered_buffer.get();
+  Int* order = order_buffer.get();
+  auto ordered_array = owned(std::move(ordered_buffer), count);
+  auto order_array = owned(std::move(order_buffer), count);
   std::atomic<bool> refused{false};
   {
     nb::gil_scoped_release release;

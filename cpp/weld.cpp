@@ -307,10 +307,11 @@ template <typename W>
 std::optional<Welded> weld_words(const Corners<W>& corners, bool by_table, std::uint32_t mask,
                                  std::int64_t most) {
   const auto count = static_cast<std::size_t>(corners.count());
-  std::int64_t* index = new std::int64_t[count];
-  Index index_array = owned(index, count);
+  std::unique_ptr<std::int64_t[]> index_buffer(new std::int64_t[count]);
+  std::int64_t* index = index_buffer.get();
+  Index index_array = owned(std::move(index_buffer), count);
   Numbered numbered{{}, index};
-  double* vertices = nullptr;
+  std::unique_ptr<double[]> vertices;
   {
     nb::gil_scoped_release release;
     if (by_table) {
@@ -322,14 +323,14 @@ std::optional<Welded> weld_words(const Corners<W>& corners, bool by_table, std::
       sort_weld(corners, numbered);
     }
     if (!numbered.leaders.empty()) {
-      vertices = new double[3 * numbered.leaders.size()];
-      leading_points(corners, numbered.leaders, vertices);
+      vertices.reset(new double[3 * numbered.leaders.size()]);
+      leading_points(corners, numbered.leaders, vertices.get());
     }
   }
   if (vertices == nullptr) {
     return std::nullopt;
   }
-  return Welded{owned(vertices, numbered.leaders.size(), 3), index_array};
+  return Welded{owned(std::move(vertices), numbered.leaders.size(), 3), index_array};
 }
 
 std::optional<Welded> weld_grid(const Grid& grid, bool by_table, std::uint32_t mask,
