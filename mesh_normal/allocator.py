@@ -38,9 +38,9 @@ PREFAULT_MOST = 2**32
 _SPACER = 64
 _PAGE = 4096
 
-#: The memory a mesh's arrays take per byte of its file, as :func:`prefault` is asked for it:
-#: a binary STL takes 3 (a 700 MB file of 14M faces, 2.1 GB besides the file).
-ARRAYS_PER_FILE_BYTE = {"binary stl": 3}
+#: The memory a binary STL's arrays take per byte of its file, as :func:`prefault` is asked for
+#: it (a 700 MB file of 14M faces: 2.1 GB besides the file).
+ARRAYS_PER_STL_BYTE = 3
 
 _keeping = False
 

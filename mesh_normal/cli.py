@@ -104,7 +104,7 @@ def _fault_ahead(size: int) -> None:
     and take more memory."""
     from mesh_normal import allocator
 
-    allocator.start_job(allocator.ARRAYS_PER_FILE_BYTE["binary stl"] * size)
+    allocator.start_job(allocator.ARRAYS_PER_STL_BYTE * size)
 
 
 def read_input(path: str, progress: Progress) -> bytes:

@@ -54,7 +54,7 @@ def ahead(size: int) -> None:
     ``FAULT_AHEAD_FROM`` bytes, keep freed memory for this job and fault its arrays' memory in
     on another thread (the worker undoes both when the job ends). Nothing outside a worker."""
     if size >= FAULT_AHEAD_FROM:
-        allocator.start_job(allocator.ARRAYS_PER_FILE_BYTE["binary stl"] * size)
+        allocator.start_job(allocator.ARRAYS_PER_STL_BYTE * size)
 
 
 def load(upload: Upload) -> LoadedMesh:

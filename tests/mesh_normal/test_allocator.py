@@ -111,7 +111,7 @@ def test_the_command_line_keeps_and_prefaults_for_large_binary_stl_only(
     assert cli.main(["analyze", str(obj)]) == 0
     assert asked == []  # a text format: more memory, no time gained
     assert cli.main(["analyze", str(stl)]) == 0
-    assert asked == [allocator.ARRAYS_PER_FILE_BYTE["binary stl"] * stl.stat().st_size]
+    assert asked == [allocator.ARRAYS_PER_STL_BYTE * stl.stat().st_size]
 
 
 @pytest.mark.skipif(not GLIBC, reason="the settings are glibc's")

@@ -214,7 +214,7 @@ def test_a_large_binary_stl_has_its_memory_faulted_in_and_given_back_after() -> 
     ended before the trim)."""
     corners = np.random.default_rng(7).random((200_000, 3, 3))
     stl = Upload(binary_stl(corners), "big.stl")
-    faulted = allocator.ARRAYS_PER_FILE_BYTE["binary stl"] * len(stl.data) >> 20
+    faulted = allocator.ARRAYS_PER_STL_BYTE * len(stl.data) >> 20
 
     async def scenario(pool: WorkerPool) -> tuple[int, int, int]:
         before = await call(pool, jobhooks.resident, None)
