@@ -20,20 +20,24 @@ def described(description: str, **limits: object) -> Any:
     return dataclasses.field(metadata={"description": description, **limits})
 
 
-def _plain(value: object) -> object:
-    """``value`` as plain Python: a NumPy scalar as its Python value, a float that is not
-    finite as ``None`` (so a report never holds NaN or infinity), lists item by item."""
+def _plain(value: object, finite: bool) -> object:
+    """``value`` as plain Python: a NumPy scalar as its Python value, lists item by item, and a
+    float that is not finite as ``None`` (so a report never holds NaN or infinity), or a
+    ``ValueError`` where it must be ``finite``."""
     if type(value).__module__ == "numpy":
         value = value.item()  # type: ignore[attr-defined]
     if isinstance(value, float) and not math.isfinite(value):
+        if finite:
+            raise ValueError(f"{value} where a finite number must be.")
         return None
     if isinstance(value, list) and not all(type(item) in (int, str) for item in value):
-        return [_plain(item) for item in value]
+        return [_plain(item, finite) for item in value]
     return value
 
 
 class Record:
-    """A report's part: frozen, plain values only, every float finite or ``None``."""
+    """A report's part: frozen, plain values only, every float finite or ``None``; a ``Finite``
+    field refuses a float that is not finite (``ValueError``)."""
 
     __slots__ = ()
     # Read by pydantic when the web app and the tests build the schema and validate JSON.
@@ -45,7 +49,9 @@ class Record:
     def __post_init__(self) -> None:
         for field in dataclasses.fields(self):  # type: ignore[arg-type]
             value = getattr(self, field.name)
-            plain = _plain(value)
+            # A field typed ``Finite`` (mesh_normal.report) holds a number that is always
+            # finite; the annotation is read as written (the reports' modules postpone them).
+            plain = _plain(value, "Finite" in str(field.type))
             if plain is not value:
                 object.__setattr__(self, field.name, plain)
 

@@ -16,7 +16,7 @@ from pydantic import TypeAdapter, ValidationError
 import mesh_normal as mn
 from mesh_normal.analysis import analyse, analyse_mesh, build_report
 from mesh_normal.files import SUFFIXES, read_mesh, write_mesh
-from mesh_normal.report import Bounds, FileInfo, MeshFormat, MeshReport
+from mesh_normal.report import Bounds, FileInfo, MeshFormat, MeshReport, Weld
 from tests.meshes import (
     CUBE_OBJ,
     CUBE_ONE_FLIPPED_OBJ,
@@ -171,6 +171,16 @@ def test_a_measure_that_is_not_finite_becomes_none(value: float) -> None:
     assert report.area is None
     assert strict_json(report.to_json())["area"] is None
     assert report.to_dict()["area"] is None
+
+
+def test_bounds_refuse_coordinates_that_are_not_finite() -> None:
+    with pytest.raises(ValueError, match="finite"):
+        Bounds(min=[0.0, 0.0, 0.0], max=[math.inf, 0.0, 0.0])
+    with pytest.raises(ValueError, match="finite"):
+        Weld(tolerance=math.nan, distance=0.0, joined_vertices=0)
+    part = dataclasses.replace(report_of(CUBE_ONE_FLIPPED_OBJ).fix.components[0], volume=math.nan)
+    assert part.volume is None  # a measure, not a finite number: null
+    Bounds(min=[0.0, 0.0, 0.0], max=[1e308, 0.0, 0.0])  # finite, however large
 
 
 def test_numpy_scalars_become_python_values() -> None:
