@@ -14,7 +14,7 @@ export PATH := $(CURDIR)/.venv/bin:$(PATH)
 HOST ?= 127.0.0.1
 PORT ?= 8000
 
-.PHONY: run test test-sanitize lint docs docs-serve bench bench-first bench-hostile bench-mesh bench-mesh-e2e bench-readers bench-orient bench-points bench-soak bench-memory bench-startup bench-batch env clean vendor
+.PHONY: FORCE run test test-sanitize lint docs docs-serve bench bench-first bench-hostile bench-mesh bench-mesh-e2e bench-readers bench-orient bench-points bench-soak bench-memory bench-startup bench-batch env clean vendor
 
 # uv itself comes from PyPI when the machine does not have it yet.
 .tools/bin/uv:
@@ -23,12 +23,21 @@ PORT ?= 8000
 
 # Serving needs the library and the `web` group; testing adds the `test` group. Each target
 # syncs the environment to exactly what it needs (uv is quick when nothing changed).
-.venv/.web: pyproject.toml uv.lock | $(UV)
+# The editable install maps each module of the library to its file, so a module added, moved or
+# removed needs it redone: this list is rewritten only when the modules change, and it is one of
+# uv's cache keys (pyproject.toml), so the next sync installs the library again.
+MODULES = build/modules.txt
+$(MODULES): FORCE
+	@mkdir -p build && find mesh_normal -name '*.py' | sort > $@.new && \
+		if cmp -s $@.new $@; then rm $@.new; else mv $@.new $@; fi
+FORCE:
+
+.venv/.web: pyproject.toml uv.lock $(MODULES) | $(UV)
 	$(UV) sync --locked --group web
 	$(COMPILE_SOURCES)
 	rm -f .venv/.test && touch $@
 
-.venv/.test: pyproject.toml uv.lock | $(UV)
+.venv/.test: pyproject.toml uv.lock $(MODULES) | $(UV)
 	$(UV) sync --locked --group test
 	$(COMPILE_SOURCES)
 	rm -f .venv/.web && touch $@
@@ -67,10 +76,10 @@ test: lint docs
 # preloaded into Python, so only tests that start no browser run here.
 SANITIZE := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
 SANITIZED_TESTS := tests/mesh_normal/files tests/mesh_normal/points \
-	tests/mesh_normal/test_faces.py tests/mesh_normal/test_vertices.py \
-	tests/mesh_normal/test_corners.py tests/mesh_normal/test_topology.py \
-	tests/mesh_normal/test_orientation.py tests/mesh_normal/test_visibility.py \
-	tests/mesh_normal/test_no_harm.py tests/mesh_normal/test_checks.py
+	tests/mesh_normal/mesh/test_faces.py tests/mesh_normal/mesh/test_vertices.py \
+	tests/mesh_normal/mesh/test_corners.py tests/mesh_normal/mesh/test_topology.py \
+	tests/mesh_normal/mesh/test_orientation.py tests/mesh_normal/mesh/test_visibility.py \
+	tests/mesh_normal/test_no_harm.py tests/mesh_normal/mesh/test_checks.py
 test-sanitize: .venv/.test
 	UV_PROJECT_ENVIRONMENT=.venv-asan $(UV) sync --locked --group test \
 		-C build-dir=build-asan -C cmake.build-type=RelWithDebInfo \

@@ -152,11 +152,11 @@ def make_file(kind: str, megabytes: float, folder: Path) -> Path:
 
 def run_path(path_name: str, data: bytes, filename: str) -> None:
     """One path of the server's work on the upload ``data``."""
-    from mesh_normal.analysis import analyse_mesh, build_report
-    from mesh_normal.exports import normals_blocks, normals_to_write
     from mesh_normal.files import read_mesh, write_mesh
     from mesh_normal.files.formats import WRITABLE
-    from mesh_normal.orientation import orient
+    from mesh_normal.files.normals import normals_blocks, normals_to_write
+    from mesh_normal.mesh.orientation import orient
+    from mesh_normal.mesh.report.analysis import analyse_mesh, build_report
 
     mesh = read_mesh(data, filename)
     if path_name == "report":

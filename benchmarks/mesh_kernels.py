@@ -42,9 +42,9 @@ from typing import Any
 import numpy as np
 
 from benchmarks import tables
-from mesh_normal.corners import corner_normals
-from mesh_normal.faces import face_normals
-from mesh_normal.vertices import vertex_normals
+from mesh_normal.mesh.corners import corner_normals
+from mesh_normal.mesh.faces import face_normals
+from mesh_normal.mesh.vertices import vertex_normals
 
 SIZES = (69_451, 871_414, 14_000_000)
 

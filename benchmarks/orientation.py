@@ -30,7 +30,7 @@ import numpy as np
 import trimesh
 
 from benchmarks import tables
-from mesh_normal.orientation import orient
+from mesh_normal.mesh.orientation import orient
 
 
 def sphere(subdivisions: int) -> tuple[np.ndarray, np.ndarray]:

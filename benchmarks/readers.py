@@ -108,8 +108,8 @@ def ours_read(data: bytes, name: str) -> None:
 
 
 def ours_report(data: bytes, name: str) -> None:
-    from mesh_normal.analysis import analyse_mesh, build_report
     from mesh_normal.files import read_mesh
+    from mesh_normal.mesh.report.analysis import analyse_mesh, build_report
 
     mesh = read_mesh(data, name)
     build_report(analyse_mesh(mesh, name, len(data))).to_json()

@@ -115,7 +115,7 @@ def json_peak(faces: int, streamed: bool) -> float:
     """Peak resident MB over the normals themselves, for corner normals written as JSON."""
     code = f"""
 import resource, numpy as np
-from mesh_normal.exports import normals_blocks, normals_file
+from mesh_normal.files.normals import normals_blocks, normals_file
 normals = np.random.default_rng(0).normal(size=({faces}, 3, 3))
 missing = np.zeros(({faces}, 3), bool)
 base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss

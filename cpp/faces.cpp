@@ -41,7 +41,7 @@ constexpr double kCancelledSum = 0x1p-32;
 constexpr double kRecompute = kRecomputeSine * kRecomputeSine;
 constexpr double kDegenerate = kDegenerateSine * kDegenerateSine;
 
-// The weightings, as mesh_normal.vertices.WEIGHTINGS orders them.
+// The weightings, as mesh_normal.mesh.vertices.WEIGHTINGS orders them.
 enum Weighting : int { kUniform = 0, kArea = 1, kAngle = 2, kMax = 3 };
 
 // Faces (or rows) a thread takes at least: fewer run on the calling thread.

@@ -1,7 +1,7 @@
 // Topology: the half-edges sorted by edge, the runs of equal edges (boundary, manifold,
 // non-manifold), the union-find with parities that labels the patches, and the checks of their
 // winding. The orientation's kernels (cone sums, winding numbers, twinned faces) are in
-// topology_orientation.hpp. mesh_normal/topology.py says what the terms mean.
+// topology_orientation.hpp. mesh_normal/mesh/topology.py says what the terms mean.
 #include <algorithm>
 #include <cstdint>
 #include <tuple>

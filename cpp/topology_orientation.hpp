@@ -1,5 +1,5 @@
 // Orientation: sums by patch, the cone terms of the volume and their error bounds, generalized
-// winding numbers, and the faces twinned back to back. mesh_normal/orientation.py says what
+// winding numbers, and the faces twinned back to back. mesh_normal/mesh/orientation.py says what
 // they decide. Included once, by topology.cpp.
 #pragma once
 

@@ -1,5 +1,5 @@
 // Visibility from outside: rays cast from sample faces through a bounding-volume hierarchy of
-// every face (mesh_normal/visibility.py holds the method and its constants). The faces are
+// every face (mesh_normal/mesh/visibility.py holds the method and its constants). The faces are
 // ordered along a Morton curve of their centroids, the order split where the codes' highest
 // differing bit turns, and each ray searches the boxes depth first, the nearer child first,
 // until any hit ends it.

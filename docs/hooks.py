@@ -14,7 +14,7 @@ import functools
 import re
 from typing import Any
 
-from mesh_normal.cli import parser
+from mesh_normal.cli.commands import parser
 
 MARKER = re.compile(r"^<!-- cli-help: ([\w-]+) -->$", re.M)
 ROLE = re.compile(r":(?:func|class|meth|attr|mod|data|obj|exc):<code>(~?)\.?([^<]*)</code>")

@@ -23,13 +23,22 @@ from mesh_normal._lazy import lazy_names
 __version__ = "0.2.0"
 
 if TYPE_CHECKING:
-    from mesh_normal.analysis import analyse
-    from mesh_normal.checks import CheckedMesh, checked_mesh
-    from mesh_normal.corners import CornerNormals, corner_normals
     from mesh_normal.datasets.driver import batch
-    from mesh_normal.faces import FaceGeometry, FaceNormals, face_areas, face_geometry, face_normals
     from mesh_normal.files import LoadedMesh, MeshFileError, read_mesh, write_mesh
-    from mesh_normal.orientation import Orientation, orient, signed_volume
+    from mesh_normal.mesh.checks import CheckedMesh, checked_mesh
+    from mesh_normal.mesh.corners import CornerNormals, corner_normals
+    from mesh_normal.mesh.faces import (
+        FaceGeometry,
+        FaceNormals,
+        face_areas,
+        face_geometry,
+        face_normals,
+    )
+    from mesh_normal.mesh.orientation import Orientation, orient, signed_volume
+    from mesh_normal.mesh.report.analysis import analyse
+    from mesh_normal.mesh.report.models import MeshReport
+    from mesh_normal.mesh.topology import MeshTopology, mesh_topology
+    from mesh_normal.mesh.vertices import VertexNormals, vertex_normals
     from mesh_normal.points import (
         ComponentOrientation,
         PointCloud,
@@ -39,35 +48,32 @@ if TYPE_CHECKING:
         read_points,
         write_points,
     )
-    from mesh_normal.report import MeshReport
-    from mesh_normal.topology import MeshTopology, mesh_topology
-    from mesh_normal.triangle import TriangleNormal, triangle_normal
-    from mesh_normal.triangle_batch import BatchNormals, triangle_normals
-    from mesh_normal.vertices import VertexNormals, vertex_normals
+    from mesh_normal.triangle.batch import BatchNormals, triangle_normals
+    from mesh_normal.triangle.normal import TriangleNormal, triangle_normal
 
 #: Public name to the module that defines it (``module:name`` where the name differs there). No
 #: module may be named like a public name: the submodule, once imported, would shadow it as an
 #: attribute of the package.
 _HOMES = {
-    "BatchNormals": "triangle_batch",
-    "triangle_normals": "triangle_batch",
+    "BatchNormals": "triangle.batch",
+    "triangle_normals": "triangle.batch",
     "batch": "datasets.driver",  # mn.batch(paths, out=DIR): a Parquet table of reports
-    "CheckedMesh": "checks",
-    "checked_mesh": "checks",
-    "CornerNormals": "corners",
-    "corner_normals": "corners",
-    "FaceGeometry": "faces",
-    "FaceNormals": "faces",
-    "face_areas": "faces",
-    "face_geometry": "faces",
-    "face_normals": "faces",
+    "CheckedMesh": "mesh.checks",
+    "checked_mesh": "mesh.checks",
+    "CornerNormals": "mesh.corners",
+    "corner_normals": "mesh.corners",
+    "FaceGeometry": "mesh.faces",
+    "FaceNormals": "mesh.faces",
+    "face_areas": "mesh.faces",
+    "face_geometry": "mesh.faces",
+    "face_normals": "mesh.faces",
     "LoadedMesh": "files",
     "MeshFileError": "files",
     "read_mesh": "files",
     "write_mesh": "files",
-    "Orientation": "orientation",
-    "orient": "orientation",
-    "signed_volume": "orientation",
+    "Orientation": "mesh.orientation",
+    "orient": "mesh.orientation",
+    "signed_volume": "mesh.orientation",
     "ComponentOrientation": "points",
     "PointNormals": "points",
     "PointStatus": "points",
@@ -75,14 +81,14 @@ _HOMES = {
     "PointCloud": "points",
     "read_points": "points",
     "write_points": "points",
-    "MeshReport": "report",
-    "analyse": "analysis",  # mn.analyse(path) is the report
-    "MeshTopology": "topology",
-    "mesh_topology": "topology",
-    "TriangleNormal": "triangle",
-    "triangle_normal": "triangle",
-    "VertexNormals": "vertices",
-    "vertex_normals": "vertices",
+    "MeshReport": "mesh.report.models",
+    "analyse": "mesh.report.analysis",  # mn.analyse(path) is the report
+    "MeshTopology": "mesh.topology",
+    "mesh_topology": "mesh.topology",
+    "TriangleNormal": "triangle.normal",
+    "triangle_normal": "triangle.normal",
+    "VertexNormals": "mesh.vertices",
+    "vertex_normals": "mesh.vertices",
 }
 
 __all__ = [

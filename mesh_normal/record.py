@@ -14,6 +14,14 @@ import dataclasses
 import math
 from typing import Any, ClassVar
 
+#: How many indices (faces, components, points) a list in a report holds at most; counts are
+#: full.
+INDEX_LIST_LIMIT = 100
+#: A measure that may overflow the double range: ``None`` (JSON ``null``) when it does.
+Measure = float | None
+#: A float that is always finite (a coordinate of a checked mesh, a fixed angle).
+Finite = float
+
 
 def described(description: str, **limits: object) -> Any:
     """A report field: its description and limits, as the JSON schema states them."""
@@ -49,8 +57,8 @@ class Record:
     def __post_init__(self) -> None:
         for field in dataclasses.fields(self):  # type: ignore[arg-type]
             value = getattr(self, field.name)
-            # A field typed ``Finite`` (mesh_normal.report) holds a number that is always
-            # finite; the annotation is read as written (the reports' modules postpone them).
+            # A field typed ``Finite`` (above) holds a number that is
+            # always finite; the annotation is read as written (the reports' modules postpone them).
             plain = _plain(value, "Finite" in str(field.type))
             if plain is not value:
                 object.__setattr__(self, field.name, plain)

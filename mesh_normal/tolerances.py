@@ -26,12 +26,12 @@ BATCH_TINY = 2.0**-1000
 
 LARGEST_DOUBLE_TEXT = "about 1.8e308"
 
-#: Trial divisors that :func:`mesh_normal.exact.square_root` tries when it pulls squares out of
-#: a radicand (up to about 5,000 divisions, well under a millisecond on 100-digit integers).
+#: Trial divisors that :func:`mesh_normal.triangle.exact.square_root` tries when it pulls squares
+#: out of a radicand (up to about 5,000 divisions, well under a millisecond on 100-digit integers).
 SURD_TRIAL_LIMIT = 10_000
 
-# Meshes (mesh_normal.faces, mesh_normal.vertices). These are relative, so a mesh in millimetres
-# and the same mesh in metres get the same verdicts.
+# Meshes (mesh_normal.mesh.faces, mesh_normal.mesh.vertices). These are relative, so a mesh in
+# millimetres and the same mesh in metres get the same verdicts.
 
 #: k in the degenerate-face test |n| <= k * EPSILON * |p| * |q|, where n is the cross product
 #: of a face's edges p and q at its largest corner (its two shortest edges), i.e. the sine of
@@ -68,7 +68,7 @@ MESH_PAIR_CHUNK = 2**20
 MESH_CORNER_BLOCK = 4096
 
 #: A mesh patch is flat when |V| <= MESH_FLAT_SINE * sum |det| / 6 (V: the volume of the cone
-#: from its centroid over its faces, see :mod:`mesh_normal.orientation`): its faces tilt, on
+#: from its centroid over its faces, see :mod:`mesh_normal.mesh.orientation`): its faces tilt, on
 #: average, by an angle whose sine is at most this towards or away from the centroid. The same
 #: bound as a degenerate face's largest angle: below it the sign of V is rounding noise, so
 #: which side is outside is left undetermined.
@@ -80,7 +80,7 @@ FLOAT32_UNIT = 2.0**-24
 
 #: A patch's volume decides its outside only when it exceeds this many times the most that
 #: rounding the patch's coordinates (and computing the volume) could move it; see
-#: :mod:`mesh_normal.orientation`. Below that its sign may be noise, and nothing is flipped.
+#: :mod:`mesh_normal.mesh.orientation`. Below that its sign may be noise, and nothing is flipped.
 ORIENT_EVIDENCE = 4.0
 
 #: The largest weld tolerance that the report, the fix and their front ends accept, as a

@@ -20,7 +20,7 @@ from app.config import BATCH_LIMIT
 from app.web.errors import ApiError
 from app.web.jsonio import json_bytes, parse_body
 from app.web.workers import run_in_server_while_starting
-from mesh_normal.triangle import triangle_normal
+from mesh_normal.triangle.normal import triangle_normal
 
 #: Bodies up to this size are answered in the server (a compact 16 KB body holds about 600
 #: triangles, parsed and computed in about 4 ms); larger ones are a job in a worker.
@@ -64,7 +64,7 @@ def payload(raw: bytes) -> dict[str, Any]:
     # to every start-up of the server (the calculator page and /api/normal never need it).
     import numpy as np
 
-    from mesh_normal.triangle_batch import triangle_normals
+    from mesh_normal.triangle.batch import triangle_normals
 
     refuse_oversized_batch(raw)
     body = parse_body(raw, BatchRequest)

@@ -28,7 +28,7 @@ from app.calculator.params import TriangleInput
 from app.calculator.payloads import normal_payload
 from app.calculator.plane_angle import angle_math, angle_payload, plane_math, plane_payload
 from app.calculator.presets import COORDINATE_FIELDS
-from mesh_normal.triangle import TriangleNormal, rational_triangle_normal, triangle_normal
+from mesh_normal.triangle.normal import TriangleNormal, rational_triangle_normal, triangle_normal
 
 Points = tuple[RationalPoint, RationalPoint, RationalPoint]
 

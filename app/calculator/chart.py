@@ -14,7 +14,7 @@ from typing import Any
 
 from app.web.formatting import js_number, number_text
 from app.web.plotly import FONT, MUTED, TRANSPARENT
-from mesh_normal.triangle import exact_triangle
+from mesh_normal.triangle.normal import exact_triangle
 
 LABELS = ["n<sub>x</sub>", "n<sub>y</sub>", "n<sub>z</sub>", "|n|", "area"]
 COLORS = ["#e4572e", "#29a36a", "#2e86de", "#6c5ce7", "#f2a541"]

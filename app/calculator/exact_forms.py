@@ -32,8 +32,8 @@ from app.calculator.mathml import (
     row,
     sqrt,
 )
-from mesh_normal.exact import root_over, square_root
-from mesh_normal.triangle import AXES, rational_exact
+from mesh_normal.triangle.exact import root_over, square_root
+from mesh_normal.triangle.normal import AXES, rational_exact
 
 RationalPoint = tuple[Fraction, Fraction, Fraction]
 Exact3 = tuple[Fraction, Fraction, Fraction]

@@ -3,7 +3,7 @@
 :func:`app.calculator.calculation.calculation_payload` of :func:`from_doubles` builds every
 exact value as a :class:`~fractions.Fraction` (a gcd at each step) and spends most of a
 request on it. Here the same exact values are held as Python integers over powers of two
-(every double is ``X * 2**-k``; see :mod:`mesh_normal.exact`), each output is rounded once
+(every double is ``X * 2**-k``; see :mod:`mesh_normal.triangle.exact`), each output is rounded once
 from them by the same functions, and the edges u and v come from float subtraction, which
 IEEE 754 rounds correctly (the exact difference rounded once, as the exact path does).
 
@@ -23,7 +23,7 @@ from typing import Any
 from app.calculator.calculation import DOUBLES_HINT
 from app.calculator.exact_forms import MAX_DIGITS, TOO_LONG
 from app.web.formatting import js_number
-from mesh_normal.exact import _GUARD_BITS, OutOfRange, ratio_sqrt
+from mesh_normal.triangle.exact import _GUARD_BITS, OutOfRange, ratio_sqrt
 
 Point = list[float]
 
@@ -57,7 +57,8 @@ def fast_payload(a: Point, b: Point, c: Point, swap_winding: bool) -> dict[str, 
     if not isfinite(abs(u[0]) + abs(u[1]) + abs(u[2]) + abs(v[0]) + abs(v[1]) + abs(v[2])):
         return None
 
-    # Every coordinate as an integer over one scale 1 / D, D = 2**k (mesh_normal.exact.to_fixed).
+    # Every coordinate as an integer over one scale 1 / D, D = 2**k
+    # (mesh_normal.triangle.exact.to_fixed).
     pxn, pxd = px.as_integer_ratio()
     pyn, pyd = py.as_integer_ratio()
     pzn, pzd = pz.as_integer_ratio()
@@ -125,7 +126,7 @@ _HALVES_EXACTLY = 2.0**-1020
 
 
 def _root_scaled(square: int, exponent: int) -> float | None:
-    """:func:`mesh_normal.exact.sqrt_scaled`, step for step; ``None`` for out of range."""
+    """:func:`mesh_normal.triangle.exact.sqrt_scaled`, step for step; ``None`` for out of range."""
     shift = max(0, 53 + _GUARD_BITS - square.bit_length() // 2)
     quotient = square << (2 * shift)
     root = isqrt(quotient)
@@ -148,7 +149,7 @@ def _unit(ni: int, square: int, normal: float, magnitude: float) -> float:
 
 
 def _exact_unit(part: int, square: int) -> float:
-    """:func:`mesh_normal.exact.ratio_sqrt`, step for step."""
+    """:func:`mesh_normal.triangle.exact.ratio_sqrt`, step for step."""
     shift = 53 + _GUARD_BITS + max(0, square.bit_length() - part.bit_length()) // 2 + 1
     quotient, remainder = divmod(part << (2 * shift), square)
     root = isqrt(quotient)

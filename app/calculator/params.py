@@ -17,7 +17,7 @@ from pydantic import BaseModel, Field, JsonValue
 from app.calculator.coordinates import MAX_TEXT, PATTERN, SPACE, parse_coordinate
 from app.calculator.presets import COORDINATE_FIELDS
 from app.web.errors import ApiError
-from mesh_normal.triangle import TriangleNormal, rational_triangle_normal, triangle_normal
+from mesh_normal.triangle.normal import TriangleNormal, rational_triangle_normal, triangle_normal
 
 SWAP_ON = frozenset({"on", "true", "1"})
 SWAP_OFF = frozenset({"", "off", "false", "0"})

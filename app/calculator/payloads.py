@@ -6,10 +6,10 @@ import csv
 import io
 from typing import TYPE_CHECKING, Any
 
-from mesh_normal.triangle import TriangleNormal
+from mesh_normal.triangle.normal import TriangleNormal
 
-if TYPE_CHECKING:  # for the annotation only: mesh_normal.triangle_batch imports NumPy
-    from mesh_normal.triangle_batch import BatchNormals
+if TYPE_CHECKING:  # for the annotation only: mesh_normal.triangle.batch imports NumPy
+    from mesh_normal.triangle.batch import BatchNormals
 
 
 def normal_payload(result: TriangleNormal) -> dict[str, Any]:

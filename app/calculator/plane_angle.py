@@ -35,8 +35,8 @@ from app.calculator.mathml import (
     word,
 )
 from app.web.formatting import js_number
-from mesh_normal.exact import ratio_sqrt
-from mesh_normal.triangle import AXES
+from mesh_normal.triangle.exact import ratio_sqrt
+from mesh_normal.triangle.normal import AXES
 
 NO_PLANE = (
     "There is no plane: points on one line (or repeated points) do not fix a single plane, "

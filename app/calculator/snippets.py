@@ -238,7 +238,7 @@ def _mesh_normal_rational(payload: dict[str, Any], typed: Rationals) -> str:
         f"""
         from fractions import Fraction as F
 
-        from mesh_normal.triangle import rational_triangle_normal
+        from mesh_normal.triangle.normal import rational_triangle_normal
 
         a = ({a})
         b = ({b})

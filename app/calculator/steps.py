@@ -3,7 +3,7 @@
 Every number is the user's own, written as JavaScript's ``String(x)`` writes it (the
 notation is :mod:`app.calculator.notation`). The exact u, v and n are those of the decimals
 typed (:mod:`app.calculator.calculation`: 0.1 is 1/10), or of the doubles
-(:func:`mesh_normal.triangle.exact_triangle`) when there is no typed text; values in between
+(:func:`mesh_normal.triangle.normal.exact_triangle`) when there is no typed text; values in between
 (products, squares, u · v, d) are computed exactly from them and rounded once, like the
 results; from the first number that rounding changed, a chain reads "≈" instead of "=". Each
 line is a :class:`~app.calculator.mathml.Formula`: MathML for the page (vectors as columns,
@@ -66,7 +66,7 @@ from app.calculator.notation import (
     vector,
 )
 from app.calculator.plane_angle import angle_radians
-from mesh_normal.triangle import (
+from mesh_normal.triangle.normal import (
     AXES,
     IntVector,
     MaybeVector,

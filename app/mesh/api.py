@@ -29,7 +29,7 @@ from app.web.jobs import Jobs
 from app.web.jsonio import FastJSONResponse
 from mesh_normal.choices import NormalsChoice, NormalsKind, Weighting, Winding
 from mesh_normal.files.formats import FORMATS, WRITABLE
-from mesh_normal.report import MeshReport
+from mesh_normal.mesh.report.models import MeshReport
 from mesh_normal.tolerances import WELD_LIMIT
 
 # The jobs (app.mesh.work: the readers, the kernels, NumPy) are imported by the routes that run
@@ -170,7 +170,7 @@ async def post_mesh_normals(
     )
     name = f"{stem(upload.filename)}-{kind}-normals.{file_format}"
     # Written in blocks as the client reads: the text of millions of normals is never whole.
-    from mesh_normal.exports import normals_blocks
+    from mesh_normal.files.normals import normals_blocks
 
     blocks = normals_blocks(normals, missing, kind, weighting, crease_angle, file_format)
     return StreamingResponse(blocks, media_type=MEDIA_TYPES[file_format], headers=attachment(name))

@@ -9,13 +9,13 @@ from app.mesh.histogram import area_histogram, histogram_figure
 from app.mesh.view import build_view, up_axis
 
 if TYPE_CHECKING:
-    from mesh_normal.analysis import MeshAnalysis
+    from mesh_normal.mesh.report.analysis import MeshAnalysis
 
 
 def mesh_figures(analysis: MeshAnalysis) -> dict[str, Any]:
     """The page's figures for one analysed mesh: ``{"view", "histogram", "histogram_figure"}``."""
     mesh, topology = analysis.mesh, analysis.topology
-    # The edges name each point by its first vertex (see mesh_normal.topology): so do the faces
+    # The edges name each point by its first vertex (see mesh_normal.mesh.topology): so do the faces
     # here, or a face on a boundary whose corners are later copies would look fine.
     faces = analysis.points
     classes = face_classes(

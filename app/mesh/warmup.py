@@ -20,9 +20,9 @@ import numpy as np
 
 from app.mesh.uploads import Upload
 from app.mesh.work import FIX_FORMATS, fix, normals, page, report
-from mesh_normal.exports import KINDS
 from mesh_normal.files import write_mesh
-from mesh_normal.vertices import Weighting
+from mesh_normal.files.normals import KINDS
+from mesh_normal.mesh.vertices import Weighting
 
 #: A closed tetrahedron, wound outward.
 VERTICES = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])

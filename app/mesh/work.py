@@ -20,16 +20,16 @@ from app.mesh.figures import mesh_figures
 from app.mesh.uploads import Upload
 from app.web.errors import ApiError
 from mesh_normal import allocator
-from mesh_normal.analysis import analyse_mesh, build_report, flips_by_component
-from mesh_normal.exports import FORMATS, KINDS, Normals, NormalsKind, normals_to_write
 from mesh_normal.files import LoadedMesh, MeshFileError, read_mesh, read_mesh_files, stl
 from mesh_normal.files.formats import FORMATS as MESH_FORMATS
 from mesh_normal.files.formats import WRITABLE
+from mesh_normal.files.normals import FORMATS, KINDS, Normals, NormalsKind, normals_to_write
 from mesh_normal.files.read import read_mapped, reads_as_binary_stl
+from mesh_normal.files.rewrite import NormalsChoice, Winding, export_mesh, file_normals
 from mesh_normal.files.write import unkept
-from mesh_normal.mesh_export import NormalsChoice, Winding, export_mesh, file_normals
-from mesh_normal.report import MeshReport
-from mesh_normal.vertices import Weighting
+from mesh_normal.mesh.report.analysis import analyse_mesh, build_report, flips_by_component
+from mesh_normal.mesh.report.models import MeshReport
+from mesh_normal.mesh.vertices import Weighting
 
 #: The formats the fixed mesh can be downloaded in: the library's writable ones.
 FIX_FORMATS = WRITABLE
@@ -112,7 +112,7 @@ def export(
     winding: Winding,
     weld: float | None,
 ) -> tuple[NDArray[np.uint8], str, dict[str, str]]:
-    """The file written again (:func:`~mesh_normal.mesh_export.export_mesh`), its format and
+    """The file written again (:func:`~mesh_normal.files.rewrite.export_mesh`), its format and
     the headers saying what changed and what the format could not hold."""
     mesh = load(upload)
     try:

@@ -20,7 +20,7 @@ from app.web.jsonio import FastJSONResponse
 from app.web.uploads import read_files
 from mesh_normal.choices import OrientMode
 from mesh_normal.files.formats import SUFFIXES as MESH_SUFFIXES
-from mesh_normal.points.formats import POINT_SUFFIXES
+from mesh_normal.points.io.formats import POINT_SUFFIXES
 from mesh_normal.points.report import PointReport
 
 if TYPE_CHECKING:

@@ -1,7 +1,7 @@
 """The normals of ``POST /api/points/normals`` as JSON, CSV or ``.npy``, written in blocks.
 
 The server streams them as the client reads, from the arrays the worker sent back, so the
-text of millions of normals is never whole in memory (as :mod:`mesh_normal.exports` does for
+text of millions of normals is never whole in memory (as :mod:`mesh_normal.files.normals` does for
 a mesh's). PLY and XYZ, which carry the points too, are written whole by the worker.
 """
 
@@ -13,7 +13,7 @@ from collections.abc import Iterator
 import numpy as np
 
 from app.web.jsonio import json_bytes
-from mesh_normal.exports import BLOCK_ROWS, npy_bytes
+from mesh_normal.files.normals import BLOCK_ROWS, npy_bytes
 from mesh_normal.types import BoolArray, FloatArray
 
 

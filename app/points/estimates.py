@@ -9,13 +9,13 @@ plus the file itself, rounded up: wider records take less a byte (binary PLY of 
 bytes a point, about 9 besides the fixed part; XYZ text of 59 bytes a point about 4).
 Lower them here, in this one table, when they are measured per format. The readers charge
 points they unpack from compressed data (a PCD's LZF, LAZ) at the same 213 bytes a point
-(``mesh_normal.points.cloud.POINT_JOB_BYTES``) to the upload's expansion budget, so a file
+(``mesh_normal.points.io.cloud.POINT_JOB_BYTES``) to the upload's expansion budget, so a file
 that packs more points than its size allows is refused before this estimate could be wrong.
 """
 
 from __future__ import annotations
 
-from mesh_normal.points.formats import POINT_SUFFIXES
+from mesh_normal.points.io.formats import POINT_SUFFIXES
 
 #: Bytes of memory per byte of the file, by the format read from the bytes (else the name).
 MEMORY_PER_BYTE: dict[str, float] = {
@@ -39,7 +39,7 @@ def estimate(data: bytes, filename: str | None) -> int:
 
 def per_byte(data: bytes, filename: str | None) -> float:
     """The factor of the format the bytes show, else the name's (LAZ is told by its name)."""
-    from mesh_normal.points.read import sniff_points  # here: the readers load after start-up
+    from mesh_normal.points.io.read import sniff_points  # here: the readers load after start-up
 
     suffix = "." + filename.rsplit(".", 1)[-1].lower() if filename and "." in filename else ""
     found = "laz" if suffix == ".laz" else sniff_points(data) or POINT_SUFFIXES.get(suffix)

@@ -14,10 +14,10 @@ from app.points.figures import histogram_figure, view_figure
 from app.web.errors import ApiError
 from mesh_normal.files.errors import MeshFileError
 from mesh_normal.points.analysis import PointAnalysis, analyse_points
+from mesh_normal.points.io.read import PointCloud, read_points
+from mesh_normal.points.io.write import write_points
 from mesh_normal.points.orient import OrientMode
-from mesh_normal.points.read import PointCloud, read_points
 from mesh_normal.points.report import PointReport
-from mesh_normal.points.write import write_points
 from mesh_normal.types import BoolArray, FloatArray
 
 

@@ -147,7 +147,7 @@ def batch_options(**given: Any) -> BatchOptions:
             raise ValueError(f"{name} must be a number above 0, not {value!r}.")
     if not options.k >= 3:
         raise ValueError(f"k must be at least 3, not {options.k!r}.")
-    from mesh_normal.analysis import checked_weld
+    from mesh_normal.mesh.report.analysis import checked_weld
 
     return replace(options, weld=checked_weld(options.weld))
 

@@ -2,7 +2,7 @@
 
 A folder or a pattern contributes the files whose suffix names a format the batch reads
 (:data:`~mesh_normal.files.formats.ACCEPTED_SUFFIXES`, and with ``points`` also
-:data:`~mesh_normal.points.read.POINT_SUFFIXES`); the others are counted as skipped, as are
+:data:`~mesh_normal.points.io.read.POINT_SUFFIXES`); the others are counted as skipped, as are
 hidden files and folders (a name that starts with a dot: ``.git``, a batch's own ``.parts``). A
 file named on its own is always taken: if it is not a mesh, its row says so. The tasks come out
 sorted by path, each file once.
@@ -36,7 +36,7 @@ def suffixes(points: bool) -> frozenset[str]:
 
     if not points:
         return frozenset(ACCEPTED_SUFFIXES)
-    from mesh_normal.points.read import POINT_SUFFIXES
+    from mesh_normal.points.io.read import POINT_SUFFIXES
 
     return frozenset((*ACCEPTED_SUFFIXES, *POINT_SUFFIXES)) - {".zip"}
 

@@ -19,7 +19,7 @@ from mesh_normal.datasets.schema import empty_row, failed_row
 from mesh_normal.datasets.tasks import BatchOptions, FileTask
 
 if TYPE_CHECKING:
-    from mesh_normal.analysis import MeshAnalysis
+    from mesh_normal.mesh.report.analysis import MeshAnalysis
     from mesh_normal.points.analysis import PointAnalysis
 
 #: Bytes of the digest in the ``hash`` column (BLAKE2b, 128 bits: 32 hex digits).
@@ -92,8 +92,8 @@ def _name(task: FileTask) -> str:
 
 
 def _mesh(task: FileTask, options: BatchOptions, data: bytes, row: dict[str, Any]) -> None:
-    from mesh_normal.analysis import analyse_mesh, build_report
     from mesh_normal.files import read_mesh
+    from mesh_normal.mesh.report.analysis import analyse_mesh, build_report
 
     name = _name(task)
     if name.lower().endswith(".gltf") and os.path.exists(task.url):
@@ -137,7 +137,7 @@ def _mesh(task: FileTask, options: BatchOptions, data: bytes, row: dict[str, Any
             write_output(options.out, output_name(task, options), _normals(analysis, options))
         )
     if options.fix and report.fix.faces_flipped:
-        from mesh_normal.mesh_export import default_format, export_mesh
+        from mesh_normal.files.rewrite import default_format, export_mesh
 
         chosen = default_format(mesh)
         fixed = export_mesh(mesh, chosen, winding="fix", weld=options.weld)
@@ -145,7 +145,7 @@ def _mesh(task: FileTask, options: BatchOptions, data: bytes, row: dict[str, Any
 
 
 def _normals(analysis: MeshAnalysis, options: BatchOptions) -> bytes:
-    from mesh_normal.exports import compute_normals, normals_file, normals_ply
+    from mesh_normal.files.normals import compute_normals, normals_file, normals_ply
 
     kind = options.normals or "face"
     mesh = analysis.mesh
@@ -160,7 +160,7 @@ def _normals(analysis: MeshAnalysis, options: BatchOptions) -> bytes:
 
 def _points(task: FileTask, options: BatchOptions, data: bytes, row: dict[str, Any]) -> None:
     from mesh_normal.points.analysis import analyse_points
-    from mesh_normal.points.read import read_points
+    from mesh_normal.points.io.read import read_points
 
     name = _name(task)
     cloud = read_points(data, name)
@@ -186,8 +186,8 @@ def _points(task: FileTask, options: BatchOptions, data: bytes, row: dict[str, A
             stored_median_degrees=stored.median_angle_degrees,
         )
     if options.normals is not None:
-        from mesh_normal.exports import npy_bytes
-        from mesh_normal.points.write import write_points
+        from mesh_normal.files.normals import npy_bytes
+        from mesh_normal.points.io.write import write_points
 
         normals = found.normals.normals
         if options.normals_format == "ply":

@@ -190,8 +190,8 @@ def warm() -> None:
     imports (the readers, the report's modules)."""
     import numpy as np
 
-    from mesh_normal.analysis import analyse_mesh, build_report
     from mesh_normal.files import read_mesh, write_mesh
+    from mesh_normal.mesh.report.analysis import analyse_mesh, build_report
 
     vertices = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=np.float64)
     faces = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])

@@ -10,13 +10,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from mesh_normal.checks import _coordinate_range, _index_range
+from mesh_normal.choices import MeshFormat
 from mesh_normal.files.errors import MeshFileError
-from mesh_normal.report import MeshFormat
+from mesh_normal.mesh.checks import _coordinate_range, _index_range
 from mesh_normal.types import FloatArray, IndexArray
 
 if TYPE_CHECKING:
-    from mesh_normal.checks import CheckedMesh
+    from mesh_normal.mesh.checks import CheckedMesh
 
 #: Most triangles a file may place once its instances (glTF nodes, 3MF components) are
 #: expanded: a few kilobytes of placements must not become gigabytes of triangles.
@@ -107,15 +107,15 @@ class LoadedMesh:
     distinct_points: bool = field(default=False, repr=False, compare=False)
 
     def checked(self) -> CheckedMesh:
-        """The mesh as the core takes it (:class:`~mesh_normal.checks.CheckedMesh`).
+        """The mesh as the core takes it (:class:`~mesh_normal.mesh.checks.CheckedMesh`).
 
         A mesh the reader built is not checked again: :func:`build` checked its arrays by the
-        rules of :func:`~mesh_normal.checks.check_mesh` and made them read-only. One built by
+        rules of :func:`~mesh_normal.mesh.checks.check_mesh` and made them read-only. One built by
         hand is checked now, with a ``ValueError`` for the first problem, and so is a reader's
         mesh whose arrays were replaced by views in another layout (the compiled core reads
         C-contiguous rows only).
         """
-        from mesh_normal.checks import CheckedMesh, checked_mesh, scaling  # numpy only
+        from mesh_normal.mesh.checks import CheckedMesh, checked_mesh, scaling  # numpy only
 
         laid_out = self.vertices.flags.c_contiguous and self.faces.flags.c_contiguous
         if not self.from_reader or not laid_out:

@@ -307,7 +307,7 @@ def write_stl(
     triangles : (m, 3) intp
     """
     # Imported here: reading STL needs no compiled kernel, only writing its normals does.
-    from mesh_normal.faces import face_geometry
+    from mesh_normal.mesh.faces import face_geometry
 
     largest = float(np.abs(points).max(initial=0.0))
     if largest > float(np.finfo(np.float32).max):

@@ -22,7 +22,6 @@ from typing import Literal, overload
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from mesh_normal.checks import check_mesh
 from mesh_normal.files.errors import unsupported
 from mesh_normal.files.formats import (
     FORMATS,
@@ -34,6 +33,7 @@ from mesh_normal.files.formats import (
     MeshFormat,
     suffix_format,
 )
+from mesh_normal.mesh.checks import check_mesh
 
 StrPath = str | os.PathLike[str]
 NormalsKind = Literal["face", "vertex", "corner"]
@@ -131,7 +131,7 @@ def write_mesh(
     Raises
     ------
     ValueError
-        For a bad mesh (from :func:`mesh_normal.faces.check_mesh`).
+        For a bad mesh (from :func:`mesh_normal.mesh.faces.check_mesh`).
     MeshFileError
         415 for a format that cannot be written (or a path whose suffix names none), 422 for
         coordinates STL cannot hold.

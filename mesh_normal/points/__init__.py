@@ -18,10 +18,10 @@ from mesh_normal._lazy import lazy_names
 if TYPE_CHECKING:
     from mesh_normal.points.analysis import PointAnalysis, analyse_points
     from mesh_normal.points.estimate import PointNormals, PointStatus, point_normals
+    from mesh_normal.points.io.read import POINT_SUFFIXES, PointCloud, read_points
+    from mesh_normal.points.io.write import POINT_WRITE_FORMATS, write_points
     from mesh_normal.points.orient import ORIENT_MODES, ComponentOrientation, OrientMode
-    from mesh_normal.points.read import POINT_SUFFIXES, PointCloud, read_points
     from mesh_normal.points.report import PointReport
-    from mesh_normal.points.write import POINT_WRITE_FORMATS, write_points
 
 #: Public name to the module under ``mesh_normal.points`` that defines it.
 _HOMES = {
@@ -31,14 +31,14 @@ _HOMES = {
     "PointNormals": "estimate",
     "PointStatus": "estimate",
     "point_normals": "estimate",
-    "POINT_SUFFIXES": "read",
-    "PointCloud": "read",
-    "read_points": "read",
-    "POINT_WRITE_FORMATS": "write",
+    "POINT_SUFFIXES": "io.read",
+    "PointCloud": "io.read",
+    "read_points": "io.read",
+    "POINT_WRITE_FORMATS": "io.write",
     "PointAnalysis": "analysis",
     "PointReport": "report",
     "analyse_points": "analysis",
-    "write_points": "write",
+    "write_points": "io.write",
 }
 
 __all__ = [

@@ -1,4 +1,4 @@
-"""One point cloud analysed once, as :mod:`mesh_normal.analysis` analyses a mesh.
+"""One point cloud analysed once, as :mod:`mesh_normal.mesh.report.analysis` analyses a mesh.
 
 :func:`analyse_points` estimates the normals (:func:`~mesh_normal.points.point_normals`) and
 sums them up in a :class:`~mesh_normal.points.report.PointReport`: the file, the bounds, how far
@@ -22,8 +22,8 @@ from mesh_normal.points.estimate import (
     coincident_groups,
     point_normals,
 )
+from mesh_normal.points.io.read import PointCloud
 from mesh_normal.points.orient import OrientMode
-from mesh_normal.points.read import PointCloud
 from mesh_normal.points.report import (
     FLIPPED_FRACTION,
     POINT_AGREEMENT_DEGREES,
@@ -37,7 +37,7 @@ from mesh_normal.points.report import (
     StatusCounts,
     StoredNormals,
 )
-from mesh_normal.report import INDEX_LIST_LIMIT
+from mesh_normal.record import INDEX_LIST_LIMIT
 from mesh_normal.tolerances import POINT_FAR_FROM_FLAT
 from mesh_normal.types import BoolArray, FloatArray
 

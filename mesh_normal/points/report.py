@@ -7,8 +7,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from mesh_normal.choices import OrientMode, SourceKind
-from mesh_normal.record import Record, described
-from mesh_normal.report import INDEX_LIST_LIMIT, Finite, Measure
+from mesh_normal.record import INDEX_LIST_LIMIT, Finite, Measure, Record, described
 from mesh_normal.tolerances import POINT_FAR_FROM_FLAT
 
 #: Stored normals within this angle of ours, as lines (either side), count as agreeing.

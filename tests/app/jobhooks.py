@@ -14,7 +14,7 @@ from typing import Any
 from app.mesh import work
 from app.mesh.uploads import Upload
 from app.web.errors import ApiError
-from mesh_normal.report import MeshReport
+from mesh_normal.mesh.report.models import MeshReport
 
 #: The real report, taken before a test puts a hook in its place.
 REPORT = work.report

@@ -10,7 +10,11 @@ back). The rules:
 - ``mesh_normal`` (the library) imports nothing from ``app``;
 - in ``mesh_normal``, only the entry points (the command line) import the command line and
   the process-wide settings (``mesh_normal.allocator``): the geometry, the readers and the
-  reports change nothing in the process that imports them.
+  reports change nothing in the process that imports them;
+- the library's layers, bottom up: the shared words (``types``, ``choices``, ``tolerances``,
+  ``record``) import no other module of the library; the geometry (``mesh_normal.triangle``,
+  ``mesh_normal.mesh`` but its ``report``) imports only the shared words and itself; the files
+  (``mesh_normal.files``) import neither the reports, the point clouds nor the datasets.
 """
 
 from __future__ import annotations
@@ -26,6 +30,17 @@ FEATURES = ("app.calculator", "app.mesh", "app.points")
 #: What only an entry point may import, and the library's entry points.
 RUNTIME = ("mesh_normal.cli", "mesh_normal.allocator")
 ENTRY_POINTS = ("mesh_normal.cli", "mesh_normal.__main__")
+SHARED = (
+    "mesh_normal._lazy",
+    "mesh_normal.choices",
+    "mesh_normal.record",
+    "mesh_normal.tolerances",
+    "mesh_normal.types",
+)
+GEOMETRY = ("mesh_normal.triangle", "mesh_normal.mesh")
+REPORTS = "mesh_normal.mesh.report"
+#: What the files may not import: what is built on them.
+ABOVE_FILES = (REPORTS, "mesh_normal.points", "mesh_normal.datasets")
 Graph = Mapping[str, set[str]]
 
 
@@ -94,6 +109,10 @@ def within(module: str, package: str) -> bool:
     return module == package or module.startswith(package + ".")
 
 
+def is_geometry(module: str) -> bool:
+    return any(within(module, package) for package in GEOMETRY) and not within(module, REPORTS)
+
+
 def violations(graph: Graph) -> list[str]:
     """Every import that crosses a wall between rooms, as ``importer -> imported``."""
     found = []
@@ -110,8 +129,14 @@ def violations(graph: Graph) -> list[str]:
                 or (within(module, "mesh_normal") and within(target, "app"))
                 or (
                     within(module, "mesh_normal")
-                    and module not in ENTRY_POINTS
-                    and target in RUNTIME
+                    and not any(within(module, entry) for entry in ENTRY_POINTS)
+                    and any(within(target, runtime) for runtime in RUNTIME)
+                )
+                or (module in SHARED and target not in SHARED)
+                or (is_geometry(module) and not (is_geometry(target) or target in SHARED))
+                or (
+                    within(module, "mesh_normal.files")
+                    and any(within(target, above) for above in ABOVE_FILES)
                 )
             )
             if crossing:
@@ -133,11 +158,10 @@ GRAPH = build_graph()
 
 
 def test_the_graph_sees_every_module_and_late_imports() -> None:
-    assert {"app.main", "app.web.errors", "app.calculator.steps", "mesh_normal.triangle"} <= set(
-        GRAPH
-    )
+    seen = {"app.main", "app.web.errors", "app.calculator.steps", "mesh_normal.triangle.normal"}
+    assert seen <= set(GRAPH)
     assert "app.calculator.pages" in GRAPH["app.main"]  # ``from app.calculator import pages``
-    assert "mesh_normal.triangle" in GRAPH["app.calculator.steps"]
+    assert "mesh_normal.triangle.normal" in GRAPH["app.calculator.steps"]
 
 
 def test_no_import_cycle() -> None:
@@ -167,10 +191,19 @@ def test_crossings_are_named() -> None:
         [
             ("app.mesh.view", "app.calculator.view3d"),
             ("app.web.errors", "app.calculator.pages"),
-            ("mesh_normal.report", "app.web.formatting"),
-            ("mesh_normal.faces", "mesh_normal.allocator"),
+            ("mesh_normal.mesh.report.models", "app.web.formatting"),
+            ("mesh_normal.mesh.faces", "mesh_normal.allocator"),
             ("mesh_normal.files.read", "mesh_normal.cli"),
-            ("mesh_normal.cli", "mesh_normal.allocator"),  # allowed: an entry point
+            ("mesh_normal.cli.mesh", "mesh_normal.allocator"),  # allowed: an entry point
+            ("mesh_normal.cli.points", "mesh_normal.cli.common"),  # allowed: within the CLI
+            ("mesh_normal.mesh.topology", "mesh_normal.cli.common"),
+            ("mesh_normal.mesh.faces", "mesh_normal.files.read"),
+            ("mesh_normal.triangle.normal", "mesh_normal.mesh.report.models"),
+            ("mesh_normal.mesh.faces", "mesh_normal.tolerances"),  # allowed: shared words
+            ("mesh_normal.mesh.report.analysis", "mesh_normal.files"),  # allowed: reports read
+            ("mesh_normal.files.loaded", "mesh_normal.mesh.report.models"),
+            ("mesh_normal.files.write", "mesh_normal.mesh.faces"),  # allowed: files use geometry
+            ("mesh_normal.choices", "mesh_normal.mesh.faces"),
             ("app.mesh.work", "mesh_normal.allocator"),  # allowed: a worker's job
             ("app.calculator.pages", "app.web.templating"),  # allowed: features use the plumbing
             ("app.main", "app.mesh.page"),  # allowed: the app builds every room
@@ -179,9 +212,14 @@ def test_crossings_are_named() -> None:
     assert violations(graph) == [
         "app.mesh.view -> app.calculator.view3d",
         "app.web.errors -> app.calculator.pages",
-        "mesh_normal.faces -> mesh_normal.allocator",
+        "mesh_normal.choices -> mesh_normal.mesh.faces",
+        "mesh_normal.files.loaded -> mesh_normal.mesh.report.models",
         "mesh_normal.files.read -> mesh_normal.cli",
-        "mesh_normal.report -> app.web.formatting",
+        "mesh_normal.mesh.faces -> mesh_normal.allocator",
+        "mesh_normal.mesh.faces -> mesh_normal.files.read",
+        "mesh_normal.mesh.report.models -> app.web.formatting",
+        "mesh_normal.mesh.topology -> mesh_normal.cli.common",
+        "mesh_normal.triangle.normal -> mesh_normal.mesh.report.models",
     ]
 
 

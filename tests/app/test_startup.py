@@ -14,7 +14,7 @@ HEAVY = (
     "app.mesh.work",
     "app.mesh.warmup",
     "app.points.work",
-    "mesh_normal.orientation",
+    "mesh_normal.mesh.orientation",
 )
 
 

@@ -10,7 +10,7 @@ import pytest
 
 from benchmarks.memory import FORMATS, PATHS, file_bytes, measure, run_path, torus
 from mesh_normal.files import read_mesh
-from mesh_normal.topology import mesh_topology
+from mesh_normal.mesh.topology import mesh_topology
 
 
 @pytest.mark.parametrize("kind", FORMATS)

@@ -12,7 +12,7 @@ from playwright.sync_api import Page, expect
 
 from mesh_normal import vertex_normals
 from mesh_normal.files import read_mesh, write_mesh
-from mesh_normal.topology import mesh_topology
+from mesh_normal.mesh.topology import mesh_topology
 from tests.browser.conftest import ConsoleWatch, NewPage
 from tests.meshes import CUBE_ONE_FLIPPED_OBJ, stepped_sides_cube
 from tests.paths import DATA, ROOT

@@ -11,7 +11,7 @@ from playwright.sync_api import Page, expect
 
 from app.mesh.samples import CUBE_FACES, cube_points
 from mesh_normal.files import read_mesh
-from mesh_normal.topology import mesh_topology
+from mesh_normal.mesh.topology import mesh_topology
 from tests.browser.conftest import NewPage
 from tests.browser.test_mesh_page import cube_file, open_mesh_page, wait_for_report
 from tests.meshes import CUBE_ONE_FLIPPED_OBJ

@@ -1,8 +1,8 @@
 """Independent exact references for the core tests.
 
 Nothing here uses ``int / int`` or ``float(Fraction)`` (which is the same CPython routine
-that ``mesh_normal.exact.round_scaled`` relies on), so the tests of the rounding code compare
-against a second, separately written implementation.
+that ``mesh_normal.triangle.exact.round_scaled`` relies on), so the tests of the rounding code
+compare against a second, separately written implementation.
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ class RefOutOfRange(Exception):
 def round_ref(value: Fraction | int) -> float:
     """Round an exact rational to the nearest double, ties to even, with integer arithmetic.
 
-    Raises RefOutOfRange("overflow" / "underflow") like ``mesh_normal.exact.round_scaled``.
+    Raises RefOutOfRange("overflow" / "underflow") like ``mesh_normal.triangle.exact.round_scaled``.
     """
     value = Fraction(value)
     if value == 0:

@@ -13,9 +13,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mesh_normal.checks import checked_mesh
-from mesh_normal.orientation import orient
-from mesh_normal.topology import mesh_topology, row_hashes, same_points
+from mesh_normal.mesh.checks import checked_mesh
+from mesh_normal.mesh.orientation import orient
+from mesh_normal.mesh.topology import mesh_topology, row_hashes, same_points
 from tests.meshes import (
     HARD_CASES,
     far_triangle,
@@ -268,7 +268,7 @@ def test_a_shell_inside_another_is_left_as_it_is() -> None:
 
 
 def test_nested_shells_past_the_limits_are_left_alone(monkeypatch: pytest.MonkeyPatch) -> None:
-    from mesh_normal import orientation
+    from mesh_normal.mesh import orientation
 
     vertices, faces = HARD_CASES["head with eyes"]()
     labels = mesh_topology(checked_mesh(vertices, faces)).face_component

@@ -51,13 +51,13 @@ def test_the_core_modules_are_found() -> None:
     modules = core_modules()
     for expected in (
         "mesh_normal",
-        "mesh_normal.exact",
-        "mesh_normal.triangle",
-        "mesh_normal.triangle_batch",
+        "mesh_normal.triangle.exact",
+        "mesh_normal.triangle.normal",
+        "mesh_normal.triangle.batch",
         "mesh_normal.tolerances",
         "mesh_normal.files",
-        "mesh_normal.report",
-        "mesh_normal.analysis",
+        "mesh_normal.mesh.report.models",
+        "mesh_normal.mesh.report.analysis",
         "mesh_normal.cli",
     ):
         assert expected in modules

@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 
 from app.calculator.params import read_triangle
 from app.calculator.presets import COORDINATE_FIELDS
-from mesh_normal.triangle import rational_triangle_normal
+from mesh_normal.triangle.normal import rational_triangle_normal
 from tests.conftest import EXAMPLE_QUERY
 
 RESULT_KEYS = {

@@ -21,7 +21,7 @@ from app.calculator.fast import (
 )
 from app.web.formatting import js_number
 from app.web.jsonio import json_bytes
-from mesh_normal.exact import ratio_sqrt
+from mesh_normal.triangle.exact import ratio_sqrt
 
 Point = list[float]
 

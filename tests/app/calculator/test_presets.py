@@ -6,7 +6,7 @@ import pytest
 
 from app.calculator.params import read_triangle
 from app.calculator.presets import COORDINATE_FIELDS, EXAMPLE, PRESETS
-from mesh_normal.triangle import triangle_normal
+from mesh_normal.triangle.normal import triangle_normal
 
 
 def test_the_example_fills_every_field() -> None:

@@ -22,7 +22,7 @@ from app.calculator.payloads import normal_payload
 from app.calculator.presets import PRESETS
 from app.calculator.snippets import Snippet, snippets
 from app.web.templating import templates
-from mesh_normal.triangle import triangle_normal
+from mesh_normal.triangle.normal import triangle_normal
 from tests.paths import ROOT
 
 GENERAL = ((1.5, -2.25, 0.1), (4.0, 0.5, -3.0), (0.3, 7.0, 2.5))

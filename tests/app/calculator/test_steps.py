@@ -16,7 +16,7 @@ from app.calculator.calculation import from_typed
 from app.calculator.params import read_triangle
 from app.calculator.steps import Step, worked_steps
 from app.web.formatting import number_text
-from mesh_normal.triangle import TriangleNormal, triangle_normal
+from mesh_normal.triangle.normal import TriangleNormal, triangle_normal
 from tests.conftest import Page
 from tests.paths import TEMPLATES
 

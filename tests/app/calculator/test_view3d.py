@@ -23,7 +23,7 @@ from app.calculator import view3d
 from app.calculator.calculation import calculation_payload, from_doubles
 from app.calculator.payloads import normal_payload
 from app.calculator.view3d import view3d_figure, view_space
-from mesh_normal.triangle import triangle_normal
+from mesh_normal.triangle.normal import triangle_normal
 from tests.app.calculator import _view3d_numpy as reference
 from tests.paths import ROOT
 

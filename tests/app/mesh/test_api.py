@@ -238,7 +238,7 @@ def test_fix_writes_each_format(client: TestClient, fmt: str) -> None:
 def test_fix_of_stl_solids_names_the_objects_it_leaves_out(client: TestClient, fmt: str) -> None:
     """Every file the fix writes is one mesh (binary STL holds one): X-Dropped says the
     division into solids is gone; the triangles are all there, the turned cube turned back."""
-    from tests.mesh_normal.test_objects import two_cubes
+    from tests.mesh_normal.mesh.report.test_objects import two_cubes
 
     data = obj_as_solids(two_cubes([face[::-1] for face in CUBE_OBJ_FACES], "turned"))
     response = upload(client, "/api/mesh/fix", data, "two.stl", format=fmt)
@@ -446,7 +446,7 @@ def test_openapi_documents_every_key_of_the_objects(client: TestClient) -> None:
 def test_stl_solids_are_objects_like_obj_objects(client: TestClient) -> None:
     """The same two cubes (the second turned inside out) as two OBJ objects and as two ASCII
     STL solids: the same objects, with the same counts and verdicts."""
-    from tests.mesh_normal.test_objects import two_cubes
+    from tests.mesh_normal.mesh.report.test_objects import two_cubes
 
     text = two_cubes([face[::-1] for face in CUBE_OBJ_FACES], "turned")
     obj = upload(client, "/api/mesh", text, "two.obj").json()

@@ -156,7 +156,7 @@ def test_a_post_without_a_file_is_a_422_page(client: TestClient) -> None:
 
 
 def test_objects_table_names_the_inward_object(client: TestClient) -> None:
-    from tests.mesh_normal.test_objects import two_cubes
+    from tests.mesh_normal.mesh.report.test_objects import two_cubes
 
     inward = [face[::-1] for face in CUBE_OBJ_FACES]
     _, html = post(client, two_cubes(inward, "turned"), part="report")
@@ -168,7 +168,7 @@ def test_objects_table_names_the_inward_object(client: TestClient) -> None:
 
 
 def test_objects_table_lists_stl_solids(client: TestClient) -> None:
-    from tests.mesh_normal.test_objects import two_cubes
+    from tests.mesh_normal.mesh.report.test_objects import two_cubes
 
     text = two_cubes([face[::-1] for face in CUBE_OBJ_FACES], "turned")
     _, html = post(client, obj_as_solids(text), "two.stl", part="report")
@@ -180,7 +180,7 @@ def test_objects_table_lists_stl_solids(client: TestClient) -> None:
 def test_the_page_says_before_the_download_that_the_objects_are_left_out(
     client: TestClient,
 ) -> None:
-    from tests.mesh_normal.test_objects import two_cubes
+    from tests.mesh_normal.mesh.report.test_objects import two_cubes
 
     response, html = post(client, obj_as_solids(two_cubes()), "two.stl", part="report")
     expected = {  # OBJ keeps them, as o statements
@@ -204,7 +204,7 @@ def test_objects_table_is_hidden_for_one_object_or_none(client: TestClient) -> N
 
 
 def test_objects_table_says_when_it_lists_only_the_first(client: TestClient) -> None:
-    from tests.mesh_normal.test_objects import many_triangles
+    from tests.mesh_normal.mesh.report.test_objects import many_triangles
 
     _, html = post(client, many_triangles(105), part="report")
     assert "105 objects in the file; the first 100 are listed" in html.text("mesh-objects")

@@ -10,7 +10,7 @@ import pytest
 from fastapi.testclient import TestClient
 
 from app.points.figures import VIEW_NORMALS, VIEW_POINTS, normal_colors, voxel_sample
-from mesh_normal.points.write import write_points
+from mesh_normal.points.io.write import write_points
 from tests.conftest import Page
 
 

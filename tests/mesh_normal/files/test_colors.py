@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 from mesh_normal.files import LoadedMesh, read_mesh, write_mesh
 from mesh_normal.files.loaded import build
 from mesh_normal.files.write import unkept
-from mesh_normal.orientation import orient
+from mesh_normal.mesh.orientation import orient
 from tests.meshes import TETRA_FACES, TETRA_VERTICES
 from tests.paths import DATA
 

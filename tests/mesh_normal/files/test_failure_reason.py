@@ -9,7 +9,7 @@ import pytest
 
 from mesh_normal.files.errors import MeshFileError, failure_reason
 from mesh_normal.files.read import read_mesh
-from mesh_normal.points.read import read_points
+from mesh_normal.points.io.read import read_points
 
 PRIMITIVE = {"attributes": {"POSITION": 0}}
 

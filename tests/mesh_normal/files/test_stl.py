@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from mesh_normal.files import MeshFileError, read_mesh
-from mesh_normal.topology import by_position, same_points
+from mesh_normal.mesh.topology import by_position, same_points
 from tests.meshes import (
     CUBE_FACES,
     CUBE_VERTICES,

@@ -13,7 +13,7 @@ import pytest
 
 from mesh_normal import _core
 from mesh_normal.files.errors import MeshFileError
-from mesh_normal.points.pcd import lzf_decompress
+from mesh_normal.points.io.pcd import lzf_decompress
 from mesh_normal.tolerances import POINT_GAP_RATIO, POINT_LINE_RATIO
 from tests.mesh_normal.points._pcd import lzf_compress
 from tests.paths import ROOT

@@ -13,8 +13,8 @@ from mesh_normal.files.errors import MeshFileError
 from mesh_normal.files.expansion import ExpansionTooLarge
 from mesh_normal.points.analysis import analyse_points
 from mesh_normal.points.estimate import PointStatus, coincident_groups, point_normals
-from mesh_normal.points.pcd import lzf_decompress
-from mesh_normal.points.read import make_cloud, read_points
+from mesh_normal.points.io.pcd import lzf_decompress
+from mesh_normal.points.io.read import make_cloud, read_points
 from tests.mesh_normal.points import _clouds as clouds
 from tests.mesh_normal.points._hostile import (
     HOSTILE_POINTS,

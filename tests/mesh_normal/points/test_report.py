@@ -12,7 +12,7 @@ from pydantic import TypeAdapter
 
 from mesh_normal.points import read_points
 from mesh_normal.points.analysis import analyse_points
-from mesh_normal.points.read import make_cloud
+from mesh_normal.points.io.read import make_cloud
 from mesh_normal.points.report import POINT_AGREEMENT_DEGREES, PointReport
 from tests.mesh_normal.points._clouds import sphere
 from tests.mesh_normal.points._pcd import pcd_header

@@ -1,0 +1,1 @@
+"""One triangle's normal, exact and rounded once, and many triangles' at once."""
