@@ -11,7 +11,7 @@ from typing import get_args
 from mesh_normal import __version__
 from mesh_normal.choices import NormalsChoice, NormalsKind, OrientMode, Weighting, Winding
 from mesh_normal.cli.common import EXIT_USAGE, Failure, Progress
-from mesh_normal.cli.mesh import FIX_FORMATS, analyze, export, fix, normals
+from mesh_normal.cli.mesh import FIX_FORMATS, NORMAL_SUFFIXES, analyze, export, fix, normals
 from mesh_normal.cli.points import points
 from mesh_normal.files.formats import SUFFIXES
 from mesh_normal.tolerances import ORIENT_MAX_ANGLE, WELD_LIMIT
@@ -142,27 +142,32 @@ def parser() -> argparse.ArgumentParser:
         "--output",
         required=True,
         help="OUT.npy (float64), OUT.csv, OUT.json: the normals; OUT.obj, OUT.glb (any kind), "
-        "OUT.ply (face, vertex), OUT.off (vertex), OUT.stl (face): the mesh with them",
+        "OUT.ply (face, vertex), OUT.off (vertex), OUT.stl (face): the mesh with them; "
+        "- for standard output (npy unless --format says otherwise)",
+    )
+    normals_parser.add_argument(
+        "--format",
+        choices=(*(suffix.lstrip(".") for suffix in NORMAL_SUFFIXES), *FIX_FORMATS),
+        metavar="FORMAT",
+        help="%(choices)s: what to write, where the output's suffix does not say (-)",
     )
     normals_parser.add_argument(
         "--force", action="store_true", help="allow OUT to be the input file"
     )
-    normals_parser.set_defaults(run=normals, weld=None, write_unchanged=True)
+    normals_parser.set_defaults(run=normals, weld=None)
 
     fix_parser = commands.add_parser(
         "fix",
         help="write the mesh with consistent, outward winding",
         description="Write the mesh with consistent, outward winding, keeping what the "
         "output's format holds (colours, groups, normals recomputed) and naming what it "
-        "cannot. Writes nothing when no face needs flipping (see --write-unchanged), and "
-        "never over the input without --force; another existing OUT is replaced, as cp does.",
+        "cannot. When no face needs flipping, OUT is the mesh as it was (the input's own "
+        "bytes, in its own format). Never over the input without --force; another existing "
+        "OUT is replaced, as cp does; - writes to standard output (with --format).",
     )
     add_output(fix_parser)
-    fix_parser.add_argument(
-        "--write-unchanged",
-        action="store_true",
-        help="write OUT even when no face needs flipping",
-    )
+    # Accepted so that older scripts still run: fix always writes OUT now.
+    fix_parser.add_argument("--write-unchanged", action="store_true", help=argparse.SUPPRESS)
     fix_parser.set_defaults(run=fix, winding="fix")
 
     export_parser = commands.add_parser(
@@ -181,7 +186,7 @@ def parser() -> argparse.ArgumentParser:
         help="%(choices)s: keep the faces, fix them (consistent and outward) or flip every "
         "one (default: %(default)s)",
     )
-    export_parser.set_defaults(run=export, write_unchanged=True)
+    export_parser.set_defaults(run=export)
 
     points_parser = commands.add_parser(
         "points",
@@ -195,7 +200,14 @@ def parser() -> argparse.ArgumentParser:
         "-o",
         "--output",
         help="OUT.ply, OUT.xyz or OUT.csv (the points with their normals) or OUT.npy (the "
-        "(n, 3) float64 normals); points without a normal get zeros. Default: a summary",
+        "(n, 3) float64 normals); points without a normal get zeros; - for standard output "
+        "(npy unless --format says otherwise). Default: a summary",
+    )
+    points_parser.add_argument(
+        "--format",
+        choices=("ply", "xyz", "csv", "npy"),
+        metavar="FORMAT",
+        help="%(choices)s: what -o writes, where its suffix does not say (-)",
     )
     points_parser.add_argument(
         "--k",

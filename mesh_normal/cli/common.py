@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -13,6 +15,8 @@ if TYPE_CHECKING:
 Parsed = TypeVar("Parsed")
 
 EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE, EXIT_INPUT, EXIT_OUTPUT = 0, 1, 2, 3, 4
+#: The output that means standard output, as Unix tools take it.
+STDOUT = "-"
 
 
 class Failure(Exception):
@@ -85,14 +89,40 @@ def parsed(path: str, parse: Callable[[], Parsed]) -> Parsed:
 
 
 def write(path: str, data: bytes) -> None:
-    """Write through a temporary file beside ``path`` and rename it: never a half-written
-    file, and ``mesh-normal fix a.obj a.obj`` cannot lose the input."""
+    """Write ``data`` to standard output for ``-``; else through a temporary file beside
+    ``path``, renamed over it: never a half-written file, and ``mesh-normal fix a.obj a.obj``
+    cannot lose the input."""
+    if path == STDOUT:
+        try:
+            sys.stdout.buffer.write(data)
+            sys.stdout.buffer.flush()
+        except BrokenPipeError:  # a reader that stopped early (``| head``)
+            # Python would complain again when it flushes stdout at exit.
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            raise Failure(
+                "standard output was closed before the data was written", EXIT_OUTPUT
+            ) from None
+        return
     from mesh_normal.files.write import replace_file
 
     try:
         replace_file(path, data)
     except OSError as error:
         raise Failure(f"cannot write {path}: {error.strerror or error}", EXIT_OUTPUT) from None
+
+
+def where(path: str, written: str | None = None) -> str:
+    """An output as a sentence names it, with the format ``written`` there where the name
+    does not say it (standard output)."""
+    if path != STDOUT:
+        return path
+    return "standard output" if written is None else f"standard output ({written})"
+
+
+def tell(text: str, output: str | None) -> None:
+    """What a command did: on stdout, or on stderr when stdout carries the data (``-o -``),
+    so that a pipe gets the data alone."""
+    print(text, file=sys.stderr if output == STDOUT else sys.stdout)
 
 
 def count(number: int, noun: str, plural: str | None = None) -> str:

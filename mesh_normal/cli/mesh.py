@@ -4,20 +4,25 @@ from __future__ import annotations
 
 import argparse
 import json
+import re
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 from mesh_normal.cli.common import (
     EXIT_OK,
     EXIT_OUTPUT,
     EXIT_PROBLEMS,
     EXIT_USAGE,
+    STDOUT,
     Failure,
     Progress,
     count,
     load,
+    read_input,
     same_file,
+    tell,
+    where,
     write,
 )
 from mesh_normal.files.formats import WRITABLE
@@ -81,17 +86,16 @@ def summary(report: MeshReport) -> str:
     return "\n".join(lines)
 
 
-#: The report's words for the page, as a terminal reads them.
-TERMINAL_WORDS = {
-    "Download the fixed mesh": "Write the fixed mesh (the command below)",
-}
+#: The page's button in the report's advice ("Download the fixed mesh", with a note in brackets
+#: or not), and the same advice as a terminal reads it: the command is printed below it.
+PAGE_ADVICE = re.compile(r"Download the fixed mesh( \([^)]*\))?")
 
 
 def terminal_words(text: str) -> str:
     """A report sentence written for the page, in the terminal's words."""
-    for page, terminal in TERMINAL_WORDS.items():
-        text = text.replace(page, terminal)
-    return text
+    return PAGE_ADVICE.sub(
+        lambda found: f"Write the fixed mesh{found.group(1) or ''} with the command below", text
+    )
 
 
 def weld_line(weld: Weld) -> str:
@@ -105,27 +109,19 @@ def weld_line(weld: Weld) -> str:
 
 
 def normals(args: argparse.Namespace, progress: Progress) -> int:
-    suffix = Path(args.output).suffix.lower()
-    mesh_suffixes = tuple(f".{name}" for name in FIX_FORMATS)
-    if suffix not in (*NORMAL_SUFFIXES, *mesh_suffixes):
-        raise Failure(
-            f"the output must end in {', '.join((*NORMAL_SUFFIXES, *mesh_suffixes))}, not "
-            f"{suffix or 'no suffix'}",
-            EXIT_USAGE,
-        )
-    if suffix in mesh_suffixes:  # the mesh itself, with the normals in it
+    chosen = normals_format(args.output, args.format)
+    if chosen in FIX_FORMATS:  # the mesh itself, with the normals in it
         from mesh_normal.files.formats import FORMATS, HOLDS_NORMALS
 
-        name = suffix.lstrip(".")
-        held = HOLDS_NORMALS.get(name, ())
+        held = HOLDS_NORMALS.get(chosen, ())
         if args.kind not in held:
             holds = f"only {' and '.join(held)} normals" if held else "no normals"
             raise Failure(
-                f"{args.kind} normals do not fit in a {FORMATS[name].title} file, which holds "
+                f"{args.kind} normals do not fit in a {FORMATS[chosen].title} file, which holds "
                 f"{holds}; use .obj or .glb (any kind), or .npy, .csv, .json",
                 EXIT_USAGE,
             )
-        args.input, args.format, args.normals, args.winding = args.file, name, args.kind, "keep"
+        args.input, args.format, args.normals, args.winding = args.file, chosen, args.kind, "keep"
         return export(args, progress)
     from mesh_normal.files.normals import NormalsFormat, normals_file, normals_to_write
 
@@ -134,22 +130,42 @@ def normals(args: argparse.Namespace, progress: Progress) -> int:
     mesh, _ = load(args.file, progress)
     progress.step(f"computing {args.kind} normals")
     values, missing = normals_to_write(mesh, args.kind, args.weighting, args.crease_angle)
-    progress.step(f"writing {args.output}")
-    formats: dict[str, NormalsFormat] = {".npy": "npy", ".csv": "csv", ".json": "json"}
+    progress.step(f"writing {where(args.output)}")
     # the same files as POST /api/mesh/normals
     data = normals_file(
-        values, missing, args.kind, args.weighting, args.crease_angle, formats[suffix]
+        values, missing, args.kind, args.weighting, args.crease_angle, cast(NormalsFormat, chosen)
     )
     write(args.output, data)
     progress.done()
-    if int(missing.sum()):
-        zero = count(int(missing.sum()), f"{args.kind} normal")
-        print(
-            f"{zero} {'is a zero row' if int(missing.sum()) == 1 else 'are zero rows'} "
-            "(degenerate or unused); see `mesh-normal analyze`.",
-            file=sys.stderr,
-        )
+    line = f"wrote {count(len(values), f'{args.kind} normal')} to {where(args.output, chosen)}"
+    zero = int(missing.sum())
+    if zero:
+        are = "is a zero row" if zero == 1 else "are zero rows"
+        line += f"; {count(zero, 'of them', 'of them')} {are} (degenerate or unused faces)"
+    tell(line + ("; see `mesh-normal analyze`" if zero else ""), args.output)
     return EXIT_OK
+
+
+def normals_format(output: str, given: str | None) -> str:
+    """What ``normals -o OUTPUT`` writes: ``--format``, else the output's suffix, else npy for
+    standard output; a usage failure where they disagree or name nothing it writes."""
+    suffixes = {
+        **{suffix: suffix.lstrip(".") for suffix in NORMAL_SUFFIXES},
+        **{f".{name}": name for name in FIX_FORMATS},
+    }
+    named = None if output == STDOUT else suffixes.get(Path(output).suffix.lower())
+    if output != STDOUT and named is None and given is None:
+        suffix = Path(output).suffix.lower() or "no suffix"
+        raise Failure(
+            f"the output must end in {', '.join(suffixes)}, not {suffix} (or give --format)",
+            EXIT_USAGE,
+        )
+    if given is not None and named is not None and given != named:
+        raise Failure(
+            f"{output} names {named} but --format is {given}; give one, or make them agree",
+            EXIT_USAGE,
+        )
+    return given or named or "npy"
 
 
 def fix(args: argparse.Namespace, progress: Progress) -> int:
@@ -185,42 +201,54 @@ def export(args: argparse.Namespace, progress: Progress) -> int:
             weld=args.weld,
         )
     except MeshFileError as error:
-        raise Failure(f"cannot write {args.output}: {error}", EXIT_OUTPUT) from None
-    faces = len(mesh.faces)
-    unchanged = args.command == "fix" and not result.faces_flipped
-    if unchanged and not (args.write_unchanged or args.force):
-        progress.done()
-        verdict = result.orientation.orientation if result.orientation else "unknown"
-        print(
-            f"nothing to fix: none of the {count(faces, 'face')} of {args.input} needs "
-            f"flipping (orientation {verdict}); wrote nothing (--write-unchanged writes "
-            f"{args.output} anyway)"
-        )
-        return EXIT_OK
-    progress.step(f"writing {args.output}")
-    write(args.output, result.data)
+        raise Failure(f"cannot write {where(args.output)}: {error}", EXIT_OUTPUT) from None
+    faces, shown = len(mesh.faces), where(args.output, chosen)
+    # Nothing to flip, in the input's own format, normals as stored: the input's bytes are that
+    # mesh exactly, with all it holds (texture coordinates, materials, comments included).
+    as_it_was = (
+        args.command == "fix"
+        and not result.faces_flipped
+        and chosen == mesh.format
+        and args.normals == "auto"
+    )
+    progress.step(f"writing {shown}")
+    write(args.output, read_input(args.input, progress) if as_it_was else result.data)
     progress.done()
-    if result.dropped:  # do no harm: never leave data out without saying so
-        print(f"mesh-normal: {args.output} leaves out {'; '.join(result.dropped)}", file=sys.stderr)
-    kept = f"; kept {', '.join(result.kept)}" if result.kept else ""
-    if result.orientation is not None:
+    if result.dropped and not as_it_was:  # do no harm: never leave data out without saying so
+        print(f"mesh-normal: {shown} leaves out {'; '.join(result.dropped)}", file=sys.stderr)
+    kept = f"; kept {', '.join(result.kept)}" if result.kept and not as_it_was else ""
+    if result.orientation is not None and not result.faces_flipped and args.command == "fix":
+        again = "the input as it was" if as_it_was else "the same faces"
+        tell(
+            f"wrote {shown}: {again}, since none of the {count(faces, 'face')} needs "
+            f"flipping (orientation {result.orientation.orientation}){kept}",
+            args.output,
+        )
+    elif result.orientation is not None:
         parts = flips_by_component(result.orientation)
-        where = f" (component:faces {parts})" if parts else ""
-        print(
-            f"wrote {args.output}: flipped {result.faces_flipped:,} of {count(faces, 'face')}"
-            f"{where}; orientation before: {result.orientation.orientation}{kept}"
+        within = f" (component:faces {parts})" if parts else ""
+        tell(
+            f"wrote {shown}: flipped {result.faces_flipped:,} of {count(faces, 'face')}"
+            f"{within}; orientation before: {result.orientation.orientation}{kept}",
+            args.output,
         )
     else:
         done = "every face flipped" if args.winding == "flip" else "winding as it was"
-        print(f"wrote {args.output}: {count(faces, 'face')}, {done}{kept}")
+        tell(f"wrote {shown}: {count(faces, 'face')}, {done}{kept}", args.output)
     weld = weld_summary(mesh.vertices, args.weld)
     if weld is not None:
-        print(weld_line(weld))
+        tell(weld_line(weld), args.output)
     return EXIT_OK
 
 
 def output_format(output: str, given: str | None) -> str:
     """The mesh format ``--format`` or the output's suffix names; a usage failure otherwise."""
+    if output == STDOUT and given is None:
+        raise Failure(
+            f"writing the mesh to standard output (-) needs --format, one of "
+            f"{', '.join(FIX_FORMATS)}",
+            EXIT_USAGE,
+        )
     chosen = given or Path(output).suffix.lower().lstrip(".")
     if chosen not in FIX_FORMATS:
         raise Failure(

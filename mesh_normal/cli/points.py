@@ -11,12 +11,15 @@ from mesh_normal.choices import OrientMode
 from mesh_normal.cli.common import (
     EXIT_OK,
     EXIT_USAGE,
+    STDOUT,
     Failure,
     Progress,
     count,
     parsed,
     read_input,
     same_file,
+    tell,
+    where,
     write,
 )
 
@@ -41,7 +44,9 @@ STATUS_WORDS = {
 
 def points(args: argparse.Namespace, progress: Progress) -> int:
     """Normals of a point cloud: a file of them with ``-o``, else a summary on stdout."""
-    output_format = point_output(args.file, args.output)
+    output_format = point_output(args.file, args.output, args.format)
+    if args.json and args.output == STDOUT:
+        raise Failure("--json and -o - would both write to standard output; give one", EXIT_USAGE)
     if args.k is None and args.radius is None:
         raise Failure("--k all needs --radius", EXIT_USAGE)
     from mesh_normal.points import point_normals
@@ -63,31 +68,41 @@ def points(args: argparse.Namespace, progress: Progress) -> int:
         raise Failure(str(error), EXIT_USAGE) from None
     found = points_summary(args, cloud, result, orient)
     if args.output is not None:
-        progress.step(f"writing {args.output}")
+        progress.step(f"writing {where(args.output)}")
         write(args.output, point_bytes(cloud, result, output_format))
     progress.done()
     if args.json:  # allow_nan=False: never NaN
         print(json.dumps(found, indent=2, allow_nan=False))
     elif args.output is not None:
-        print(written_line(found, args.output))
+        tell(written_line(found, args.output, output_format or "npy"), args.output)
     else:
         print(points_text(found))
     return EXIT_OK
 
 
-def point_output(source: str, output: str | None) -> str | None:
-    """The output's format from its suffix; refuses another suffix and the input's own path."""
+def point_output(source: str, output: str | None, given: str | None) -> str | None:
+    """What ``-o`` writes: ``--format``, else its suffix, else npy for standard output;
+    refuses another suffix, a suffix and ``--format`` that disagree, and the input's own
+    path."""
     if output is None:
+        if given is not None:
+            raise Failure("--format is only used with -o", EXIT_USAGE)
         return None
-    suffix = Path(output).suffix.lower()
-    if suffix not in POINT_OUTPUTS:
+    named = None if output == STDOUT else POINT_OUTPUTS.get(Path(output).suffix.lower())
+    if output != STDOUT and named is None and given is None:
+        suffix = Path(output).suffix.lower() or "no suffix"
         raise Failure(
-            f"the output must end in {', '.join(POINT_OUTPUTS)}, not {suffix or 'no suffix'}",
+            f"the output must end in {', '.join(POINT_OUTPUTS)}, not {suffix} (or give --format)",
+            EXIT_USAGE,
+        )
+    if given is not None and named is not None and given != named:
+        raise Failure(
+            f"{output} names {named} but --format is {given}; give one, or make them agree",
             EXIT_USAGE,
         )
     if same_file(output, source):
         raise Failure(f"{output} is the input file; write the normals to another file", EXIT_USAGE)
-    return POINT_OUTPUTS[suffix]
+    return given or named or "npy"
 
 
 def load_points(path: str, progress: Progress) -> PointCloud:
@@ -316,10 +331,11 @@ def stored_line(stored: dict[str, Any]) -> str:
     )
 
 
-def written_line(found: dict[str, Any], output: str) -> str:
+def written_line(found: dict[str, Any], output: str, output_format: str) -> str:
     """What ``-o`` wrote, and what in it is not a normal oriented as asked."""
-    rows = found["file_points"] if output.lower().endswith(".npy") else found["points"]
-    line = f"wrote {count(rows, 'normal')} to {output}"
+    npy = output_format == "npy"
+    rows = found["file_points"] if npy else found["points"]
+    line = f"wrote {count(rows, 'normal')} to {where(output, output_format)}"
     missing, unoriented = found["without_normal"], found["counts"]["unoriented"]
     if missing:
         reasons = ", ".join(
@@ -333,7 +349,7 @@ def written_line(found: dict[str, Any], output: str) -> str:
         its = "its side" if unoriented == 1 else "their side"
         line += f"; {count(unoriented, 'normal')} unoriented ({its} could not be decided)"
     left_out = found["file_points"] - found["points"]
-    if left_out and output.lower().endswith(".npy"):
+    if left_out and npy:
         rows_left = (
             "row the file left out is a zero row"
             if left_out == 1

@@ -81,19 +81,38 @@ def test_analyze_lists_stl_solids_as_objects(
     ]
 
 
-def test_fix_of_stl_solids_says_the_objects_are_left_out(
+def test_stl_solids_written_again_say_the_objects_are_left_out(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     from tests.mesh_normal.mesh.report.test_objects import two_cubes
 
-    source, out = tmp_path / "two.stl", tmp_path / "fixed.stl"
+    source, out = tmp_path / "two.stl", tmp_path / "again.stl"
     source.write_bytes(obj_as_solids(two_cubes()))
-    assert main(["fix", "--write-unchanged", str(source), str(out)]) == 0
+    assert main(["export", str(source), str(out)]) == 0
     lines = [line for line in capsys.readouterr().err.splitlines() if "leaves out" in line]
     assert lines == [
         f"mesh-normal: {out} leaves out the division into 2 objects (the STL written is one mesh)"
     ]
-    assert len(read_mesh(out.read_bytes(), "fixed.stl").faces) == 24
+    assert len(read_mesh(out.read_bytes(), "again.stl").faces) == 24
+
+
+def test_fix_with_nothing_to_flip_writes_the_input_as_it_was(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A script's ``fix IN OUT`` always finds OUT; with nothing to flip it is the input's own
+    bytes, so the solids (and anything else the file holds) are kept."""
+    from tests.mesh_normal.mesh.report.test_objects import two_cubes
+
+    source, out = tmp_path / "two.stl", tmp_path / "fixed.stl"
+    source.write_bytes(obj_as_solids(two_cubes()))
+    assert main(["fix", str(source), str(out)]) == 0
+    captured = capsys.readouterr()
+    assert out.read_bytes() == source.read_bytes()
+    assert captured.out == (
+        f"wrote {out}: the input as it was, since none of the 24 faces needs flipping "
+        "(orientation outward)\n"
+    )
+    assert "leaves out" not in captured.err
 
 
 def test_analyze_one_object_lists_none(cube: Path, capsys: pytest.CaptureFixture[str]) -> None:

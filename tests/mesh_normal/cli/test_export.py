@@ -64,13 +64,40 @@ def test_fix_with_force_replaces_the_input_keeping_its_normals(
     np.testing.assert_allclose(fixed.file_vertex_normals, outward, atol=1e-12)
 
 
-def test_nothing_to_fix_writes_nothing(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_nothing_to_fix_still_writes_the_output(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     source, out = tmp_path / "good.ply", tmp_path / "out.ply"
     source.write_bytes(write_mesh(TETRA_VERTICES, TETRA_FACES, "ply"))
     assert main(["fix", str(source), str(out)]) == EXIT_OK
-    assert "nothing to fix" in capsys.readouterr().out and not out.exists()
+    assert out.read_bytes() == source.read_bytes()
+    assert "the input as it was" in capsys.readouterr().out
+    out.unlink()  # the old option is still taken, and changes nothing
     assert main(["fix", "--write-unchanged", str(source), str(out)]) == EXIT_OK
-    assert out.exists()
+    assert out.read_bytes() == source.read_bytes()
+
+
+def test_nothing_to_fix_in_another_format_writes_the_same_faces(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    source, out = tmp_path / "good.ply", tmp_path / "out.obj"
+    source.write_bytes(write_mesh(TETRA_VERTICES, TETRA_FACES, "ply"))
+    assert main(["fix", str(source), str(out)]) == EXIT_OK
+    assert "the same faces, since none of the 4 faces needs flipping" in capsys.readouterr().out
+    np.testing.assert_array_equal(read_mesh(out.read_bytes(), "out.obj").faces, TETRA_FACES)
+
+
+def test_an_obj_with_nothing_to_fix_keeps_its_texture_coordinates_and_groups(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    source, out = tmp_path / "good.obj", tmp_path / "out.obj"
+    text = (
+        "mtllib a.mtl\ng body\nvt 0 0\n" + write_mesh(TETRA_VERTICES, TETRA_FACES, "obj").decode()
+    )
+    source.write_text(text)
+    assert main(["fix", str(source), str(out)]) == EXIT_OK
+    assert out.read_text() == text
+    assert "leaves out" not in capsys.readouterr().err
 
 
 def test_fix_says_what_it_drops(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

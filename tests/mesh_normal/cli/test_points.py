@@ -394,7 +394,7 @@ def test_counts_in_words_are_singular_or_plural() -> None:
         "without_normal": 1,
         "counts": {"ok": 1, "too_few_neighbours": 1, "unoriented": 1},
     }
-    assert written_line(written, "n.npy") == (
+    assert written_line(written, "n.npy", "npy") == (
         "wrote 3 normals to n.npy; 1 point without a normal is a zero row (1 too_few_neighbours); "
         "1 normal unoriented (its side could not be decided); 1 row the file left out is a zero "
         "row too; see `mesh-normal points FILE`"
