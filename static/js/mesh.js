@@ -364,16 +364,67 @@
     return select ? select.value : "problems";
   }
 
-  // The camera for the chosen up axis (the report's figure carries the format's own), and the
-  // traces of the chosen colours shown, the others hidden.
+  // The problem place the view looks at (an index into the report's spots), or -1: the whole
+  // mesh. A new report starts with the whole mesh.
+  let spot = -1;
+
+  // A canvas taller than wide sees less across than up and down: the camera steps back by as
+  // much, so that the whole mesh stays framed on a phone.
+  function fitted(camera, element, figureHeight) {
+    // The figure's height is what the element gets when Plotly draws; its width, the page's.
+    const width = element ? element.clientWidth : 0;
+    const height = figureHeight || (element ? element.clientHeight : 0);
+    if (!(width > 0 && height > width)) return camera;
+    const back = height / width;
+    const eye = camera.eye;
+    return Object.assign({}, camera, { eye: { x: eye.x * back, y: eye.y * back, z: eye.z * back } });
+  }
+
+  // Looking at a problem place: from its outward side, a little above, close enough to see the
+  // faces around it.
+  function spotCamera(place, up) {
+    const out = place.outward, c = place.center;
+    const direction = [out.x + 0.35 * up.x, out.y + 0.35 * up.y, out.z + 0.35 * up.z];
+    const length = Math.hypot(direction[0], direction[1], direction[2]) || 1;
+    const d = place.distance / length;
+    return {
+      up: up, center: c,
+      eye: { x: c.x + direction[0] * d, y: c.y + direction[1] * d, z: c.z + direction[2] * d },
+    };
+  }
+
+  function syncSpot() {
+    const spots = data("mesh-view-spots") || [];
+    const row = document.getElementById("mesh-spot-controls");
+    const whole = document.getElementById("mesh-whole");
+    const words = document.getElementById("mesh-spot-text");
+    if (row) row.hidden = !spots.length;
+    if (whole) whole.hidden = spot < 0;
+    if (words) {
+      words.textContent = spot < 0 ? "" :
+        "Problem place " + (spot + 1) + " of " + spots.length + ": face " +
+        spots[spot].face.toLocaleString("en-US");
+    }
+  }
+
+  // The camera for the chosen up axis (the report's figure carries the format's own) or the
+  // problem place chosen, and the traces of the chosen colours shown, the others hidden.
   function viewFigure() {
     const figure = data("mesh-view-data");
     const cameras = data("mesh-view-cameras");
+    const spots = data("mesh-view-spots") || [];
     const select = document.getElementById("mesh-up");
+    const element = document.getElementById("mesh-view");
     if (!figure) return figure;
     if (cameras && select && cameras[select.value]) figure.layout.scene.camera = cameras[select.value];
-    // Rotating and zooming stay when the colours change; a new up axis starts a new view.
-    figure.layout.uirevision = select ? select.value : "view";
+    if (spot >= 0 && spots[spot]) {
+      figure.layout.scene.camera = spotCamera(spots[spot], figure.layout.scene.camera.up);
+    } else {
+      figure.layout.scene.camera = fitted(figure.layout.scene.camera, element, figure.layout.height);
+    }
+    // Rotating and zooming stay when the colours change; a new up axis or problem place starts
+    // a new view.
+    figure.layout.uirevision = (select ? select.value : "view") + " " + spot;
     const arrows = chosenArrows(figure);
     if (arrows) {
       figure.data = figure.data.filter(function (trace) { return ARROW_NAMES.indexOf(trace.name) === -1; })
@@ -419,13 +470,15 @@
     const observer = new IntersectionObserver(function (entries) {
       if (!entries.some(function (entry) { return entry.isIntersecting; })) return;
       observer.disconnect();
-      window.NormalView3D.show(element, figure);
+      window.NormalView3D.show(element, viewFigure());  // its camera fitted to the size it has now
     });
     observer.observe(element);
   }
 
   function drawFigures() {
     showScripted();
+    spot = -1;
+    syncSpot();
     syncMode();
     drawView();
     return drawHistogram();
@@ -610,6 +663,14 @@
     if (event.target.closest("#mesh-report-download")) { downloadReport(); return; }
     const fixButton = event.target.closest("button[data-mesh-download=fix]");
     if (fixButton && !fixButton.closest("form")) downloadFix(fixButton);
+    const next = event.target.closest("#mesh-next-problem");
+    if (next || event.target.closest("#mesh-whole")) {
+      const spots = data("mesh-view-spots") || [];
+      spot = next && spots.length ? (spot + 1) % spots.length : -1;
+      syncSpot();
+      const element = document.getElementById("mesh-view");
+      if (element && window.NormalView3D) window.NormalView3D.update(element, viewFigure());
+    }
   });
   document.addEventListener("change", function (event) {
     if (event.target.id === "normals-kind") syncFields();

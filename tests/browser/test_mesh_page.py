@@ -411,3 +411,70 @@ def test_the_smooth_by_angle_slider_splits_the_surface_and_goes_with_the_export(
     with page.expect_request(lambda request: "/api/mesh/export" in request.url) as sent:
         page.click("#download-export")
     assert "crease_angle=0" in sent.value.url and "normals=corner" in sent.value.url
+
+
+CAMERA = """() => {
+    const camera = document.getElementById('mesh-view')._fullLayout.scene.camera;
+    return {center: [camera.center.x, camera.center.y, camera.center.z],
+            eye: [camera.eye.x, camera.eye.y, camera.eye.z]};
+}"""
+
+
+def test_the_view_steps_through_the_problem_places_and_back(page: Page) -> None:
+    open_mesh_page(page)
+    page.set_input_files("#mesh-file", files=[cube_file()])  # one face flipped
+    wait_for_report(page)
+    wait_for_view(page)
+    spots = page.evaluate(
+        "() => JSON.parse(document.getElementById('mesh-view-spots').textContent)"
+    )
+    assert len(spots) == 1
+    whole = page.evaluate(CAMERA)
+    assert whole["center"] == [0, 0, 0]
+    expect(page.locator("#mesh-whole")).to_be_hidden()
+    drawn = page.get_attribute("#mesh-view", "data-drawn")
+    page.click("#mesh-next-problem")
+    page.wait_for_function(
+        "d => document.getElementById('mesh-view').dataset.drawn !== d", arg=drawn
+    )
+    near = page.evaluate(CAMERA)
+    assert near["center"] == pytest.approx([spots[0]["center"][a] for a in "xyz"], abs=1e-6)
+    assert np.linalg.norm(np.subtract(near["eye"], near["center"])) < np.linalg.norm(whole["eye"])
+    expect(page.locator("#mesh-spot-text")).to_contain_text(
+        f"Problem place 1 of 1: face {spots[0]['face']}"
+    )
+    drawn = page.get_attribute("#mesh-view", "data-drawn")
+    page.click("#mesh-whole")
+    page.wait_for_function(
+        "d => document.getElementById('mesh-view').dataset.drawn !== d", arg=drawn
+    )
+    assert page.evaluate(CAMERA) == whole
+    expect(page.locator("#mesh-whole")).to_be_hidden()
+
+
+def test_a_mesh_without_problems_has_no_problem_places(page: Page) -> None:
+    from tests.meshes import CUBE_FACES, CUBE_VERTICES
+
+    open_mesh_page(page)
+    good = write_mesh(CUBE_VERTICES, CUBE_FACES, "obj")
+    page.set_input_files(
+        "#mesh-file", files=[{"name": "good.obj", "mimeType": "text/plain", "buffer": good}]
+    )
+    wait_for_report(page)
+    wait_for_view(page)
+    expect(page.locator("#mesh-spot-controls")).to_be_hidden()
+
+
+def test_on_a_phone_the_camera_steps_back_to_frame_the_mesh(new_page: NewPage) -> None:
+    page = new_page(viewport={"width": 360, "height": 740})
+    open_mesh_page(page)
+    page.set_input_files("#mesh-file", files=[cube_file()])
+    wait_for_report(page)
+    wait_for_view(page)
+    camera = page.evaluate(CAMERA)
+    cameras = page.evaluate(
+        "() => JSON.parse(document.getElementById('mesh-view-cameras').textContent)"
+    )
+    up = page.input_value("#mesh-up")
+    framed = np.linalg.norm([cameras[up]["eye"][a] for a in "xyz"])
+    assert np.linalg.norm(camera["eye"]) > 1.05 * framed  # the canvas is taller than wide

@@ -161,9 +161,9 @@ def test_camera_looks_along_the_up_axis_from_far_enough() -> None:
         camera = view["figure"]["layout"]["scene"]["camera"]
         assert camera["up"][up] == 1 and sum(camera["up"].values()) == 1
         eye = np.array([camera["eye"][axis] for axis in "xyz"])
-        # Plotly's default eye is 1.25 on each axis (2.17 away); nearer than 1.8 cuts off the
-        # long side of an elongated mesh.
-        assert np.linalg.norm(eye) > 1.8
+        scene = mesh_view.Scene.of(vertices)
+        drawn = _on_screen(camera, (vertices - scene.middle) / scene.unit)
+        assert np.abs(drawn).max() < 0.9  # the whole grid, with a margin
         assert eye["xyz".index(up)] < eye.max()  # looked at from the side, a little above
         assert view["up"] == up and set(view["cameras"]) == {"x", "y", "z"}
 
@@ -205,3 +205,74 @@ def test_the_view_sends_face_normals_and_corner_neighbourhoods_for_the_crease_sl
         own = np.cross(*(points[faces[f, 1:]] - points[faces[f, 0]]))
         assert np.allclose(around[0], own)  # its own face first; every cube triangle has area 1/2
         assert np.allclose(np.linalg.norm(around, axis=1), 1.0)
+
+
+def _on_screen(camera: dict, corners: np.ndarray, aspect: float = 1.0) -> np.ndarray:
+    """Where Plotly's camera (45 degrees of vertical field) draws scene points, in the screen's
+    units: within -1 to 1 on both axes is in the picture."""
+    eye, center, up = (
+        np.array([camera[key][axis] for axis in "xyz"]) for key in ("eye", "center", "up")
+    )
+    forward = (center - eye) / np.linalg.norm(center - eye)
+    right = np.cross(forward, up)
+    right /= np.linalg.norm(right)
+    upward = np.cross(right, forward)
+    relative = corners - eye
+    depth = relative @ forward
+    focal = 1 / np.tan(np.pi / 8)
+    return np.stack(
+        [focal * (relative @ right) / depth / aspect, focal * (relative @ upward) / depth], axis=1
+    )
+
+
+def _scene_corners(points: np.ndarray) -> np.ndarray:
+    """The corners of Plotly's scene box around ``points`` (aspectmode "data")."""
+    ranges = points.max(axis=0) - points.min(axis=0)
+    half = ranges / np.exp(np.log(ranges).mean()) / 2
+    return np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * half
+
+
+def test_the_whole_mesh_is_framed_with_a_margin() -> None:
+    """The inside-out cube sample's near bottom corner was cut off: the camera stood at 1.98
+    scene units where the box's corners need 2.26 (the whole box in 45 degrees)."""
+    for vertices in (CUBE_VERTICES, CUBE_VERTICES * [4.0, 1.0, 0.5], CUBE_VERTICES * [1, 1, 9]):
+        classes = np.full(len(CUBE_FACES), FLIPPED, dtype=np.int8)
+        normals = np.tile([0.0, 0.0, 1.0], (len(CUBE_FACES), 1))
+        for up in "xyz":
+            view = build_view(
+                vertices, CUBE_FACES, normals, classes, np.zeros((0, 2), dtype=np.intp),
+                np.zeros((0, 2), dtype=np.intp), up=up,
+            )  # fmt: skip
+            corners = _scene_corners(np.asarray(vertices, dtype=float))
+            drawn = _on_screen(view["figure"]["layout"]["scene"]["camera"], corners)
+            assert np.abs(drawn).max() < 0.95, (up, vertices.max(axis=0), drawn)
+            assert view["cameras"][up] == view["figure"]["layout"]["scene"]["camera"]
+
+
+def test_the_camera_turns_towards_the_problem_and_the_page_can_step_through_them() -> None:
+    vertices, faces = grid(6)  # a flat grid in z = 0, one corner face flipped
+    normals = np.tile([0.0, 0.0, 1.0], (len(faces), 1))
+    classes = np.full(len(faces), OK, dtype=np.int8)
+    corner = int(np.argmax(vertices[faces].mean(axis=1) @ [1.0, 1.0, 0.0]))
+    classes[corner] = FLIPPED
+    view = build_view(
+        vertices, faces, normals, classes, np.zeros((0, 2), dtype=np.intp),
+        np.zeros((0, 2), dtype=np.intp), up="z",
+    )  # fmt: skip
+    (spot,) = view["spots"]
+    assert spot["face"] == corner
+    assert spot["outward"] == {"x": 0.0, "y": 0.0, "z": -1.0}  # the side the fix turns it to
+    centre = np.array([spot["center"][axis] for axis in "xyz"])
+    assert centre[0] > 0.3 and centre[1] > 0.3  # the (+x, +y) corner of the scene
+    eye = np.array([view["cameras"]["z"]["eye"][axis] for axis in "xyz"])
+    default = np.array([1.25, -1.25, 0.9])
+    # Turned towards the corner: nearer to it than the default three-quarter view is.
+    assert eye @ centre / np.linalg.norm(eye) > default @ centre / np.linalg.norm(default)
+    assert 0 < spot["distance"] < np.linalg.norm(eye)
+    spread = build_view(
+        vertices, faces, normals, np.full(len(faces), FLIPPED, dtype=np.int8),
+        np.zeros((0, 2), dtype=np.intp), np.zeros((0, 2), dtype=np.intp), up="z",
+    )  # fmt: skip
+    assert len(spread["spots"]) == mesh_view.PROBLEM_SPOTS
+    centres = np.array([[s["center"][axis] for axis in "xyz"] for s in spread["spots"]])
+    assert np.ptp(centres[:, 0]) > 0.8 and np.ptp(centres[:, 1]) > 0.8  # spread over the grid
