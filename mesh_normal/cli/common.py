@@ -130,6 +130,25 @@ def count(number: int, noun: str, plural: str | None = None) -> str:
     return f"{number:,} {noun if number == 1 else plural or noun + 's'}"
 
 
+def output_form(output: str, given: str | None, suffixes: dict[str, str]) -> str:
+    """What a command writes to ``output``: ``--format`` (``given``), else what the output's
+    suffix names in ``suffixes``, else npy for standard output; a usage failure where the
+    suffix names nothing written, or another form than ``--format``."""
+    named = None if output == STDOUT else suffixes.get(Path(output).suffix.lower())
+    if output != STDOUT and named is None and given is None:
+        suffix = Path(output).suffix.lower() or "no suffix"
+        raise Failure(
+            f"the output must end in {', '.join(suffixes)}, not {suffix} (or give --format)",
+            EXIT_USAGE,
+        )
+    if given is not None and named is not None and given != named:
+        raise Failure(
+            f"{output} names {named} but --format is {given}; give one, or make them agree",
+            EXIT_USAGE,
+        )
+    return given or named or "npy"
+
+
 def same_file(one: str, other: str) -> bool:
     """Whether two paths name one file: the same path once resolved, or a (hard) link."""
     if Path(one).resolve() == Path(other).resolve():

@@ -19,6 +19,7 @@ from mesh_normal.cli.common import (
     Progress,
     count,
     load,
+    output_form,
     read_input,
     same_file,
     tell,
@@ -147,25 +148,12 @@ def normals(args: argparse.Namespace, progress: Progress) -> int:
 
 
 def normals_format(output: str, given: str | None) -> str:
-    """What ``normals -o OUTPUT`` writes: ``--format``, else the output's suffix, else npy for
-    standard output; a usage failure where they disagree or name nothing it writes."""
+    """What ``normals -o OUTPUT`` writes: the normals alone, or the mesh with them."""
     suffixes = {
         **{suffix: suffix.lstrip(".") for suffix in NORMAL_SUFFIXES},
         **{f".{name}": name for name in FIX_FORMATS},
     }
-    named = None if output == STDOUT else suffixes.get(Path(output).suffix.lower())
-    if output != STDOUT and named is None and given is None:
-        suffix = Path(output).suffix.lower() or "no suffix"
-        raise Failure(
-            f"the output must end in {', '.join(suffixes)}, not {suffix} (or give --format)",
-            EXIT_USAGE,
-        )
-    if given is not None and named is not None and given != named:
-        raise Failure(
-            f"{output} names {named} but --format is {given}; give one, or make them agree",
-            EXIT_USAGE,
-        )
-    return given or named or "npy"
+    return output_form(output, given, suffixes)
 
 
 def fix(args: argparse.Namespace, progress: Progress) -> int:

@@ -15,6 +15,7 @@ from mesh_normal.cli.common import (
     Failure,
     Progress,
     count,
+    output_form,
     parsed,
     read_input,
     same_file,
@@ -88,21 +89,10 @@ def point_output(source: str, output: str | None, given: str | None) -> str | No
         if given is not None:
             raise Failure("--format is only used with -o", EXIT_USAGE)
         return None
-    named = None if output == STDOUT else POINT_OUTPUTS.get(Path(output).suffix.lower())
-    if output != STDOUT and named is None and given is None:
-        suffix = Path(output).suffix.lower() or "no suffix"
-        raise Failure(
-            f"the output must end in {', '.join(POINT_OUTPUTS)}, not {suffix} (or give --format)",
-            EXIT_USAGE,
-        )
-    if given is not None and named is not None and given != named:
-        raise Failure(
-            f"{output} names {named} but --format is {given}; give one, or make them agree",
-            EXIT_USAGE,
-        )
+    chosen = output_form(output, given, POINT_OUTPUTS)
     if same_file(output, source):
         raise Failure(f"{output} is the input file; write the normals to another file", EXIT_USAGE)
-    return given or named or "npy"
+    return chosen
 
 
 def load_points(path: str, progress: Progress) -> PointCloud:
