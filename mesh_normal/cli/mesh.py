@@ -157,7 +157,7 @@ def normals_format(output: str, given: str | None) -> str:
 
 
 def fix(args: argparse.Namespace, progress: Progress) -> int:
-    """Write the mesh with consistent, outward winding; nothing when nothing needs fixing."""
+    """Write the mesh with consistent, outward winding (as it was when nothing needs it)."""
     args.winding = "fix"
     return export(args, progress)
 
