@@ -189,9 +189,11 @@ class Worker:
         or the start is called off."""
         deadline = time.monotonic() + timeout
         try:
-            while not self.connection.poll(min(0.2, max(0.0, deadline - time.monotonic()))):
-                if (called_off is not None and called_off.is_set()) or time.monotonic() >= deadline:
+            while True:
+                if (called_off is not None and called_off.is_set()) or time.monotonic() > deadline:
                     raise WorkerNotStarted("The worker process did not start.")
+                if self.connection.poll(min(0.2, max(0.0, deadline - time.monotonic()))):
+                    break
             word, self.allowance = self.connection.recv()
             if word != "ready":
                 raise WorkerNotStarted("The worker process did not start.")
@@ -372,7 +374,7 @@ def received(connection: Connection) -> tuple[bytes, list[bytes | mmap.mmap]]:
 def serve(connection: Connection, settings: Settings) -> None:
     """A worker's life: set its limits, import, warm up, cap its memory, say so, then run one
     job after another until the pipe closes."""
-    from mesh_normal import allocator
+    import mesh_normal.allocator as allocator
     from mesh_normal.files import expansion
 
     if settings.expansion_most is not None:

@@ -31,6 +31,7 @@ watches a pipe only the server holds); :meth:`WorkerPool.close` kills them at on
 from __future__ import annotations
 
 import asyncio
+import functools
 import logging
 import threading
 from collections.abc import Callable, Sequence
@@ -121,8 +122,8 @@ class Worker(workers.Worker):
 
     async def started(self, called_off: threading.Event) -> None:
         """Wait until it is ready (WorkerNotStarted if it ends, or ``called_off`` is set)."""
-        loop = asyncio.get_running_loop()
-        await loop.run_in_executor(self.executor, self.wait_ready, workers.START_SECONDS, called_off)
+        wait = functools.partial(self.wait_ready, workers.START_SECONDS, called_off)
+        await asyncio.get_running_loop().run_in_executor(self.executor, wait)
 
     async def run(self, function: Callable[..., Any], args: Sequence[Any]) -> Any:
         """Run one job in this worker (:meth:`call`); cancelling the wait leaves the job

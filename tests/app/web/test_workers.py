@@ -15,7 +15,6 @@ import pytest
 
 from app.mesh.uploads import Upload
 from app.web import workers
-from mesh_normal import workers as library
 from app.web.errors import ApiError
 from app.web.workers import (
     JobCancelled,
@@ -26,6 +25,7 @@ from app.web.workers import (
     WorkerPool,
 )
 from mesh_normal import allocator
+from mesh_normal import workers as library
 from mesh_normal.files import expansion
 from tests.app import jobhooks
 from tests.meshes import binary_stl
