@@ -296,7 +296,7 @@ def test_a_job_past_its_time_is_stopped_and_its_worker_lives_on() -> None:
         again, _ = await call(pool, jobhooks.value, b"")
         assert again == first and pool.replaced == 0
 
-    with_pool(scenario, job_seconds=0.5)
+    with_pool(scenario, job_seconds=0.5, preload=("tests.app.jobhooks",))
 
 
 def test_a_job_that_does_not_stop_in_time_costs_its_worker() -> None:
@@ -310,7 +310,7 @@ def test_a_job_that_does_not_stop_in_time_costs_its_worker() -> None:
         again, _ = await call(pool, jobhooks.value, b"")
         assert again != first and pool.replaced == 1
 
-    with_pool(scenario, job_seconds=0.5)
+    with_pool(scenario, job_seconds=0.5, preload=("tests.app.jobhooks",))
 
 
 def test_a_job_asked_to_stop_stops_and_its_worker_lives_on() -> None:
