@@ -8,8 +8,8 @@ Why a plain child process (``python -m mesh_normal.workers``), not :mod:`multipr
 
 - it works everywhere a job runs, a daemonic process included (a Dask worker), where
   multiprocessing refuses to start children;
-- nothing stands between the parent and its workers (a fork server, importing for seconds
-  before it looks at its parent, is what outlived a server stopped during its start-up);
+- nothing stands between the parent and its workers (a fork server imports for seconds
+  before it looks at its parent again, and outlives a parent stopped meanwhile);
 - a child watches a pipe whose other end only its parent holds, from its first line on
   (before its imports): when the parent ends, however it ends, the pipe closes and the child
   exits. (``PR_SET_PDEATHSIG`` is tied to the parent's *thread*, and the workers are started
