@@ -135,6 +135,19 @@ def wait_for(condition: object, seconds: float = 120) -> None:
         time.sleep(0.01)
 
 
+def proportional_mb(pid: int) -> float:
+    """The process's proportional set size (its pages, shared ones split among sharers), MB."""
+    with open(f"/proc/{pid}/smaps_rollup") as rollup:
+        for line in rollup:
+            if line.startswith("Pss:"):
+                return int(line.split()[1]) / 1024
+    return 0.0
+
+
+#: The idle server's memory, measured once its workers are ready: (server, [each worker]) MB.
+idle_memory: list[tuple[float, list[float]]] = []
+
+
 def stop(number: signal.Signals, moment: str) -> float:
     """Seconds from ``number`` to no process of the server left, sent at ``moment``."""
     port = free_port()
@@ -167,7 +180,10 @@ def stop(number: signal.Signals, moment: str) -> float:
             cube = {"filename": "cube.obj"}
             httpx.post(url + "/api/mesh", params=cube, content=CUBE_OBJ, timeout=120)
             wait_for(lambda: len(workers_of(tag)) == 3)
-            time.sleep(2)  # the last ones warm up
+            time.sleep(15)  # the last ones warm up, even on a busy machine
+            idle_memory.append(
+                (proportional_mb(process.pid), [proportional_mb(pid) for pid in workers_of(tag)])
+            )
         process.send_signal(number)
         begun = time.perf_counter()
         wait_for(lambda: not tagged(tag), 60)
@@ -210,6 +226,13 @@ def main() -> None:
         term = stop(signal.SIGTERM, moment)
         interrupt = stop(signal.SIGINT, moment)
         report.print(f"| {moment} | {term:.2f} | {interrupt:.2f} |")
+    server, each = idle_memory[0]
+    report.print()
+    report.print(
+        f"Idle, its workers ready: the server {server:.0f} MB and each worker "
+        f"{statistics.median(each):.0f} MB of proportional memory (PSS), {server + sum(each):.0f}"
+        " MB in all."
+    )
     report.write()
 
 
