@@ -4,7 +4,7 @@
 #   docker run --rm -p 8000:8000 mesh-normal-calculator
 #   docker run --rm --read-only --tmpfs /tmp -p 8000:8000 mesh-normal-calculator   # read-only root
 #
-# Nothing is written at run time but the worker processes' sockets in /tmp (a tmpfs is enough).
+# Nothing is written at run time: a read-only root works, with or without a tmpfs at /tmp.
 #
 # Two stages: the builder installs the locked runtime dependencies (uv.lock: the library's own and
 # the `web` group) into /opt/venv, compiles the library's wheel (its C++ core, with g++) and

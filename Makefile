@@ -14,7 +14,7 @@ export PATH := $(CURDIR)/.venv/bin:$(PATH)
 HOST ?= 127.0.0.1
 PORT ?= 8000
 
-.PHONY: FORCE run test test-sanitize lint docs docs-serve bench bench-first bench-hostile bench-mesh bench-mesh-e2e bench-readers bench-orient bench-points bench-soak bench-memory bench-startup bench-batch env clean vendor
+.PHONY: FORCE run test test-sanitize lint docs docs-serve bench bench-first bench-hostile bench-workers bench-mesh bench-mesh-e2e bench-readers bench-orient bench-points bench-soak bench-memory bench-startup bench-batch env clean vendor
 
 # uv itself comes from PyPI when the machine does not have it yet.
 .tools/bin/uv:
@@ -117,6 +117,7 @@ bench: .venv/.test
 	.venv/bin/python -m benchmarks.batch --markdown docs/benchmarks/batch.md
 	.venv/bin/python -m benchmarks.stalls --markdown docs/benchmarks/stalls.md
 	.venv/bin/python -m benchmarks.hostile --markdown docs/benchmarks/hostile.md
+	.venv/bin/python -m benchmarks.workers --markdown docs/benchmarks/workers.md
 	.venv/bin/python -m benchmarks.soak --markdown docs/benchmarks/soak.md
 
 bench-mesh: .venv/.test
@@ -140,6 +141,10 @@ bench-batch: .venv/.test
 # The hostile uploads (tests/data/hostile/ and larger generated ones) against a real server.
 bench-hostile: .venv/.test
 	.venv/bin/python -m benchmarks.hostile $(ARGS)
+
+# The worker processes: a start, the next job after a killed one, the server's stop.
+bench-workers: .venv/.test
+	.venv/bin/python -m benchmarks.workers $(ARGS)
 
 bench-memory: .venv/.test
 	.venv/bin/python -m benchmarks.memory

@@ -33,8 +33,8 @@ from app.web.workers import tune_allocator
 #: The server answers its first page without them, and imports them in a thread once it is up
 #: (:func:`lifespan`), so that neither the first page nor the first upload waits for them.
 HEAVY_MODULES = ("app.mesh.work", "app.points.work")
-#: What the fork server imports once, before it forks each worker: :mod:`app.preload` (the jobs,
-#: the warm-up and trimesh's glTF loader, the garbage collector paused meanwhile).
+#: What each worker imports as it starts: :mod:`app.preload` (the jobs, the warm-up and
+#: trimesh's glTF loader, the garbage collector paused meanwhile).
 PRELOAD = ("app.preload",)
 #: Seconds after start-up before :data:`HEAVY_MODULES` load: the first page, which a
 #: supervisor's health check or a reader often asks for at once, does not share the CPU with

@@ -1,12 +1,10 @@
-"""What the fork server of the worker processes imports once, before it forks each worker.
+"""What each worker process imports as it starts, before its warm-up (:mod:`app.web.workers`).
 
-``multiprocessing`` imports this module by name in the fork server. It imports
-:data:`MODULES` with Python's garbage collector paused (their hundreds of thousands of objects,
-walked again and again by the collector's passes as they grow, would make the same imports
-take about twice as long), then freezes what they made out of the
-collector's later passes (``gc.freeze``: what Python's documentation advises before a fork, so
-that no collection in a worker writes to the pages those objects share with the fork server)
-and lets it run again.
+It imports :data:`MODULES` with Python's garbage collector paused (their hundreds of thousands
+of objects, walked again and again by the collector's passes as they grow, would make the same
+imports take about twice as long), then freezes what they made out of the collector's later
+passes (``gc.freeze``: they live as long as the worker, and no job's collection walks them
+again) and lets it run again.
 """
 
 from __future__ import annotations
@@ -15,9 +13,8 @@ import gc
 import importlib
 
 #: The jobs (and with them the compiled core, ``mesh_normal._core``), the warm-up each worker
-#: runs, and trimesh's glTF loader, which takes seconds to import. A worker, the first or a
-#: replacement, starts without importing them itself, and the pages they touch are shared until
-#: written.
+#: runs, and trimesh's glTF loader, which takes seconds to import: loaded as the worker
+#: starts, so that no job waits for them.
 MODULES = (
     "app.mesh.work",
     "app.points.work",
@@ -28,9 +25,9 @@ MODULES = (
 
 def load() -> None:
     """Import :data:`MODULES`, the collector paused, and freeze what they made. A module that
-    cannot be imported is left, as the fork server leaves each module it is given (the worker
-    imports it, or says why, when a job needs it); the others still load."""
-    gc.disable()  # this process is the fork server: nothing else runs in it meanwhile
+    cannot be imported is left (the worker imports it, or says why, when a job needs it); the
+    others still load."""
+    gc.disable()  # this process is a worker starting: nothing else runs in it meanwhile
     try:
         for name in MODULES:
             try:

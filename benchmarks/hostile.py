@@ -3,7 +3,7 @@
 Starts ``uvicorn app.main:app`` on a free loopback port (its worker processes, the
 environment as is), waits for it and for a first small upload, then runs each row and prints
 one line of a Markdown table: the upload's size, the answer's status, the seconds to it, the
-peak memory the server's processes added (server, fork server and workers: RSS every 20 ms),
+peak memory the server's processes added (server and workers: RSS every 20 ms),
 the slowest ``GET /`` meanwhile (asked every 50 ms) and the start of the answer's sentence.
 
 The rows: every file of ``tests/data/hostile/`` (``points_*`` to ``/api/points``, the others
@@ -110,7 +110,7 @@ def size_text(size: float) -> str:
 
 
 def tree_memory(root: psutil.Process) -> int:
-    """Resident bytes of the server and its children (fork server, workers)."""
+    """Resident bytes of the server and its children (its workers)."""
     total = 0
     for process in [root, *root.children(recursive=True)]:
         with contextlib.suppress(psutil.Error):  # a worker replaced meanwhile

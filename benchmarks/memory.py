@@ -187,9 +187,10 @@ def child(path_name: str, file: Path, small: Path) -> None:
     """Measure one path in this (fresh) process and print its peak in bytes."""
     from app.mesh.warmup import warm
     from app.mesh.work import ahead
-    from app.web.workers import _MAPPED_FROM, tune_allocator
+    from app.web.workers import tune_allocator
     from mesh_normal import allocator
     from mesh_normal.files import stl
+    from mesh_normal.workers import MAPPED_FROM
 
     tune_allocator()  # as the server's job workers do when they start
     allocator.enable_jobs()
@@ -202,7 +203,7 @@ def child(path_name: str, file: Path, small: Path) -> None:
     if stl.is_binary(data):  # as a worker's job does before it reads a binary STL
         ahead(len(data))
     run_path(path_name, data, file.name)
-    allocator.end_job(_MAPPED_FROM)  # its prefaulting ended (its pages counted), as a worker's
+    allocator.end_job(MAPPED_FROM)  # its prefaulting ended (its pages counted), as a worker's
     print(json.dumps({"peak": _status("VmHWM") - baseline, "size": len(data)}))
 
 

@@ -97,7 +97,7 @@ class Upload:
     parts: tuple[tuple[str | None, bytes], ...] = ()
     weld: float | None = None  # the multipart field weld, checked
     #: In a job worker: the one file as it came from the server in shared memory, a read-only
-    #: map of it (:func:`app.web.workers.send`), instead of ``data`` (then empty).
+    #: map of it (:func:`mesh_normal.workers.send`), instead of ``data`` (then empty).
     mapped: mmap.mmap | None = None
 
     @classmethod
@@ -110,7 +110,7 @@ class Upload:
 
     def __reduce_ex__(self, protocol: SupportsIndex) -> Any:
         """With protocol 5, the bytes are pickled out of band: they travel to a worker process
-        (:mod:`app.web.workers`) as they are, never copied into the pickle."""
+        (:mod:`mesh_normal.workers`) as they are, never copied into the pickle."""
         if int(protocol) < 5:
             return object.__reduce_ex__(self, protocol)
         parts = tuple((name, PickleBuffer(data)) for name, data in self.parts)

@@ -30,6 +30,10 @@ class ApiError(Exception):
         self.field = field
         self.headers = headers or {}  # e.g. Retry-After with a 503
 
+    def __reduce__(self) -> tuple[type[ApiError], tuple[Any, ...]]:
+        """Pickled whole: a refusal raised in a worker process is raised again in the server."""
+        return ApiError, (self.status_code, self.error, self.field, self.headers)
+
     def body(self) -> dict[str, str | None]:
         return {"error": self.error, "field": self.field}
 

@@ -8,7 +8,6 @@ raises an error imports a template.
 from __future__ import annotations
 
 import logging
-import tempfile
 
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
@@ -96,20 +95,6 @@ NO_TEMP_DIR_SENTENCE = (
     "The server has no writable temporary folder for this request; "
     "its operator must give it one (a tmpfs at /tmp)."
 )
-
-
-def temp_dir_problem() -> str | None:
-    """Why no temporary file can be made (no writable temporary folder), or None.
-
-    On a read-only filesystem without a tmpfs at /tmp there is none to make: the worker
-    processes cannot start (:mod:`app.web.jobs` says so). Uploads need none: they are kept in
-    memory (:mod:`app.web.uploads`).
-    """
-    try:
-        tempfile.gettempdir()
-    except FileNotFoundError as error:
-        return str(error)
-    return None
 
 
 async def on_file_not_found(request: Request, exc: Exception) -> Response:

@@ -31,10 +31,10 @@ from starlette.requests import Request
 
 from app.config import RETRY_AFTER_SECONDS, Settings
 from app.web.errors import ApiError
-from app.web.handlers import temp_dir_problem
 from app.web.workers import (
     ALLOCATION_FAILED,
     GRACE_SECONDS,
+    SPARE,
     JobTimedOut,
     ServerThread,
     Worker,
@@ -189,20 +189,12 @@ class Jobs:
             settings.queue_length,
         )
         limit = settings.worker_memory_mb
-        # Worker processes need a writable temporary folder (the forkserver's socket): on a
-        # read-only root without one the jobs run in the server's threads instead, so that the
-        # pages and small uploads still work (handlers.install says what to mount).
-        homeless = temp_dir_problem() is not None
-        if homeless and not settings.in_process:
-            logger.warning(
-                "no writable temporary folder: the mesh jobs run in the server process, without "
-                "worker processes (mount a tmpfs at /tmp to have them)"
-            )
         self.pool = (
             None
-            if settings.in_process or homeless
+            if settings.in_process
             else WorkerPool(
                 settings.workers,
+                spare=SPARE,
                 warm=warm,
                 preload=preload,
                 memory_limit=None if limit is None else int(limit * 2**20),
@@ -287,7 +279,7 @@ class Jobs:
         worker = await pool.acquire(self.settings.queue_seconds, (function, args))
         if worker is None:  # the workers are still starting, or being replaced
             raise shutting_down() if self.closing else busy()
-        job = asyncio.ensure_future(worker.call(function, args))
+        job = asyncio.ensure_future(worker.run(function, args))
         gone = asyncio.ensure_future(disconnected(request))
         clean = False
         try:

@@ -8,9 +8,9 @@ back). The rules:
 - ``app.calculator`` never imports ``app.mesh``, nor ``app.mesh`` ``app.calculator``;
 - ``app.web`` (the plumbing) imports no feature;
 - ``mesh_normal`` (the library) imports nothing from ``app``;
-- in ``mesh_normal``, only the entry points (the command line) import the command line and
-  the process-wide settings (``mesh_normal.allocator``): the geometry, the readers and the
-  reports change nothing in the process that imports them;
+- in ``mesh_normal``, only the entry points (the command line, a worker process's main)
+  import the command line and the process-wide settings (``mesh_normal.allocator``): the
+  geometry, the readers and the reports change nothing in the process that imports them;
 - the library's layers, bottom up: the shared words (``types``, ``choices``, ``tolerances``,
   ``record``) import no other module of the library; the geometry (``mesh_normal.triangle``,
   ``mesh_normal.mesh`` but its ``report``) imports only the shared words and itself; the files
@@ -29,7 +29,7 @@ PACKAGES = ("app", "mesh_normal")
 FEATURES = ("app.calculator", "app.mesh", "app.points")
 #: What only an entry point may import, and the library's entry points.
 RUNTIME = ("mesh_normal.cli", "mesh_normal.allocator")
-ENTRY_POINTS = ("mesh_normal.cli", "mesh_normal.__main__")
+ENTRY_POINTS = ("mesh_normal.cli", "mesh_normal.__main__", "mesh_normal.workers")
 SHARED = (
     "mesh_normal._lazy",
     "mesh_normal.choices",

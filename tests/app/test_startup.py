@@ -88,8 +88,8 @@ print(gc.isenabled(), gc.get_freeze_count())
     assert run(code) == "True 0"
 
 
-def test_the_fork_server_s_preload_loads_the_jobs_and_freezes_them() -> None:
-    # What a worker's fork server runs: the heavy modules imported, the collector paused
+def test_a_worker_s_preload_loads_the_jobs_and_freezes_them() -> None:
+    # What a worker runs as it starts: the heavy modules imported, the collector paused
     # meanwhile and running again after, with their objects frozen out of its passes.
     code = """
 import gc, sys
@@ -103,8 +103,8 @@ print(gc.isenabled(), gc.get_freeze_count() > 100_000,
 
 
 def test_a_preload_module_that_fails_leaves_the_others_loading() -> None:
-    # As the fork server leaves a preload module it cannot import: the rest still load, the
-    # collector runs again.
+    # A preload module that cannot be imported is left: the rest still load, the collector
+    # runs again.
     code = """
 import gc, importlib, sys
 real = importlib.import_module

@@ -4,12 +4,14 @@ every step is driven by the test)."""
 from __future__ import annotations
 
 import asyncio
+import os
 import threading
 
 import pytest
 
 from app.web.errors import ApiError
 from app.web.jobs import BUSY, Admission
+from app.web.workers import Worker
 
 MB = 2**20
 
@@ -82,19 +84,35 @@ def test_a_waiting_job_starts_when_a_slot_frees() -> None:
     run(scenario())
 
 
-def test_without_a_writable_temporary_folder_the_jobs_run_in_the_server(
+def test_without_a_writable_temporary_folder_the_jobs_still_run_in_workers(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    # A read-only root without a tmpfs: worker processes cannot start (the forkserver needs a
-    # socket folder), so the pages and small uploads go on in the server's threads.
+    """A read-only root without a tmpfs: the workers need no file (a socket pair and a pipe
+    join them to the server), so a job runs in one."""
+    import tempfile
+
     from app.config import load_settings
     from app.web import jobs
+    from tests.app import jobhooks
 
-    monkeypatch.setattr(jobs, "temp_dir_problem", lambda: "No usable temporary directory")
-    assert jobs.Jobs(load_settings(in_process=False)).pool is None
-    monkeypatch.setattr(jobs, "temp_dir_problem", lambda: None)
-    pool = jobs.Jobs(load_settings(in_process=False)).pool
-    assert pool is not None  # made, not started: no process runs until start()
+    monkeypatch.setattr(tempfile, "tempdir", None)
+    monkeypatch.setattr(tempfile, "_candidate_tempdir_list", list)  # no folder to try
+
+    async def scenario() -> int:
+        pool = jobs.Jobs(load_settings(in_process=False, workers=1)).pool
+        assert pool is not None
+        try:
+            worker = await pool.acquire(60)
+            assert isinstance(worker, Worker)
+            pid, _ = await worker.run(jobhooks.value, (b"",))
+            pool.release(worker, clean=True)
+            return int(pid)
+        finally:
+            pool.close()
+
+    with pytest.raises(FileNotFoundError):
+        tempfile.gettempdir()
+    assert run(scenario()) != os.getpid()
 
 
 def test_after_a_job_the_server_gives_freed_memory_back_twice(
@@ -155,11 +173,12 @@ def test_a_worker_s_memory_cap_is_by_default_the_budget_beyond_its_own() -> None
 
     pool = jobs.Jobs(load_settings(in_process=False, memory_budget_mb=300)).pool
     assert pool is not None
-    assert (pool.memory_limit, pool.job_memory) == (None, 300 * MB)
+    assert (pool.settings.memory_limit, pool.settings.job_memory) == (None, 300 * MB)
     pool = jobs.Jobs(load_settings(in_process=False, worker_memory_mb=500)).pool
     assert pool is not None
-    assert (pool.memory_limit, pool.job_memory) == (500 * MB, None)
-    assert jobs.Jobs(load_settings(in_process=False, job_seconds=7)).pool.job_seconds == 7  # type: ignore[union-attr]
+    assert (pool.settings.memory_limit, pool.settings.job_memory) == (500 * MB, None)
+    pool = jobs.Jobs(load_settings(in_process=False, job_seconds=7)).pool
+    assert pool is not None and pool.settings.job_seconds == 7
 
 
 @pytest.mark.parametrize(

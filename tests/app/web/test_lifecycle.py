@@ -226,37 +226,55 @@ def test_a_job_past_its_time_is_a_422_and_its_worker_lives_on(
     assert same, "the worker was replaced"
 
 
-def session_members(session: int) -> list[int]:
-    """The live processes of a session (a worker that outlived its parent keeps the session)."""
-    members = []
+def tagged(tag: str) -> list[int]:
+    """The live processes whose environment holds ``MESH_TEST_TAG=tag``: a server started with
+    it, and every process it started (a worker that outlived it included)."""
+    found = []
     for entry in filter(str.isdigit, os.listdir("/proc")):
         try:
-            with open(f"/proc/{entry}/stat") as stat:
-                fields = stat.read().rsplit(") ", 1)[1].split()
-        except (FileNotFoundError, ProcessLookupError):
+            with open(f"/proc/{entry}/environ", "rb") as environ:
+                if f"MESH_TEST_TAG={tag}".encode() not in environ.read().split(b"\0"):
+                    continue
+        except OSError:  # ended meanwhile, or not ours
             continue
-        if fields[0] != "Z" and int(fields[3]) == session:
-            members.append(int(entry))
-    return members
+        if alive(int(entry)):
+            found.append(int(entry))
+    return found
 
 
-@pytest.mark.skipif(not os.path.exists("/proc/self/stat"), reason="reads /proc")
-@pytest.mark.parametrize("after", [0.0, 0.5])
-def test_a_server_stopped_while_it_starts_leaves_no_process(tmp_path: Path, after: float) -> None:
-    """SIGTERM just after the first page, while the fork server imports and the workers warm:
-    the server and every process it started are gone within 5 s."""
+def workers_of(tag: str) -> list[int]:
+    """The worker processes among :func:`tagged`'s."""
+    found = []
+    for pid in tagged(tag):
+        with suppress(OSError), open(f"/proc/{pid}/cmdline", "rb") as cmdline:
+            if b"mesh_normal.workers" in cmdline.read():
+                found.append(pid)
+    return found
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/self/environ"), reason="reads /proc")
+@pytest.mark.parametrize("number", [signal.SIGTERM, signal.SIGINT], ids=["SIGTERM", "SIGINT"])
+@pytest.mark.parametrize("moment", ["first worker", "first page", "0.5 s", "ready"])
+def test_a_server_stopped_at_any_moment_leaves_no_process(
+    tmp_path: Path, number: signal.Signals, moment: str
+) -> None:
+    """SIGTERM or SIGINT to a plain ``uvicorn app.main:app`` as its first worker process
+    starts (before the first page), just after its first page, half a second later (the
+    workers importing and warming), or once they are ready: the server and every process it
+    started are gone within 5 s."""
     with socket.socket() as probe:
         probe.bind(("127.0.0.1", 0))
         port = probe.getsockname()[1]
+    tag = f"{os.getpid()}-{time.monotonic_ns()}"
     command = [sys.executable, "-m", "uvicorn", "app.main:app", "--port", str(port)]
+    env = {**os.environ, "MESH_WORKERS": "2", "MESH_TEST_TAG": tag}
     with (tmp_path / "server.log").open("wb") as log:
         process = subprocess.Popen(
             [*command, "--host", "127.0.0.1"],
             cwd=ROOT,
             stdout=log,
             stderr=subprocess.STDOUT,
-            env={**os.environ, "MESH_WORKERS": "2"},
-            start_new_session=True,
+            env=env,
         )
     try:
 
@@ -267,15 +285,70 @@ def test_a_server_stopped_while_it_starts_leaves_no_process(tmp_path: Path, afte
             except httpx.TransportError:
                 return False
 
-        eventually(answers)
-        time.sleep(after)
-        process.send_signal(signal.SIGTERM)
+        if moment == "first worker":
+            eventually(lambda: bool(workers_of(tag)))
+        else:
+            eventually(answers)
+        if moment == "0.5 s":
+            time.sleep(0.5)
+        if moment == "ready":  # the workers (two, and one to spare) are ready: a job runs
+            answer = httpx.post(
+                f"http://127.0.0.1:{port}/api/mesh",
+                params={"filename": "cube.obj"},
+                content=CUBE_OBJ,
+                timeout=PATIENCE_S,
+            )
+            assert answer.status_code == 200
+            eventually(lambda: len(workers_of(tag)) == 3)
+        assert tagged(tag)
+        process.send_signal(number)
         stopped = time.monotonic()
         process.wait(GONE_WITHIN_S)
-        eventually(lambda: not session_members(process.pid), 5 - (time.monotonic() - stopped))
+        eventually(lambda: not tagged(tag), 5 - (time.monotonic() - stopped))
     finally:
-        for member in session_members(process.pid):
+        for member in tagged(tag):
             with suppress(ProcessLookupError):
                 os.kill(member, signal.SIGKILL)
         with suppress(ProcessLookupError):
             process.kill()
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/self/environ"), reason="reads /proc")
+def test_a_job_that_does_not_stop_costs_the_next_job_no_wait(tmp_path: Path) -> None:
+    """A client leaves while its job runs a loop that ignores the request to stop (as a native
+    loop does): its worker is killed after the grace, and the next upload is a 200 from the
+    worker that was kept to spare, ready before the kill (no worker had to start for it)."""
+    tag = f"{os.getpid()}-{time.monotonic_ns()}"
+    server = Server(tmp_path, MESH_TEST_TAG=tag)
+    try:
+        eventually(lambda: len(workers_of(tag)) == 2)  # one worker, one to spare
+        (tmp_path / "fine").mkdir()
+        (tmp_path / "fine" / "release").touch()
+        assert server.upload(tmp_path / "fine").status_code == 200  # a worker is ready
+        ready = set(workers_of(tag))
+        gone = tmp_path / "gone"
+        gone.mkdir()
+        (gone / "stubborn").touch()
+        head = (
+            f"POST /api/mesh?filename={quote(str(gone / 'cube.obj'))} HTTP/1.1\r\nHost: x\r\n"
+            f"Content-Length: {len(CUBE_OBJ)}\r\n\r\n{CUBE_OBJ}"
+        )
+        with socket.create_connection(("127.0.0.1", server.port), timeout=PATIENCE_S) as client:
+            client.sendall(head.encode())
+            eventually((gone / "started").exists)
+        stubborn = int((gone / "started").read_text())
+        eventually(lambda: not alive(stubborn))  # killed after the grace
+        (tmp_path / "next").mkdir()
+        (tmp_path / "next" / "release").touch()
+        begun = time.monotonic()
+        answer = server.upload(tmp_path / "next")
+        seconds = time.monotonic() - begun
+        assert answer.status_code == 200 and answer.json()["faces"] == 12
+        next_pid = int((tmp_path / "next" / "started").read_text())
+        assert next_pid in ready - {stubborn}, "the next job waited for a new worker"
+        print(f"the next upload after a killed worker: {seconds * 1000:.0f} ms")
+    finally:
+        server.close()
+        for member in tagged(tag):
+            with suppress(ProcessLookupError):
+                os.kill(member, signal.SIGKILL)

@@ -1,4 +1,5 @@
-"""app/web/workers.py: real worker processes, one job at a time; a dead one is replaced."""
+"""app/web/workers.py over mesh_normal/workers.py: real worker processes, one job at a time; a
+dead one is replaced, by a spare at once if the pool keeps one."""
 
 from __future__ import annotations
 
@@ -24,6 +25,7 @@ from app.web.workers import (
     WorkerPool,
 )
 from mesh_normal import allocator
+from mesh_normal import workers as library
 from mesh_normal.files import expansion
 from tests.app import jobhooks
 from tests.meshes import binary_stl
@@ -51,7 +53,7 @@ async def call(pool: WorkerPool, function: Callable[..., Any], *args: Any) -> An
     assert worker is not None
     clean = False
     try:
-        value = await worker.call(function, args)
+        value = await worker.run(function, args)
         clean = True
         return value
     except (ApiError, WorkerOutOfMemory, JobTimedOut, JobCancelled):
@@ -106,13 +108,13 @@ def test_a_cancelled_call_stops_its_worker() -> None:
     async def scenario(pool: WorkerPool) -> None:
         worker = await pool.acquire(60)
         assert worker is not None
-        job = asyncio.ensure_future(worker.call(jobhooks.sleep_forever, ()))
+        job = asyncio.ensure_future(worker.run(jobhooks.sleep_forever, ()))
         await asyncio.sleep(0)
         job.cancel()
         with pytest.raises(asyncio.CancelledError):
             await job
         pool.release(worker, clean=False)
-        assert not worker.process.is_alive()
+        assert not worker.alive()
         await call(pool, jobhooks.value, b"")  # the replacement works
 
     with_pool(scenario)
@@ -163,16 +165,18 @@ def test_a_worker_whose_start_ends_after_the_pool_closed_is_stopped(
 
     monkeypatch.setattr(workers, "Worker", Late)
 
+    pool = WorkerPool(1)
+
     async def main() -> None:
-        pool = WorkerPool(1)
         pool.start()
         await asyncio.sleep(0)  # the worker's start begins, in its thread
         pool.close()
         closed.set()
 
-    asyncio.run(main())  # which waits for the thread, as the loop's executor shuts down
+    asyncio.run(main())
+    pool.executor.shutdown(wait=True)  # the thread that started it has ended
     assert len(started) == 1
-    assert not started[0].process.is_alive()
+    assert not started[0].alive()
 
 
 def test_a_small_job_marked_so_runs_in_the_server_until_a_worker_is_ready(
@@ -188,11 +192,11 @@ def test_a_small_job_marked_so_runs_in_the_server_until_a_worker_is_ready(
         assert not pool.idle  # the worker is still starting
         thread = await pool.acquire(60, (jobhooks.value, (b"tiny",)))
         assert isinstance(thread, workers.ServerThread)
-        pid, back = await thread.call(jobhooks.value, (b"tiny",))
+        pid, back = await thread.run(jobhooks.value, (b"tiny",))
         pool.release(thread, clean=True)
         assert (pid, back) == (os.getpid(), b"tiny")
         with pytest.raises(ApiError):  # a refusal comes back as from a worker
-            await workers.ServerThread().call(jobhooks.refuse, ())
+            await workers.ServerThread().run(jobhooks.refuse, ())
         # Too large for its test, then not marked: both wait for the worker.
         worker = await pool.acquire(60, (jobhooks.value, (b"large",)))
         assert isinstance(worker, Worker)
@@ -200,7 +204,7 @@ def test_a_small_job_marked_so_runs_in_the_server_until_a_worker_is_ready(
         assert pool._warmed is not None and pool._warmed.is_set()
         worker = await pool.acquire(60, (jobhooks.value, (b"tiny",)))
         assert isinstance(worker, Worker)  # a worker is ready now: it takes the job
-        pid, _ = await worker.call(jobhooks.value, (b"tiny",))
+        pid, _ = await worker.run(jobhooks.value, (b"tiny",))
         pool.release(worker, clean=True)
         assert pid != os.getpid()
 
@@ -233,10 +237,10 @@ def _sent_and_received(value: Any) -> Any:
     import multiprocessing
 
     ours, theirs = multiprocessing.Pipe()
-    sender = threading.Thread(target=workers.send, args=(ours, value, workers.SHARED_FROM))
+    sender = threading.Thread(target=library.send, args=(ours, value, library.SHARED_FROM))
     sender.start()
     try:
-        return workers.receive(theirs)
+        return library.receive(theirs)
     finally:
         sender.join()
         ours.close()
@@ -254,14 +258,14 @@ def test_a_large_upload_travels_in_shared_memory_and_reads_the_same() -> None:
     vertices, faces = torus_mesh(42_000)
     stl = write_mesh(vertices, faces, "stl")
     obj = write_mesh(vertices, faces, "obj")
-    assert len(stl) >= workers.SHARED_FROM and len(obj) >= workers.SHARED_FROM
+    assert len(stl) >= library.SHARED_FROM and len(obj) >= library.SHARED_FROM
     small = write_mesh(vertices[:3], np.array([[0, 1, 2]]), "stl")
     descriptors = set(os.listdir("/proc/self/fd"))
     for upload in (Upload(stl, "torus.stl"), Upload(obj, "torus.obj"), Upload(small, "t.stl")):
         function, (received, weld) = _sent_and_received((work.report, (upload, None)))
         assert function is work.report and weld is None
         assert received.filename == upload.filename and received.size == upload.size
-        if len(upload.data) >= workers.SHARED_FROM:
+        if len(upload.data) >= library.SHARED_FROM:
             assert isinstance(received.mapped, mmap.mmap) and received.data == b""
             assert received.mapped[:] == upload.data
         else:
@@ -274,11 +278,11 @@ def test_a_large_upload_travels_in_shared_memory_and_reads_the_same() -> None:
 def test_a_job_s_buffers_without_shared_memory_come_through_the_pipe() -> None:
     import multiprocessing
 
-    value = (np.arange(300_000), b"x" * 10, Upload(b"y" * (workers.SHARED_FROM + 1), "y.stl"))
+    value = (np.arange(300_000), b"x" * 10, Upload(b"y" * (library.SHARED_FROM + 1), "y.stl"))
     ours, theirs = multiprocessing.Pipe()
-    sender = threading.Thread(target=workers.send, args=(ours, value))  # no shared_from
+    sender = threading.Thread(target=library.send, args=(ours, value))  # no shared_from
     sender.start()
-    array, text, upload = workers.receive(theirs)
+    array, text, upload = library.receive(theirs)
     sender.join()
     np.testing.assert_array_equal(array, value[0])
     assert text == value[1] and upload.data == value[2].data and upload.mapped is None
@@ -292,7 +296,7 @@ def test_a_job_past_its_time_is_stopped_and_its_worker_lives_on() -> None:
         again, _ = await call(pool, jobhooks.value, b"")
         assert again == first and pool.replaced == 0
 
-    with_pool(scenario, job_seconds=0.5)
+    with_pool(scenario, job_seconds=0.5, preload=("tests.app.jobhooks",))
 
 
 def test_a_job_that_does_not_stop_in_time_costs_its_worker() -> None:
@@ -306,7 +310,7 @@ def test_a_job_that_does_not_stop_in_time_costs_its_worker() -> None:
         again, _ = await call(pool, jobhooks.value, b"")
         assert again != first and pool.replaced == 1
 
-    with_pool(scenario, job_seconds=0.5)
+    with_pool(scenario, job_seconds=0.5, preload=("tests.app.jobhooks",))
 
 
 def test_a_job_asked_to_stop_stops_and_its_worker_lives_on() -> None:
@@ -314,7 +318,7 @@ def test_a_job_asked_to_stop_stops_and_its_worker_lives_on() -> None:
         first, _ = await call(pool, jobhooks.value, b"")
         worker = await pool.acquire(60)
         assert isinstance(worker, Worker)
-        job = asyncio.ensure_future(worker.call(jobhooks.sleep_forever, ()))
+        job = asyncio.ensure_future(worker.run(jobhooks.sleep_forever, ()))
         await asyncio.sleep(0.5)  # the job is running (or about to: the stop waits for it)
         worker.interrupt()
         with pytest.raises(JobCancelled):
@@ -385,30 +389,55 @@ async def gone(pid: int) -> None:
     raise AssertionError(f"process {pid} still runs")
 
 
-@pytest.mark.skipif(not os.path.exists("/proc/self/stat"), reason="reads /proc")
-def test_a_killed_fork_server_takes_its_workers_with_it() -> None:
-    """Its busy worker too; the pool then starts a new fork server and new workers."""
+def test_workers_killed_from_outside_are_replaced() -> None:
+    """The busy one's job ends as WorkerDied; the idle one is skipped when next lent."""
 
     async def scenario(pool: WorkerPool) -> None:
         busy = await pool.acquire(60)
         idle = await pool.acquire(60)
         assert isinstance(busy, Worker) and isinstance(idle, Worker)
         pool.release(idle, clean=True)
-        job = asyncio.ensure_future(busy.call(jobhooks.sleep_forever, ()))
+        job = asyncio.ensure_future(busy.run(jobhooks.sleep_forever, ()))
         await asyncio.sleep(0.5)
-        assert busy.process.pid is not None and idle.process.pid is not None
-        with open(f"/proc/{busy.process.pid}/stat") as stat:
-            fork_server = int(stat.read().split(") ")[1].split()[1])
-        os.kill(fork_server, signal.SIGKILL)
-        await gone(busy.process.pid)
-        await gone(idle.process.pid)
+        os.kill(busy.pid, signal.SIGKILL)
+        os.kill(idle.pid, signal.SIGKILL)
         with pytest.raises(WorkerDied):
             await asyncio.wait_for(job, PATIENCE_S)
         pool.release(busy, clean=False)
+        await gone(idle.pid)
         pid, _ = await call(pool, jobhooks.value, b"")  # the dead idle worker is skipped
-        assert pid not in (busy.process.pid, idle.process.pid)
+        assert pid not in (busy.pid, idle.pid)
 
     with_pool(scenario, count=2)
+
+
+def test_a_spare_takes_a_killed_worker_s_place_at_once() -> None:
+    """With a worker to spare, a job that does not stop costs no wait: the next job runs in the
+    spare, which was started before, while a new spare starts."""
+
+    async def scenario(pool: WorkerPool) -> tuple[int, set[int], float]:
+        while len(pool.idle) < 2:  # both ready
+            await asyncio.sleep(0.05)
+        ready = {worker.pid for worker in pool.idle}
+        worker = await pool.acquire(60)
+        assert isinstance(worker, Worker)
+        job = asyncio.ensure_future(worker.run(jobhooks.stuck, ()))
+        await asyncio.sleep(0.2)
+        job.cancel()
+        pool.release(worker, clean=False)  # as when its client left and it did not stop
+        loop = asyncio.get_running_loop()
+        begun = loop.time()
+        spare = await pool.acquire(0)  # no wait at all
+        assert isinstance(spare, Worker)
+        pid, _ = await spare.run(jobhooks.value, (b"",))
+        seconds = loop.time() - begun
+        pool.release(spare, clean=True)
+        assert pool.replaced == 1
+        return pid, ready - {worker.pid}, seconds
+
+    pid, spares, seconds = with_pool(scenario, count=1, spare=1)
+    assert pid in spares  # a worker ready before the kill: none had to start for this job
+    print(f"next job after a killed worker: {seconds * 1000:.0f} ms")
 
 
 def test_a_worker_limits_what_an_upload_expands_into_as_the_pool_says() -> None:
