@@ -598,8 +598,12 @@ _NEST_PAIRS = 1 << 16
 #: order of the inner shell) are not tested, and their inner shell has no known depth.
 _NEST_WORK = 2 * 10**8
 
-# How a shell K whose box lies within J's relates to J.
-_OUTSIDE, _INSIDE, _CROSSES, _TOUCHES, _UNTESTED = range(5)
+#: The samples of a shell tested first, for lying inside another: one clearly outside settles it.
+_NEST_FIRST = 4
+
+# How a shell K whose box lies within J's relates to J: not inside it (outside, or crossing
+# it), inside, touching it (not known which), not tested (past the limits).
+_APART, _INSIDE, _TOUCHES, _UNTESTED = range(4)
 
 
 @dataclass(frozen=True, slots=True)
@@ -717,78 +721,75 @@ def _relations(
     shells: IndexArray,
     cone: _Cone,
 ) -> IndexArray:
-    """(pairs,) how each inner shell relates to its outer one (see :func:`_nesting`)."""
+    """(pairs,) how each inner shell relates to its outer one (see :func:`_nesting`).
+
+    In three steps, each on the pairs not yet settled: ``_NEST_FIRST`` samples (one clearly
+    outside settles most pairs of shells side by side in one box), then ``_NEST_SAMPLES``, then
+    the outer shell's vertices in the inner one's box."""
+    relation = np.full(len(pairs), _UNTESTED, dtype=np.intp)
     if not len(pairs):
-        return np.zeros(0, dtype=np.intp)
+        return relation
     inner, outer = pairs[:, 0], pairs[:, 1]
     faces = ends - starts
+    oriented: dict[int, IndexArray] = {}
 
     def oriented_faces(shell: int) -> IndexArray:
-        rows = order[starts[shell] : ends[shell]]
-        turned = found.parity[rows].astype(bool)
-        chosen = mesh.faces[rows]
-        chosen[turned, 1:] = chosen[turned, :0:-1]
-        return chosen
+        if shell not in oriented:
+            rows = order[starts[shell] : ends[shell]]
+            turned = found.parity[rows].astype(bool)
+            chosen = mesh.faces[rows]
+            chosen[turned, 1:] = chosen[turned, :0:-1]
+            oriented[shell] = chosen
+        return oriented[shell]
 
-    def spread(shell: int) -> FloatArray:
-        picks = np.linspace(starts[shell], ends[shell] - 1, min(_NEST_SAMPLES, faces[shell]))
+    def spread(shell: int, count: int) -> FloatArray:
+        picks = np.linspace(starts[shell], ends[shell] - 1, min(count, faces[shell]))
         chosen: FloatArray = mesh.points[mesh.faces[order[picks.astype(np.intp)], 0]]
         return chosen * mesh.factor
 
-    samples = {k: spread(k) for k in np.unique(inner).tolist()}
-    # The vertices of the outer shell that lie in the inner one's box (at most _NEST_SAMPLES,
-    # spread): each outer shell's vertices sorted along x once, then a slab of them a pair.
-    sorted_vertices: dict[int, FloatArray] = {}
-    intruders = []
-    for k, j in pairs.tolist():
-        if j not in sorted_vertices:
-            used = np.unique(mesh.faces[order[starts[j] : ends[j]]])
-            vertices = mesh.points[used] * mesh.factor
-            sorted_vertices[j] = vertices[np.argsort(vertices[:, 0], kind="stable")]
-        vertices = sorted_vertices[j]
-        first = np.searchsorted(vertices[:, 0], low[k, 0], side="left")
-        slab = vertices[first : np.searchsorted(vertices[:, 0], high[k, 0], side="right")]
-        picked = slab[np.all((slab >= low[k]) & (slab <= high[k]), axis=1)]
-        if len(picked) > _NEST_SAMPLES:
-            picked = picked[np.linspace(0, len(picked) - 1, _NEST_SAMPLES).astype(np.intp)]
-        intruders.append(picked)
-    del sorted_vertices
-    work = np.array(
-        [
-            len(samples[k]) * faces[j] + len(intruders[i]) * faces[k]
-            for i, (k, j) in enumerate(pairs.tolist())
-        ],
-        dtype=np.int64,
-    )
-    tested = np.cumsum(work) <= _NEST_WORK
+    # The most that the three steps can cost, in (sample, face) visits.
+    work = _NEST_SAMPLES * (faces[outer] + faces[inner])
+    pending = np.cumsum(work) <= _NEST_WORK
     # A sample is trusted this far from the other shell: a fraction of that shell's size, and
     # the coordinates' rounding (as for the volume's evidence), so anywhere alike.
     largest = cone.largest[: found.patches][shells]
     noise = ORIENT_EVIDENCE * (cone.data_unit + 4 * EPSILON) * largest
     reach = _NEST_CLEARANCE * np.linalg.norm(high - low, axis=1)
-    counts = np.zeros((len(pairs), 3), dtype=np.intp)  # samples inside, outside, near
-    for j, rows in _grouped(outer, tested):  # the inner shells' samples about j
-        groups = [samples[int(inner[r])] for r in rows]
-        limits = [reach[j] + max(noise[j], noise[inner[r]]) for r in rows]
-        counts[rows] = _sorted_samples(mesh, oriented_faces(j), groups, limits)
-    intruding = np.zeros((len(pairs), 3), dtype=np.intp)  # outer vertices inside, outside, near
-    for k, rows in _grouped(inner, tested):  # the outer shells' vertices about k
-        rows = [r for r in rows if len(intruders[r])]
-        if rows:
-            groups = [intruders[r] for r in rows]
-            limits = [reach[k] + max(noise[k], noise[outer[r]]) for r in rows]
-            intruding[rows] = _sorted_samples(mesh, oriented_faces(k), groups, limits)
-    inside, outside, near = counts.T
-    relation: IndexArray = np.select(
-        [
-            ~tested,
-            ((inside > 0) & (outside > 0)) | (intruding[:, 0] > 0),
-            (near > 0) | (intruding[:, 2] > 0),
-            inside > 0,
-        ],
-        [_UNTESTED, _CROSSES, _TOUCHES, _INSIDE],
-        _OUTSIDE,
-    )
+    for count in (_NEST_FIRST, _NEST_SAMPLES):  # the inner shells' samples about the outer
+        samples = {k: spread(k, count) for k in np.unique(inner[pending]).tolist()}
+        for j, rows in _grouped(outer, pending):
+            groups = [samples[int(inner[r])] for r in rows]
+            limits = [reach[j] + max(noise[j], noise[inner[r]]) for r in rows]
+            inside, outside, near = _sorted_samples(mesh, oriented_faces(j), groups, limits).T
+            relation[rows] = np.where(outside > 0, _APART, _UNTESTED)
+            if count == _NEST_SAMPLES:
+                relation[rows] = np.where(
+                    outside > 0, _APART, np.where(near > 0, _TOUCHES, _INSIDE)
+                )
+        pending &= relation == _UNTESTED
+    # The vertices of the outer shell that lie in the inner one's box, at most _NEST_SAMPLES
+    # spread among them, about the inner shell: one inside it, and they cross.
+    maybe = relation == _INSIDE
+    vertices: dict[int, FloatArray] = {}  # each outer shell's, sorted along x
+    for k, rows in _grouped(inner, maybe):
+        groups, limits = [], []
+        for r in rows:
+            j = int(outer[r])
+            if j not in vertices:
+                used = mesh.points[np.unique(oriented_faces(j))] * mesh.factor
+                vertices[j] = used[np.argsort(used[:, 0], kind="stable")]
+            ranked = vertices[j]
+            first = np.searchsorted(ranked[:, 0], low[k, 0], side="left")
+            slab = ranked[first : np.searchsorted(ranked[:, 0], high[k, 0], side="right")]
+            picked = slab[np.all((slab >= low[k]) & (slab <= high[k]), axis=1)]
+            if len(picked) > _NEST_SAMPLES:
+                picked = picked[np.linspace(0, len(picked) - 1, _NEST_SAMPLES).astype(np.intp)]
+            groups.append(picked)
+            limits.append(reach[k] + max(noise[k], noise[j]))
+        if not any(len(group) for group in groups):
+            continue
+        inside, _, near = _sorted_samples(mesh, oriented_faces(k), groups, limits).T
+        relation[rows] = np.where(inside > 0, _APART, np.where(near > 0, _TOUCHES, _INSIDE))
     return relation
 
 

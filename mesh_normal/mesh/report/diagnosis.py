@@ -145,13 +145,15 @@ def _inward(report: MeshReport) -> Problem | None:
 def _mixed(report: MeshReport) -> Problem | None:
     if report.orientation != "mixed" or not report.winding_consistent:
         return None
+    cavities = any(part.depth and part.depth % 2 for part in report.fix.components)
+    way = "away from the material (out, or into their cavity)" if cavities else "outward"
     return _problem(
         "mixed",
         "error",
         "Some parts point outward, others inward",
-        "Each part is wound consistently, but not all of them face away from the material "
-        "(out, or into a cavity)." + _flipped_objects(report),
-        "Download the fixed mesh: each part is turned to face away from the material on its own.",
+        f"Each part is wound consistently, but not all of them face "
+        f"{'away from the material' if cavities else 'out'}." + _flipped_objects(report),
+        f"Download the fixed mesh: each part is turned to face {way} on its own.",
         "import mesh_normal as mn\n\n"
         f"faces = mn.orient(vertices, faces{_weld_argument(report)}).faces",
     )

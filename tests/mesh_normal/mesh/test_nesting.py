@@ -160,6 +160,7 @@ def test_a_shell_whose_samples_lie_inside_but_that_crosses_is_no_cavity(
 ) -> None:
     # One sample, inside the box; but the crater's tip lies inside the ball: they cross.
     monkeypatch.setattr(orientation, "_NEST_SAMPLES", 1)
+    monkeypatch.setattr(orientation, "_NEST_FIRST", 1)
     points, triangles = dented_box()
     ball_points, ball_faces = ball(0.3)
     low = ball_points[ball_faces[0, 0]]

@@ -294,6 +294,11 @@ def test_a_cavity_is_named_in_plain_words() -> None:
         "to point into the cavity."
     )
     assert wrong.fix.faces_flipped == wrong.fix.components[1].faces
+    [mixed] = [item for item in problems(wrong) if item.code == "mixed"]
+    assert "not all of them face away from the material" in mixed.detail
+    assert mixed.action.endswith(
+        "face away from the material (out, or into their cavity) on its own."
+    )
 
 
 def test_a_body_in_a_cavity_and_more_parts_are_named() -> None:
