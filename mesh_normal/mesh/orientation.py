@@ -608,14 +608,13 @@ _APART, _INSIDE, _TOUCHES, _UNTESTED = range(4)
 
 @dataclass(frozen=True, slots=True)
 class _Nesting:
-    """Per patch: ``depth``, how many closed shells hold it (-1: not a shell, or unknown);
-    ``parent``, the innermost of them (-1: none); ``touches``, a shell it touches, so that
-    its depth is unknown (-1: none); ``untested``, its depth unknown past the limits."""
+    """Per patch: ``depth``, how many closed shells hold it (-1: not a shell, or unknown: it
+    touches one, or was past the limits); ``parent``, the innermost of them (-1: none);
+    ``touches``, a shell it touches (-1: none)."""
 
     depth: IndexArray
     parent: IndexArray
     touches: IndexArray
-    untested: BoolArray
 
 
 def _nesting(
@@ -633,11 +632,13 @@ def _nesting(
     the float sum of the solid angles is within far less than one half of the integer it
     stands for, and it is rounded. Then:
 
-    - all samples inside: K lies in J, and counts J in its depth;
-    - some inside, some outside, or a vertex of J inside K: K crosses J (an eye sunk half into
-      a head). It is no cavity of J (a cavity cannot break through the material's surface) but
-      a body of its own, and J does not count in its depth;
-    - otherwise, a sample nearer J than that: they touch, and K's depth is unknown.
+    - a sample clearly outside J, or a vertex of J clearly inside K: K is not inside J. It lies
+      beside J in J's box, or crosses J (an eye sunk half into a head): no cavity of J (a
+      cavity cannot break through the material's surface) but a body of its own. J does not
+      count in its depth;
+    - else a sample (or such a vertex of J) nearer than that: they touch, and K's depth is
+      unknown;
+    - else every sample inside: K lies in J, and counts J in its depth.
 
     Boxes one inside the other are found by a sweep (:func:`_contained`); past ``_NEST_PAIRS``
     such pairs, or ``_NEST_WORK`` face visits, the shells not tested have no known depth.
@@ -646,11 +647,10 @@ def _nesting(
     depth = np.full(patches, -1, dtype=np.intp)
     parent = np.full(patches, -1, dtype=np.intp)
     touches = np.full(patches, -1, dtype=np.intp)
-    untested = np.zeros(patches, dtype=bool)
     shells = np.flatnonzero(candidates)
     depth[shells] = 0
     if len(shells) < 2:
-        return _Nesting(depth, parent, touches, untested)
+        return _Nesting(depth, parent, touches)
     mesh = geometry.mesh
     group = found.group
     member = np.flatnonzero(np.r_[candidates, False][group])
@@ -667,8 +667,7 @@ def _nesting(
     pairs, boxed = _contained(low, high)
     if pairs is None:  # too many to test: a shell in another's box has no known depth
         depth[shells[boxed]] = -1
-        untested[shells[boxed]] = True
-        return _Nesting(depth, parent, touches, untested)
+        return _Nesting(depth, parent, touches)
     relation = _relations(mesh, found, order, starts, ends, low, high, pairs, shells, cone)
     inner, outer = pairs[:, 0], pairs[:, 1]
     holds = relation == _INSIDE
@@ -681,7 +680,6 @@ def _nesting(
             first = rows[np.lexsort((shells[outer[rows]], inner[rows]))]
             keep = np.r_[True, inner[first][1:] != inner[first][:-1]] if len(first) else first
             mark[shells[inner[first[keep]]]] = shells[outer[first[keep]]]
-    untested[shells[np.unique(inner[relation == _UNTESTED])]] = True
     depth[shells] = np.where(unknown, -1, count)
     # The innermost shell that holds it: of those, the one with the smallest box.
     size = np.linalg.norm(high - low, axis=1)
@@ -689,7 +687,7 @@ def _nesting(
     holding = holding[np.lexsort((size[outer[holding]], inner[holding]))]
     first = np.r_[True, inner[holding][1:] != inner[holding][:-1]] if len(holding) else holding
     parent[shells[inner[holding[first]]]] = shells[outer[holding[first]]]
-    return _Nesting(depth, parent, touches, untested)
+    return _Nesting(depth, parent, touches)
 
 
 def _contained(low: FloatArray, high: FloatArray) -> tuple[IndexArray | None, BoolArray]:
