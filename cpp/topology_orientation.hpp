@@ -367,10 +367,11 @@ void winding_numbers(Rows points, double factor, Triangles faces, Rows samples,
 
 // The pairs (k, j) of boxes where box k lies within box j (k != j; low[j] <= low[k] and
 // high[k] <= high[j] on every axis), the first `pairs.shape(0)` of them in `pairs`, and in
-// `boxed` which boxes lie within another; returns how many pairs there are. A sweep along
+// `boxed` which boxes lie within another; returns how many pairs there are (once past the room,
+// at least the room and one more), or -1 past `budget` comparisons of two boxes. A sweep along
 // `axis` in the order of the boxes' low ends, holding the boxes whose range is still open
 // there: about linear when few boxes overlap along that axis, as parts side by side do.
-std::int64_t contained_boxes(Rows low, Rows high, std::int64_t axis,
+std::int64_t contained_boxes(Rows low, Rows high, std::int64_t axis, std::int64_t budget,
                              Out<std::int64_t, nb::shape<-1, 2>> pairs,
                              Out<bool, nb::shape<-1>> boxed) {
   const std::int64_t count = static_cast<std::int64_t>(low.shape(0));
@@ -409,6 +410,7 @@ std::int64_t contained_boxes(Rows low, Rows high, std::int64_t axis,
   };
   std::vector<std::int64_t> open;
   std::int64_t found = 0;
+  std::int64_t compared = 0;
   std::size_t next = 0;
   while (next < order.size()) {
     // Every box whose low end is at this place opens before any of them is tested: boxes
@@ -424,6 +426,10 @@ std::int64_t contained_boxes(Rows low, Rows high, std::int64_t axis,
                open.end());
     for (std::size_t i = first; i < next; ++i) {
       const std::int64_t k = order[i];
+      compared += static_cast<std::int64_t>(open.size());
+      if (compared > budget) {
+        return -1;
+      }
       for (const std::int64_t j : open) {
         if (j != k && within(k, j)) {
           if (found < capacity) {
@@ -432,6 +438,9 @@ std::int64_t contained_boxes(Rows low, Rows high, std::int64_t axis,
           }
           ++found;
           inside[k] = true;
+          if (found > capacity) {  // past the room only `boxed` is wanted: one holder is enough
+            break;
+          }
         }
       }
     }
@@ -561,10 +570,11 @@ inline void bind_orientation(nb::module_& m) {
         "The generalized winding number of the faces at each sample, and the squared distance "
         "from it to the nearest face.");
   m.def("contained_boxes", &contained_boxes, nb::arg("low").noconvert(),
-        nb::arg("high").noconvert(), nb::arg("axis"), nb::arg("pairs").noconvert(),
+        nb::arg("high").noconvert(), nb::arg("axis"), nb::arg("budget"),
+        nb::arg("pairs").noconvert(),
         nb::arg("boxed").noconvert(),
         "The pairs (k, j) where box k lies within box j, up to the room in pairs; returns "
-        "how many there are.");
+        "how many there are, or -1 past the budget of comparisons.");
   m.def("twinned_faces", &twinned_faces, nb::arg("faces").noconvert(), nb::arg("width"),
         nb::arg("twinned").noconvert(),
         "Mark the faces whose three points another face has, wound the other way.");

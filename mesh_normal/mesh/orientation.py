@@ -594,6 +594,9 @@ _NEST_CLEARANCE = 2.0**-30
 #: At most this many pairs of boxes one inside the other are looked at; past it, a shell whose
 #: box lies inside another's has no known depth (undetermined, never flipped).
 _NEST_PAIRS = 1 << 16
+#: At most this many comparisons of two boxes go into finding the pairs; past it no shell whose
+#: box overlaps others has a known depth.
+_NEST_COMPARISONS = 1 << 26
 #: At most this many (sample, face) visits go into winding numbers; the pairs past it (in the
 #: order of the inner shell) are not tested, and their inner shell has no known depth.
 _NEST_WORK = 2 * 10**8
@@ -700,7 +703,9 @@ def _contained(low: FloatArray, high: FloatArray) -> tuple[IndexArray | None, Bo
         axis = int(np.argmax(np.nan_to_num(span / extent, nan=0.0, posinf=np.inf)))
     pairs = np.empty((_NEST_PAIRS, 2), dtype=np.int64)
     boxed = np.zeros(len(low), dtype=bool)
-    total = _core.contained_boxes(low, high, axis, pairs, boxed)
+    total = _core.contained_boxes(low, high, axis, _NEST_COMPARISONS, pairs, boxed)
+    if total < 0:  # boxes that overlap each other by the thousand: none has a known depth
+        return None, np.ones(len(low), dtype=bool)
     if total > _NEST_PAIRS:
         return None, boxed
     kept = pairs[:total]

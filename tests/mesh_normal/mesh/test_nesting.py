@@ -202,3 +202,20 @@ def test_many_small_closed_parts_side_by_side_are_decided_quickly() -> None:
     wrong = turned(faces, all_labels, [1])
     r = orient(vertices, wrong)
     assert np.array_equal(r.flipped, all_labels == 1)
+
+
+def test_many_shells_in_one_place_are_left_as_they_are_quickly(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # 3,000 cubes one inside the next, wound inward: 4.5 million pairs of boxes, far past the
+    # room for them. Only the largest, in no other's box, has a known depth (0): turned out.
+    count = 3000
+    vertices, faces, labels = built(*[(box(1.0 + 1e-3 * i), True) for i in range(count)])
+    r = orient(vertices, faces)
+    assert np.array_equal(r.flipped, labels == count - 1)
+    assert [c.depth for c in r.components] == [None] * (count - 1) + [0]
+    # Past the budget of comparisons, the same.
+    vertices, faces, labels = built(*CASES["hollow ball"][0])
+    monkeypatch.setattr(orientation, "_NEST_COMPARISONS", 0)
+    r = orient(vertices, turned(faces, labels, [1]))
+    assert not r.flipped.any() and [c.depth for c in r.components] == [None, None]

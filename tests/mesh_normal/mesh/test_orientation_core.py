@@ -149,24 +149,26 @@ def test_contained_boxes() -> None:
     high = np.array([[6.0, 6, 6], [2, 2, 2], [2, 2, 2], [7, 1, 1], [0, 0, 0]])
     for axis in range(3):
         pairs, boxed = np.empty((10, 2), dtype=np.int64), np.zeros(5, dtype=bool)
-        assert _core.contained_boxes(low, high, axis, pairs, boxed) == 5
+        assert _core.contained_boxes(low, high, axis, 100, pairs, boxed) == 5
         found = sorted(map(tuple, pairs[:5].tolist()))
         assert found == [(1, 0), (1, 2), (2, 0), (2, 1), (4, 0)]
         assert boxed.tolist() == [False, True, True, False, True]
     # Counted past the room given, written up to it.
     pairs, boxed = np.full((2, 2), -1, dtype=np.int64), np.zeros(5, dtype=bool)
-    assert _core.contained_boxes(low, high, 0, pairs, boxed) == 5
+    assert _core.contained_boxes(low, high, 0, 100, pairs, boxed) >= 3
     assert (pairs >= 0).all() and boxed.tolist() == [False, True, True, False, True]
+    # Past the budget of comparisons: -1.
+    assert _core.contained_boxes(low, high, 0, 3, pairs, boxed) == -1
     with pytest.raises(ValueError, match="low <= high"):
-        _core.contained_boxes(high, low, 0, pairs, boxed)
+        _core.contained_boxes(high, low, 0, 100, pairs, boxed)
     with pytest.raises(ValueError, match="low <= high"):
-        _core.contained_boxes(low * np.nan, high, 0, pairs, boxed)
+        _core.contained_boxes(low * np.nan, high, 0, 100, pairs, boxed)
     with pytest.raises(ValueError, match="axis"):
-        _core.contained_boxes(low, high, 3, pairs, boxed)
+        _core.contained_boxes(low, high, 3, 100, pairs, boxed)
     with pytest.raises(ValueError, match="one row a box"):
-        _core.contained_boxes(low, high[:4].copy(), 0, pairs, boxed)
+        _core.contained_boxes(low, high[:4].copy(), 0, 100, pairs, boxed)
     with pytest.raises(ValueError, match="one row a box"):
-        _core.contained_boxes(low, high, 0, pairs, boxed[:4].copy())
+        _core.contained_boxes(low, high, 0, 100, pairs, boxed[:4].copy())
 
 
 def test_twinned_faces_refuse_points_out_of_range() -> None:
