@@ -78,7 +78,8 @@ SANITIZE := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-r
 SANITIZED_TESTS := tests/mesh_normal/files tests/mesh_normal/points \
 	tests/mesh_normal/mesh/test_faces.py tests/mesh_normal/mesh/test_vertices.py \
 	tests/mesh_normal/mesh/test_corners.py tests/mesh_normal/mesh/test_topology.py \
-	tests/mesh_normal/mesh/test_orientation.py tests/mesh_normal/mesh/test_visibility.py \
+	tests/mesh_normal/mesh/test_orientation.py tests/mesh_normal/mesh/test_orientation_core.py \
+	tests/mesh_normal/mesh/test_nesting.py tests/mesh_normal/mesh/test_visibility.py \
 	tests/mesh_normal/test_no_harm.py tests/mesh_normal/mesh/test_checks.py
 test-sanitize: .venv/.test
 	UV_PROJECT_ENVIRONMENT=.venv-asan $(UV) sync --locked --group test \

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "core.hpp"
@@ -25,6 +26,8 @@ constexpr std::int64_t cone_grain = 4096;
 // compare each pair, larger ones look the twin up in a sorted copy.
 constexpr std::int64_t twin_grain = 4096;
 constexpr std::int64_t few_twins = 32;
+// (sample, face) visits per thread of winding_numbers.
+constexpr std::int64_t winding_grain = std::int64_t{1} << 16;
 // math.pi: the double nearest pi.
 constexpr double pi = 3.141592653589793;
 
@@ -251,12 +254,61 @@ void cone_sums(Rows points, double factor, Triangles faces, Rows crosses,
   }
 }
 
+// The squared distance from the origin to the triangle a, b, c (Ericson, Real-Time Collision
+// Detection, 5.1.5, with the point at the origin); a triangle without area by its three edges.
+double squared_distance(const double* a, const double* b, const double* c) {
+  const auto dot = [](const double* u, const double* v) {
+    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+  };
+  const auto segment = [&dot](const double* p, const double* q) {
+    const double d[3] = {q[0] - p[0], q[1] - p[1], q[2] - p[2]};
+    const double length = dot(d, d);
+    const double t = length > 0.0 ? std::clamp(-dot(p, d) / length, 0.0, 1.0) : 0.0;
+    const double x[3] = {p[0] + t * d[0], p[1] + t * d[1], p[2] + t * d[2]};
+    return dot(x, x);
+  };
+  const double ab[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  const double ac[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  const double d1 = -dot(ab, a), d2 = -dot(ac, a);
+  if (d1 <= 0.0 && d2 <= 0.0) {
+    return dot(a, a);
+  }
+  const double d3 = -dot(ab, b), d4 = -dot(ac, b);
+  if (d3 >= 0.0 && d4 <= d3) {
+    return dot(b, b);
+  }
+  const double d5 = -dot(ab, c), d6 = -dot(ac, c);
+  if (d6 >= 0.0 && d5 <= d6) {
+    return dot(c, c);
+  }
+  const double vc = d1 * d4 - d3 * d2, vb = d5 * d2 - d1 * d6, va = d3 * d6 - d5 * d4;
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+    return segment(a, b);
+  }
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
+    return segment(a, c);
+  }
+  if (va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0) {
+    return segment(b, c);
+  }
+  const double sum = va + vb + vc;
+  if (!(sum > 0.0) || !std::isfinite(sum)) {  // no area: the nearest of its edges
+    return std::min({segment(a, b), segment(b, c), segment(c, a)});
+  }
+  const double v = vb / sum, w = vc / sum;
+  const double x[3] = {a[0] + v * ab[0] + w * ac[0], a[1] + v * ab[1] + w * ac[1],
+                       a[2] + v * ab[2] + w * ac[2]};
+  return dot(x, x);
+}
+
 // The generalized winding number of `faces` at one sample: Van Oosterom and Strackee's solid
-// angle of each triangle, summed in face order, over 4 pi.
+// angle of each triangle, summed in face order, over 4 pi; and in `clearance` the squared
+// distance from the sample to the nearest face, which says whether the sum can be trusted.
 double winding_number(const double* points, double factor, const std::int64_t* faces,
-                      std::int64_t count, const double* sample) {
+                      std::int64_t count, const double* sample, double& clearance) {
   const double px = sample[0], py = sample[1], pz = sample[2];
   double total = 0.0;
+  double nearest = std::numeric_limits<double>::infinity();
   for (std::int64_t f = 0; f < count; ++f) {
     const double* a = points + 3 * faces[3 * f];
     const double* b = points + 3 * faces[3 * f + 1];
@@ -272,16 +324,28 @@ double winding_number(const double* points, double factor, const std::int64_t* f
     double dot = la * lb * lc + (ax * bx + ay * by + az * bz) * lc;
     dot += (ax * cx + ay * cy + az * cz) * lb + (bx * cx + by * cy + bz * cz) * la;
     total += 2.0 * std::atan2(det, dot);
+    // The distance only where the face may be nearer than the nearest so far: no point of it
+    // is nearer than its nearest corner less its longest edge, which |AB| + |AC| bounds.
+    const double edges = std::abs(bx - ax) + std::abs(by - ay) + std::abs(bz - az) +
+                         std::abs(cx - ax) + std::abs(cy - ay) + std::abs(cz - az);
+    const double reach = std::min({la, lb, lc}) - edges;
+    if (reach <= 0.0 || reach * reach < nearest) {
+      const double ra[3] = {ax, ay, az}, rb[3] = {bx, by, bz}, rc[3] = {cx, cy, cz};
+      nearest = std::min(nearest, squared_distance(ra, rb, rc));
+    }
   }
+  clearance = nearest;
   return total / (4.0 * pi);
 }
 
-// The winding number of `faces` at each sample, the samples on every thread.
+// The winding number of `faces` at each sample and the squared distance from it to the nearest
+// face, the samples on every thread.
 void winding_numbers(Rows points, double factor, Triangles faces, Rows samples,
-                     Out<double, nb::shape<-1>> winding) {
+                     Out<double, nb::shape<-1>> winding, Out<double, nb::shape<-1>> clearance) {
   const std::int64_t count = static_cast<std::int64_t>(samples.shape(0));
-  if (static_cast<std::int64_t>(winding.shape(0)) != count) {
-    throw nb::value_error("winding must have one place a sample.");
+  if (static_cast<std::int64_t>(winding.shape(0)) != count ||
+      static_cast<std::int64_t>(clearance.shape(0)) != count) {
+    throw nb::value_error("winding and clearance must have one place a sample.");
   }
   check_triangles(faces, static_cast<std::int64_t>(points.shape(0)));
   const double* p = points.data();
@@ -289,12 +353,99 @@ void winding_numbers(Rows points, double factor, Triangles faces, Rows samples,
   const std::int64_t face_count = static_cast<std::int64_t>(faces.shape(0));
   const double* s = samples.data();
   double* w = winding.data();
+  double* d = clearance.data();
   nb::gil_scoped_release release;
-  parallel_for(count, 1, [&](std::int64_t begin, std::int64_t end) {
+  // Threads only where each has about winding_grain faces to visit: starting one costs more
+  // than a small shell's samples.
+  const std::int64_t grain = std::max<std::int64_t>(1, winding_grain / std::max<std::int64_t>(1, face_count));
+  parallel_for(count, grain, [&](std::int64_t begin, std::int64_t end) {
     for (std::int64_t i = begin; i < end; ++i) {
-      w[i] = winding_number(p, factor, f, face_count, s + 3 * i);
+      w[i] = winding_number(p, factor, f, face_count, s + 3 * i, d[i]);
     }
   });
+}
+
+// The pairs (k, j) of boxes where box k lies within box j (k != j; low[j] <= low[k] and
+// high[k] <= high[j] on every axis), the first `pairs.shape(0)` of them in `pairs`, and in
+// `boxed` which boxes lie within another; returns how many pairs there are (once past the room,
+// at least the room and one more), or -1 past `budget` comparisons of two boxes. A sweep along
+// `axis` in the order of the boxes' low ends, holding the boxes whose range is still open
+// there: about linear when few boxes overlap along that axis, as parts side by side do.
+std::int64_t contained_boxes(Rows low, Rows high, std::int64_t axis, std::int64_t budget,
+                             Out<std::int64_t, nb::shape<-1, 2>> pairs,
+                             Out<bool, nb::shape<-1>> boxed) {
+  const std::int64_t count = static_cast<std::int64_t>(low.shape(0));
+  if (static_cast<std::int64_t>(high.shape(0)) != count ||
+      static_cast<std::int64_t>(boxed.shape(0)) != count) {
+    throw nb::value_error("low, high and boxed must have one row a box.");
+  }
+  if (axis < 0 || axis > 2) {
+    throw nb::value_error("axis must be 0, 1 or 2.");
+  }
+  const double* lo = low.data();
+  const double* hi = high.data();
+  for (std::int64_t i = 0; i < 3 * count; ++i) {
+    if (!(lo[i] <= hi[i])) {  // also refuses NaN
+      throw nb::value_error("every box must have low <= high.");
+    }
+  }
+  const std::int64_t capacity = static_cast<std::int64_t>(pairs.shape(0));
+  std::int64_t* out = pairs.data();
+  bool* inside = boxed.data();
+  nb::gil_scoped_release release;
+  std::vector<std::int64_t> order(static_cast<std::size_t>(count));
+  for (std::int64_t i = 0; i < count; ++i) {
+    order[static_cast<std::size_t>(i)] = i;
+  }
+  std::stable_sort(order.begin(), order.end(), [&](std::int64_t x, std::int64_t y) {
+    return lo[3 * x + axis] < lo[3 * y + axis];
+  });
+  const auto within = [&](std::int64_t k, std::int64_t j) {
+    for (int a = 0; a < 3; ++a) {
+      if (lo[3 * j + a] > lo[3 * k + a] || hi[3 * k + a] > hi[3 * j + a]) {
+        return false;
+      }
+    }
+    return true;
+  };
+  std::vector<std::int64_t> open;
+  std::int64_t found = 0;
+  std::int64_t compared = 0;
+  std::size_t next = 0;
+  while (next < order.size()) {
+    // Every box whose low end is at this place opens before any of them is tested: boxes
+    // with equal low ends may hold each other.
+    const double place = lo[3 * order[next] + axis];
+    const std::size_t first = next;
+    while (next < order.size() && lo[3 * order[next] + axis] == place) {
+      open.push_back(order[next++]);
+    }
+    // Boxes that ended before this place hold no box from here on.
+    open.erase(std::remove_if(open.begin(), open.end(),
+                              [&](std::int64_t j) { return hi[3 * j + axis] < place; }),
+               open.end());
+    for (std::size_t i = first; i < next; ++i) {
+      const std::int64_t k = order[i];
+      compared += static_cast<std::int64_t>(open.size());
+      if (compared > budget) {
+        return -1;
+      }
+      for (const std::int64_t j : open) {
+        if (j != k && within(k, j)) {
+          if (found < capacity) {
+            out[2 * found] = k;
+            out[2 * found + 1] = j;
+          }
+          ++found;
+          inside[k] = true;
+          if (found > capacity) {  // past the room only `boxed` is wanted: one holder is enough
+            break;
+          }
+        }
+      }
+    }
+  }
+  return found;
 }
 
 // A face as (middle * width + highest) * 2 + even, even meaning wound as its sorted points (a
@@ -415,8 +566,15 @@ inline void bind_orientation(nb::module_& m) {
         "area, largest |coordinate|, bounds and sensitivities.");
   m.def("winding_numbers", &winding_numbers, nb::arg("points").noconvert(), nb::arg("factor"),
         nb::arg("faces").noconvert(), nb::arg("samples").noconvert(),
-        nb::arg("winding").noconvert(),
-        "The generalized winding number of the faces at each sample.");
+        nb::arg("winding").noconvert(), nb::arg("clearance").noconvert(),
+        "The generalized winding number of the faces at each sample, and the squared distance "
+        "from it to the nearest face.");
+  m.def("contained_boxes", &contained_boxes, nb::arg("low").noconvert(),
+        nb::arg("high").noconvert(), nb::arg("axis"), nb::arg("budget"),
+        nb::arg("pairs").noconvert(),
+        nb::arg("boxed").noconvert(),
+        "The pairs (k, j) where box k lies within box j, up to the room in pairs; returns "
+        "how many there are, or -1 past the budget of comparisons.");
   m.def("twinned_faces", &twinned_faces, nb::arg("faces").noconvert(), nb::arg("width"),
         nb::arg("twinned").noconvert(),
         "Mark the faces whose three points another face has, wound the other way.");

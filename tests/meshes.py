@@ -302,3 +302,80 @@ def hollow_ball() -> tuple[np.ndarray, np.ndarray]:
 
 
 HARD_CASES["hollow ball"] = hollow_ball
+
+
+# --- closed shells inside each other -------------------------------------------------------
+
+Shell = tuple[np.ndarray, np.ndarray]
+
+
+def ball(radius: float, centre: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> Shell:
+    vertices, faces = icosphere(2, radius)
+    return vertices + np.array(centre), faces
+
+
+def box(size: float, centre: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> Shell:
+    return (CUBE_VERTICES - 0.5) * size + np.array(centre), CUBE_FACES.copy()
+
+
+def built(*shells: tuple[Shell, bool]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The shells as one mesh, each with its own vertices, wound outward or (True) inward;
+    and each face's shell."""
+    vertices, faces, labels, base = [], [], [], 0
+    for number, ((points, triangles), inward) in enumerate(shells):
+        vertices.append(points)
+        faces.append((triangles[:, ::-1] if inward else triangles) + base)
+        labels.append(np.full(len(triangles), number))
+        base += len(points)
+    return np.concatenate(vertices), np.concatenate(faces), np.concatenate(labels)
+
+
+def turned(faces: np.ndarray, labels: np.ndarray, shells: list[int]) -> np.ndarray:
+    """``faces`` with the given shells wound the other way (as orient() turns a row)."""
+    rows = np.isin(labels, shells)
+    result = faces.copy()
+    result[rows] = faces[rows][:, [0, 2, 1]]
+    return result
+
+
+#: Closed shells inside each other, every one facing away from the material: (shells, the
+#: depth of each).
+NESTED_CASES = {
+    "hollow ball": (((ball(1.0), False), (ball(0.5, (0.1, 0.0, 0.05)), True)), [0, 1]),
+    "hollow box": (((box(2.0), False), (box(1.6, (0.05, 0.0, 0.0)), True)), [0, 1]),
+    "ball in a hollow ball": (
+        ((ball(1.0), False), (ball(0.7), True), (ball(0.3, (0.1, 0.1, 0.0)), False)),
+        [0, 1, 2],
+    ),
+    "three levels of hollow balls": (
+        (
+            (ball(1.0), False),
+            (ball(0.8), True),
+            (ball(0.6), False),
+            (ball(0.4), True),
+            (ball(0.2), False),
+            (ball(0.1), True),
+        ),
+        [0, 1, 2, 3, 4, 5],
+    ),
+    "two hollow boxes side by side": (
+        (
+            (box(2.0), False),
+            (box(1.5), True),
+            (box(2.0, (3.0, 0.0, 0.0)), False),
+            (box(1.5, (3.0, 0.0, 0.0)), True),
+        ),
+        [0, 1, 0, 1],
+    ),
+    "two hollow boxes, one box each inside": (
+        (
+            (box(2.0), False),
+            (box(1.5), True),
+            (box(2.0, (0.0, 2.5, 0.0)), False),
+            (box(1.5, (0.0, 2.5, 0.0)), True),
+            (box(0.5, (0.0, 2.5, 0.0)), False),
+            (box(0.5), False),
+        ),
+        [0, 1, 0, 1, 2, 2],
+    ),
+}

@@ -42,12 +42,16 @@ triangle sees the world alike from both sides, a plate shut inside a box from ne
 they are undetermined. A patch made only of faces that lie back to back with another face
 (a double-sided surface) is not scored at all: turning it would only make two faces one.
 
-Shells inside shells. A closed patch that lies inside another closed patch (its bounding box
-within the other's and sample vertices at a generalized winding number of magnitude above
-one half about it) may be a cavity, wound inward on purpose, or a part inside a housing,
-wound outward: its sign is no evidence either way, so it is undetermined. Shells that cross
-(an eye sunk half into a head) are decided each by its own volume. So :func:`orient` flips
-nothing on a closed mesh whose shells all have positive volume or are nested.
+Shells inside shells. Every surface faces away from the material: a closed patch with an
+evident volume that lies inside an even number of others (its *depth*) faces out, one inside an
+odd number faces in (a cavity, or the surface of a body inside a cavity faces out again). A shell
+lies inside another when its box lies within the other's and sample vertices of it are at a
+generalized winding number of 1 about the other, taken only where the samples are clearly off
+the other's surface (see :func:`_nesting`). A shell that crosses another (an eye sunk half into
+a head) is no cavity of it but a body of its own, and that other does not count in its depth. A
+shell that touches another (a sample on or within rounding of its surface) has no known depth
+and is undetermined. So :func:`orient` flips nothing on a closed mesh whose shells all face away
+from the material.
 
 A patch that fails any of these tests is *undetermined*: :func:`orient` does not turn it over, only
 makes it consistent, keeping the winding of the majority of its faces (of its lowest-numbered
@@ -68,7 +72,7 @@ from __future__ import annotations
 import math
 import threading
 from collections.abc import Iterator, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import overload
 
 import numpy as np
@@ -117,15 +121,25 @@ class ComponentOrientation:
     method : {"volume", "visibility", "none"}
         How its outside was chosen: by the sign of its volume (closed and orientable), by
         visibility from outside (open; at least one patch decided), or not at all
-        (non-orientable, a closed surface enclosing no volume, a shell inside another one, a
+        (non-orientable, a closed surface enclosing no volume, a shell that touches another, a
         volume whose sign could be rounding noise, or an open part that sees alike from both
-        sides).
+        sides). A closed part's volume is compared with its depth: out at even depth, in at odd.
     flipped : int
         How many of its faces :func:`orient` reversed.
     volume : float or None
-        Its signed volume after orienting, when closed and orientable; else None.
+        Its signed volume after orienting, when closed and orientable (negative for a cavity:
+        the volumes sum to the material's); else None.
     orientation : {"outward", "inward", "mixed", "undetermined"}
         Its verdict as given (see :attr:`Orientation.orientation`).
+    depth : int or None
+        How many other closed components it lies inside, when it is closed with a volume
+        clearly more than noise and that is known: even, it faces out; odd, it is a cavity and
+        faces in. None otherwise.
+    inside : int or None
+        The innermost closed component it lies inside, or None.
+    touches : int or None
+        A closed component it touches, so that its depth is not known (it is not turned), or
+        None.
     """
 
     index: int
@@ -136,6 +150,9 @@ class ComponentOrientation:
     flipped: int
     volume: float | None
     orientation: Verdict
+    depth: int | None = None
+    inside: int | None = None
+    touches: int | None = None
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -158,6 +175,8 @@ class ComponentTable(Sequence[ComponentOrientation]):
     has_volume : (c,) bool
     orientation : (c,) intp
         Indices into ``VERDICTS``.
+    depth, inside, touches : (c,) intp
+        As in :class:`ComponentOrientation`, -1 for None.
     """
 
     faces: IndexArray
@@ -168,6 +187,9 @@ class ComponentTable(Sequence[ComponentOrientation]):
     volume: FloatArray
     has_volume: BoolArray
     orientation: IndexArray
+    depth: IndexArray
+    inside: IndexArray
+    touches: IndexArray
 
     def __len__(self) -> int:
         return len(self.faces)
@@ -193,10 +215,17 @@ class ComponentTable(Sequence[ComponentOrientation]):
             flipped=int(self.flipped[i]),
             volume=float(self.volume[i]) if self.has_volume[i] else None,
             orientation=VERDICTS[self.orientation[i]],
+            depth=_optional(self.depth[i]),
+            inside=_optional(self.inside[i]),
+            touches=_optional(self.touches[i]),
         )
 
     def __iter__(self) -> Iterator[ComponentOrientation]:
         return (self[i] for i in range(len(self)))
+
+
+def _optional(value: np.intp) -> int | None:
+    return None if value < 0 else int(value)
 
 
 @dataclass(frozen=True, slots=True)
@@ -423,10 +452,14 @@ def oriented(
     orientable = found.orientable
     closed = found.closed[found.patch_component]
     shells = orientable & closed & _evident(volume, cone, len(indices))
-    # A shell inside another may be a cavity (wound inward on purpose) or a part inside a
-    # housing (outward): its volume's sign is no evidence, so it is left as it is.
-    del cone, terms  # 24 bytes a face, not needed from here on
-    shells &= ~_nested(geometry, found, shells)
+    del terms  # 8 bytes a face, not needed from here on
+    cone = replace(cone, terms=np.empty(0))
+    # Every surface faces away from the material: a shell that lies in an even number of
+    # others faces out, in an odd number in (a cavity). A shell whose depth is not known
+    # (it touches another) is left as it is.
+    nesting = _nesting(geometry, found, shells, cone)
+    shells &= nesting.depth >= 0
+    cavity = nesting.depth % 2 == 1
     # Open patches: the side from which the rest of the mesh and the world beyond are seen.
     area = per_patch(geometry.lengths)
     # A patch made only of faces back to back with another face (a double-sided surface, on
@@ -444,7 +477,7 @@ def oriented(
     decided = shells | seen
     # Turn the consistent patch over when it points in, or when most of its faces are against
     # its first face (undecided patches).
-    turn = np.where(shells, volume < 0, np.where(seen, inward, 2 * against > size))
+    turn = np.where(shells, (volume < 0) != cavity, np.where(seen, inward, 2 * against > size))
     flips = np.where(orientable, np.where(turn, size - against, against), 0).astype(np.intp)
     flipped = (parity ^ np.r_[turn, False][group]).astype(bool)
     flipped &= np.r_[orientable, False][group]
@@ -452,7 +485,7 @@ def oriented(
     vote[~decided] = np.where(flips[~decided] > 0, _MIXED, _UNDETERMINED)
     vote[~orientable] = _UNDETERMINED
     after = _unscaled_array(np.where(turn, -volume, volume), scale)
-    components = _component_table(found, decided, vote, flips, size, after)
+    components = _component_table(found, decided, vote, flips, size, after, nesting)
     if flipped.any():
         oriented = indices.copy()
         oriented[flipped, 1:] = indices[flipped, :0:-1]
@@ -552,91 +585,248 @@ def _evident(
 
 # --- shells inside shells ----------------------------------------------------------------------
 
-#: How many points of a closed shell are tested for lying inside another (spread over its faces).
-_NEST_SAMPLES = 8
-#: Beyond this many closed shells not every pair of boxes is compared (k**2 pairs): a shell whose
-#: box lies inside the box of one of the ``_NEST_LARGEST`` largest shells counts as nested, and
-#: the others are decided by their own volume.
-_NEST_SHELLS = 4096
-_NEST_LARGEST = 64
-#: Beyond this many pairs of boxes one inside the other, no winding number is taken: a shell
-#: whose box lies inside another's counts as nested (undecided) on that alone.
-_NEST_PAIRS = 4096
-#: At most this many (sample, face) visits go into winding numbers.
+#: How many vertices of a closed shell are tested for lying inside another (spread over its
+#: faces), and at most how many vertices of the other that lie in its box for lying inside it.
+_NEST_SAMPLES = 32
+#: A sample counts only this far from the other shell, relative to that shell's box diagonal (the
+#: winding number is then certain, see :func:`_nesting`); nearer, the shells touch.
+_NEST_CLEARANCE = 2.0**-30
+#: At most this many pairs of boxes one inside the other are looked at; past it, a shell whose
+#: box lies inside another's has no known depth (undetermined, never flipped).
+_NEST_PAIRS = 1 << 16
+#: At most this many comparisons of two boxes go into finding the pairs; past it no shell whose
+#: box overlaps others has a known depth.
+_NEST_COMPARISONS = 1 << 26
+#: At most this many (sample, face) visits go into winding numbers; the pairs past it (in the
+#: order of the inner shell) are not tested, and their inner shell has no known depth.
 _NEST_WORK = 2 * 10**8
 
+#: The samples of a shell tested first, for lying inside another: one clearly outside settles it.
+_NEST_FIRST = 4
 
-def _nested(geometry: FaceGeometry, found: Structure, candidates: BoolArray) -> BoolArray:
-    """(patches,) bool: which of the ``candidates`` (closed patches) lie inside another one.
+# How a shell K whose box lies within J's relates to J: not inside it (outside, or crossing
+# it), inside, touching it (not known which), not tested (past the limits).
+_APART, _INSIDE, _TOUCHES, _UNTESTED = range(4)
 
-    A shell K is inside another J when K's bounding box lies within J's and each of up to
-    ``_NEST_SAMPLES`` vertices of K, spread over its faces, has a generalized winding number
-    about J (J's winding made consistent) of magnitude above one half: 1 inside a closed
-    surface, 0 outside, whichever way it is wound. Shells that cross (an eye sunk half into a
-    head) have sample points outside and are not nested. Past ``_NEST_SHELLS`` shells only
-    the boxes of the largest ones are compared, and a shell inside one of them counts as nested;
-    past
-    ``_NEST_PAIRS`` pairs of boxes one inside the other, or once the winding numbers would take
-    more than ``_NEST_WORK`` face visits, a shell whose box lies inside another's and that is not
-    yet cleared counts as nested: undecided, never flipped.
+
+@dataclass(frozen=True, slots=True)
+class _Nesting:
+    """Per patch: ``depth``, how many closed shells hold it (-1: not a shell, or unknown: it
+    touches one, or was past the limits); ``parent``, the innermost of them (-1: none);
+    ``touches``, a shell it touches (-1: none)."""
+
+    depth: IndexArray
+    parent: IndexArray
+    touches: IndexArray
+
+
+def _nesting(
+    geometry: FaceGeometry, found: Structure, candidates: BoolArray, cone: _Cone
+) -> _Nesting:
+    """How deep each of the ``candidates`` (closed patches with an evident volume) lies in the
+    others, by the generalized winding number.
+
+    A shell J holds a shell K when K's box lies within J's and K lies inside J's solid: each of
+    up to ``_NEST_SAMPLES`` vertices of K, spread over its faces, has a winding number about J
+    (J's winding made consistent) of 1 in magnitude (0 outside a closed surface), and no vertex
+    of J that lies in K's box is inside K. A winding number is trusted only at a sample farther
+    from J than ``_NEST_CLEARANCE`` of J's box diagonal plus ``ORIENT_EVIDENCE`` times the
+    coordinates' rounding (as for the volume: the same verdict wherever the mesh is): there
+    the float sum of the solid angles is within far less than one half of the integer it
+    stands for, and it is rounded. Then:
+
+    - a sample clearly outside J, or a vertex of J clearly inside K: K is not inside J. It lies
+      beside J in J's box, or crosses J (an eye sunk half into a head): no cavity of J (a
+      cavity cannot break through the material's surface) but a body of its own. J does not
+      count in its depth;
+    - else a sample (or such a vertex of J) nearer than that: they touch, and K's depth is
+      unknown;
+    - else every sample inside: K lies in J, and counts J in its depth.
+
+    Boxes one inside the other are found by a sweep (:func:`_contained`); past ``_NEST_PAIRS``
+    such pairs, or ``_NEST_WORK`` face visits, the shells not tested have no known depth.
     """
-    nested = np.zeros(found.patches, dtype=bool)
+    patches = found.patches
+    depth = np.full(patches, -1, dtype=np.intp)
+    parent = np.full(patches, -1, dtype=np.intp)
+    touches = np.full(patches, -1, dtype=np.intp)
     shells = np.flatnonzero(candidates)
+    depth[shells] = 0
     if len(shells) < 2:
-        return nested
+        return _Nesting(depth, parent, touches)
     mesh = geometry.mesh
-    faces = mesh.faces
     group = found.group
     member = np.flatnonzero(np.r_[candidates, False][group])
     order = member[np.argsort(group[member], kind="stable")]
     starts = np.searchsorted(group[order], shells)
     ends = np.searchsorted(group[order], shells, side="right")
-    corners = mesh.points[faces[order]] * mesh.factor  # (k, 3, 3)
-    low = np.minimum.reduceat(corners.min(axis=1), starts)
-    high = np.maximum.reduceat(corners.max(axis=1), starts)
-    if len(shells) > _NEST_SHELLS:
-        nested[shells] = _inside_largest(low, high)
-        return nested
-    # inside[k, j]: shell k's box lies within shell j's.
-    inside = np.logical_and(
-        np.all(low[:, None] >= low[None], axis=2), np.all(high[:, None] <= high[None], axis=2)
-    )
-    inside[np.arange(len(shells)), np.arange(len(shells))] = False
-    if np.count_nonzero(inside) > _NEST_PAIRS:  # too many to test: the boxes alone decide
-        nested[shells] = inside.any(axis=1)
-        return nested
-    oriented = faces[order].copy()
-    turned = found.parity[order].astype(bool)
-    oriented[turned, 1:] = oriented[turned, :0:-1]
-    work = 0
-    for k, j in zip(*np.nonzero(inside), strict=True):
-        if nested[shells[k]]:
-            continue
-        picks = np.linspace(starts[k], ends[k] - 1, min(_NEST_SAMPLES, ends[k] - starts[k]))
-        samples = corners[picks.astype(np.intp), 0]
-        work += len(samples) * (ends[j] - starts[j])
-        if work > _NEST_WORK:
-            nested[shells[k]] = True
-            continue
-        winding = np.empty(len(samples))
-        _core.winding_numbers(
-            mesh.points, mesh.factor, oriented[starts[j] : ends[j]], samples, winding
-        )
-        if (np.abs(winding) > 0.5).all():
-            nested[shells[k]] = True
-    return nested
+    low = np.full((len(shells), 3), np.inf)
+    high = np.full((len(shells), 3), -np.inf)
+    for corner in range(3):  # a corner at a time: 24 bytes a face at most
+        points = mesh.points[mesh.faces[order, corner]] * mesh.factor
+        low = np.minimum(low, np.minimum.reduceat(points, starts))
+        high = np.maximum(high, np.maximum.reduceat(points, starts))
+    del points
+    pairs, boxed = _contained(low, high)
+    if pairs is None:  # too many to test: a shell in another's box has no known depth
+        depth[shells[boxed]] = -1
+        return _Nesting(depth, parent, touches)
+    relation = _relations(mesh, found, order, starts, ends, low, high, pairs, shells, cone)
+    inner, outer = pairs[:, 0], pairs[:, 1]
+    holds = relation == _INSIDE
+    count = np.bincount(inner[holds], minlength=len(shells))
+    unknown = np.zeros(len(shells), dtype=bool)
+    for kind, mark in ((_TOUCHES, touches), (_UNTESTED, None)):
+        rows = np.flatnonzero(relation == kind)
+        unknown[inner[rows]] = True
+        if mark is not None:  # the first shell it touches, by number
+            first = rows[np.lexsort((shells[outer[rows]], inner[rows]))]
+            keep = np.r_[True, inner[first][1:] != inner[first][:-1]] if len(first) else first
+            mark[shells[inner[first[keep]]]] = shells[outer[first[keep]]]
+    depth[shells] = np.where(unknown, -1, count)
+    # The innermost shell that holds it: of those, the one with the smallest box.
+    size = np.linalg.norm(high - low, axis=1)
+    holding = np.flatnonzero(holds)
+    holding = holding[np.lexsort((size[outer[holding]], inner[holding]))]
+    first = np.r_[True, inner[holding][1:] != inner[holding][:-1]] if len(holding) else holding
+    parent[shells[inner[holding[first]]]] = shells[outer[holding[first]]]
+    return _Nesting(depth, parent, touches)
 
 
-def _inside_largest(low: FloatArray, high: FloatArray) -> BoolArray:
-    """(k,) bool: which boxes lie inside the box of one of the largest other boxes."""
-    largest = np.argsort(-np.prod(high - low, axis=1), kind="stable")[:_NEST_LARGEST]
-    inside = np.logical_and(
-        np.all(low[:, None] >= low[largest][None], axis=2),
-        np.all(high[:, None] <= high[largest][None], axis=2),
-    )
-    inside[largest, np.arange(len(largest))] = False  # a box lies inside itself
-    found: BoolArray = inside.any(axis=1)
-    return found
+def _contained(low: FloatArray, high: FloatArray) -> tuple[IndexArray | None, BoolArray]:
+    """The pairs (k, j) of boxes where box k lies within box j, or None past ``_NEST_PAIRS``;
+    and which boxes lie within another. Swept along the axis that separates the boxes best
+    (the largest span of the whole over the boxes' mean extent)."""
+    span = high.max(axis=0) - low.min(axis=0)
+    extent = (high - low).mean(axis=0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        axis = int(np.argmax(np.nan_to_num(span / extent, nan=0.0, posinf=np.inf)))
+    pairs = np.empty((_NEST_PAIRS, 2), dtype=np.int64)
+    boxed = np.zeros(len(low), dtype=bool)
+    total = _core.contained_boxes(low, high, axis, _NEST_COMPARISONS, pairs, boxed)
+    if total < 0:  # boxes that overlap each other by the thousand: none has a known depth
+        return None, np.ones(len(low), dtype=bool)
+    if total > _NEST_PAIRS:
+        return None, boxed
+    kept = pairs[:total]
+    return kept[np.lexsort((kept[:, 1], kept[:, 0]))].astype(np.intp), boxed
+
+
+def _relations(
+    mesh: CheckedMesh,
+    found: Structure,
+    order: IndexArray,
+    starts: IndexArray,
+    ends: IndexArray,
+    low: FloatArray,
+    high: FloatArray,
+    pairs: IndexArray,
+    shells: IndexArray,
+    cone: _Cone,
+) -> IndexArray:
+    """(pairs,) how each inner shell relates to its outer one (see :func:`_nesting`).
+
+    In three steps, each on the pairs not yet settled: ``_NEST_FIRST`` samples (one clearly
+    outside settles most pairs of shells side by side in one box), then ``_NEST_SAMPLES``, then
+    the outer shell's vertices in the inner one's box."""
+    relation = np.full(len(pairs), _UNTESTED, dtype=np.intp)
+    if not len(pairs):
+        return relation
+    inner, outer = pairs[:, 0], pairs[:, 1]
+    faces = ends - starts
+    oriented: dict[int, IndexArray] = {}
+
+    def oriented_faces(shell: int) -> IndexArray:
+        if shell not in oriented:
+            rows = order[starts[shell] : ends[shell]]
+            turned = found.parity[rows].astype(bool)
+            chosen = mesh.faces[rows]
+            chosen[turned, 1:] = chosen[turned, :0:-1]
+            oriented[shell] = chosen
+        return oriented[shell]
+
+    def spread(shell: int, count: int) -> FloatArray:
+        picks = np.linspace(starts[shell], ends[shell] - 1, min(count, faces[shell]))
+        chosen: FloatArray = mesh.points[mesh.faces[order[picks.astype(np.intp)], 0]]
+        return chosen * mesh.factor
+
+    # The most that the three steps can cost, in (sample, face) visits.
+    work = _NEST_SAMPLES * (faces[outer] + faces[inner])
+    pending = np.cumsum(work) <= _NEST_WORK
+    # A sample is trusted this far from the other shell: a fraction of that shell's size, and
+    # the coordinates' rounding (as for the volume's evidence), so anywhere alike.
+    largest = cone.largest[: found.patches][shells]
+    noise = ORIENT_EVIDENCE * (cone.data_unit + 4 * EPSILON) * largest
+    reach = _NEST_CLEARANCE * np.linalg.norm(high - low, axis=1)
+    for count in (_NEST_FIRST, _NEST_SAMPLES):  # the inner shells' samples about the outer
+        samples = {k: spread(k, count) for k in np.unique(inner[pending]).tolist()}
+        for j, rows in _grouped(outer, pending):
+            groups = [samples[int(inner[r])] for r in rows]
+            limits = [reach[j] + max(noise[j], noise[inner[r]]) for r in rows]
+            inside, outside, near = _sorted_samples(mesh, oriented_faces(j), groups, limits).T
+            relation[rows] = np.where(outside > 0, _APART, _UNTESTED)
+            if count == _NEST_SAMPLES:
+                relation[rows] = np.where(
+                    outside > 0, _APART, np.where(near > 0, _TOUCHES, _INSIDE)
+                )
+        pending &= relation == _UNTESTED
+    # The vertices of the outer shell that lie in the inner one's box, at most _NEST_SAMPLES
+    # spread among them, about the inner shell: one inside it, and they cross.
+    maybe = relation == _INSIDE
+    vertices: dict[int, FloatArray] = {}  # each outer shell's, sorted along x
+    for k, rows in _grouped(inner, maybe):
+        groups, limits = [], []
+        for r in rows:
+            j = int(outer[r])
+            if j not in vertices:
+                used = mesh.points[np.unique(oriented_faces(j))] * mesh.factor
+                vertices[j] = used[np.argsort(used[:, 0], kind="stable")]
+            ranked = vertices[j]
+            first = np.searchsorted(ranked[:, 0], low[k, 0], side="left")
+            slab = ranked[first : np.searchsorted(ranked[:, 0], high[k, 0], side="right")]
+            picked = slab[np.all((slab >= low[k]) & (slab <= high[k]), axis=1)]
+            if len(picked) > _NEST_SAMPLES:
+                picked = picked[np.linspace(0, len(picked) - 1, _NEST_SAMPLES).astype(np.intp)]
+            groups.append(picked)
+            limits.append(reach[k] + max(noise[k], noise[j]))
+        if not any(len(group) for group in groups):
+            continue
+        inside, _, near = _sorted_samples(mesh, oriented_faces(k), groups, limits).T
+        relation[rows] = np.where(inside > 0, _APART, np.where(near > 0, _TOUCHES, _INSIDE))
+    return relation
+
+
+def _grouped(keys: IndexArray, chosen: BoolArray) -> Iterator[tuple[int, list[int]]]:
+    """Each key of the chosen rows with its rows, in the order of the keys."""
+    rows = np.flatnonzero(chosen)
+    if not len(rows):
+        return
+    rows = rows[np.argsort(keys[rows], kind="stable")]
+    bounds = np.flatnonzero(np.r_[True, keys[rows][1:] != keys[rows][:-1], True])
+    for a, b in zip(bounds[:-1].tolist(), bounds[1:].tolist(), strict=True):
+        yield int(keys[rows[a]]), rows[a:b].tolist()
+
+
+def _sorted_samples(
+    mesh: CheckedMesh, faces: IndexArray, groups: list[FloatArray], limits: list[float]
+) -> IndexArray:
+    """(groups, 3): of each group of points, how many lie inside the closed shell ``faces``,
+    outside it, and nearer it than the group's limit (where the winding number is not
+    trusted)."""
+    points = np.ascontiguousarray(np.concatenate(groups))
+    winding, clearance = np.empty(len(points)), np.empty(len(points))
+    _core.winding_numbers(mesh.points, mesh.factor, faces, points, winding, clearance)
+    sizes = [len(group) for group in groups]
+    limit = np.repeat(np.array(limits), sizes)
+    rounded = np.rint(winding)
+    # Far from the surface the sum is within far less than 1/2 of an integer; a sum that is not
+    # counts as near all the same.
+    clear = (np.sqrt(clearance) > limit) & (np.abs(winding - rounded) < 0.25)
+    which = np.repeat(np.arange(len(groups)), sizes)
+    inside = np.bincount(which, clear & (rounded != 0), len(groups))
+    outside = np.bincount(which, clear & (rounded == 0), len(groups))
+    near = np.bincount(which, ~clear, len(groups))
+    return np.stack([inside, outside, near], axis=1).astype(np.intp)
 
 
 def _twinned(faces: IndexArray) -> BoolArray:
@@ -707,6 +897,7 @@ def _component_table(
     flips: IndexArray,
     size: FloatArray,
     volume: FloatArray,
+    nesting: _Nesting,
 ) -> ComponentTable:
     """Sum the patches up by component."""
     count = found.topology.components
@@ -737,4 +928,20 @@ def _component_table(
         volume=component_volume,
         has_volume=has_volume,
         orientation=orientation,
+        depth=_by_component(nesting.depth, found, count),
+        inside=_by_component(_component_of(nesting.parent, of_patch), found, count),
+        touches=_by_component(_component_of(nesting.touches, of_patch), found, count),
     )
+
+
+def _component_of(patches: IndexArray, of_patch: IndexArray) -> IndexArray:
+    """The component of each patch number, -1 kept."""
+    return np.where(patches >= 0, of_patch[np.maximum(patches, 0)], -1)
+
+
+def _by_component(values: IndexArray, found: Structure, count: int) -> IndexArray:
+    """A closed component's value is its one patch's; -1 for the others."""
+    result = np.full(count, -1, dtype=np.intp)
+    closed = found.closed[found.patch_component]
+    result[found.patch_component[closed]] = values[closed]
+    return result

@@ -252,19 +252,20 @@ def test_a_face_with_two_corners_at_one_point_has_no_edges() -> None:
     assert t.boundary_edges == 3
 
 
-def test_a_shell_inside_another_is_left_as_it_is() -> None:
-    # A cavity is wound inward on purpose, a part in a housing outward: neither is flipped.
+def test_a_cavity_faces_into_itself_and_a_part_inside_a_shell_is_a_cavity() -> None:
+    # Nesting decides: a shell inside one other faces in, away from the material around it.
     vertices, faces = HARD_CASES["hollow ball"]()
     r = orient(vertices, faces)
     assert r.orientation == "outward" and not r.flipped.any()
-    assert [c.method for c in r.components] == ["volume", "none"]
+    assert [c.method for c in r.components] == ["volume", "volume"]
+    assert [c.depth for c in r.components] == [0, 1]
     assert r.volume is not None and r.volume > 0
     inner = mesh_topology(checked_mesh(vertices, faces)).face_component == 1
     part = faces.copy()
     part[inner] = faces[inner][:, [0, 2, 1]]
-    assert not orient(vertices, part).flipped.any()
-    # The outer shell is still decided by its volume.
-    assert np.array_equal(orient(vertices, faces[:, [0, 2, 1]]).flipped, ~inner)
+    assert np.array_equal(orient(vertices, part).flipped, inner)
+    # Inside out, both shells are turned.
+    assert orient(vertices, faces[:, [0, 2, 1]]).flipped.all()
 
 
 def test_nested_shells_past_the_limits_are_left_alone(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -277,7 +278,8 @@ def test_nested_shells_past_the_limits_are_left_alone(monkeypatch: pytest.Monkey
     assert np.array_equal(orient(vertices, faces).flipped, eye)
     monkeypatch.setattr(orientation, "_NEST_WORK", 10)
     assert not orient(vertices, faces).flipped.any()  # not cleared: left as it is
-    monkeypatch.setattr(orientation, "_NEST_SHELLS", 1)
+    monkeypatch.setattr(orientation, "_NEST_WORK", 2 * 10**8)
+    monkeypatch.setattr(orientation, "_NEST_PAIRS", 1)
     assert not orient(vertices, faces).flipped.any()
 
 
@@ -297,8 +299,8 @@ def test_many_separate_inward_shells_are_still_fixed_past_the_pair_limits() -> N
 
 
 def test_crossing_shells_in_one_box_are_left_alone_quickly() -> None:
-    # 1,000 tetrahedra jittered around one place: a million box pairs, far past _NEST_PAIRS, so
-    # the boxes alone decide (every one lies inside another's: undecided, nothing flipped).
+    # 1,000 tetrahedra jittered around one place: every one crosses the others, or lies in
+    # no other's box; all face out, and nothing is flipped.
     tetra = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.0]])
     outward = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
     jitter = np.random.default_rng(0).normal(size=(1000, 1, 3)) * 0.01

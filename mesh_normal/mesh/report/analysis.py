@@ -287,6 +287,9 @@ def _fix(orientation: Orientation) -> Fix:
                 method=part.method,
                 faces_flipped=part.flipped,
                 volume=part.volume,
+                depth=part.depth,
+                inside=part.inside,
+                touches=part.touches,
             )
             for part in orientation.components[:INDEX_LIST_LIMIT]
         ],

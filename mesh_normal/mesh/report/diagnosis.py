@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from mesh_normal.mesh.report.models import (
+    ComponentFix,
     FileNormals,
     MeshReport,
     ObjectReport,
@@ -144,12 +145,15 @@ def _inward(report: MeshReport) -> Problem | None:
 def _mixed(report: MeshReport) -> Problem | None:
     if report.orientation != "mixed" or not report.winding_consistent:
         return None
+    cavities = any(part.depth and part.depth % 2 for part in report.fix.components)
+    way = "away from the material (out, or into their cavity)" if cavities else "outward"
     return _problem(
         "mixed",
         "error",
         "Some parts point outward, others inward",
-        "Each part is wound consistently, but not all of them face out." + _flipped_objects(report),
-        "Download the fixed mesh: each part is turned to face outward on its own.",
+        f"Each part is wound consistently, but not all of them face "
+        f"{'away from the material' if cavities else 'out'}." + _flipped_objects(report),
+        f"Download the fixed mesh: each part is turned to face {way} on its own.",
         "import mesh_normal as mn\n\n"
         f"faces = mn.orient(vertices, faces{_weld_argument(report)}).faces",
     )
@@ -289,6 +293,71 @@ def _components(report: MeshReport) -> Problem | None:
     )
 
 
+def _of_listed_parts(report: MeshReport) -> str:
+    """Where the mesh has more parts than the report lists, which ones were looked at."""
+    if report.components > len(report.fix.components):
+        return f" (of the first {len(report.fix.components):,} parts)"
+    return ""
+
+
+def _nesting_sentence(part: ComponentFix) -> str:
+    """Where a part inside others lies and which way its faces point, as the fix leaves them."""
+    where = f"Part {part.component} "
+    where += (
+        f"is a cavity inside part {part.inside}"
+        if part.depth is not None and part.depth % 2
+        else f"is a body in the cavity part {part.inside}"
+    )
+    into = "into the cavity" if part.depth is not None and part.depth % 2 else "out of it"
+    if not part.faces_flipped:
+        return f"{where}; its faces point {into}, as they should."
+    if part.faces_flipped == part.faces:
+        return f"{where}; its faces point the other way: the fix turns them to point {into}."
+    return f"{where}; the fix turns {_count(part.faces_flipped, 'face')} of it to point {into}."
+
+
+def _cavities(report: MeshReport) -> Problem | None:
+    nested = [part for part in report.fix.components if part.depth and part.inside is not None]
+    cavities = [part for part in nested if part.depth is not None and part.depth % 2]
+    if not cavities:
+        return None
+    sentences = [_nesting_sentence(part) for part in nested[:NAMED_OBJECTS]]
+    if len(nested) > NAMED_OBJECTS:
+        sentences.append(f"{_count(len(nested) - NAMED_OBJECTS, 'more part')} lie inside others.")
+    wrong = any(part.faces_flipped for part in nested)
+    return _problem(
+        "cavities",
+        "info",
+        f"The mesh has {_count(len(cavities), 'cavity', 'cavities')}{_of_listed_parts(report)}",
+        " ".join(sentences) + " A closed part inside an odd number of others is a cavity: its "
+        "faces point into it, away from the material, and its volume counts negative, so the "
+        "parts' volumes sum to the material's.",
+        ("The fix turns the parts that face the wrong way. " if wrong else "Nothing to do. ")
+        + "If a part should be a body of its own rather than a cavity, move it out of the other.",
+    )
+
+
+def _touching(report: MeshReport) -> Problem | None:
+    parts = [part for part in report.fix.components if part.touches is not None]
+    if not parts:
+        return None
+    sentences = [
+        f"Part {part.component} touches part {part.touches}." for part in parts[:NAMED_OBJECTS]
+    ]
+    if len(parts) > NAMED_OBJECTS:
+        sentences.append(f"{_count(len(parts) - NAMED_OBJECTS, 'more part')} touch others.")
+    return _problem(
+        "touching",
+        "warning",
+        f"{_count(len(parts), 'closed part touches another', 'closed parts touch others')}"
+        + _of_listed_parts(report),
+        " ".join(sentences) + " A surface on another one (or within rounding of it) leaves "
+        "unknown whether it is a cavity or a body: its faces are left as they are.",
+        "If it is a cavity, give the wall between it and the outer surface some thickness; if "
+        "the parts are one solid, join them (a boolean union in your modeller).",
+    )
+
+
 def _area(report: MeshReport) -> Problem | None:
     volume_lost = (
         report.volume is None
@@ -341,6 +410,8 @@ CHECKS = (
     _file_normals,
     _unused,
     _components,
+    _cavities,
+    _touching,
     _area,
     _underflow,
 )

@@ -42,6 +42,8 @@ ProblemCode = Literal[
     "file_normals",
     "unused_vertices",
     "components",
+    "cavities",
+    "touching",
     "overflow",
     "underflow",
 ]
@@ -94,13 +96,29 @@ class ComponentFix(Record):
     method: Method = described(
         description="How its outside was chosen: by the sign of its volume (closed parts), by "
         "visibility, the side from which rays escape the whole mesh (open parts), or not at "
-        "all (one-sided parts, closed parts that enclose no volume or lie inside another, open "
-        "parts that see the world alike from both sides)."
+        "all (one-sided parts, closed parts that enclose no volume or touch another, open "
+        "parts that see the world alike from both sides). A closed part's volume is read "
+        "with its depth: out at an even depth, in (a cavity) at an odd one."
     )
     faces_flipped: int = described(ge=0, description="How many of its faces orient() reverses.")
     volume: Measure = described(
-        description="The part's signed volume after the fix; null when it is open, one-sided "
-        "or beyond the double range."
+        description="The part's signed volume after the fix, negative for a cavity (so that "
+        "the volumes sum to the material's); null when it is open, one-sided or beyond the "
+        "double range."
+    )
+    depth: int | None = described(
+        description="How many other closed parts it lies inside: even, its faces point out; "
+        "odd, it is a cavity and its faces point into it, away from the material. Null when "
+        "it is not a closed part with a clear volume, or when that is not known (it touches "
+        "another part, or there were too many to check)."
+    )
+    inside: int | None = described(
+        description="The innermost closed part it lies inside (the one whose cavity or body "
+        "holds it), or null."
+    )
+    touches: int | None = described(
+        description="A closed part it touches, so that whether it is a cavity is not decided "
+        "and its faces are left as they are; null otherwise."
     )
 
 

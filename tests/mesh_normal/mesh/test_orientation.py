@@ -85,6 +85,7 @@ def test_tetrahedron_outward() -> None:
         flipped=0,
         volume=component.volume,
         orientation="outward",
+        depth=0,
     )
     assert component.volume == pytest.approx(1 / 6, rel=1e-15)
     assert_same_topology(r.topology, t)

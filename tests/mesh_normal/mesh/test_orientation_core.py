@@ -114,16 +114,61 @@ OUTWARD = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
 
 
 def test_winding_numbers_of_a_closed_tetrahedron() -> None:
-    samples = np.array([[0.1, 0.1, 0.1], [2.0, 2.0, 2.0], [0.2, 0.3, 0.1]])
-    winding = np.empty(3)
-    _core.winding_numbers(TETRAHEDRON, 1.0, OUTWARD, samples, winding)
-    assert winding == pytest.approx([1.0, 0.0, 1.0], abs=1e-12)
-    _core.winding_numbers(TETRAHEDRON, 1.0, OUTWARD[:, ::-1].copy(), samples, winding)
-    assert winding == pytest.approx([-1.0, 0.0, -1.0], abs=1e-12)
+    samples = np.array(
+        [[0.1, 0.1, 0.1], [2.0, 2.0, 2.0], [0.2, 0.3, 0.1], [1.0, 0.0, 0.0], [0.5, -1.0, 0.0]]
+    )
+    winding, clearance = np.empty(5), np.empty(5)
+    _core.winding_numbers(TETRAHEDRON, 1.0, OUTWARD, samples, winding, clearance)
+    assert winding[:3] == pytest.approx([1.0, 0.0, 1.0], abs=1e-12)
+    assert winding[4] == pytest.approx(0.0, abs=1e-12)
+    # The squared distance to the nearest face: a side 0.1 away; the slanted face's centre
+    # (1/3, 1/3, 1/3), 5/3 away on each axis; a corner; the edge from (0, 0, 0) to (1, 0, 0).
+    assert clearance == pytest.approx([0.01, 25 / 3, 0.01, 0.0, 1.0], abs=1e-15)
+    _core.winding_numbers(TETRAHEDRON, 1.0, OUTWARD[:, ::-1].copy(), samples, winding, clearance)
+    assert winding[:3] == pytest.approx([-1.0, 0.0, -1.0], abs=1e-12)
+    # Scaled by the factor as the points are.
+    _core.winding_numbers(TETRAHEDRON * 4, 0.25, OUTWARD, samples, winding, clearance)
+    assert clearance[:3] == pytest.approx([0.01, 25 / 3, 0.01], abs=1e-15)
+    # A triangle without area: its distance is its edges'.
+    flat = np.array([[0.0, 0, 0], [1, 0, 0], [2, 0, 0]])
+    _core.winding_numbers(
+        flat, 1.0, np.array([[0, 1, 2]]), np.array([[1.5, 0, 2.0]]), winding[:1], clearance[:1]
+    )
+    assert clearance[0] == pytest.approx(4.0) and winding[0] == 0.0
     with pytest.raises(IndexError, match="does not exist"):
-        _core.winding_numbers(TETRAHEDRON, 1.0, OUTWARD + 1, samples, winding)
+        _core.winding_numbers(TETRAHEDRON, 1.0, OUTWARD + 1, samples, winding, clearance)
     with pytest.raises(ValueError, match="one place a sample"):
-        _core.winding_numbers(TETRAHEDRON, 1.0, OUTWARD, samples, np.empty(2))
+        _core.winding_numbers(TETRAHEDRON, 1.0, OUTWARD, samples, np.empty(2), clearance)
+    with pytest.raises(ValueError, match="one place a sample"):
+        _core.winding_numbers(TETRAHEDRON, 1.0, OUTWARD, samples, winding, np.empty(6))
+
+
+def test_contained_boxes() -> None:
+    # 0 holds 1 and 2; 2 equals 1; 3 overlaps 0 only; 4 is a point on 0's corner.
+    low = np.array([[0.0, 0, 0], [1, 1, 1], [1, 1, 1], [5, 0, 0], [0, 0, 0]])
+    high = np.array([[6.0, 6, 6], [2, 2, 2], [2, 2, 2], [7, 1, 1], [0, 0, 0]])
+    for axis in range(3):
+        pairs, boxed = np.empty((10, 2), dtype=np.int64), np.zeros(5, dtype=bool)
+        assert _core.contained_boxes(low, high, axis, 100, pairs, boxed) == 5
+        found = sorted(map(tuple, pairs[:5].tolist()))
+        assert found == [(1, 0), (1, 2), (2, 0), (2, 1), (4, 0)]
+        assert boxed.tolist() == [False, True, True, False, True]
+    # Counted past the room given, written up to it.
+    pairs, boxed = np.full((2, 2), -1, dtype=np.int64), np.zeros(5, dtype=bool)
+    assert _core.contained_boxes(low, high, 0, 100, pairs, boxed) >= 3
+    assert (pairs >= 0).all() and boxed.tolist() == [False, True, True, False, True]
+    # Past the budget of comparisons: -1.
+    assert _core.contained_boxes(low, high, 0, 3, pairs, boxed) == -1
+    with pytest.raises(ValueError, match="low <= high"):
+        _core.contained_boxes(high, low, 0, 100, pairs, boxed)
+    with pytest.raises(ValueError, match="low <= high"):
+        _core.contained_boxes(low * np.nan, high, 0, 100, pairs, boxed)
+    with pytest.raises(ValueError, match="axis"):
+        _core.contained_boxes(low, high, 3, 100, pairs, boxed)
+    with pytest.raises(ValueError, match="one row a box"):
+        _core.contained_boxes(low, high[:4].copy(), 0, 100, pairs, boxed)
+    with pytest.raises(ValueError, match="one row a box"):
+        _core.contained_boxes(low, high, 0, 100, pairs, boxed[:4].copy())
 
 
 def test_twinned_faces_refuse_points_out_of_range() -> None:

@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 from pydantic import TypeAdapter
 
-from mesh_normal.files import read_mesh
+from mesh_normal.files import read_mesh, write_mesh
 from mesh_normal.mesh.report.analysis import analyse_mesh, build_report
 from mesh_normal.mesh.report.diagnosis import CHECKS, Problem, ProblemCode, problems
 from mesh_normal.mesh.report.models import FileNormals, MeshReport
-from tests.meshes import CUBE_OBJ, CUBE_ONE_FLIPPED_OBJ
+from tests.meshes import CUBE_OBJ, CUBE_ONE_FLIPPED_OBJ, NESTED_CASES, Shell, box, built, turned
 from tests.paths import DATA
 
 
@@ -260,3 +260,61 @@ def test_the_snippets_repeat_the_weld() -> None:
     [item] = problems(flipped)
     assert item.python is not None and "mn.orient(vertices, faces, weld=1e-06)" in item.python
     assert "weld=" not in (problems(changed(orientation="mixed"))[0].python or "")
+
+
+def nested_report(shells: list[tuple[Shell, bool]], wrong: list[int]) -> MeshReport:
+    """The report on the shells (see tests/mesh_normal/mesh/test_nesting.py) as a PLY file,
+    the ``wrong`` ones turned the other way."""
+    vertices, faces, labels = built(*shells)
+    data = write_mesh(vertices, turned(faces, labels, wrong), "ply")
+    return build_report(analyse_mesh(read_mesh(data, "nested.ply"), "nested.ply", len(data)))
+
+
+def test_a_cavity_is_named_in_plain_words() -> None:
+    shells = list(NESTED_CASES["hollow ball"][0])
+    right = nested_report(shells, [])
+    assert codes(right) == ["components", "cavities"]
+    [item] = [item for item in problems(right) if item.code == "cavities"]
+    assert item.title == "The mesh has 1 cavity"
+    assert item.detail.startswith(
+        "Part 1 is a cavity inside part 0; its faces point into the cavity, as they should."
+    )
+    assert item.action.startswith("Nothing to do.")
+    assert [(p.depth, p.inside, p.touches) for p in right.fix.components] == [
+        (0, None, None),
+        (1, 0, None),
+    ]
+    assert right.volume is not None and right.fix.components[1].volume is not None
+    assert right.fix.components[1].volume < 0  # the volumes are the material's
+    wrong = nested_report(shells, [1])
+    assert codes(wrong) == ["mixed", "components", "cavities"]
+    [item] = [item for item in problems(wrong) if item.code == "cavities"]
+    assert item.detail.startswith(
+        "Part 1 is a cavity inside part 0; its faces point the other way: the fix turns them "
+        "to point into the cavity."
+    )
+    assert wrong.fix.faces_flipped == wrong.fix.components[1].faces
+    [mixed] = [item for item in problems(wrong) if item.code == "mixed"]
+    assert "not all of them face away from the material" in mixed.detail
+    assert mixed.action.endswith(
+        "face away from the material (out, or into their cavity) on its own."
+    )
+
+
+def test_a_body_in_a_cavity_and_more_parts_are_named() -> None:
+    report = nested_report(list(NESTED_CASES["three levels of hollow balls"][0]), [])
+    [item] = [item for item in problems(report) if item.code == "cavities"]
+    assert item.title == "The mesh has 3 cavities"
+    assert "Part 2 is a body in the cavity part 1; its faces point out of it, as they should." in (
+        item.detail
+    )
+    assert "2 more parts lie inside others." in item.detail
+
+
+def test_a_part_that_touches_another_is_said_so() -> None:
+    report = nested_report([(box(2.0), False), (box(1.0, (0.0, 0.0, -0.5)), True)], [])
+    assert codes(report) == ["touching", "components"]
+    [item] = [item for item in problems(report) if item.code == "touching"]
+    assert item.title == "1 closed part touches another"
+    assert item.detail.startswith("Part 1 touches part 0.")
+    assert report.fix.components[1].method == "none"

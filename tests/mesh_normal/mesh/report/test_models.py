@@ -126,6 +126,9 @@ def test_the_json_keys_keep_their_names_and_order() -> None:
         "method",
         "faces_flipped",
         "volume",
+        "depth",
+        "inside",
+        "touches",
     ]
     assert list(data["problems"][0]) == ["code", "severity", "title", "detail", "action", "python"]
 
