@@ -3,8 +3,7 @@
 //
 // The OBJ scan reads a chunk's bytes as Latin-1 text, as Python's str methods see it: lines end
 // where str.splitlines() ends them, words are split where str.split() splits them, numbers are
-// float()'s (bit for bit) and indices int()'s, underscores between digits and all. What a file
-// means was settled by a reader written in Python; these rules keep every file meaning the same.
+// float()'s (bit for bit) and indices int()'s, underscores between digits and all.
 #include <nanobind/stl/optional.h>
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/tuple.h>
