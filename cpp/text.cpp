@@ -163,48 +163,44 @@ bool unsigned_decimal(std::string_view text, double& value) {
   return true;
 }
 
-// float() of a word: a sign, then inf, infinity or nan in any case, or an unsigned decimal;
-// false where float() raises.
-bool python_float(std::string_view text, double& value) {
-  std::string plain;
-  if (text.find('_') != std::string_view::npos) {
-    if (!without_underscores(text, plain)) {
-      return false;
-    }
-    text = plain;
-  }
+// float() of a word without underscores: a sign, then inf, infinity or nan in any case, or an
+// unsigned decimal; false where float() raises.
+bool plain_float(std::string_view text, double& value) {
   const bool negative = !text.empty() && text[0] == '-';
   if (!text.empty() && (text[0] == '+' || text[0] == '-')) {
     text.remove_prefix(1);
   }
   const double sign = negative ? -1.0 : 1.0;
-  if (same_letters(text, "inf") || same_letters(text, "infinity")) {
-    value = std::copysign(std::numeric_limits<double>::infinity(), sign);
-    return true;
-  }
-  if (same_letters(text, "nan")) {
-    value = std::copysign(std::numeric_limits<double>::quiet_NaN(), sign);  // "-nan": sign bit
-    return true;
-  }
   if (!unsigned_decimal(text, value)) {
+    if (same_letters(text, "inf") || same_letters(text, "infinity")) {
+      value = std::copysign(std::numeric_limits<double>::infinity(), sign);
+      return true;
+    }
+    if (same_letters(text, "nan")) {
+      value = std::copysign(std::numeric_limits<double>::quiet_NaN(), sign);  // "-nan": sign bit
+      return true;
+    }
     return false;
   }
   value = std::copysign(value, sign);
   return true;
 }
 
+// float() of a word, single underscores between digits allowed.
+bool python_float(std::string_view text, double& value) {
+  if (plain_float(text, value)) {
+    return true;
+  }
+  std::string plain;
+  return text.find('_') != std::string_view::npos && without_underscores(text, plain) &&
+         plain_float(plain, value);
+}
+
 // What int() makes of a word: no integer, an integer, or one past int64.
 enum class Integer { NONE, READ, TOO_LARGE };
 
-// int() of a word: a sign, then digits (single underscores between them).
-Integer python_int(std::string_view text, std::int64_t& value) {
-  std::string plain;
-  if (text.find('_') != std::string_view::npos) {
-    if (!without_underscores(text, plain)) {
-      return Integer::NONE;
-    }
-    text = plain;
-  }
+// int() of a word without underscores: a sign, then digits.
+Integer plain_int(std::string_view text, std::int64_t& value) {
   const bool negative = !text.empty() && text[0] == '-';
   if (!text.empty() && (text[0] == '+' || text[0] == '-')) {
     text.remove_prefix(1);
@@ -212,17 +208,18 @@ Integer python_int(std::string_view text, std::int64_t& value) {
   if (text.empty()) {
     return Integer::NONE;
   }
-  // The magnitude's limit: 2**63 for a negative value, 2**63 - 1 otherwise.
+  // The magnitude's limit: 2**63 for a negative value, 2**63 - 1 otherwise. Eighteen digits
+  // always fit; only a longer number is checked digit by digit.
   const std::uint64_t limit = std::uint64_t{1} << 63U;
   const std::uint64_t top = negative ? limit : limit - 1;
   std::uint64_t read = 0;
   bool large = false;
-  for (const char c : text) {
-    if (!is_digit(c)) {
+  for (std::size_t k = 0; k < text.size(); ++k) {
+    if (!is_digit(text[k])) {
       return Integer::NONE;
     }
-    const auto digit = static_cast<std::uint64_t>(c - '0');
-    large = large || read > (top - digit) / 10;
+    const auto digit = static_cast<std::uint64_t>(text[k] - '0');
+    large = large || (k >= 18 && read > (top - digit) / 10);
     read = large ? read : read * 10 + digit;
   }
   if (large) {
@@ -230,6 +227,16 @@ Integer python_int(std::string_view text, std::int64_t& value) {
   }
   value = negative ? static_cast<std::int64_t>(0 - read) : static_cast<std::int64_t>(read);
   return Integer::READ;
+}
+
+// int() of a word, single underscores between digits allowed.
+Integer python_int(std::string_view text, std::int64_t& value) {
+  const Integer read = plain_int(text, value);
+  if (read != Integer::NONE || text.find('_') == std::string_view::npos) {
+    return read;
+  }
+  std::string plain;
+  return without_underscores(text, plain) ? plain_int(plain, value) : Integer::NONE;
 }
 
 // The statements the scan tells apart.
