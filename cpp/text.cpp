@@ -1,19 +1,25 @@
-// Text and binary parsing: an OBJ chunk's lines, numbers and face corners read from its bytes,
-// and a binary PLY's integer lists read from its records.
+// Text and binary parsing: an OBJ chunk's statements read from its bytes, and a binary PLY's
+// integer lists read from its records.
 //
-// The OBJ scan reads what it can certify and declines the rest (returns None): the Python
-// reader then reads that chunk itself, so every form, note and error message is the Python
-// reader's. A number is certified when it is `[+-]digits[.digits][e[+-]digits]`, which Python's
-// float() reads as std::from_chars does: both are correctly rounded, so the bits agree.
+// The OBJ scan reads a chunk's bytes as Latin-1 text, as Python's str methods see it: lines end
+// where str.splitlines() ends them, words are split where str.split() splits them, numbers are
+// float()'s (bit for bit) and indices int()'s, underscores between digits and all.
 #include <nanobind/stl/optional.h>
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/tuple.h>
+#include <nanobind/stl/vector.h>
 
+#include <array>
 #include <charconv>
+#include <cmath>
 #include <cstring>
 #include <limits>
 #include <optional>
+#include <string>
+#include <string_view>
 #include <system_error>
+#include <unordered_map>
+#include <utility>
 
 #include "core.hpp"
 
@@ -21,78 +27,131 @@ namespace mesh_normal {
 
 namespace {
 
-// What the scan says of a line (the Python reader's kinds; UNKNOWN is left to Python).
-constexpr std::int8_t UNKNOWN = -1, IGNORE = 0, VERTEX = 1, NORMAL = 2, TEXTURE = 3, FACE = 4;
-
-constexpr bool is_digit(std::uint8_t byte) { return byte >= '0' && byte <= '9'; }
-constexpr bool is_blank(std::uint8_t byte) { return byte == ' ' || byte == '\t'; }
-
 template <typename T>
 using Array = nb::ndarray<nb::numpy, T>;
 
-// A NumPy array that owns a vector's memory (no copy).
+// A NumPy array that owns a vector's memory (no copy); the capsule is made while a unique_ptr
+// still holds the vector, so a throw frees it.
 template <typename T>
 Array<T> array_of(std::vector<T>&& values, std::size_t columns = 0) {
-  auto* held = new std::vector<T>(std::move(values));
-  nb::capsule owner(held, [](void* p) noexcept { delete static_cast<std::vector<T>*>(p); });
-  const std::size_t count = columns ? held->size() / columns : held->size();
+  auto held = std::make_unique<std::vector<T>>(std::move(values));
+  nb::capsule owner(held.get(), [](void* p) noexcept { delete static_cast<std::vector<T>*>(p); });
+  std::vector<T>* vector = held.release();
+  const std::size_t count = columns ? vector->size() / columns : vector->size();
   if (columns == 0) {
-    return Array<T>(held->data(), {count}, owner);
+    return Array<T>(vector->data(), {count}, owner);
   }
-  return Array<T>(held->data(), {count, columns}, owner);
+  return Array<T>(vector->data(), {count, columns}, owner);
 }
 
-// The decimal token at data[start, end) up to a space or tab: its value, and the byte after
-// it; false when it is no decimal of the certified form.
-bool decimal(const std::uint8_t* data, std::int64_t start, std::int64_t end, std::int64_t& stop,
-             double& value) {
-  std::int64_t i = start;
-  const bool negative = i < end && data[i] == '-';
-  if (i < end && (data[i] == '+' || data[i] == '-')) {
+// Where str.splitlines() ends a line of Latin-1 text (\n, \r, \v, \f, \x1c-\x1e, NEL; \r\n is
+// one end), and what else str.split() separates words at within a line (space, tab, \x1f and
+// the no-break space).
+constexpr std::uint8_t BREAK = 1, SPACE = 2;
+constexpr std::array<std::uint8_t, 256> character_classes() {
+  std::array<std::uint8_t, 256> classes{};
+  for (const int code : {0x0a, 0x0d, 0x0b, 0x0c, 0x1c, 0x1d, 0x1e, 0x85}) {
+    classes[static_cast<std::size_t>(code)] = BREAK;
+  }
+  for (const int code : {0x20, 0x09, 0x1f, 0xa0}) {
+    classes[static_cast<std::size_t>(code)] = SPACE;
+  }
+  return classes;
+}
+constexpr std::array<std::uint8_t, 256> CLASSES = character_classes();
+
+bool is_break(char c) { return CLASSES[static_cast<std::uint8_t>(c)] == BREAK; }
+bool is_space(char c) { return CLASSES[static_cast<std::uint8_t>(c)] == SPACE; }
+constexpr bool is_digit(char c) { return c >= '0' && c <= '9'; }
+
+// The next word of `line` from `i` (empty at the line's end); `i` moves past it.
+std::string_view next_word(std::string_view line, std::size_t& i) {
+  while (i < line.size() && is_space(line[i])) {
     ++i;
   }
-  const std::int64_t digits_start = i;
+  const std::size_t start = i;
+  while (i < line.size() && !is_space(line[i])) {
+    ++i;
+  }
+  return line.substr(start, i - start);
+}
+
+// `text` without its underscores, where each stands between two digits as float() and int()
+// allow; false where one does not.
+bool without_underscores(std::string_view text, std::string& plain) {
+  char previous = 0;
+  for (const char c : text) {
+    if (c == '_' ? !is_digit(previous) : previous == '_' && !is_digit(c)) {
+      return false;
+    }
+    if (c != '_') {
+      plain.push_back(c);
+    }
+    previous = c;
+  }
+  return previous != '_';
+}
+
+// Whether `text` is `lower` in any case.
+bool same_letters(std::string_view text, std::string_view lower) {
+  if (text.size() != lower.size()) {
+    return false;
+  }
+  for (std::size_t k = 0; k < text.size(); ++k) {
+    const char c = text[k] >= 'A' && text[k] <= 'Z' ? static_cast<char>(text[k] + 32) : text[k];
+    if (c != lower[k]) {
+      return false;
+    }
+  }
+  return true;
+}
+
+// An unsigned decimal, `digits[.digits][(e|E)[+-]digits]` with a digit in its mantissa, as the
+// nearest double (std::from_chars and float() both round correctly, so the bits agree); false
+// when `text` is not one.
+bool unsigned_decimal(std::string_view text, double& value) {
+  const std::size_t end = text.size();
+  std::size_t i = 0;
   // Where the first significant digit stands against the point, to tell an overflow from an
   // underflow when from_chars finds the value out of range.
   std::int64_t magnitude = 0;
   bool seen = false, significant = false;
-  for (; i < end && is_digit(data[i]); ++i) {
+  for (; i < end && is_digit(text[i]); ++i) {
     seen = true;
-    significant = significant || data[i] != '0';
+    significant = significant || text[i] != '0';
     magnitude += significant ? 1 : 0;
   }
-  if (i < end && data[i] == '.') {
-    for (++i; i < end && is_digit(data[i]); ++i) {
+  if (i < end && text[i] == '.') {
+    for (++i; i < end && is_digit(text[i]); ++i) {
       seen = true;
-      significant = significant || data[i] != '0';
+      significant = significant || text[i] != '0';
       magnitude -= significant ? 0 : 1;
     }
   }
   if (!seen) {
     return false;
   }
-  if (i < end && (data[i] == 'e' || data[i] == 'E')) {
+  if (i < end && (text[i] == 'e' || text[i] == 'E')) {
     ++i;
-    const bool minus = i < end && data[i] == '-';
-    if (i < end && (data[i] == '+' || data[i] == '-')) {
+    const bool minus = i < end && text[i] == '-';
+    if (i < end && (text[i] == '+' || text[i] == '-')) {
       ++i;
     }
-    if (i >= end || !is_digit(data[i])) {
+    if (i >= end || !is_digit(text[i])) {
       return false;
     }
     std::int64_t power = 0;
-    for (; i < end && is_digit(data[i]); ++i) {
-      power = power < 100000 ? power * 10 + (data[i] - '0') : power;
+    for (; i < end && is_digit(text[i]); ++i) {
+      power = power < 100000 ? power * 10 + (text[i] - '0') : power;
     }
     magnitude += minus ? -power : power;
   }
-  if (i < end && !is_blank(data[i])) {
+  if (i != end) {
     return false;
   }
-  const char* first = reinterpret_cast<const char*>(data + digits_start);
-  const char* last = reinterpret_cast<const char*>(data + i);
+  const char* last = text.data() + end;
   double read = 0.0;
-  const auto [ptr, error] = std::from_chars(first, last, read, std::chars_format::general);
+  const auto [ptr, error] = std::from_chars(text.data(), last, read, std::chars_format::general);
   if (ptr != last || (error != std::errc() && error != std::errc::result_out_of_range)) {
     return false;
   }
@@ -100,221 +159,416 @@ bool decimal(const std::uint8_t* data, std::int64_t start, std::int64_t end, std
     // float() gives infinity past the largest double and zero below half the smallest.
     read = magnitude > 0 ? std::numeric_limits<double>::infinity() : 0.0;
   }
-  stop = i;
-  value = negative ? -read : read;
+  value = read;
   return true;
 }
 
-// The integer at data[start, end) (`[+-]digits`, at most 18 of them); false when there is none.
-bool integer(const std::uint8_t* data, std::int64_t start, std::int64_t end, std::int64_t& stop,
-             std::int64_t& value) {
-  std::int64_t i = start;
-  const bool negative = i < end && data[i] == '-';
-  if (i < end && (data[i] == '+' || data[i] == '-')) {
-    ++i;
+// float() of a word without underscores: a sign, then inf, infinity or nan in any case, or an
+// unsigned decimal; false where float() raises.
+bool plain_float(std::string_view text, double& value) {
+  const bool negative = !text.empty() && text[0] == '-';
+  if (!text.empty() && (text[0] == '+' || text[0] == '-')) {
+    text.remove_prefix(1);
   }
-  std::int64_t read = 0, digits = 0;
-  for (; i < end && is_digit(data[i]) && digits <= 18; ++i, ++digits) {
-    read = digits < 18 ? read * 10 + (data[i] - '0') : read;  // 19 digits decline: no overflow
-  }
-  if (digits == 0 || digits > 18) {
+  const double sign = negative ? -1.0 : 1.0;
+  if (!unsigned_decimal(text, value)) {
+    if (same_letters(text, "inf") || same_letters(text, "infinity")) {
+      value = std::copysign(std::numeric_limits<double>::infinity(), sign);
+      return true;
+    }
+    if (same_letters(text, "nan")) {
+      value = std::copysign(std::numeric_limits<double>::quiet_NaN(), sign);  // "-nan": sign bit
+      return true;
+    }
     return false;
   }
-  stop = i;
-  value = negative ? -read : read;
+  value = std::copysign(value, sign);
   return true;
 }
 
-// What the scan of one OBJ chunk finds.
-struct ObjLines {
-  std::vector<std::int8_t> kinds;
-  std::vector<double> vertices, colors, normals;
-  std::vector<std::int64_t> vertex_ids, normal_ids, counts;
-  std::vector<std::int64_t> unknown;  // row, start, end of each line left to Python
-  bool all_colors = true, all_normals = true;
-  const std::uint8_t* data = nullptr;
-};
-
-// The numbers of a `v` or `vn` line from `i`: the first three kept (and, for `v`, the colours
-// of a line of exactly six); false when one is no certified decimal or there are fewer than 3.
-bool numbers_line(ObjLines& out, std::int64_t i, std::int64_t end, bool vertex) {
-  double values[6] = {0, 0, 0, 0, 0, 0};
-  std::int64_t width = 0;
-  for (;;) {
-    while (i < end && is_blank(out.data[i])) {
-      ++i;
-    }
-    if (i >= end) {
-      break;
-    }
-    double value = 0.0;
-    if (!decimal(out.data, i, end, i, value)) {
-      return false;
-    }
-    if (width < 6) {
-      values[width] = value;
-    }
-    ++width;
+// float() of a word, single underscores between digits allowed.
+bool python_float(std::string_view text, double& value) {
+  if (plain_float(text, value)) {
+    return true;
   }
-  if (width < 3) {
-    return false;
-  }
-  auto& target = vertex ? out.vertices : out.normals;
-  target.insert(target.end(), values, values + 3);
-  if (vertex) {
-    out.all_colors = out.all_colors && width == 6;
-    if (out.all_colors) {
-      out.colors.insert(out.colors.end(), values + 3, values + 6);
-    }
-  }
-  return true;
+  std::string plain;
+  return text.find('_') != std::string_view::npos && without_underscores(text, plain) &&
+         plain_float(plain, value);
 }
 
-// One face corner at `i` (`v`, `v/vt`, `v//vn`, `v/vt/vn`, `v/`, `v//`): false when it is not.
-bool corner(ObjLines& out, std::int64_t& i, std::int64_t end) {
-  const std::uint8_t* data = out.data;
-  std::int64_t vertex = 0, normal = 0, texture = 0;
-  bool has_normal = false;
-  if (!integer(data, i, end, i, vertex)) {
-    return false;
+// What int() makes of a word: no integer, an integer, or one past int64.
+enum class Integer { NONE, READ, TOO_LARGE };
+
+// int() of a word without underscores: a sign, then digits.
+Integer plain_int(std::string_view text, std::int64_t& value) {
+  const bool negative = !text.empty() && text[0] == '-';
+  if (!text.empty() && (text[0] == '+' || text[0] == '-')) {
+    text.remove_prefix(1);
   }
-  if (i < end && data[i] == '/') {
-    ++i;
-    if (i < end && data[i] != '/' && !is_blank(data[i]) && !integer(data, i, end, i, texture)) {
-      return false;
+  if (text.empty()) {
+    return Integer::NONE;
+  }
+  // The magnitude's limit: 2**63 for a negative value, 2**63 - 1 otherwise. Eighteen digits
+  // always fit; only a longer number is checked digit by digit.
+  const std::uint64_t limit = std::uint64_t{1} << 63U;
+  const std::uint64_t top = negative ? limit : limit - 1;
+  std::uint64_t read = 0;
+  bool large = false;
+  for (std::size_t k = 0; k < text.size(); ++k) {
+    if (!is_digit(text[k])) {
+      return Integer::NONE;
     }
-    if (i < end && data[i] == '/') {
-      ++i;
-      if (i < end && !is_blank(data[i]) && data[i] != '#') {
-        if (!integer(data, i, end, i, normal)) {
-          return false;
-        }
-        has_normal = true;
+    const auto digit = static_cast<std::uint64_t>(text[k] - '0');
+    large = large || (k >= 18 && read > (top - digit) / 10);
+    read = large ? read : read * 10 + digit;
+  }
+  if (large) {
+    return Integer::TOO_LARGE;
+  }
+  value = negative ? static_cast<std::int64_t>(0 - read) : static_cast<std::int64_t>(read);
+  return Integer::READ;
+}
+
+// int() of a word, single underscores between digits allowed.
+Integer python_int(std::string_view text, std::int64_t& value) {
+  const Integer read = plain_int(text, value);
+  if (read != Integer::NONE || text.find('_') == std::string_view::npos) {
+    return read;
+  }
+  std::string plain;
+  return without_underscores(text, plain) ? plain_int(plain, value) : Integer::NONE;
+}
+
+// The statements the scan tells apart.
+enum Kind { IGNORE, VERTEX, NORMAL, TEXTURE, FACE, OBJECT, GROUP, OTHER };
+
+// What stops the scan of a file: (code, line, text, number) for the caller's sentence.
+enum Failure : std::int64_t { TOO_FEW = 1, NOT_A_NUMBER = 2, BAD_CORNER = 3, TOO_LARGE = 4 };
+
+// A line's kind: `v `, `vn`, `vt`, `f `, `o ` or `g ` at its start, or else its first word
+// (`key`, which is counted when the kind is OTHER); comments and blank lines are IGNORE.
+Kind kind_of(std::string_view line, std::string_view& key) {
+  if (line.size() >= 2) {
+    const char first = line[0], second = line[1];
+    if (first == 'v') {
+      if (second == ' ') {
+        return VERTEX;
+      }
+      if (second == 'n') {
+        return NORMAL;
+      }
+      if (second == 't') {
+        return TEXTURE;
+      }
+    }
+    if (second == ' ' && (first == 'f' || first == 'o' || first == 'g')) {
+      return first == 'f' ? FACE : first == 'o' ? OBJECT : GROUP;
+    }
+  }
+  std::size_t i = 0;
+  key = next_word(line, i);
+  if (key.empty() || key[0] == '#') {
+    return IGNORE;
+  }
+  if (key.size() <= 2) {
+    for (const auto& [word, kind] : {std::pair<std::string_view, Kind>{"v", VERTEX},
+                                     {"vn", NORMAL},
+                                     {"vt", TEXTURE},
+                                     {"f", FACE},
+                                     {"o", OBJECT},
+                                     {"g", GROUP}}) {
+      if (key == word) {
+        return kind;
       }
     }
   }
-  if (i < end && !is_blank(data[i]) && data[i] != '#') {
-    return false;
+  return OTHER;
+}
+
+// What the scan of one chunk finds (see scan_obj's binding), line numbers counted from its
+// first line.
+struct Scan {
+  std::vector<double> vertices, colors, normals;
+  std::vector<std::int64_t> vertex_lines, vertex_ids, normal_ids, counts, face_lines;
+  std::vector<std::int64_t> vertices_before, normals_before;
+  std::int64_t lines = 0, textures = 0;
+  bool all_colors = true, all_normals = true;
+  // The `o` (true) and `g` statements: the faces before each, and its name.
+  std::vector<std::tuple<bool, std::int64_t, std::string>> groups;
+  // Each other statement's keyword and count, in the order first met.
+  std::vector<std::pair<std::string, std::int64_t>> skipped;
+  std::unordered_map<std::string, std::size_t> skipped_at;
+  std::optional<std::tuple<std::int64_t, std::int64_t, std::string, std::int64_t>> failure;
+  std::string joined;  // a continued line's pieces
+};
+
+bool fail(Scan& scan, Failure code, std::int64_t line, std::string_view text,
+          std::int64_t number = 0) {
+  scan.failure.emplace(code, line, std::string(text), number);
+  return false;
+}
+
+// The three numbers after a `v` or `vn` keyword: the first three words after it, as float()
+// reads them (what follows is the colours' business).
+bool coordinates(Scan& scan, std::string_view line, std::int64_t number, bool vertex,
+                 std::vector<double>& target) {
+  std::size_t i = 0;
+  next_word(line, i);  // the keyword
+  std::string_view words[3];
+  std::int64_t count = 0;
+  for (; count < 3; ++count) {
+    words[count] = next_word(line, i);
+    if (words[count].empty()) {
+      return fail(scan, TOO_FEW, number, vertex ? "v" : "vn", count);
+    }
   }
-  out.all_normals = out.all_normals && has_normal;
-  out.vertex_ids.push_back(vertex);
-  out.normal_ids.push_back(normal);
+  for (const std::string_view word : words) {
+    double value = 0.0;
+    if (!python_float(word, value)) {
+      return fail(scan, NOT_A_NUMBER, number, word);
+    }
+    target.push_back(value);
+  }
   return true;
 }
 
-// The corners of an `f` line from `i`, up to its end or a comment.
-bool face_line(ObjLines& out, std::int64_t i, std::int64_t end) {
+// The colours of a `v x y z r g b` line: exactly seven words before any `#`, the last three
+// numbers. A file whose `v` lines do not all have them has none.
+void colors(Scan& scan, std::string_view line) {
+  line = line.substr(0, line.find('#'));
+  std::size_t i = 0;
   std::int64_t count = 0;
-  for (;;) {
-    while (i < end && is_blank(out.data[i])) {
-      ++i;
+  double rgb[3] = {0, 0, 0};
+  for (std::string_view word = next_word(line, i); !word.empty(); word = next_word(line, i)) {
+    if (count >= 7 || (count >= 4 && !python_float(word, rgb[count - 4]))) {
+      scan.all_colors = false;
+      return;
     }
-    if (i >= end || out.data[i] == '#') {
+    ++count;
+  }
+  scan.all_colors = count == 7;
+  if (scan.all_colors) {
+    scan.colors.insert(scan.colors.end(), rgb, rgb + 3);
+  }
+}
+
+// One face corner: `v`, `v/vt` or `v/vt/vn`, where the texture and normal may be empty; each
+// an integer, though a texture index of any size (it is not used).
+bool corner(Scan& scan, std::string_view word, std::int64_t number) {
+  std::string_view fields[3];
+  std::size_t count = 0, start = 0;
+  for (;;) {
+    const std::size_t slash = word.find('/', start);
+    if (count == 3) {
+      return fail(scan, BAD_CORNER, number, word);
+    }
+    fields[count++] = word.substr(start, slash == std::string_view::npos ? slash : slash - start);
+    if (slash == std::string_view::npos) {
       break;
     }
-    if (!corner(out, i, end)) {
+    start = slash + 1;
+  }
+  if (fields[0].empty()) {
+    return fail(scan, BAD_CORNER, number, word);
+  }
+  std::int64_t values[3] = {0, 0, 0};
+  std::int64_t large = -1;  // the first field past int64
+  for (std::size_t k = 0; k < count; ++k) {
+    if (fields[k].empty()) {
+      continue;
+    }
+    const Integer read = python_int(fields[k], values[k]);
+    if (read == Integer::NONE) {
+      return fail(scan, BAD_CORNER, number, word);
+    }
+    if (read == Integer::TOO_LARGE && k != 1 && large < 0) {  // texture indices go unused
+      large = static_cast<std::int64_t>(k);
+    }
+  }
+  if (large >= 0) {
+    return fail(scan, TOO_LARGE, number, fields[large], large);
+  }
+  const bool has_normal = count == 3 && !fields[2].empty();
+  scan.all_normals = scan.all_normals && has_normal;
+  scan.vertex_ids.push_back(values[0]);
+  scan.normal_ids.push_back(values[2]);
+  return true;
+}
+
+// The corners of an `f` line: its words after the keyword, up to any `#`.
+bool face(Scan& scan, std::string_view line, std::int64_t number) {
+  line = line.substr(0, line.find('#'));
+  std::size_t i = 0;
+  next_word(line, i);  // the keyword
+  std::int64_t count = 0;
+  for (std::string_view word = next_word(line, i); !word.empty(); word = next_word(line, i)) {
+    if (!corner(scan, word, number)) {
       return false;
     }
     ++count;
   }
-  out.counts.push_back(count);
+  scan.counts.push_back(count);
+  scan.face_lines.push_back(number);
+  scan.vertices_before.push_back(static_cast<std::int64_t>(scan.vertex_lines.size()));
+  scan.normals_before.push_back(static_cast<std::int64_t>(scan.normals.size() / 3));
   return true;
 }
 
-// The kind of the line data[position, end), its numbers or corners read; false to decline.
-bool obj_line(ObjLines& out, std::int64_t position, std::int64_t end) {
-  const std::uint8_t* data = out.data;
-  const std::uint8_t first = end > position ? data[position] : 0;
-  const std::uint8_t second = end > position + 1 ? data[position + 1] : 0;
-  std::int8_t kind = UNKNOWN;
-  if (end == position || first == '#') {
-    kind = IGNORE;
-  } else if (first == 'v' && second == 't') {
-    kind = TEXTURE;  // only counted
-  } else if (first == 'v' && second == ' ') {
-    kind = VERTEX;
-    if (!numbers_line(out, position + 2, end, true)) {
-      return false;
+// An `o` or `g` statement: the words after the keyword, up to any `#`, as one name.
+void group(Scan& scan, std::string_view line, bool object) {
+  line = line.substr(0, line.find('#'));
+  std::size_t i = 0;
+  next_word(line, i);  // the keyword
+  std::string name;
+  for (std::string_view word = next_word(line, i); !word.empty(); word = next_word(line, i)) {
+    if (!name.empty()) {
+      name.push_back(' ');
     }
-  } else if (first == 'v' && second == 'n' && end > position + 2 && is_blank(data[position + 2])) {
-    kind = NORMAL;
-    if (!numbers_line(out, position + 3, end, false)) {
-      return false;
-    }
-  } else if (first == 'f' && second == ' ') {
-    kind = FACE;
-    if (!face_line(out, position + 2, end)) {
-      return false;
-    }
+    name.append(word);
   }
-  if (kind == UNKNOWN) {
-    const auto row = static_cast<std::int64_t>(out.kinds.size());
-    out.unknown.insert(out.unknown.end(), {row, position, end});
-  }
-  out.kinds.push_back(kind);
-  return true;
+  scan.groups.emplace_back(object, static_cast<std::int64_t>(scan.counts.size()), std::move(name));
 }
 
-// Whether Python's str.splitlines breaks a line at data[at] where the scan would not: \v \f
-// \x1c-\x1e, NEL (0x85), a \r not followed by \n.
-bool other_break(const std::uint8_t* data, std::int64_t at, std::int64_t size) {
-  const std::uint8_t byte = data[at];
-  return byte == 11 || byte == 12 || (byte >= 28 && byte <= 30) || byte == 133 ||
-         (byte == '\r' && at + 1 < size && data[at + 1] != '\n');
-}
-
-// Every line of the chunk; false to decline it.
-bool scan_lines(ObjLines& out, std::int64_t size) {
-  const std::uint8_t* data = out.data;
-  const std::int64_t reserve = size / 24 + 1;
-  out.kinds.reserve(static_cast<std::size_t>(reserve));
-  for (std::int64_t position = 0; position < size;) {
-    std::int64_t end = position;
-    for (; end < size && data[end] != '\n'; ++end) {
-      if (other_break(data, end, size)) {
+// One statement (a line, or a continued line's pieces joined), from line `number`.
+bool statement(Scan& scan, std::string_view line, std::int64_t number) {
+  std::string_view key;
+  switch (kind_of(line, key)) {
+    case VERTEX:
+      if (!coordinates(scan, line, number, true, scan.vertices)) {
         return false;
       }
+      scan.vertex_lines.push_back(number);
+      if (scan.all_colors) {
+        colors(scan, line);
+      }
+      return true;
+    case NORMAL:
+      return coordinates(scan, line, number, false, scan.normals);
+    case TEXTURE:
+      ++scan.textures;
+      return true;
+    case FACE:
+      return face(scan, line, number);
+    case OBJECT:
+    case GROUP:
+      group(scan, line, line[0] == 'o' || key == "o");
+      return true;
+    case OTHER: {
+      const auto [at, added] = scan.skipped_at.try_emplace(std::string(key), scan.skipped.size());
+      if (added) {
+        scan.skipped.emplace_back(key, 0);
+      }
+      ++scan.skipped[at->second].second;
+      return true;
     }
-    const std::int64_t next = end + 1;
-    if (end > position && data[end - 1] == '\r') {
-      --end;
-    }
-    if (!obj_line(out, position, end)) {
-      return false;
-    }
-    position = next;
+    case IGNORE:
+      return true;
   }
   return true;
 }
 
-// What scan_obj gives for a chunk it reads (see its binding's doc).
-using ObjChunk = std::tuple<Array<std::int8_t>, Array<double>, std::optional<Array<double>>,
-                            Array<double>, Array<std::int64_t>, std::optional<Array<std::int64_t>>,
-                            Array<std::int64_t>, Array<std::int64_t>>;
+// Every line of the chunk, until one fails. A line whose last visible character is a backslash
+// continues on the next, joined by a space; a comment line does not (`# saved in C:\models\`
+// would swallow the statement after it), unless it is itself a continuation.
+void scan_lines(Scan& scan, std::string_view text) {
+  std::int64_t number = 0, first = 0;  // the line's number, and a continued line's first
+  bool pending = false;
+  for (std::size_t start = 0; start < text.size();) {
+    std::size_t end = start;
+    while (end < text.size() && !is_break(text[end])) {
+      ++end;
+    }
+    const bool crlf = end + 1 < text.size() && text[end] == '\r' && text[end + 1] == '\n';
+    const std::string_view line = text.substr(start, end - start);
+    start = end + (crlf ? 2 : 1);
+    ++number;
+    std::size_t kept = line.size();
+    while (kept > 0 && is_space(line[kept - 1])) {
+      --kept;
+    }
+    if (kept > 0 && line[kept - 1] == '\\') {
+      std::size_t i = 0;
+      if (pending || next_word(line, i)[0] != '#') {
+        if (pending) {
+          scan.joined.push_back(' ');
+        } else {
+          scan.joined.clear();
+          first = number;
+          pending = true;
+        }
+        scan.joined.append(line.substr(0, kept - 1));
+        continue;
+      }
+    }
+    bool read = true;
+    if (pending) {
+      scan.joined.push_back(' ');
+      scan.joined.append(line);
+      pending = false;
+      read = statement(scan, scan.joined, first);
+    } else {
+      read = statement(scan, line, number);
+    }
+    if (!read) {
+      return;
+    }
+  }
+  if (pending) {
+    statement(scan, scan.joined, first);
+  }
+  scan.lines = number;
+}
 
-std::optional<ObjChunk> scan_obj(In<std::uint8_t, nb::ndim<1>> chunk) {
-  ObjLines out;
-  out.data = chunk.data();
-  const auto size = static_cast<std::int64_t>(chunk.shape(0));
-  bool read = false;
+// What scan_obj gives for a chunk (see its binding's doc).
+struct ObjChunk {
+  Array<double> vertices, normals;
+  std::optional<Array<double>> colors;
+  Array<std::int64_t> vertex_lines, vertex_ids, counts, face_lines, vertices_before,
+      normals_before;
+  std::optional<Array<std::int64_t>> normal_ids;
+  std::int64_t lines = 0, textures = 0;
+  std::vector<std::tuple<bool, std::int64_t, nb::bytes>> groups;
+  std::vector<std::tuple<nb::bytes, std::int64_t>> skipped;
+  std::optional<std::tuple<std::int64_t, std::int64_t, nb::bytes, std::int64_t>> failure;
+};
+
+nb::bytes bytes_of(const std::string& text) { return nb::bytes(text.data(), text.size()); }
+
+ObjChunk scan_obj(In<std::uint8_t, nb::ndim<1>> chunk) {
+  Scan scan;
   {
     nb::gil_scoped_release release;
-    read = scan_lines(out, size);
+    scan_lines(scan, std::string_view(reinterpret_cast<const char*>(chunk.data()), chunk.shape(0)));
   }
-  if (!read) {
-    return std::nullopt;
+  ObjChunk out;
+  const bool any_vertex = !scan.vertex_lines.empty(), any_corner = !scan.vertex_ids.empty();
+  out.vertices = array_of(std::move(scan.vertices), 3);
+  out.normals = array_of(std::move(scan.normals), 3);
+  if (scan.all_colors && any_vertex) {
+    out.colors = array_of(std::move(scan.colors), 3);
   }
-  std::optional<Array<double>> colors;
-  if (out.all_colors && !out.vertices.empty()) {
-    colors = array_of(std::move(out.colors), 3);
+  out.vertex_lines = array_of(std::move(scan.vertex_lines));
+  out.vertex_ids = array_of(std::move(scan.vertex_ids));
+  if (scan.all_normals && any_corner) {
+    out.normal_ids = array_of(std::move(scan.normal_ids));
   }
-  std::optional<Array<std::int64_t>> normal_ids;
-  if (out.all_normals && !out.vertex_ids.empty()) {
-    normal_ids = array_of(std::move(out.normal_ids));
+  out.counts = array_of(std::move(scan.counts));
+  out.face_lines = array_of(std::move(scan.face_lines));
+  out.vertices_before = array_of(std::move(scan.vertices_before));
+  out.normals_before = array_of(std::move(scan.normals_before));
+  out.lines = scan.lines;
+  out.textures = scan.textures;
+  for (const auto& [object, faces, name] : scan.groups) {
+    out.groups.emplace_back(object, faces, bytes_of(name));
   }
-  return ObjChunk(array_of(std::move(out.kinds)), array_of(std::move(out.vertices), 3), colors,
-                  array_of(std::move(out.normals), 3), array_of(std::move(out.vertex_ids)),
-                  normal_ids, array_of(std::move(out.counts)), array_of(std::move(out.unknown), 3));
+  for (const auto& [key, count] : scan.skipped) {
+    out.skipped.emplace_back(bytes_of(key), count);
+  }
+  if (scan.failure) {
+    const auto& [code, line, text, number] = *scan.failure;
+    out.failure.emplace(code, line, bytes_of(text), number);
+  }
+  return out;
 }
 
 // One item of `Size` bytes at `at`, in the file's byte order, as int64.
@@ -389,13 +643,10 @@ void binary_items(In<std::uint8_t, nb::ndim<1>> data, std::int64_t offset, std::
   }
 }
 
-// The decimal of the whole of `text` as the OBJ scan reads it, or None (for tests).
+// float() of `text` as the OBJ scan reads a word, or None where float() raises (for tests).
 std::optional<double> read_decimal(const std::string& text) {
-  const auto* data = reinterpret_cast<const std::uint8_t*>(text.data());
-  const auto end = static_cast<std::int64_t>(text.size());
-  std::int64_t stop = 0;
   double value = 0.0;
-  if (!decimal(data, 0, end, stop, value) || stop != end) {
+  if (!python_float(text, value)) {
     return std::nullopt;
   }
   return value;
@@ -404,18 +655,47 @@ std::optional<double> read_decimal(const std::string& text) {
 }  // namespace
 
 void bind_text(nb::module_& m) {
+  // The arrays are the ObjChunk's own (their capsules hold them), so they are handed out as
+  // they are: each Python array keeps its buffer alive.
+  constexpr auto as_is = nb::rv_policy::reference;
+  nb::class_<ObjChunk>(
+      m, "ObjChunk",
+      "What scan_obj reads in a chunk of whole lines, line numbers counted from its first.")
+      .def_ro("vertices", &ObjChunk::vertices, as_is, "(n, 3) the `v` coordinates")
+      .def_ro("colors", &ObjChunk::colors, as_is,
+              "(n, 3) their colours, or None unless every `v` has `r g b`")
+      .def_ro("vertex_lines", &ObjChunk::vertex_lines, as_is, "(n,) the line of each `v`")
+      .def_ro("normals", &ObjChunk::normals, as_is, "(k, 3) the `vn` vectors")
+      .def_ro("vertex_ids", &ObjChunk::vertex_ids, as_is,
+              "(c,) each corner's vertex index as written")
+      .def_ro("normal_ids", &ObjChunk::normal_ids, as_is,
+              "(c,) its normal index, or None unless every corner has one")
+      .def_ro("counts", &ObjChunk::counts, as_is, "(p,) the corners of each `f`")
+      .def_ro("face_lines", &ObjChunk::face_lines, as_is, "(p,) the line of each `f`")
+      .def_ro("vertices_before", &ObjChunk::vertices_before, as_is,
+              "(p,) the `v` statements before each `f`")
+      .def_ro("normals_before", &ObjChunk::normals_before, as_is,
+              "(p,) the `vn` statements before each `f`")
+      .def_ro("lines", &ObjChunk::lines, "how many lines the chunk has")
+      .def_ro("textures", &ObjChunk::textures, "how many `vt` statements")
+      .def_ro("groups", &ObjChunk::groups,
+              "(is `o`, faces before it, name) of each `o` and `g` statement")
+      .def_ro("skipped", &ObjChunk::skipped,
+              "(keyword, count) of the other statements, in the order first met")
+      .def_ro("failure", &ObjChunk::failure,
+              "None, or what stopped the scan: (code, line, text, number), codes 1 too few "
+              "numbers (number: how many), 2 not a number, 3 not a corner, 4 a vertex or normal "
+              "index past int64 (number: 0 vertex, 2 normal)");
   m.def("scan_obj", &scan_obj, nb::arg("chunk").noconvert(),
-        "The lines of an OBJ chunk (whole lines): (kinds, vertices, colours or None, normals, "
-        "corner vertex indices, corner normal indices or None, corners per face, (row, start, "
-        "end) of each line left to the caller), or None where the scan cannot certify it.");
+        "The statements of a chunk of an OBJ file, whole lines, read as Latin-1 text as Python "
+        "reads it (see ObjChunk).");
   m.def("binary_items", &binary_items, nb::arg("data").noconvert(), nb::arg("offset"),
         nb::arg("stride"), nb::arg("size"), nb::arg("signed"), nb::arg("little"),
         nb::arg("items").noconvert(),
         "The integers of `size` bytes (1, 2 or 4) at data[offset + i * stride + j * size] "
         "into items[i, j]: a binary PLY's lists of one length, read from its records.");
   m.def("read_decimal", &read_decimal, nb::arg("text"),
-        "The decimal `text` as the OBJ scan reads it (float()'s bits), or None where the scan "
-        "declines it.");
+        "float(text) as the OBJ scan reads a word, to the bit, or None where float() raises.");
 }
 
 }  // namespace mesh_normal

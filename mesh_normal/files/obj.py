@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import os
 from collections import Counter, deque
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mesh_normal._core import scan_obj
+from mesh_normal._core import ObjChunk, scan_obj
 from mesh_normal.files.errors import MeshFileError
 from mesh_normal.files.formats import MAKER
 from mesh_normal.files.loaded import LoadedMesh, build
@@ -69,9 +69,6 @@ _UNKEPT = {
     "s": "smoothing groups",
 }
 
-_KINDS = {"v ": 1, "vn": 2, "vt": 3, "f ": 4, "o ": 5, "g ": 6, "": 0}
-_KEYS = {"v": 1, "vn": 2, "vt": 3, "f": 4, "o": 5, "g": 6, "l": 7, "p": 8}
-IGNORE, VERTEX, NORMAL, TEXTURE, FACE, OBJECT, GROUP, LINE, POINT, OTHER = range(10)
 _DEFAULT_GROUP = "default"
 
 
@@ -149,36 +146,7 @@ def read_obj(data: bytes) -> LoadedMesh:
     )
 
 
-def _logical_lines(text: str) -> tuple[list[str], NDArray[np.intp], int]:
-    """The lines, with backslash continuations joined, and each one's 1-based line number
-    (of its first physical line), and the count of physical lines.
-
-    Spaces after the backslash still continue (editors leave them and nobody sees them). A
-    comment line ending in a backslash does not: it would silently swallow the statement
-    after it, and comments end in one innocently (``# saved in C:\\models\\``).
-    """
-    lines = text.splitlines()
-    if "\\" not in text:
-        return lines, np.arange(1, len(lines) + 1), len(lines)
-    joined: list[str] = []
-    numbers: list[int] = []
-    pending: list[str] = []
-    for number, line in enumerate(lines, 1):
-        end = line.rstrip()
-        if end.endswith("\\") and (pending or not end.lstrip().startswith("#")):
-            pending.append(end[:-1])
-            continue
-        numbers.append(number - len(pending))
-        joined.append(" ".join([*pending, line]))
-        pending = []
-    if pending:
-        numbers.append(len(lines) - len(pending) + 1)
-        joined.append(" ".join(pending))
-    return joined, np.asarray(numbers, dtype=np.intp), len(lines)
-
-
-#: Bytes of the file scanned at once (cut at a line end): the lines and words of a chunk, not
-#: of the file, are held as strings (several times their text).
+#: Bytes of the file scanned at once (cut at a line end): chunks are scanned on several threads.
 _TEXT_CHUNK = 1 << 20
 
 
@@ -208,52 +176,62 @@ class _Groups:
 
 
 def _scan(data: bytes) -> _Statements:
-    """Every statement of the file, a chunk of text at a time (see :func:`_scan_chunk`)."""
+    """Every statement of the file, a chunk at a time (see :func:`_scans`)."""
     groups = _Groups([_DEFAULT_GROUP], {_DEFAULT_GROUP: 0})
     other: Counter[str] = Counter()
     ignored: Counter[str] = Counter()
-    chunks: list[_Chunk] = []
-    offset = vertices = normals = 0
-    spans = list(_text_chunks(data))
-    with _prescans(data, spans) as scans:
-        for (start, end), read in zip(spans, scans, strict=True):
-            chunk = None
-            if read is not None:
-                chunk = _scan_fast(read, offset, vertices, normals, groups, other, ignored)
-            if chunk is None:
-                text = data[start:end].decode("latin-1")
-                chunk = _scan_chunk(text, offset, vertices, normals, groups, other, ignored)
-                del text
-            offset, vertices, normals = (
-                chunk.lines_after,
-                vertices + len(chunk.vertices),
-                normals + len(chunk.normals),
-            )
+    chunks: list[ObjChunk] = []
+    labels: list[NDArray[np.intp] | None] = []
+    # A chunk counts its lines, v and vn from its own start: these count from the file's.
+    vertex_lines: list[NDArray[np.int64]] = []
+    face_lines: list[NDArray[np.int64]] = []
+    vertices_before: list[NDArray[np.int64]] = []
+    normals_before: list[NDArray[np.int64]] = []
+    lines = vertices = normals = 0
+    with _scans(data, list(_text_chunks(data))) as scans:
+        for chunk in scans:
+            if chunk.failure is not None:
+                raise _failure(*chunk.failure, lines)
+            labels.append(_face_labels(chunk.groups, len(chunk.counts), groups))
+            for key, count in chunk.skipped:
+                name = key.decode("latin-1")
+                if name not in _IGNORED:
+                    other[name] += count
+                elif name in _UNKEPT:
+                    ignored[name] += count
+            ignored["vt"] += chunk.textures
             chunks.append(chunk)
+            vertex_lines.append(chunk.vertex_lines + lines)
+            face_lines.append(chunk.face_lines + lines)
+            vertices_before.append(chunk.vertices_before + vertices)
+            normals_before.append(chunk.normals_before + normals)
+            lines += chunk.lines
+            vertices += len(chunk.vertices)
+            normals += len(chunk.normals)
     faced = [chunk for chunk in chunks if len(chunk.counts)]
     colored = [chunk.colors for chunk in chunks if len(chunk.vertices)]
-    normal_fields = [chunk.normal_fields for chunk in faced]
+    normal_fields = [chunk.normal_ids for chunk in faced]
     return _Statements(
         vertices=_joined([chunk.vertices for chunk in chunks], (0, 3), np.float64),
-        vertex_lines=_joined([chunk.vertex_lines for chunk in chunks], (0,), np.intp),
+        vertex_lines=_joined(vertex_lines, (0,), np.intp),
         colors=None
         if not colored or any(part is None for part in colored)
         else np.concatenate(colored),  # type: ignore[arg-type]
         normals=_joined([chunk.normals for chunk in chunks], (0, 3), np.float64),
-        vertex_fields=_joined([chunk.vertex_fields for chunk in faced], (0,), np.int64),
+        vertex_fields=_joined([chunk.vertex_ids for chunk in faced], (0,), np.int64),
         normal_fields=None
         if not faced or any(part is None for part in normal_fields)
         else np.concatenate(normal_fields),  # type: ignore[arg-type]
         counts=_joined([chunk.counts for chunk in faced], (0,), np.intp),
-        face_lines=_joined([chunk.face_lines for chunk in chunks], (0,), np.intp),
-        vertices_before=_joined([chunk.vertices_before for chunk in chunks], (0,), np.intp),
-        normals_before=_joined([chunk.normals_before for chunk in chunks], (0,), np.intp),
+        face_lines=_joined(face_lines, (0,), np.intp),
+        vertices_before=_joined(vertices_before, (0,), np.intp),
+        normals_before=_joined(normals_before, (0,), np.intp),
         face_labels=None
         if not groups.seen
         else _joined(
             [
-                np.zeros(len(chunk.counts), np.intp) if chunk.labels is None else chunk.labels
-                for chunk in chunks
+                np.zeros(len(chunk.counts), np.intp) if part is None else part
+                for chunk, part in zip(chunks, labels, strict=True)
             ],
             (0,),
             np.intp,
@@ -268,6 +246,28 @@ def _scan(data: bytes) -> _Statements:
     )
 
 
+def _failure(code: int, line: int, text: bytes, number: int, offset: int) -> MeshFileError:
+    """The sentence for what stopped the scan (see :class:`mesh_normal._core.ObjChunk`) on
+    line ``line`` of the chunk after ``offset`` lines."""
+    line += offset
+    word = text.decode("latin-1")
+    if code == _TOO_FEW:
+        return MeshFileError(f"Line {line:,}: '{word}' needs 3 numbers, but has {number}.")
+    if code == _NOT_A_NUMBER:
+        return MeshFileError(f"Line {line:,}: {word[:40]!r} is not a number.")
+    if code == _BAD_CORNER:
+        return MeshFileError(
+            f"The face corner {word[:40]!r} is not an index, nor index/texture, "
+            f"index//normal or index/texture/normal (line {line:,})."
+        )
+    kind = "vertex" if number == 0 else "normal"
+    return MeshFileError(f"Line {line:,}: {kind} index {word[:40]} is out of range.")
+
+
+#: The codes of :attr:`mesh_normal._core.ObjChunk.failure`.
+_TOO_FEW, _NOT_A_NUMBER, _BAD_CORNER, _TOO_LARGE = 1, 2, 3, 4
+
+
 def _joined(parts: list[NDArray[Any]], empty: tuple[int, ...], dtype: type) -> NDArray[Any]:
     """The chunks' arrays as one (a chunk's own when there is one)."""
     if not parts:
@@ -275,110 +275,14 @@ def _joined(parts: list[NDArray[Any]], empty: tuple[int, ...], dtype: type) -> N
     return parts[0] if len(parts) == 1 else np.concatenate(parts)
 
 
-@dataclass(frozen=True, slots=True)
-class _Chunk:
-    """One chunk's statements (see :class:`_Statements`); ``labels`` ``None`` before any
-    ``o`` or ``g``."""
-
-    lines_after: int
-    vertices: NDArray[np.float64]
-    vertex_lines: NDArray[np.intp]
-    colors: NDArray[np.float64] | None
-    normals: NDArray[np.float64]
-    vertex_fields: NDArray[np.int64]
-    normal_fields: NDArray[np.int64] | None
-    counts: NDArray[np.intp]
-    face_lines: NDArray[np.intp]
-    vertices_before: NDArray[np.intp]
-    normals_before: NDArray[np.intp]
-    labels: NDArray[np.intp] | None
-
-
-def _scan_chunk(
-    text: str,
-    offset: int,
-    vertex_total: int,
-    normal_total: int,
-    groups: _Groups,
-    other: Counter[str],
-    ignored: Counter[str],
-) -> _Chunk:
-    """The statements of one chunk of text whose first line is line ``offset + 1``, after
-    ``vertex_total`` ``v`` and ``normal_total`` ``vn`` statements; ``other`` and ``ignored``
-    count what is skipped."""
-    lines, numbers, physical = _logical_lines(text)
-    del text  # the lines hold it now
-    numbers += offset
-    # Most lines start "v ", "vn", "vt" or "f ": classify those by their first two characters,
-    # and only the rest (comments, groups, indented or tab-separated lines) by splitting.
-    kinds = np.fromiter((_KINDS.get(line[:2], -1) for line in lines), np.int8, len(lines))
-    chunk_ignored: Counter[str] = Counter()
-    for row in np.flatnonzero(kinds < 0):
-        kinds[row] = _split_kind(lines[row], other, chunk_ignored)
-    chunk_ignored["vt"] = int(np.count_nonzero(kinds == TEXTURE))
-    ignored.update(chunk_ignored)
-    rows = {kind: np.flatnonzero(kinds == kind) for kind in (VERTEX, NORMAL, FACE)}
-    labels = _face_labels(
-        lines, np.flatnonzero(np.isin(kinds, (OBJECT, GROUP))), rows[FACE], groups
-    )
-    vertex_text = [lines[row] for row in rows[VERTEX]]
-    vertices = _numbers(vertex_text, numbers[rows[VERTEX]], "v")
-    normals = _numbers([lines[row] for row in rows[NORMAL]], numbers[rows[NORMAL]], "vn")
-    colors = _vertex_colors(vertex_text)
-    del vertex_text
-    vertex_fields, normal_fields, counts = _face_fields(lines, rows[FACE], numbers)
-    return _Chunk(
-        lines_after=offset + physical,
-        vertices=vertices,
-        vertex_lines=numbers[rows[VERTEX]],
-        colors=colors,
-        normals=normals,
-        vertex_fields=vertex_fields,
-        normal_fields=normal_fields,
-        counts=counts,
-        face_lines=numbers[rows[FACE]],
-        vertices_before=vertex_total + np.searchsorted(rows[VERTEX], rows[FACE]),
-        normals_before=normal_total + np.searchsorted(rows[NORMAL], rows[FACE]),
-        labels=labels,
-    )
-
-
-def _split_kind(line: str, other: Counter[str], unkept: Counter[str]) -> int:
-    """The kind of a line that its first two characters do not settle, by its first word;
-    ``other`` counts the statements skipped with a note, ``unkept`` those the mesh drops."""
-    parts = line.split(None, 1)
-    key = parts[0] if parts else ""
-    kind = _KEYS.get(key, IGNORE if not key or key[0] == "#" or key in _IGNORED else OTHER)
-    if kind >= LINE:
-        other[key] += 1
-    elif key in _UNKEPT:
-        unkept[key] += 1
-    return kind
-
-
-#: The most threads that scan an OBJ file's chunks at once (:func:`_prescans`).
+#: The most threads that scan an OBJ file's chunks at once (:func:`_scans`).
 SCAN_THREADS = 4
-
-#: What the compiled scan reads in a chunk (:func:`_prescan`): each line's kind (those it
-#: leaves to Python marked -1), the ``v`` coordinates, their colours (when every ``v`` has six
-#: numbers), the ``vn`` vectors, each corner's vertex index and normal index (when every corner
-#: has one), the corners of each face, and the text of each line left to Python by its row.
-ObjChunk = tuple[
-    NDArray[np.int8],
-    NDArray[np.float64],
-    NDArray[np.float64] | None,
-    NDArray[np.float64],
-    NDArray[np.int64],
-    NDArray[np.int64] | None,
-    NDArray[np.intp],
-    dict[int, str],
-]
 
 
 @contextmanager
-def _prescans(data: bytes, spans: list[tuple[int, int]]) -> Iterator[Iterator[ObjChunk | None]]:
-    """What the compiled scan reads in each chunk, in order (``None`` for a chunk it declines:
-    those are read in Python).
+def _scans(data: bytes, spans: list[tuple[int, int]]) -> Iterator[Iterator[ObjChunk]]:
+    """What the compiled scan (:func:`mesh_normal._core.scan_obj`) reads in each chunk
+    ``data[start:end]``, in order.
 
     The chunks are scanned ahead on up to ``SCAN_THREADS`` threads (the scan releases the
     GIL), while the caller takes each result in turn: a chunk depends on the ones before only
@@ -387,8 +291,9 @@ def _prescans(data: bytes, spans: list[tuple[int, int]]) -> Iterator[Iterator[Ob
     the chunks they replace."""
     threads = max(1, min(SCAN_THREADS, len(spans), len(os.sched_getaffinity(0))))
 
-    def scan(span: tuple[int, int]) -> ObjChunk | None:
-        return _prescan(data, *span)
+    def scan(span: tuple[int, int]) -> ObjChunk:
+        start, end = span
+        return scan_obj(np.frombuffer(data, np.uint8, end - start, start))
 
     if threads == 1:
         yield map(scan, spans)
@@ -399,29 +304,14 @@ def _prescans(data: bytes, spans: list[tuple[int, int]]) -> Iterator[Iterator[Ob
         yield _ahead(pool, scan, spans, 2 * threads)
 
 
-def _prescan(data: bytes, start: int, end: int) -> ObjChunk | None:
-    """What the compiled scan (:func:`mesh_normal._core.scan_obj`) reads in the whole lines
-    ``data[start:end]``, or ``None`` where it declines: a number or corner it does not read
-    exactly as the Python path does, a character at which Python splits lines and it does not,
-    or a continued line, which the Python path joins."""
-    if data.find(b"\\", start, end) >= 0:
-        return None
-    read = scan_obj(np.frombuffer(data, np.uint8, end - start, start))
-    if read is None:
-        return None
-    kinds, vertices, colors, normals, vertex_ids, normal_ids, counts, unknown = read
-    texts = {row: data[start + a : start + b].decode("latin-1") for row, a, b in unknown.tolist()}
-    return kinds, vertices, colors, normals, vertex_ids, normal_ids, counts, texts
-
-
 def _ahead(
     pool: ThreadPoolExecutor,
-    scan: Callable[[tuple[int, int]], ObjChunk | None],
+    scan: Callable[[tuple[int, int]], ObjChunk],
     spans: list[tuple[int, int]],
     depth: int,
-) -> Iterator[ObjChunk | None]:
+) -> Iterator[ObjChunk]:
     """The results of ``scan`` over ``spans`` in order, with ``depth`` of them running ahead."""
-    waiting: deque[Future[ObjChunk | None]] = deque()
+    waiting: deque[Future[ObjChunk]] = deque()
     for span in spans:
         waiting.append(pool.submit(scan, span))
         if len(waiting) >= depth:
@@ -430,81 +320,30 @@ def _ahead(
         yield waiting.popleft().result()
 
 
-def _scan_fast(
-    read: ObjChunk,
-    offset: int,
-    vertex_total: int,
-    normal_total: int,
-    groups: _Groups,
-    other: Counter[str],
-    ignored: Counter[str],
-) -> _Chunk | None:
-    """What :func:`_scan_chunk` finds in a chunk, read by the compiled scan (:func:`_prescan`);
-    ``None`` (nothing counted, nothing changed) where it cannot certify the chunk: a line
-    continued, a number or corner it does not read exactly as the Python path does, an
-    indented ``v``, a character that Python splits lines or words at and the scan does not.
-    ``read`` is what the scan read there (see :func:`_prescans`)."""
-    kinds, vertices, colors, normals, vertex_fields, normal_fields, counts, texts = read
-    chunk_other: Counter[str] = Counter()
-    chunk_ignored: Counter[str] = Counter()
-    statements: dict[int, str] = {}
-    for row, text in texts.items():
-        kind = _KINDS.get(text[:2], -1)
-        if kind < 0:
-            kind = _split_kind(text, chunk_other, chunk_ignored)
-        if kind in (VERTEX, NORMAL, TEXTURE, FACE):
-            return None  # "v\t1 2 3", " f 1 2 3": the Python path reads those
-        if kind in (OBJECT, GROUP):
-            statements[row] = text
-        kinds[row] = kind
-    chunk_ignored["vt"] = int(np.count_nonzero(kinds == TEXTURE))
-    other.update(chunk_other)
-    ignored.update(chunk_ignored)
-    numbers = np.arange(offset + 1, offset + 1 + len(kinds), dtype=np.intp)
-    rows = {kind: np.flatnonzero(kinds == kind) for kind in (VERTEX, NORMAL, FACE)}
-    labels = _face_labels(statements, np.array(sorted(statements), np.intp), rows[FACE], groups)
-    return _Chunk(
-        lines_after=offset + len(kinds),
-        vertices=vertices,
-        vertex_lines=numbers[rows[VERTEX]],
-        colors=colors,
-        normals=normals,
-        vertex_fields=vertex_fields,
-        normal_fields=normal_fields,
-        counts=counts,
-        face_lines=numbers[rows[FACE]],
-        vertices_before=vertex_total + np.searchsorted(rows[VERTEX], rows[FACE]),
-        normals_before=normal_total + np.searchsorted(rows[NORMAL], rows[FACE]),
-        labels=labels,
-    )
-
-
 def _face_labels(
-    lines: Mapping[int, str] | list[str],
-    statements: NDArray[np.intp],
-    faces: NDArray[np.intp],
-    groups: _Groups,
+    statements: list[tuple[bool, int, bytes]], faces: int, groups: _Groups
 ) -> NDArray[np.intp] | None:
-    """Each face's group (see the module docstring), from the rows of the ``o`` and ``g``
-    statements and of the faces in a chunk, ``groups`` the state before it (updated);
-    ``None`` before any statement."""
-    if not len(statements):
-        return None if not groups.seen else np.full(len(faces), groups.latest, dtype=np.intp)
+    """Each face's group (see the module docstring) in a chunk of ``faces`` faces, from its
+    ``o`` and ``g`` statements (``(is o, faces before it, name)``), ``groups`` the state before
+    it (updated); ``None`` before any statement."""
+    if not statements:
+        return None if not groups.seen else np.full(faces, groups.latest, dtype=np.intp)
     before = groups.latest
     current = np.empty(len(statements), dtype=np.intp)
-    for position, row in enumerate(statements.tolist()):
-        keyword, *names = lines[row].partition("#")[0].split()
-        name = " ".join(names)
-        if keyword == "o":
-            groups.thing, groups.group = name, ""
+    starts = np.empty(len(statements), dtype=np.intp)
+    for position, (is_object, start, name) in enumerate(statements):
+        if is_object:
+            groups.thing, groups.group = name.decode("latin-1"), ""
         else:
-            groups.group = name
+            groups.group = name.decode("latin-1")
         label = "/".join(part for part in (groups.thing, groups.group) if part) or _DEFAULT_GROUP
         current[position] = groups.index.setdefault(label, len(groups.labels))
+        starts[position] = start
         if len(groups.labels) < len(groups.index):
             groups.labels.append(label)
     groups.latest, groups.seen = int(current[-1]), True
-    latest = np.searchsorted(statements, faces) - 1  # the last statement before each face
+    # The last statement before each face.
+    latest = np.searchsorted(starts, np.arange(faces), side="right") - 1
     return np.where(latest >= 0, current[np.maximum(latest, 0)], before)
 
 
@@ -532,106 +371,8 @@ def _utf8(name: str) -> str:
         return name
 
 
-#: Lines converted at once: the words of a chunk, not of the file, are held as strings.
+#: Lines written at once: the text of a chunk of lines, not of the file, is held as strings.
 _CHUNK = 1 << 16
-
-
-def _numbers(lines: list[str], numbers: NDArray[np.intp], key: str) -> NDArray[np.float64]:
-    """The first three numbers after the keyword of each line, a chunk of lines at a time."""
-    values = np.empty((len(lines), 3))
-    for start in range(0, len(lines), _CHUNK):
-        end = start + _CHUNK
-        values[start:end] = _chunk_numbers(lines[start:end], numbers[start:end], key)
-    return values
-
-
-def _face_fields(
-    lines: list[str], rows: NDArray[np.intp], numbers: NDArray[np.intp]
-) -> tuple[NDArray[np.int64], NDArray[np.int64] | None, NDArray[np.intp]]:
-    """Vertex and normal index of every corner (see :func:`_fields`) and the corners of each
-    face, from the face lines ``rows``, a chunk of lines at a time."""
-    vertex_parts: list[NDArray[np.int64]] = []
-    normal_parts: list[NDArray[np.int64]] = []
-    count_parts: list[NDArray[np.intp]] = []
-    has_normals = True
-    for start in range(0, len(rows), _CHUNK):
-        chunk = rows[start : start + _CHUNK]
-        # A comment may follow a face's corners: "f 1 2 3 # the lid".
-        corners, counts = _face_corners(
-            [lines[row].partition("#")[0] if "#" in lines[row] else lines[row] for row in chunk]
-        )
-        try:
-            fields = _fields(corners)
-        except _BadCorner as bad:
-            face = int(np.searchsorted(np.cumsum(counts), bad.position, side="right"))
-            raise _BadCorner(bad.corner, bad.position, int(numbers[chunk[face]])) from None
-        del corners
-        vertex_parts.append(fields[0])
-        count_parts.append(counts)
-        if fields[2] is None:
-            has_normals = False
-        elif has_normals:
-            normal_parts.append(fields[2])
-    if not rows.size:
-        return np.zeros(0, np.int64), None, np.zeros(0, np.intp)
-    normals = np.concatenate(normal_parts) if has_normals else None
-    return np.concatenate(vertex_parts), normals, np.concatenate(count_parts)
-
-
-def _chunk_numbers(lines: list[str], numbers: NDArray[np.intp], key: str) -> NDArray[np.float64]:
-    tokens = " ".join(lines).split()
-    width = len(tokens) // len(lines) if lines else 4
-    try:
-        if (
-            width >= 4
-            and len(tokens) == width * len(lines)  # all as wide: slice columns
-            and tokens[::width].count(key) == len(lines)
-        ):
-            return np.stack(
-                [np.array(tokens[column::width], dtype=np.float64) for column in (1, 2, 3)], axis=1
-            )
-        values = np.array([line.split()[1:4] for line in lines], dtype=np.float64)
-        if values.shape == (len(lines), 3) or not lines:
-            return values.reshape(-1, 3)
-    except ValueError:
-        pass
-    for line, number in zip(lines, numbers, strict=True):
-        words = line.split()[1:4]
-        if len(words) < 3:
-            raise MeshFileError(f"Line {number:,}: '{key}' needs 3 numbers, but has {len(words)}.")
-        for value in words:
-            try:
-                float(value)
-            except ValueError:
-                raise MeshFileError(f"Line {number:,}: {value[:40]!r} is not a number.") from None
-    raise AssertionError("unreachable: a line failed to convert")
-
-
-def _vertex_colors(lines: list[str]) -> NDArray[np.float64] | None:
-    """``r g b`` of ``v x y z r g b`` lines (MeshLab, ZBrush), when every ``v`` line has
-    exactly six numbers; a file mixing widths, or ``v x y z w``, has no colours."""
-    if not lines or len(lines[0].partition("#")[0].split()) != 7:
-        return None  # the first line settles most files without a list of every line's words
-    rows = [line.partition("#")[0].split()[4:] for line in lines]
-    if any(len(row) != 3 for row in rows):
-        return None
-    try:
-        return np.array(rows, dtype=np.float64)
-    except ValueError:
-        return None
-
-
-def _face_corners(lines: list[str]) -> tuple[list[str], NDArray[np.intp]]:
-    """Every corner token, and how many each face has (the ``f`` keywords split the faces)."""
-    tokens = " ".join(lines).split()
-    width = len(tokens) // len(lines) if lines else 4
-    if len(tokens) == width * len(lines) and tokens[::width].count("f") == len(lines):
-        del tokens[::width]
-        return tokens, np.full(len(lines), width - 1, dtype=np.intp)
-    # Line by line: a line continued into another "f" has that "f" as a corner (an error).
-    words = [line.split() for line in lines]
-    counts = np.array([len(line) - 1 for line in words], dtype=np.intp)
-    return [word for line in words for word in line[1:]], counts
 
 
 def _corner_indices(found: _Statements) -> tuple[NDArray[np.intp], NDArray[np.intp] | None]:
@@ -656,94 +397,6 @@ def _corner_indices(found: _Statements) -> tuple[NDArray[np.intp], NDArray[np.in
             len(found.normals),
         )
     return vertex_ids, normal_ids
-
-
-#: Vertex, texture and normal index of every corner.
-_Fields = tuple[NDArray[np.int64], NDArray[np.int64] | None, NDArray[np.int64] | None]
-
-
-def _fields(corners: list[str]) -> _Fields:
-    """Vertex, texture and normal index of every corner as written (0 where a field is empty,
-    ``None`` for the normal unless every corner has one, and for texture indices when the
-    form is uniform: they are not used).
-
-    When every corner has the same form (``v``, ``v/vt``, ``v/vt/vn``, ``v//vn`` or ``v//``),
-    all are split at once; anything else, corner by corner.
-    """
-    text = " ".join(corners)
-    slashes, count = text.count("/"), len(corners)
-    try:
-        if not slashes:
-            return _ints(text.split()), None, None
-        per_corner = slashes // count if slashes in (count, 2 * count) else 0
-        if per_corner and _same_slashes(text, per_corner, count):
-            # Now each corner is a/b (one slash) or a/b/c (two); empty fields show as fewer
-            # numbers, and "//" (an empty b) in every corner or in none settles which.
-            tokens, doubles = text.replace("/", " ").split(), text.count("//")
-            if per_corner == 1 and len(tokens) == 2 * count:  # v/vt
-                return _ints(tokens[0::2]), None, None
-            if not doubles and len(tokens) == 3 * count:  # v/vt/vn
-                return _ints(tokens[0::3]), None, _ints(tokens[2::3])
-            if doubles == count and len(tokens) == 2 * count:  # v//vn
-                return _ints(tokens[0::2]), None, _ints(tokens[1::2])
-            # v//: "//5 1//" has one number a corner too, so every corner must end "//".
-            if doubles == count and len(tokens) == count and _every_corner_ends(text, "//"):
-                return _ints(tokens), None, None
-    except ValueError:
-        pass
-    return _mixed_fields(corners)
-
-
-def _same_slashes(text: str, slashes: int, count: int) -> bool:
-    """Whether each of the ``count`` space-separated corners in ``text`` has ``slashes``."""
-    separators = text.encode("latin-1").translate(None, _NOT_SEPARATORS)
-    return separators == (b"/" * slashes + b" ") * (count - 1) + b"/" * slashes
-
-
-#: Every byte but the space and the slash, for :func:`_same_slashes` to delete.
-_NOT_SEPARATORS = bytes(code for code in range(256) if code not in b" /")
-
-
-def _every_corner_ends(text: str, end: str) -> bool:
-    """Whether every space-separated corner in ``text`` ends with ``end``."""
-    return text.endswith(end) and text.count(end + " ") == text.count(" ")
-
-
-def _ints(tokens: list[str]) -> NDArray[np.int64]:
-    return np.array(tokens, dtype=np.int64)
-
-
-def _mixed_fields(corners: list[str]) -> _Fields:
-    """Corner by corner: any field may be empty (``1/``, ``1//``, ``1//3``, ``1/2/``), as
-    other readers allow; a corner without a normal drops the normals of the whole file."""
-    columns: list[list[int]] = [[], [], []]
-    has_normal = True
-    for position, corner in enumerate(corners):
-        parts = corner.split("/")
-        if len(parts) > 3 or not parts[0]:
-            raise _BadCorner(corner, position)
-        parts += [""] * (3 - len(parts))
-        has_normal = has_normal and parts[2] != ""
-        for column, part in zip(columns, parts, strict=True):
-            try:
-                column.append(int(part) if part else 0)
-            except ValueError:
-                raise _BadCorner(corner, position) from None
-    arrays = [np.array(column, dtype=np.int64) for column in columns]
-    return arrays[0], arrays[1], arrays[2] if has_normal else None
-
-
-class _BadCorner(MeshFileError):
-    """A corner that is not ``v``, ``v/vt``, ``v//vn`` or ``v/vt/vn``; :func:`_corner_indices`
-    adds its line from ``position`` (its place among all corners)."""
-
-    def __init__(self, corner: str, position: int, line: int | None = None) -> None:
-        self.corner, self.position = corner, position
-        where = f" (line {line:,})" if line is not None else ""
-        super().__init__(
-            f"The face corner {corner[:40]!r} is not an index, nor index/texture, "
-            f"index//normal or index/texture/normal{where}."
-        )
 
 
 def _resolve(

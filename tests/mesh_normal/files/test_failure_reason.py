@@ -21,7 +21,7 @@ def gltf(document: dict) -> bytes:  # type: ignore[type-arg]
 @pytest.mark.parametrize(
     ("data", "name", "words"),
     [
-        (b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 99999999999999999999999\n", "a.obj", "too large"),
+        (b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 99999999999999999999999\n", "a.off", "too large"),
         (gltf({"meshes": [None]}), "a.gltf", "wrong kind of value"),
         (gltf({"meshes": [{"primitives": [PRIMITIVE]}]}), "a.gltf", "entry that it does not"),
     ],

@@ -350,7 +350,7 @@ def test_chunks_of_lines_read_as_one(monkeypatch: pytest.MonkeyPatch, text: str)
         return mesh.vertices.tolist(), mesh.faces.tolist(), normals is None, mesh.notes
 
     whole = outcome()
-    monkeypatch.setattr("mesh_normal.files.obj._CHUNK", 1)
+    monkeypatch.setattr("mesh_normal.files.obj._TEXT_CHUNK", 1)  # a chunk a line
     assert outcome() == whole
 
 
