@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 # The reports import no NumPy and no kernels (the app declares its routes with them at start).
-from mesh_normal.choices import MeshFormat, Method, Verdict, Weighting
+from mesh_normal.choices import InMemory, MeshFormat, Method, Verdict, Weighting
 from mesh_normal.record import INDEX_LIST_LIMIT, Finite, Measure, Record, described
 from mesh_normal.tolerances import WELD_LIMIT
 
@@ -69,7 +69,10 @@ class FileInfo(Record):
     """The uploaded file."""
 
     name: str | None = described(description="The file's name as uploaded, or null without one.")
-    format: MeshFormat = described(description="The format read from the bytes (else the name).")
+    format: MeshFormat | InMemory = described(
+        description="The format read from the bytes (else the name); memory for a mesh handed "
+        "over in memory (arrays, or another library's mesh)."
+    )
     bytes: int = described(
         ge=0, description="The file's size in bytes (0 for a mesh handed over already read)."
     )
