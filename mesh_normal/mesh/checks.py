@@ -213,6 +213,59 @@ def _not_a_mesh(value: object) -> str:
     return f"A mesh function takes {MESH_FORMS}, not {type(value).__name__}."
 
 
+class _Points(Protocol):
+    """What :func:`~mesh_normal.points.read_points` returns, an Open3D ``PointCloud``, a
+    PyVista ``PolyData``."""
+
+    @property
+    def points(self) -> ArrayLike: ...
+
+
+class _Vertices(Protocol):
+    """A ``trimesh.PointCloud``, or any mesh by its vertices."""
+
+    @property
+    def vertices(self) -> ArrayLike: ...
+
+
+#: A point cloud as people hold it (see :func:`held_points`).
+HeldCloud: TypeAlias = "CheckedMesh | _Points | _Vertices"
+
+#: What a point function takes, for the sentence that refuses anything else.
+POINT_FORMS = (
+    "an (n, 3) array of points, what read_points returns, an Open3D PointCloud, a "
+    "trimesh.PointCloud, a PyVista PolyData, or a mesh (its vertices)"
+)
+
+
+def held_points(cloud: object) -> tuple[ArrayLike, FloatArray | None]:
+    """The points that ``cloud`` holds and the normals stored with them (``None`` without),
+    recognised by its attributes as :func:`checked_mesh` recognises a mesh: an array as it
+    is; what :func:`~mesh_normal.points.read_points` returns, an Open3D ``PointCloud`` and a
+    PyVista ``PolyData`` by their ``points`` (and ``normals``, an Open3D cloud's empty without
+    any); a ``trimesh.PointCloud`` and any mesh by their ``vertices``. A path, or an object
+    with none of these, gets a ``TypeError`` that says what can be passed; the points
+    themselves are checked by the function that reads them."""
+    if isinstance(cloud, CheckedMesh):
+        return cloud.vertices, None
+    if isinstance(cloud, str | bytes | os.PathLike):
+        raise TypeError(
+            f"A point function takes {POINT_FORMS}, not a file: read it with mn.read_points first."
+        )
+    if hasattr(cloud, "points"):
+        points = np.asarray(cloud.points)
+        normals = getattr(cloud, "normals", None)
+        stored = None if normals is None else np.asarray(normals)
+        if stored is None or stored.shape != points.shape or not len(stored):
+            return points, None
+        return points, stored.astype(np.float64, copy=False)
+    if hasattr(cloud, "vertices"):
+        return np.asarray(cloud.vertices), None
+    if isinstance(cloud, np.ndarray | list | tuple):
+        return cloud, None
+    raise TypeError(f"A point function takes {POINT_FORMS}, not {type(cloud).__name__}.")
+
+
 def _polydata_triangles(mesh: object) -> IndexArray:
     """(m, 3): the triangles of a PyVista ``PolyData``, from its flat cell array
     ``[3, a, b, c, 3, ...]``; a ``ValueError`` for any other cell. Polygons are refused, not
