@@ -154,3 +154,9 @@ class PointReport(Record):
         description="How the file's normals agree with ours; null when it stores none."
     )
     diagnosis: list[str] = described(description="What was found, in plain sentences.")
+
+    def _repr_html_(self) -> str:
+        """What a notebook shows: the diagnosis, the key figures and the findings."""
+        from mesh_normal.notebook.html import point_report_html
+
+        return point_report_html(self.to_dict())

@@ -260,3 +260,9 @@ class MeshReport(Record):
     )
     notes: list[str] = described(description="What the reader noticed about the file, in words.")
     problems: list[Problem] = described(description="Each problem found, the most serious first.")
+
+    def _repr_html_(self) -> str:
+        """What a notebook shows: the diagnosis, the key figures and the problems."""
+        from mesh_normal.notebook.html import mesh_report_html
+
+        return mesh_report_html(self.to_dict())
