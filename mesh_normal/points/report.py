@@ -22,7 +22,8 @@ class PointFileInfo(Record):
 
     name: str | None = described(description="The file's name as uploaded, or null without one.")
     format: str = described(
-        description="The format read: ply, xyz, pts, pcd, las, laz or a mesh's."
+        description="The format read: ply, xyz, pts, pcd, las, laz or a mesh's; memory for a "
+        "cloud handed over in memory (an array, another library's cloud)."
     )
     source_kind: SourceKind = described(description='"points", or "mesh vertices" for a mesh file.')
     bytes: int = described(
