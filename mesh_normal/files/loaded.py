@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from mesh_normal.choices import InMemory, MeshFormat
+from mesh_normal.choices import MeshFormat, ReportFormat
 from mesh_normal.files.errors import MeshFileError
 from mesh_normal.mesh.checks import _coordinate_range, _index_range
 from mesh_normal.types import FloatArray, IndexArray
@@ -93,7 +93,7 @@ class LoadedMesh:
 
     vertices: FloatArray
     faces: IndexArray
-    format: MeshFormat | InMemory
+    format: ReportFormat
     source_faces: int
     file_face_normals: FloatArray | None = None
     file_vertex_normals: FloatArray | None = None

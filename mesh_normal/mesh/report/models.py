@@ -17,7 +17,8 @@ from dataclasses import dataclass
 from typing import Literal
 
 # The reports import no NumPy and no kernels (the app declares its routes with them at start).
-from mesh_normal.choices import InMemory, MeshFormat, Method, Verdict, Weighting
+from mesh_normal.choices import MeshFormat as MeshFormat  # the files' formats, named here too
+from mesh_normal.choices import Method, ReportFormat, Verdict, Weighting
 from mesh_normal.record import INDEX_LIST_LIMIT, Finite, Measure, Record, described
 from mesh_normal.tolerances import WELD_LIMIT
 
@@ -69,7 +70,7 @@ class FileInfo(Record):
     """The uploaded file."""
 
     name: str | None = described(description="The file's name as uploaded, or null without one.")
-    format: MeshFormat | InMemory = described(
+    format: ReportFormat = described(
         description="The format read from the bytes (else the name); memory for a mesh handed "
         "over in memory (arrays, or another library's mesh)."
     )
