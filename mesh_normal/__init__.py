@@ -6,6 +6,8 @@
 (69451, 3)
 >>> fixed = mn.orient(mesh.vertices, mesh.faces)
 >>> mn.write_mesh(mesh.vertices, fixed.faces, path="bunny-fixed.ply")   # or "ply": the bytes
+>>> mn.face_normals(mesh)                      # a mesh alone: read_mesh's, trimesh's, Open3D's...
+>>> mn.show(mesh)                              # a Plotly figure (pip install mesh-normal[show])
 
 Every name below is loaded on first use, so that ``import mesh_normal`` (and the command line's
 ``--help``) does not pay for NumPy and the readers until a name is needed. The command line is
@@ -39,6 +41,7 @@ if TYPE_CHECKING:
     from mesh_normal.mesh.report.models import MeshReport
     from mesh_normal.mesh.topology import MeshTopology, mesh_topology
     from mesh_normal.mesh.vertices import VertexNormals, vertex_normals
+    from mesh_normal.notebook.show import show
     from mesh_normal.points import (
         ComponentOrientation,
         PointCloud,
@@ -85,6 +88,7 @@ _HOMES = {
     "analyse": "mesh.report.analysis",  # mn.analyse(path) is the report
     "MeshTopology": "mesh.topology",
     "mesh_topology": "mesh.topology",
+    "show": "notebook.show",  # mn.show(mesh): a Plotly figure (the `show` extra)
     "TriangleNormal": "triangle.normal",
     "triangle_normal": "triangle.normal",
     "VertexNormals": "mesh.vertices",
@@ -121,6 +125,7 @@ __all__ = [
     "point_normals",
     "read_mesh",
     "read_points",
+    "show",
     "signed_volume",
     "triangle_normal",
     "triangle_normals",

@@ -23,5 +23,10 @@ NormalsChoice = Literal["auto", "none", "face", "vertex", "corner"]
 OrientMode = Literal["mst", "riemannian", "viewpoint", "direction", "file", "none"]
 #: A mesh file's format, as a report names it (:mod:`mesh_normal.files.formats`).
 MeshFormat = Literal["stl", "obj", "ply", "off", "glb", "gltf", "3mf"]
+#: A report's format for a mesh or cloud handed over in memory (arrays or another library's
+#: object), not read from a file.
+InMemory = Literal["memory"]
+#: A mesh report's format: the file's, or memory (one flat Literal: one enum in the schema).
+ReportFormat = Literal[MeshFormat, InMemory]
 #: What a point cloud was read from (:mod:`mesh_normal.points.io.cloud`).
 SourceKind = Literal["points", "mesh vertices"]

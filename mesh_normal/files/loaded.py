@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from mesh_normal.choices import MeshFormat
+from mesh_normal.choices import MeshFormat, ReportFormat
 from mesh_normal.files.errors import MeshFileError
 from mesh_normal.mesh.checks import _coordinate_range, _index_range
 from mesh_normal.types import FloatArray, IndexArray
@@ -39,7 +39,9 @@ class LoadedMesh:
         Triangles in file order; a polygon becomes ``k - 2`` consecutive fan triangles, and
         PLY triangle strips follow the faces as their triangles.
     format : str
-        ``"stl"``, ``"obj"``, ``"ply"``, ``"off"``, ``"glb"`` or ``"gltf"``.
+        ``"stl"``, ``"obj"``, ``"ply"``, ``"off"``, ``"glb"``, ``"gltf"`` or ``"3mf"``;
+        ``"memory"`` for a mesh made from arrays or another library's mesh (see
+        :func:`~mesh_normal.analyse`).
     source_faces : int
         Faces as written in the file, before triangulation (and before skipping any with fewer
         than three corners); a PLY triangle strip record counts as one.
@@ -91,7 +93,7 @@ class LoadedMesh:
 
     vertices: FloatArray
     faces: IndexArray
-    format: MeshFormat
+    format: ReportFormat
     source_faces: int
     file_face_normals: FloatArray | None = None
     file_vertex_normals: FloatArray | None = None

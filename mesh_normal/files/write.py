@@ -33,10 +33,25 @@ from mesh_normal.files.formats import (
     MeshFormat,
     suffix_format,
 )
-from mesh_normal.mesh.checks import check_mesh
+from mesh_normal.mesh.checks import HeldMesh, checked_mesh
 
 StrPath = str | os.PathLike[str]
 NormalsKind = Literal["face", "vertex", "corner"]
+
+
+@overload
+def write_mesh(
+    vertices: HeldMesh,
+    file_format: str,
+    /,
+    *,
+    vertex_colors: ArrayLike | None = None,
+    face_colors: ArrayLike | None = None,
+    normals: ArrayLike | None = None,
+    normals_kind: NormalsKind | None = None,
+    face_groups: ArrayLike | None = None,
+    group_names: Sequence[str] | None = None,
+) -> bytes: ...
 
 
 @overload
@@ -56,8 +71,23 @@ def write_mesh(
 
 @overload
 def write_mesh(
-    vertices: ArrayLike,
-    faces: ArrayLike,
+    vertices: HeldMesh,
+    faces: None = None,
+    *,
+    file_format: str,
+    vertex_colors: ArrayLike | None = None,
+    face_colors: ArrayLike | None = None,
+    normals: ArrayLike | None = None,
+    normals_kind: NormalsKind | None = None,
+    face_groups: ArrayLike | None = None,
+    group_names: Sequence[str] | None = None,
+) -> bytes: ...
+
+
+@overload
+def write_mesh(
+    vertices: ArrayLike | HeldMesh,
+    faces: ArrayLike | None = None,
     file_format: str | None = None,
     *,
     path: StrPath,
@@ -71,8 +101,8 @@ def write_mesh(
 
 
 def write_mesh(
-    vertices: ArrayLike,
-    faces: ArrayLike,
+    vertices: ArrayLike | HeldMesh,
+    faces: ArrayLike | None = None,
     file_format: str | None = None,
     *,
     path: StrPath | None = None,
@@ -87,8 +117,12 @@ def write_mesh(
 
     Parameters
     ----------
-    vertices : (n, 3) float
-        Finite coordinates, written as given (as float32 in STL, which has nothing wider).
+    vertices : (n, 3) float, or a mesh
+        Finite coordinates, written as given (as float32 in STL, which has nothing wider); or
+        a mesh as :func:`~mesh_normal.mesh.checks.checked_mesh` takes it (read_mesh's, a
+        ``(vertices, faces)`` tuple, trimesh, Open3D, PyVista), then without ``faces``:
+        ``write_mesh(mesh, "ply")``. Only its vertices and faces are written; colours, normals
+        and groups are passed as below.
     faces : (m, 3) int
         Indices into ``vertices``.
     file_format : str, optional
@@ -131,7 +165,9 @@ def write_mesh(
     Raises
     ------
     ValueError
-        For a bad mesh (from :func:`mesh_normal.mesh.faces.check_mesh`).
+        For a bad mesh (from :func:`mesh_normal.mesh.checks.check_mesh`).
+    TypeError
+        For something that is not a mesh (the sentence says what can be passed).
     MeshFileError
         415 for a format that cannot be written (or a path whose suffix names none), 422 for
         coordinates STL cannot hold.
@@ -141,13 +177,17 @@ def write_mesh(
     Examples
     --------
     >>> data = write_mesh(vertices, faces, "ply")         # bytes
+    >>> data = write_mesh(mn.read_mesh("bunny.obj"), "ply")  # a mesh alone
     >>> write_mesh(vertices, faces, path="fixed.obj")      # the format from the suffix
     >>> write_mesh(vertices, faces, "glb", normals=corners, normals_kind="corner")
     """
+    if isinstance(faces, str) and file_format is None:  # write_mesh(mesh, "ply")
+        faces, file_format = None, faces
     if file_format is None and path is None:
         raise TypeError("write_mesh needs a file_format or a path to take the format from.")
     entry = _writable(file_format, path)
-    points, triangles = check_mesh(vertices, faces)
+    checked = checked_mesh(vertices, faces)
+    points, triangles = checked.vertices, checked.faces
     kind, values = checked_normals(normals, normals_kind, len(points), len(triangles))
     groups = _checked_groups(face_groups, group_names, len(triangles))
     data = entry.write(

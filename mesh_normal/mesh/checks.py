@@ -1,15 +1,21 @@
 """Input conversion and checks, done once at the edge: :class:`CheckedMesh`.
 
 Every public function of the core takes raw arrays (and checks them, with a clear
-``ValueError`` for the first problem) or a :class:`CheckedMesh` made by :func:`checked_mesh`,
-which it trusts. A caller that runs several functions on one mesh checks it once.
+``ValueError`` for the first problem), a :class:`CheckedMesh` made by :func:`checked_mesh`,
+which it trusts, or a mesh as people hold it (:func:`checked_mesh` converts it): a
+``(vertices, faces)`` tuple, what :func:`~mesh_normal.files.read_mesh` returns, a
+``trimesh.Trimesh``, an Open3D ``TriangleMesh`` or a PyVista ``PolyData`` of triangles. Those
+are recognised by their attributes, so that none of their libraries is imported here. A caller
+that runs several functions on one mesh checks it once. :func:`held_points` does the same for
+the point functions.
 """
 
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
-from typing import NoReturn, TypeVar
+from typing import NoReturn, Protocol, TypeAlias, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -72,15 +78,59 @@ def read_only(array: ArrayType) -> ArrayType:
     return view
 
 
-def checked_mesh(vertices: ArrayLike, faces: ArrayLike, *, ranged: bool = True) -> CheckedMesh:
+class _VerticesFaces(Protocol):
+    """What :func:`~mesh_normal.files.read_mesh` returns, a ``trimesh.Trimesh``."""
+
+    @property
+    def vertices(self) -> ArrayLike: ...
+    @property
+    def faces(self) -> ArrayLike: ...
+
+
+class _VerticesTriangles(Protocol):
+    """An Open3D ``TriangleMesh`` (its ``Vector3dVector`` and ``Vector3iVector``)."""
+
+    @property
+    def vertices(self) -> ArrayLike: ...
+    @property
+    def triangles(self) -> ArrayLike: ...
+
+
+class _PointsFaces(Protocol):
+    """A PyVista ``PolyData``: ``faces`` is its flat cell array ``[3, a, b, c, 3, ...]``."""
+
+    @property
+    def points(self) -> ArrayLike: ...
+    @property
+    def faces(self) -> ArrayLike: ...
+
+
+#: A mesh as people hold it, taken without faces beside it (see :func:`checked_mesh`).
+HeldMesh: TypeAlias = (
+    "CheckedMesh | tuple[ArrayLike, ArrayLike] | _VerticesFaces | _VerticesTriangles | _PointsFaces"
+)
+
+#: What a mesh function takes, for the sentence that refuses anything else.
+MESH_FORMS = (
+    "vertices and faces arrays, a (vertices, faces) tuple, what read_mesh returns, a "
+    "CheckedMesh, a trimesh.Trimesh, an Open3D TriangleMesh or a PyVista PolyData of triangles"
+)
+
+
+def checked_mesh(
+    vertices: ArrayLike | HeldMesh, faces: ArrayLike | None = None, *, ranged: bool = True
+) -> CheckedMesh:
     """Convert and check a mesh once (see :func:`check_mesh` for the rules).
 
     Parameters
     ----------
-    vertices : (n, 3) float64
-        Finite coordinates (any real dtype).
+    vertices : (n, 3) float64, or a mesh
+        Finite coordinates (any real dtype); or, without ``faces``, a mesh as people hold
+        it: a ``(vertices, faces)`` tuple, what :func:`~mesh_normal.files.read_mesh` returns
+        (not checked again), a ``CheckedMesh`` (returned as it is), a ``trimesh.Trimesh``, an
+        Open3D ``TriangleMesh`` or a PyVista ``PolyData`` whose faces are all triangles.
     faces : (m, 3) int
-        Indices into ``vertices`` (any integer dtype).
+        Indices into ``vertices`` (any integer dtype); only with raw vertices.
     ranged : bool
         False: the faces' indices are not checked against the vertices here. Only for a
         caller whose kernel checks every index it reads before it reads the vertex, and
@@ -92,24 +142,156 @@ def checked_mesh(vertices: ArrayLike, faces: ArrayLike, *, ranged: bool = True) 
     CheckedMesh
         The converted arrays and their scaling; the input arrays themselves where they were
         already float64 and intp in C order, so they must not change while it is in use.
+
+    Raises
+    ------
+    TypeError
+        For a mesh given with ``faces``, raw vertices without them, or anything else that is
+        not a mesh (the sentence says what can be passed).
+    ValueError
+        For the first problem of the arrays.
     """
-    points, extremes = _as_vertices(vertices)
+    if faces is None:
+        return held_mesh(vertices)
+    kind = _mesh_kind(vertices)
+    if kind is not None:
+        raise TypeError(f"{kind} holds its faces: pass it without faces.")
+    points, extremes = _as_vertices(vertices)  # type: ignore[arg-type]
     indices = check_faces(faces, len(points), ranged=ranged)
     return CheckedMesh(points, indices, *scaling(points, extremes))
 
 
-def as_checked(vertices: ArrayLike | CheckedMesh, faces: ArrayLike | None) -> CheckedMesh:
-    """``vertices`` itself when it is a :class:`CheckedMesh`, else the checked arrays.
+def as_checked(vertices: ArrayLike | HeldMesh, faces: ArrayLike | None) -> CheckedMesh:
+    """The checked mesh of what a public function of the core was given.
 
-    The two ways to call the core: ``f(vertices, faces)`` or ``f(checked)``.
+    The ways to call the core: ``f(vertices, faces)``, ``f(checked)`` or ``f(mesh)`` for any
+    mesh that :func:`checked_mesh` takes alone.
     """
-    if isinstance(vertices, CheckedMesh):
-        if faces is not None:
-            raise TypeError("a checked mesh holds its faces: pass it without faces.")
-        return vertices
-    if faces is None:
-        raise TypeError("faces are required with raw vertices.")
     return checked_mesh(vertices, faces)
+
+
+def _mesh_kind(value: object) -> str | None:
+    """How a sentence names ``value`` if it is a mesh that holds its faces, else ``None``."""
+    if isinstance(value, CheckedMesh):
+        return "a checked mesh"
+    if hasattr(value, "faces") or hasattr(value, "triangles"):
+        return f"a {type(value).__name__}"
+    return None
+
+
+def held_mesh(mesh: object) -> CheckedMesh:
+    """The checked mesh that ``mesh`` holds (see :func:`checked_mesh`), recognised by its type
+    or attributes; a ``TypeError`` that says what can be passed for anything else."""
+    if isinstance(mesh, CheckedMesh):
+        return mesh
+    if isinstance(mesh, tuple) and len(mesh) == 2:
+        return checked_mesh(mesh[0], mesh[1])
+    checked = getattr(mesh, "checked", None)  # a LoadedMesh: the reader checked its arrays
+    if callable(checked) and hasattr(mesh, "faces"):
+        found = checked()
+        if isinstance(found, CheckedMesh):
+            return found
+    if hasattr(mesh, "vertices") and hasattr(mesh, "faces"):  # trimesh, a LoadedMesh
+        return checked_mesh(np.asarray(mesh.vertices), np.asarray(mesh.faces))
+    if hasattr(mesh, "vertices") and hasattr(mesh, "triangles"):  # Open3D
+        return checked_mesh(np.asarray(mesh.vertices), np.asarray(mesh.triangles))
+    if hasattr(mesh, "points") and hasattr(mesh, "faces"):  # PyVista
+        return checked_mesh(np.asarray(mesh.points), _polydata_triangles(mesh))
+    raise TypeError(_not_a_mesh(mesh))
+
+
+def _not_a_mesh(value: object) -> str:
+    """The sentence that refuses ``value`` as a mesh, saying what can be passed."""
+    if isinstance(value, str | bytes | os.PathLike):
+        return f"A mesh function takes {MESH_FORMS}, not a file: read it with mn.read_mesh first."
+    try:
+        array = np.asarray(value)
+    except (TypeError, ValueError):  # ragged nested lists
+        array = np.empty(0, dtype=object)
+    if array.ndim == 2 and array.dtype.kind in "iuf":
+        return f"faces are required with raw vertices: pass {MESH_FORMS}."
+    return f"A mesh function takes {MESH_FORMS}, not {type(value).__name__}."
+
+
+class _Points(Protocol):
+    """What :func:`~mesh_normal.points.read_points` returns, an Open3D ``PointCloud``, a
+    PyVista ``PolyData``."""
+
+    @property
+    def points(self) -> ArrayLike: ...
+
+
+class _Vertices(Protocol):
+    """A ``trimesh.PointCloud``, or any mesh by its vertices."""
+
+    @property
+    def vertices(self) -> ArrayLike: ...
+
+
+#: A point cloud as people hold it (see :func:`held_points`).
+HeldCloud: TypeAlias = "CheckedMesh | _Points | _Vertices"
+
+#: What a point function takes, for the sentence that refuses anything else.
+POINT_FORMS = (
+    "an (n, 3) array of points, what read_points returns, an Open3D PointCloud, a "
+    "trimesh.PointCloud, a PyVista PolyData, or a mesh (its vertices)"
+)
+
+
+def held_points(cloud: object) -> tuple[ArrayLike, FloatArray | None]:
+    """The points that ``cloud`` holds and the normals stored with them (``None`` without),
+    recognised by its attributes as :func:`checked_mesh` recognises a mesh: an array as it
+    is; what :func:`~mesh_normal.points.read_points` returns, an Open3D ``PointCloud`` and a
+    PyVista ``PolyData`` by their ``points`` (and ``normals``, an Open3D cloud's empty without
+    any); a ``trimesh.PointCloud`` and any mesh by their ``vertices``. A path, or an object
+    with none of these, gets a ``TypeError`` that says what can be passed; the points
+    themselves are checked by the function that reads them."""
+    if isinstance(cloud, CheckedMesh):
+        return cloud.vertices, None
+    if isinstance(cloud, str | bytes | os.PathLike):
+        raise TypeError(
+            f"A point function takes {POINT_FORMS}, not a file: read it with mn.read_points first."
+        )
+    if hasattr(cloud, "points"):
+        points = np.asarray(cloud.points)
+        normals = getattr(cloud, "normals", None)
+        stored = None if normals is None else np.asarray(normals)
+        if stored is None or stored.shape != points.shape or not len(stored):
+            return points, None
+        return points, stored.astype(np.float64, copy=False)
+    if hasattr(cloud, "vertices"):
+        return np.asarray(cloud.vertices), None
+    if isinstance(cloud, np.ndarray | list | tuple):
+        return cloud, None
+    raise TypeError(f"A point function takes {POINT_FORMS}, not {type(cloud).__name__}.")
+
+
+def _polydata_triangles(mesh: object) -> IndexArray:
+    """(m, 3): the triangles of a PyVista ``PolyData``, from its flat cell array
+    ``[3, a, b, c, 3, ...]``; a ``ValueError`` for any other cell. Polygons are refused, not
+    cut into fans: a fan is right only for convex polygons, and ``triangulate()`` knows."""
+    strips = getattr(mesh, "n_strips", 0)
+    if isinstance(strips, int) and strips:
+        raise ValueError(
+            f"the PolyData has {strips:,} triangle strips: call its triangulate() first, "
+            "so that every face is a triangle."
+        )
+    cells = np.asarray(mesh.faces)  # type: ignore[attr-defined]
+    if cells.ndim == 2:  # already (m, 3)
+        return cells
+    whole = len(cells) - len(cells) % 4
+    rows = cells[:whole].reshape(-1, 4)
+    # Until the first cell of another size, every cell is four numbers long: that one is the
+    # first row here whose count is not 3.
+    other = np.flatnonzero(rows[:, 0] != 3)
+    if len(other) or whole != len(cells):
+        corners = int(rows[other[0], 0]) if len(other) else None
+        found = f"a face of {corners} corners" if corners is not None else "a cut-off cell array"
+        raise ValueError(
+            f"the PolyData's faces must all be triangles, and it has {found}: call its "
+            "triangulate() first."
+        )
+    return rows[:, 1:]
 
 
 def check_mesh(vertices: ArrayLike, faces: ArrayLike) -> tuple[FloatArray, IndexArray]:

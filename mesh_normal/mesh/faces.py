@@ -39,7 +39,14 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 import mesh_normal._core as _core
-from mesh_normal.mesh.checks import CheckedMesh, as_checked, checked_mesh, read_only, refuse_faces
+from mesh_normal.mesh.checks import (
+    CheckedMesh,
+    HeldMesh,
+    as_checked,
+    checked_mesh,
+    read_only,
+    refuse_faces,
+)
 from mesh_normal.types import BoolArray, FloatArray, IndexArray
 
 
@@ -107,9 +114,11 @@ class FaceGeometry:
         return found
 
 
-#: What the core's functions take: raw ``vertices`` (with ``faces``), a checked mesh, or the
-#: face geometry of one (then without ``faces``).
-MeshInput: TypeAlias = ArrayLike | CheckedMesh | FaceGeometry
+#: What the core's functions take: raw ``vertices`` (with ``faces``), or without ``faces`` a
+#: mesh as :func:`~mesh_normal.mesh.checks.checked_mesh` takes it (a checked mesh, a
+#: ``(vertices, faces)`` tuple, what ``read_mesh`` returns, a trimesh, Open3D or PyVista mesh)
+#: or the face geometry of one.
+MeshInput: TypeAlias = "ArrayLike | HeldMesh | FaceGeometry"
 
 
 @dataclass(frozen=True, slots=True)
@@ -139,8 +148,10 @@ def face_geometry(vertices: MeshInput, faces: ArrayLike | None = None) -> FaceGe
 
     Parameters
     ----------
-    vertices : (n, 3) float64, CheckedMesh or FaceGeometry
-        Finite coordinates, or an already checked mesh (then no ``faces``).
+    vertices : (n, 3) float64, a mesh or FaceGeometry
+        Finite coordinates; or a mesh as :func:`~mesh_normal.mesh.checks.checked_mesh` takes
+        it (read_mesh's, a ``(vertices, faces)`` tuple, trimesh, Open3D, PyVista), then
+        without ``faces``.
     faces : (m, 3) int, optional
         Indices into ``vertices``.
 
@@ -188,8 +199,10 @@ def face_normals(
 
     Parameters
     ----------
-    vertices : (n, 3) float64, CheckedMesh or FaceGeometry
-        Finite coordinates, or an already checked mesh or its geometry (then no ``faces``).
+    vertices : (n, 3) float64, a mesh or FaceGeometry
+        Finite coordinates; or a mesh as :func:`~mesh_normal.mesh.checks.checked_mesh` takes
+        it (read_mesh's, a ``(vertices, faces)`` tuple, trimesh, Open3D, PyVista) or its
+        geometry, then without ``faces``.
     faces : (m, 3) int
         Indices into ``vertices``; face ``[a, b, c]`` has the normal (B - A) x (C - A).
     out : FaceNormals, optional
@@ -306,8 +319,10 @@ def face_areas(vertices: MeshInput, faces: ArrayLike | None = None) -> FloatArra
 
     Parameters
     ----------
-    vertices : (n, 3) float64, CheckedMesh or FaceGeometry
-        Finite coordinates, or an already checked mesh or its geometry (then no ``faces``).
+    vertices : (n, 3) float64, a mesh or FaceGeometry
+        Finite coordinates; or a mesh as :func:`~mesh_normal.mesh.checks.checked_mesh` takes
+        it (read_mesh's, a ``(vertices, faces)`` tuple, trimesh, Open3D, PyVista) or its
+        geometry, then without ``faces``.
     faces : (m, 3) int
         Indices into ``vertices``.
 

@@ -47,7 +47,14 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 import mesh_normal._core as _core
-from mesh_normal.mesh.checks import CheckedMesh, check_faces, read_only
+from mesh_normal.mesh.checks import (
+    MESH_FORMS,
+    CheckedMesh,
+    HeldMesh,
+    check_faces,
+    held_mesh,
+    read_only,
+)
 from mesh_normal.mesh.faces import FaceGeometry
 from mesh_normal.types import BoolArray, FloatArray, IndexArray, ParityArray
 
@@ -110,7 +117,7 @@ class Structure:
 
 
 def mesh_topology(
-    faces: ArrayLike | CheckedMesh | FaceGeometry,
+    faces: ArrayLike | HeldMesh | FaceGeometry,
     vertex_count: int | None = None,
     *,
     weld: float | None = None,
@@ -119,9 +126,11 @@ def mesh_topology(
 
     Parameters
     ----------
-    faces : (m, 3) int, CheckedMesh or FaceGeometry
-        Indices into ``vertex_count`` vertices, or an already checked mesh or its geometry
-        (then no ``vertex_count``). A mesh is judged by position (vertices with identical
+    faces : (m, 3) int, a mesh or FaceGeometry
+        Indices into ``vertex_count`` vertices; or a mesh as
+        :func:`~mesh_normal.mesh.checks.checked_mesh` takes it (read_mesh's, a
+        ``(vertices, faces)`` tuple, trimesh, Open3D, PyVista) or its geometry, then without
+        ``vertex_count``. A mesh is judged by position (vertices with identical
         coordinates are one point); raw faces, having no coordinates, by index.
     vertex_count : int
         n, the number of vertices.
@@ -142,15 +151,22 @@ def mesh_topology(
     """
     if isinstance(faces, FaceGeometry):
         faces = faces.mesh
+    if vertex_count is None and not isinstance(faces, CheckedMesh | np.ndarray | list):
+        faces = held_mesh(faces)
     if isinstance(faces, CheckedMesh):
         if vertex_count is not None:
             raise TypeError("a checked mesh holds its vertex count: pass it alone.")
         return structure(by_position(faces, weld), len(faces.vertices)).topology
     if vertex_count is None:
-        raise TypeError("vertex_count is required with raw faces.")
+        raise TypeError(
+            "vertex_count is required with raw faces: pass faces and vertex_count, or a mesh "
+            f"alone ({MESH_FORMS})."
+        )
     if weld is not None:
-        raise TypeError("welding needs the coordinates: pass a checked mesh.")
-    return structure(check_faces(faces, vertex_count), vertex_count).topology
+        raise TypeError("welding needs the coordinates: pass a mesh.")
+    # With a vertex count, ``faces`` is the raw index array (check_faces refuses anything else).
+    indices = check_faces(faces, vertex_count)  # type: ignore[arg-type]
+    return structure(indices, vertex_count).topology
 
 
 def by_position(mesh: CheckedMesh, weld: float | None = None) -> IndexArray:

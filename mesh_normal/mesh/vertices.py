@@ -117,8 +117,10 @@ def vertex_normals(
 
     Parameters
     ----------
-    vertices : (n, 3) float64, CheckedMesh or FaceGeometry
-        Finite coordinates, or an already checked mesh or its geometry (then ``faces`` is
+    vertices : (n, 3) float64, a mesh or FaceGeometry
+        Finite coordinates; or a mesh as :func:`~mesh_normal.mesh.checks.checked_mesh` takes
+        it (read_mesh's, a ``(vertices, faces)`` tuple, trimesh, Open3D, PyVista) or its
+        geometry (then ``faces`` is
         None: ``vertex_normals(geometry, weighting="area")``).
     faces : (m, 3) int
         Indices into ``vertices``.

@@ -16,12 +16,14 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
+from mesh_normal.mesh.checks import HeldCloud, held_points, read_only
 from mesh_normal.points.estimate import (
     PointNormals,
     PointStatus,
     coincident_groups,
     point_normals,
 )
+from mesh_normal.points.estimate import _checked_points as checked_points
 from mesh_normal.points.io.read import PointCloud
 from mesh_normal.points.orient import OrientMode
 from mesh_normal.points.report import (
@@ -54,7 +56,7 @@ class PointAnalysis:
 
 
 def analyse_points(
-    cloud: PointCloud,
+    cloud: PointCloud | ArrayLike | HeldCloud,
     *,
     k: int | None = 30,
     radius: float | None = None,
@@ -68,8 +70,14 @@ def analyse_points(
 
     With ``orient="viewpoint"`` and no ``viewpoint``, a PCD file's VIEWPOINT origin is used;
     ``orient="file"`` orients along the file's normals. ``name`` and ``size`` describe the
-    file the cloud came from. Raises ValueError (one sentence) for bad arguments.
+    file the cloud came from. ``cloud`` is what :func:`~mesh_normal.points.read_points`
+    returns, or a cloud in memory as :func:`~mesh_normal.points.point_normals` takes it (an
+    array, an Open3D ``PointCloud`` with its normals, a ``trimesh.PointCloud``, a PyVista
+    ``PolyData``, a mesh's vertices), whose report's format is ``"memory"``. Raises
+    ValueError (one sentence) for bad arguments, TypeError for what is not a cloud.
     """
+    if not isinstance(cloud, PointCloud):
+        cloud = in_memory(cloud)
     from_file = False
     if orient == "viewpoint" and viewpoint is None:
         if cloud.viewpoint is None:
@@ -107,6 +115,24 @@ def analyse_points(
         diagnosis=diagnose(counts, orientation, spacing, agreement, k, radius, far_from_flat),
     )
     return PointAnalysis(cloud, normals, report)
+
+
+def in_memory(held: ArrayLike | HeldCloud) -> PointCloud:
+    """A cloud in memory as a :class:`PointCloud` of format ``"memory"``: its points checked
+    as :func:`~mesh_normal.points.point_normals` checks them (non-finite rows are allowed),
+    read-only views of them and of its normals."""
+    points, normals = held_points(held)
+    xyz = checked_points(points)
+    return PointCloud(
+        points=read_only(xyz),
+        normals=None if normals is None else read_only(normals),
+        colors=None,
+        viewpoint=None,
+        format="memory",
+        source_kind="points",
+        kept=np.arange(len(xyz), dtype=np.int64),
+        file_points=len(xyz),
+    )
 
 
 def _vector(value: ArrayLike | None) -> list[float] | None:

@@ -36,6 +36,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 import mesh_normal._core as _core
+from mesh_normal.mesh.checks import HeldCloud, held_points
 from mesh_normal.points.orient import (
     ORIENT_MODES,
     ComponentOrientation,
@@ -155,7 +156,7 @@ class _Frame:
 
 
 def point_normals(
-    points: ArrayLike,
+    points: ArrayLike | HeldCloud,
     *,
     k: int | None = 30,
     radius: float | None = None,
@@ -170,8 +171,11 @@ def point_normals(
 
     Parameters
     ----------
-    points : (n, 3) float
-        Coordinates; NaN or infinite rows are allowed and get ``not_finite``.
+    points : (n, 3) float, or a cloud
+        Coordinates; NaN or infinite rows are allowed and get ``not_finite``. Or a cloud as
+        people hold it: what :func:`~mesh_normal.points.read_points` returns, an Open3D
+        ``PointCloud``, a ``trimesh.PointCloud``, a PyVista ``PolyData``, or a mesh (its
+        vertices); with ``orient="file"`` and no ``stored``, its own normals are taken.
     k : int or None
         The neighbourhood's size, the point itself included (at least 3); with ``radius``, at
         most this many within it; None with a radius: all within it.
@@ -185,8 +189,9 @@ def point_normals(
     direction : (3,) float
         With ``orient="direction"``: normals make an acute angle with it (e.g. (0, 0, 1)).
     stored : (n, 3) float
-        With ``orient="file"``: normals read with the points; each normal is turned to agree
-        with its stored one (zero or non-finite rows leave it unoriented).
+        With ``orient="file"``: normals read with the points (by default a cloud's own);
+        each normal is turned to agree with its stored one (zero or non-finite rows leave it
+        unoriented).
     max_angle : float
         ``"mst"`` and ``"riemannian"``: the largest angle, in degrees, between neighbours'
         normal lines that a sign is carried across.
@@ -199,7 +204,10 @@ def point_normals(
     PointNormals
         Full-length arrays in input order, and the orientation's summary.
     """
-    cloud = _checked_points(points)
+    held, held_normals = held_points(points)
+    cloud = _checked_points(held)
+    if orient == "file" and stored is None:
+        stored = held_normals  # an Open3D cloud's or read_points' own normals
     k, radius = _checked_neighbourhood(k, radius)
     references = _checked_orientation(len(cloud), orient, viewpoint, direction, stored, max_angle)
     n = len(cloud)

@@ -22,7 +22,8 @@ class PointFileInfo(Record):
 
     name: str | None = described(description="The file's name as uploaded, or null without one.")
     format: str = described(
-        description="The format read: ply, xyz, pts, pcd, las, laz or a mesh's."
+        description="The format read: ply, xyz, pts, pcd, las, laz or a mesh's; memory for a "
+        "cloud handed over in memory (an array, another library's cloud)."
     )
     source_kind: SourceKind = described(description='"points", or "mesh vertices" for a mesh file.')
     bytes: int = described(
@@ -154,3 +155,9 @@ class PointReport(Record):
         description="How the file's normals agree with ours; null when it stores none."
     )
     diagnosis: list[str] = described(description="What was found, in plain sentences.")
+
+    def _repr_html_(self) -> str:
+        """What a notebook shows: the diagnosis, the key figures and the findings."""
+        from mesh_normal.notebook.html import point_report_html
+
+        return point_report_html(self.to_dict())

@@ -132,15 +132,16 @@ def test_the_wheel_requires_no_web_or_test_package(installed: Installed) -> None
     metadata = email.parser.BytesParser().parsebytes(text)
     assert metadata["Name"] == "mesh-normal"
     assert metadata["Version"] == mesh_normal.__version__
-    # The extras are the batch's (pyarrow) and the batch on a Dask cluster; nothing of the web.
-    assert sorted(metadata.get_all("Provides-Extra") or []) == ["batch", "dask"]
+    # The extras are the batch's (pyarrow), the batch on a Dask cluster and mn.show's Plotly;
+    # nothing of the web is required.
+    assert sorted(metadata.get_all("Provides-Extra") or []) == ["batch", "dask", "show"]
     required = [Requirement(text) for text in metadata.get_all("Requires-Dist") or []]
-    names = {requirement.name.lower() for requirement in required}
+    extras = [item for item in required if item.marker and "extra" in str(item.marker)]
+    names = {requirement.name.lower() for requirement in required if requirement not in extras}
     assert "numpy" in names
     assert not names & {"numba", "llvmlite"}  # the kernels are the compiled core's
     assert not names & WEB_AND_TEST
-    extras = [item for item in required if item.marker and "extra" in str(item.marker)]
-    assert sorted(item.name.lower() for item in extras) == ["dask", "pyarrow", "pyarrow"]
+    assert sorted(item.name.lower() for item in extras) == ["dask", "plotly", "pyarrow", "pyarrow"]
     assert "pyarrow" not in {item.name for item in required if item not in extras}
 
 

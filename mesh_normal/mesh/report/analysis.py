@@ -21,6 +21,7 @@ from numpy.typing import NDArray
 from mesh_normal.files import LoadedMesh, read_mesh
 from mesh_normal.files.read import MeshSource, source_bytes
 from mesh_normal.mesh.bounds import column_bounds
+from mesh_normal.mesh.checks import MESH_FORMS, HeldMesh, checked_mesh
 from mesh_normal.mesh.faces import FaceGeometry, FaceNormals, face_geometry, geometry_areas
 from mesh_normal.mesh.orientation import HeadStart, Orientation, oriented
 from mesh_normal.mesh.report.diagnosis import problems
@@ -165,12 +166,18 @@ def analyse_mesh(
 
 
 def analyse(
-    source: LoadedMesh | MeshSource, filename: str | None = None, *, weld: float | None = None
+    source: LoadedMesh | MeshSource | HeldMesh,
+    filename: str | None = None,
+    *,
+    weld: float | None = None,
 ) -> MeshReport:
     """The report on a mesh: ``mn.analyse(path)``.
 
-    ``source`` is a mesh already read (:class:`~mesh_normal.files.LoadedMesh`), or a path, the
-    file's bytes or a binary file object; ``filename`` names it in the report (by default the
+    ``source`` is a mesh already read (:class:`~mesh_normal.files.LoadedMesh`), a path, the
+    file's bytes or a binary file object, or a mesh in memory as
+    :func:`~mesh_normal.mesh.checks.checked_mesh` takes it (a ``(vertices, faces)`` tuple, a
+    ``trimesh.Trimesh``, an Open3D ``TriangleMesh``, a PyVista ``PolyData`` of triangles; its
+    report's format is ``"memory"``). ``filename`` names it in the report (by default the
     path's or the file object's name) and, for bytes without a recognisable header, gives the
     format by its extension.
 
@@ -193,9 +200,9 @@ def analyse(
     OSError
         When the path cannot be read.
     TypeError
-        When a file object gives text, not bytes.
+        When a file object gives text, not bytes, or ``source`` is none of the above.
     ValueError
-        When ``weld`` is not a number from 0 to 0.01.
+        When ``weld`` is not a number from 0 to 0.01, or a mesh's arrays are not a mesh.
     """
     weld = checked_weld(weld)  # before reading: a bad option fails at once
     if isinstance(source, LoadedMesh):
@@ -205,8 +212,18 @@ def analyse(
         named = filename or path.name
         mesh = read_mesh(path, named)
         return build_report(analyse_mesh(mesh, named, path.stat().st_size, weld=weld))
-    data, name = source_bytes(source, filename)
-    return build_report(analyse_mesh(read_mesh(data, name), name, len(data), weld=weld))
+    if isinstance(source, bytes | bytearray | memoryview) or hasattr(source, "read"):
+        data, name = source_bytes(source, filename)  # type: ignore[arg-type]
+        return build_report(analyse_mesh(read_mesh(data, name), name, len(data), weld=weld))
+    try:
+        checked = checked_mesh(source)
+    except TypeError:
+        raise TypeError(
+            "analyse takes a path, the file's bytes, a binary file object or a mesh "
+            f"({MESH_FORMS}), not {type(source).__name__}."
+        ) from None
+    held = LoadedMesh(checked.vertices, checked.faces, "memory", len(checked.faces))
+    return build_report(analyse_mesh(held, filename, 0, weld=weld))
 
 
 def build_report(analysis: MeshAnalysis) -> MeshReport:

@@ -17,7 +17,8 @@ from dataclasses import dataclass
 from typing import Literal
 
 # The reports import no NumPy and no kernels (the app declares its routes with them at start).
-from mesh_normal.choices import MeshFormat, Method, Verdict, Weighting
+from mesh_normal.choices import MeshFormat as MeshFormat  # the files' formats, named here too
+from mesh_normal.choices import Method, ReportFormat, Verdict, Weighting
 from mesh_normal.record import INDEX_LIST_LIMIT, Finite, Measure, Record, described
 from mesh_normal.tolerances import WELD_LIMIT
 
@@ -71,7 +72,10 @@ class FileInfo(Record):
     """The uploaded file."""
 
     name: str | None = described(description="The file's name as uploaded, or null without one.")
-    format: MeshFormat = described(description="The format read from the bytes (else the name).")
+    format: ReportFormat = described(
+        description="The format read from the bytes (else the name); memory for a mesh handed "
+        "over in memory (arrays, or another library's mesh)."
+    )
     bytes: int = described(
         ge=0, description="The file's size in bytes (0 for a mesh handed over already read)."
     )
@@ -275,3 +279,9 @@ class MeshReport(Record):
     )
     notes: list[str] = described(description="What the reader noticed about the file, in words.")
     problems: list[Problem] = described(description="Each problem found, the most serious first.")
+
+    def _repr_html_(self) -> str:
+        """What a notebook shows: the diagnosis, the key figures and the problems."""
+        from mesh_normal.notebook.html import mesh_report_html
+
+        return mesh_report_html(self.to_dict())
