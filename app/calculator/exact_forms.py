@@ -49,30 +49,62 @@ MAX_EXACT_EXPONENT = 30
 
 @dataclass(frozen=True, slots=True)
 class Exact:
-    """A triangle's exact values, with the points in the chosen order (A, B, C or A, C, B)."""
+    """A triangle's exact values, with the points in the chosen order (A, B, C or A, C, B).
+
+    Held as integers over one denominator D (the corners' least common one): u and v over D,
+    n over D², n · A over D³, |n|² over D⁴ and u · v over D². Integer arithmetic needs no gcd
+    at each step, as Fractions do; the Fractions are made only where they are shown.
+    """
 
     points: tuple[RationalPoint, RationalPoint, RationalPoint]
-    u: Exact3
-    v: Exact3
-    n: Exact3
+    denominator: int
+    scaled_u: tuple[int, int, int]
+    scaled_v: tuple[int, int, int]
+    scaled_n: tuple[int, int, int]
+    #: n · A, over D³.
+    scaled_d: int
+    #: |n|² = n · n, over D⁴.
+    scaled_square: int
+    #: u · v, over D².
+    scaled_dot: int
+
+    @property
+    def u(self) -> Exact3:
+        return _over(self.scaled_u, self.denominator)
+
+    @property
+    def v(self) -> Exact3:
+        return _over(self.scaled_v, self.denominator)
+
+    @property
+    def n(self) -> Exact3:
+        return _over(self.scaled_n, self.denominator**2)
 
     @property
     def square(self) -> Fraction:
         """|n|² = n · n."""
-        return _dot(self.n, self.n)
+        return Fraction(self.scaled_square, self.denominator**4)
 
     @property
     def dot(self) -> Fraction:
         """u · v."""
-        return _dot(self.u, self.v)
+        return Fraction(self.scaled_dot, self.denominator**2)
 
     @property
     def plane_d(self) -> Fraction:
         """n · A: the plane through the triangle is n · (x, y, z) = n · A."""
-        return _dot(self.n, self.points[0])
+        return Fraction(self.scaled_d, self.denominator**3)
 
 
-def _dot(p: Exact3, q: Exact3) -> Fraction:
+def _over(values: tuple[int, int, int], denominator: int) -> Exact3:
+    return (
+        Fraction(values[0], denominator),
+        Fraction(values[1], denominator),
+        Fraction(values[2], denominator),
+    )
+
+
+def _dot(p: tuple[int, int, int], q: tuple[int, int, int]) -> int:
     return p[0] * q[0] + p[1] * q[1] + p[2] * q[2]
 
 
@@ -82,13 +114,20 @@ def exact_values(
     """The exact u, v and n of triangle ABC (ACB with ``swap_winding``)."""
     tri, denominator = rational_exact(a, b, c, swap_winding=swap_winding)
     points = (a, c, b) if swap_winding else (a, b, c)
-    square_den = denominator * denominator
-
-    def over(values: tuple[int, int, int], den: int) -> Exact3:
-        return Fraction(values[0], den), Fraction(values[1], den), Fraction(values[2], den)
-
+    start = (
+        a[0].numerator * (denominator // a[0].denominator),
+        a[1].numerator * (denominator // a[1].denominator),
+        a[2].numerator * (denominator // a[2].denominator),
+    )
     return Exact(
-        points, over(tri.u, denominator), over(tri.v, denominator), over(tri.n, square_den)
+        points,
+        denominator,
+        tri.u,
+        tri.v,
+        tri.n,
+        _dot(tri.n, start),
+        _dot(tri.n, tri.n),
+        _dot(tri.u, tri.v),
     )
 
 
@@ -138,6 +177,15 @@ def _fits(*values: Fraction | int) -> bool:
     return True
 
 
+def _fits_over(denominator: int, *values: int) -> bool:
+    """Whether each ``value / denominator``, reduced, fits as :func:`_fits` has it."""
+    for value in values:
+        common = gcd(value, denominator)
+        if abs(value) // common >= _LIMIT or denominator // common >= _LIMIT:
+            return False
+    return True
+
+
 TOO_LONG = f"The exact forms are left out: their integers would have more than {MAX_DIGITS} digits."
 
 
@@ -146,11 +194,17 @@ def exact_forms(
 ) -> ExactForms | str:
     """The exact forms, or a sentence saying why they are left out (integers too long)."""
     x = exact
-    if not _fits(*given[0], *given[1], *given[2], *x.u, *x.v, *x.n, x.plane_d):
+    den = x.denominator
+    # The likeliest to be too long first (|n|² and d, of the highest powers of D).
+    if not (
+        _fits_over(den**4, x.scaled_square)
+        and _fits_over(den**3, x.scaled_d)
+        and _fits_over(den**2, *x.scaled_n)
+        and _fits_over(den, *x.scaled_u, *x.scaled_v)
+        and _fits(*given[0], *given[1], *given[2])
+    ):
         return TOO_LONG
     square = x.square
-    if not _fits(square):
-        return TOO_LONG
     c, r = square_root(square)
     if not _fits(c, r):
         return TOO_LONG
@@ -243,11 +297,17 @@ def equation_text(coefficients: list[str], d: str, minus: str = "-") -> str:
 
 def rounded_exact(x: Fraction) -> float | None:
     """``x`` rounded once; ``None`` beyond the double range or nonzero and below it."""
+    return rounded_over(x.numerator, x.denominator)
+
+
+def rounded_over(value: int, denominator: int) -> float | None:
+    """``value / denominator`` rounded once (``int / int`` is); ``None`` as in
+    :func:`rounded_exact`."""
     try:
-        value = x.numerator / x.denominator
+        rounded = value / denominator
     except OverflowError:
         return None
-    return None if value == 0 and x != 0 else value
+    return None if rounded == 0 and value != 0 else rounded
 
 
 # --- MathML for the result card ---------------------------------------------------------------
