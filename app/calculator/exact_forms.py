@@ -32,11 +32,12 @@ from app.calculator.mathml import (
     row,
     sqrt,
 )
-from mesh_normal.exact import root_over, square_root
-from mesh_normal.triangle import AXES, rational_exact
+from mesh_normal.exact import root_over, square_root, to_fixed
+from mesh_normal.triangle import AXES
 
 RationalPoint = tuple[Fraction, Fraction, Fraction]
 Exact3 = tuple[Fraction, Fraction, Fraction]
+IntPoint = tuple[int, int, int]
 
 #: The most digits an integer of an exact form may have; beyond, the forms are left out.
 MAX_DIGITS = 40
@@ -56,7 +57,10 @@ class Exact:
     at each step, as Fractions do; the Fractions are made only where they are shown.
     """
 
-    points: tuple[RationalPoint, RationalPoint, RationalPoint]
+    #: The corners in the chosen order, over D.
+    scaled_points: tuple[IntPoint, IntPoint, IntPoint]
+    #: Whether the order is A, C, B.
+    swapped: bool
     denominator: int
     scaled_u: tuple[int, int, int]
     scaled_v: tuple[int, int, int]
@@ -67,6 +71,19 @@ class Exact:
     scaled_square: int
     #: u · v, over D².
     scaled_dot: int
+
+    @property
+    def points(self) -> tuple[RationalPoint, RationalPoint, RationalPoint]:
+        """A, B, C in the chosen order."""
+        p, q, r = self.scaled_points
+        den = self.denominator
+        return _over(p, den), _over(q, den), _over(r, den)
+
+    @property
+    def given(self) -> tuple[RationalPoint, RationalPoint, RationalPoint]:
+        """A, B, C as given (not reordered)."""
+        p, q, r = self.points
+        return (p, r, q) if self.swapped else (p, q, r)
 
     @property
     def u(self) -> Exact3:
@@ -104,42 +121,44 @@ def _over(values: tuple[int, int, int], denominator: int) -> Exact3:
     )
 
 
-def _dot(p: tuple[int, int, int], q: tuple[int, int, int]) -> int:
+def _dot(p: IntPoint, q: IntPoint) -> int:
     return p[0] * q[0] + p[1] * q[1] + p[2] * q[2]
+
+
+def _from_scaled(fixed: list[int], denominator: int, swap_winding: bool) -> Exact:
+    """The exact values of corners ``fixed`` (A, B, C in the chosen order, 9 integers over D)."""
+    p = (fixed[0], fixed[1], fixed[2])
+    q = (fixed[3], fixed[4], fixed[5])
+    r = (fixed[6], fixed[7], fixed[8])
+    u = (q[0] - p[0], q[1] - p[1], q[2] - p[2])
+    v = (r[0] - p[0], r[1] - p[1], r[2] - p[2])
+    n = (u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0])
+    return Exact((p, q, r), swap_winding, denominator, u, v, n, _dot(n, p), _dot(n, n), _dot(u, v))
 
 
 def exact_values(
     a: RationalPoint, b: RationalPoint, c: RationalPoint, *, swap_winding: bool = False
 ) -> Exact:
     """The exact u, v and n of triangle ABC (ACB with ``swap_winding``)."""
-    tri, denominator = rational_exact(a, b, c, swap_winding=swap_winding)
-    points = (a, c, b) if swap_winding else (a, b, c)
-    start = (
-        a[0].numerator * (denominator // a[0].denominator),
-        a[1].numerator * (denominator // a[1].denominator),
-        a[2].numerator * (denominator // a[2].denominator),
-    )
-    return Exact(
-        points,
-        denominator,
-        tri.u,
-        tri.v,
-        tri.n,
-        _dot(tri.n, start),
-        _dot(tri.n, tri.n),
-        _dot(tri.u, tri.v),
-    )
+    p, q, r = (a, c, b) if swap_winding else (a, b, c)
+    values = [*p, *q, *r]
+    denominator = lcm(*(x.denominator for x in values))
+    fixed = [x.numerator * (denominator // x.denominator) for x in values]
+    return _from_scaled(fixed, denominator, swap_winding)
 
 
-def double_points(
-    a: tuple[float, float, float], b: tuple[float, float, float], c: tuple[float, float, float]
-) -> tuple[RationalPoint, RationalPoint, RationalPoint]:
-    """The exact values of three points of doubles (finite: ``Fraction(x)`` is then quick)."""
-
-    def point(p: tuple[float, float, float]) -> RationalPoint:
-        return Fraction(p[0]), Fraction(p[1]), Fraction(p[2])
-
-    return point(a), point(b), point(c)
+def double_values(
+    a: tuple[float, float, float],
+    b: tuple[float, float, float],
+    c: tuple[float, float, float],
+    *,
+    swap_winding: bool = False,
+) -> Exact:
+    """:func:`exact_values` of three points of doubles (finite), from their integers over
+    one power of two (:func:`mesh_normal.exact.to_fixed`)."""
+    p, q, r = (a, c, b) if swap_winding else (a, b, c)
+    fixed, scale = to_fixed([*p, *q, *r])
+    return _from_scaled(fixed, 1 << scale, swap_winding)
 
 
 @dataclass(frozen=True, slots=True)
@@ -189,9 +208,7 @@ def _fits_over(denominator: int, *values: int) -> bool:
 TOO_LONG = f"The exact forms are left out: their integers would have more than {MAX_DIGITS} digits."
 
 
-def exact_forms(
-    given: tuple[RationalPoint, RationalPoint, RationalPoint], exact: Exact
-) -> ExactForms | str:
+def exact_forms(exact: Exact) -> ExactForms | str:
     """The exact forms, or a sentence saying why they are left out (integers too long)."""
     x = exact
     den = x.denominator
@@ -201,7 +218,7 @@ def exact_forms(
         and _fits_over(den**3, x.scaled_d)
         and _fits_over(den**2, *x.scaled_n)
         and _fits_over(den, *x.scaled_u, *x.scaled_v)
-        and _fits(*given[0], *given[1], *given[2])
+        and _fits_over(den, *x.scaled_points[0], *x.scaled_points[1], *x.scaled_points[2])
     ):
         return TOO_LONG
     square = x.square
@@ -215,7 +232,7 @@ def exact_forms(
         if not _fits(ux.coefficient, uy.coefficient, uz.coefficient):
             return TOO_LONG
         unit = (ux, uy, uz)
-    return ExactForms(given, x, Surd(c, r), unit, Surd(c / 2, r))
+    return ExactForms(x.given, x, Surd(c, r), unit, Surd(c / 2, r))
 
 
 # --- Text and JSON ----------------------------------------------------------------------------
