@@ -32,8 +32,8 @@ from app.calculator.mathml import (
     row,
     sqrt,
 )
-from mesh_normal.exact import root_over, square_root, to_fixed
-from mesh_normal.triangle import AXES
+from mesh_normal.exact import root_over, square_root
+from mesh_normal.triangle import AXES, ExactTriangle
 
 RationalPoint = tuple[Fraction, Fraction, Fraction]
 Exact3 = tuple[Fraction, Fraction, Fraction]
@@ -147,18 +147,19 @@ def exact_values(
     return _from_scaled(fixed, denominator, swap_winding)
 
 
-def double_values(
-    a: tuple[float, float, float],
-    b: tuple[float, float, float],
-    c: tuple[float, float, float],
-    *,
-    swap_winding: bool = False,
-) -> Exact:
-    """:func:`exact_values` of three points of doubles (finite), from their integers over
-    one power of two (:func:`mesh_normal.exact.to_fixed`)."""
-    p, q, r = (a, c, b) if swap_winding else (a, b, c)
-    fixed, scale = to_fixed([*p, *q, *r])
-    return _from_scaled(fixed, 1 << scale, swap_winding)
+def double_values(triangle: ExactTriangle) -> Exact:
+    """:func:`exact_values` of a triangle of doubles, from the integers over ``2**scale`` that
+    :func:`mesh_normal.triangle.exact_triangle` found (B and C are A plus u and v)."""
+    scale = triangle.scale
+    ratios = [x.as_integer_ratio() for x in triangle.points[0]]
+    # A double's denominator is a power of two, 2**(bit_length - 1), at most 2**scale.
+    px, py, pz = (num << (scale + 1 - den.bit_length()) for num, den in ratios)
+    u, v, n = triangle.u, triangle.v, triangle.n
+    q = (px + u[0], py + u[1], pz + u[2])
+    r = (px + v[0], py + v[1], pz + v[2])
+    p = (px, py, pz)
+    swapped = triangle.order == "ACB"
+    return Exact((p, q, r), swapped, 1 << scale, u, v, n, _dot(n, p), _dot(n, n), _dot(u, v))
 
 
 @dataclass(frozen=True, slots=True)

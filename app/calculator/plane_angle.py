@@ -49,15 +49,12 @@ def plane_payload(exact: Exact, *, with_exact: bool) -> tuple[dict[str, Any] | N
     if not exact.scaled_square:
         return None, NO_PLANE
     den2 = exact.denominator**2
-    rounded = [rounded_over(value, den2) for value in exact.scaled_n]
-    rounded.append(rounded_over(exact.scaled_d, den2 * exact.denominator))
+    a, b, c = (rounded_over(value, den2) for value in exact.scaled_n)
+    d = rounded_over(exact.scaled_d, den2 * exact.denominator)
     equation = None
-    if all(value is not None for value in rounded):
-        texts = [js_number(value) for value in rounded if value is not None]
-        equation = equation_text(texts[:3], texts[3])
-    plane: dict[str, Any] = dict(zip("abcd", rounded, strict=True))
-    plane["equation"] = equation
-    plane["exact"] = None
+    if a is not None and b is not None and c is not None and d is not None:
+        equation = equation_text([js_number(a), js_number(b), js_number(c)], js_number(d))
+    plane: dict[str, Any] = {"a": a, "b": b, "c": c, "d": d, "equation": equation, "exact": None}
     if with_exact:
         values = (*exact.n, exact.plane_d)
         integers = [str(value) for value in integer_plane(values)]
