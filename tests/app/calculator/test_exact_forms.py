@@ -278,8 +278,8 @@ def reference_angle(square: Fraction, dot: Fraction) -> float:
 def reference_fields(
     given: tuple[RationalPoint, RationalPoint, RationalPoint], swap: bool, reason: str | None
 ) -> dict:  # type: ignore[type-arg]
-    """Plane, angle and exact forms of the payload, from Fractions; ``reason`` is why the
-    exact forms are left out when they are too long."""
+    """u, v and n rounded, the plane, the angle and the exact forms of the payload, from
+    Fractions; ``reason`` is why the exact forms are left out when they are too long."""
     a, b, c = given
     p, q, r = (a, c, b) if swap else (a, b, c)
     u = [q[i] - p[i] for i in range(3)]
