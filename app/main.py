@@ -17,7 +17,6 @@ import mesh_normal
 from app import config
 from app.calculator import api as calculator_api
 from app.calculator import pages
-from app.calculator.lane import NormalFastLane
 from app.mesh import api as mesh_api
 from app.mesh import page as mesh_page
 from app.points import api as points_api
@@ -161,7 +160,6 @@ def create_app(upload_limit: int | None = None, settings: config.Settings | None
     app.add_middleware(BodyLimit, upload_limit=app.state.upload_limit)
     app.add_middleware(SecurityHeaders)
     app.add_middleware(HeadAsGet)
-    app.add_middleware(NormalFastLane)  # outermost of ours: the common POST /api/normal
     build_routes(app.router.routes)
     return app
 

@@ -11,7 +11,6 @@ from fastapi.responses import Response
 from app.calculator import batch
 from app.calculator.calculation import calculation_payload, from_doubles, from_typed
 from app.calculator.chart import bar_figure
-from app.calculator.fast import fast_payload
 from app.calculator.params import query_parameters_spec, read_triangle
 from app.calculator.payloads import payload_csv
 from app.calculator.schemas import BatchRequest, BatchResult, Figure, NormalRequest, NormalResult
@@ -23,14 +22,12 @@ from app.web.jsonio import (
     read_body,
     request_body_spec,
 )
-from app.web.routes import RequestRoute
 
 router = APIRouter(
     prefix="/api",
     tags=["normals"],
     responses=ERROR_RESPONSES,
     default_response_class=FastJSONResponse,
-    route_class=RequestRoute,
 )
 
 
@@ -51,11 +48,8 @@ def query_payload(request: Request) -> dict[str, Any]:
 async def post_normal(request: Request) -> FastJSONResponse:
     """The normal of one triangle given as JSON."""
     body = await read_body(request, NormalRequest)
-    payload = fast_payload(body.a, body.b, body.c, body.swap_winding)
-    if payload is None:  # where the fast path cannot be sure of the same answer
-        calc = from_doubles(body.a, body.b, body.c, swap_winding=body.swap_winding)
-        payload = calculation_payload(calc)
-    return FastJSONResponse(payload)
+    calc = from_doubles(body.a, body.b, body.c, swap_winding=body.swap_winding)
+    return FastJSONResponse(calculation_payload(calc))
 
 
 @router.get(

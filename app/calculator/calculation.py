@@ -18,7 +18,7 @@ from app.calculator.exact_forms import (
     Exact,
     ExactForms,
     RationalPoint,
-    double_points,
+    double_values,
     exact_forms,
     exact_values,
     forms_json,
@@ -28,7 +28,12 @@ from app.calculator.params import TriangleInput
 from app.calculator.payloads import normal_payload
 from app.calculator.plane_angle import angle_math, angle_payload, plane_math, plane_payload
 from app.calculator.presets import COORDINATE_FIELDS
-from mesh_normal.triangle.normal import TriangleNormal, rational_triangle_normal, triangle_normal
+from mesh_normal.triangle.normal import (
+    TriangleNormal,
+    exact_triangle,
+    rational_triangle_normal,
+    rounded_normal,
+)
 
 Points = tuple[RationalPoint, RationalPoint, RationalPoint]
 
@@ -51,15 +56,10 @@ class Calculation:
     typed: Points | None = None
 
 
-def _finish(
-    result: TriangleNormal,
-    points: tuple[RationalPoint, RationalPoint, RationalPoint],
-    why: str | None,
-) -> Calculation:
-    exact = exact_values(*points, swap_winding=result.order == "ACB")
+def _finish(result: TriangleNormal, exact: Exact, why: str | None) -> Calculation:
     if why is not None:
         return Calculation(result, exact, None, why)
-    forms = exact_forms(points, exact)
+    forms = exact_forms(exact)
     if isinstance(forms, str):
         return Calculation(result, exact, None, forms)
     return Calculation(result, exact, forms, None)
@@ -69,8 +69,8 @@ def from_doubles(
     a: list[float], b: list[float], c: list[float], *, swap_winding: bool = False
 ) -> Calculation:
     """The calculation for JSON numbers (the exact forms are the doubles' exact values)."""
-    result = triangle_normal(a, b, c, swap_winding=swap_winding)
-    calc = _finish(result, double_points(result.a, result.b, result.c), None)
+    triangle = exact_triangle(a, b, c, swap_winding=swap_winding)
+    calc = _finish(rounded_normal(triangle), double_values(triangle), None)
     if calc.reason is None:
         return calc
     return Calculation(calc.result, calc.exact, None, calc.reason + DOUBLES_HINT)
@@ -87,12 +87,14 @@ def from_typed(parsed: TriangleInput) -> Calculation:
             f"{'has' if len(missing) == 1 else 'have'} an exponent beyond ±{MAX_EXACT_EXPONENT}, "
             "so the doubles are used."
         )
-        return _finish(result, double_points(result.a, result.b, result.c), why)
+        triangle = exact_triangle(result.a, result.b, result.c, swap_winding=parsed.swap)
+        return _finish(result, double_values(triangle), why)
     x = [parsed.exact[name] for name in COORDINATE_FIELDS]
     points = ((x[0], x[1], x[2]), (x[3], x[4], x[5]), (x[6], x[7], x[8]))
     result = rational_triangle_normal(*points, swap_winding=parsed.swap)
     a, b, c = parsed.points()  # the corners as typed, -0 included
-    return replace(_finish(replace(result, a=a, b=b, c=c), points, None), typed=points)
+    exact = exact_values(*points, swap_winding=parsed.swap)
+    return replace(_finish(replace(result, a=a, b=b, c=c), exact, None), typed=points)
 
 
 def calculation_payload(calc: Calculation) -> dict[str, Any]:

@@ -33,10 +33,11 @@ from app.calculator.mathml import (
     sqrt,
 )
 from mesh_normal.triangle.exact import root_over, square_root
-from mesh_normal.triangle.normal import AXES, rational_exact
+from mesh_normal.triangle.normal import AXES, ExactTriangle
 
 RationalPoint = tuple[Fraction, Fraction, Fraction]
 Exact3 = tuple[Fraction, Fraction, Fraction]
+IntPoint = tuple[int, int, int]
 
 #: The most digits an integer of an exact form may have; beyond, the forms are left out.
 MAX_DIGITS = 40
@@ -49,58 +50,116 @@ MAX_EXACT_EXPONENT = 30
 
 @dataclass(frozen=True, slots=True)
 class Exact:
-    """A triangle's exact values, with the points in the chosen order (A, B, C or A, C, B)."""
+    """A triangle's exact values, with the points in the chosen order (A, B, C or A, C, B).
 
-    points: tuple[RationalPoint, RationalPoint, RationalPoint]
-    u: Exact3
-    v: Exact3
-    n: Exact3
+    Held as integers over one denominator D (the corners' least common one): u and v over D,
+    n over D², n · A over D³, |n|² over D⁴ and u · v over D². Integer arithmetic needs no gcd
+    at each step, as Fractions do; the Fractions are made only where they are shown.
+    """
+
+    #: The corners in the chosen order, over D.
+    scaled_points: tuple[IntPoint, IntPoint, IntPoint]
+    #: Whether the order is A, C, B.
+    swapped: bool
+    denominator: int
+    scaled_u: tuple[int, int, int]
+    scaled_v: tuple[int, int, int]
+    scaled_n: tuple[int, int, int]
+    #: n · A, over D³.
+    scaled_d: int
+    #: |n|² = n · n, over D⁴.
+    scaled_square: int
+    #: u · v, over D².
+    scaled_dot: int
+
+    @property
+    def points(self) -> tuple[RationalPoint, RationalPoint, RationalPoint]:
+        """A, B, C in the chosen order."""
+        p, q, r = self.scaled_points
+        den = self.denominator
+        return _over(p, den), _over(q, den), _over(r, den)
+
+    @property
+    def given(self) -> tuple[RationalPoint, RationalPoint, RationalPoint]:
+        """A, B, C as given (not reordered)."""
+        p, q, r = self.points
+        return (p, r, q) if self.swapped else (p, q, r)
+
+    @property
+    def u(self) -> Exact3:
+        return _over(self.scaled_u, self.denominator)
+
+    @property
+    def v(self) -> Exact3:
+        return _over(self.scaled_v, self.denominator)
+
+    @property
+    def n(self) -> Exact3:
+        return _over(self.scaled_n, self.denominator**2)
 
     @property
     def square(self) -> Fraction:
         """|n|² = n · n."""
-        return _dot(self.n, self.n)
+        return Fraction(self.scaled_square, self.denominator**4)
 
     @property
     def dot(self) -> Fraction:
         """u · v."""
-        return _dot(self.u, self.v)
+        return Fraction(self.scaled_dot, self.denominator**2)
 
     @property
     def plane_d(self) -> Fraction:
         """n · A: the plane through the triangle is n · (x, y, z) = n · A."""
-        return _dot(self.n, self.points[0])
+        return Fraction(self.scaled_d, self.denominator**3)
 
 
-def _dot(p: Exact3, q: Exact3) -> Fraction:
+def _over(values: tuple[int, int, int], denominator: int) -> Exact3:
+    return (
+        Fraction(values[0], denominator),
+        Fraction(values[1], denominator),
+        Fraction(values[2], denominator),
+    )
+
+
+def _dot(p: IntPoint, q: IntPoint) -> int:
     return p[0] * q[0] + p[1] * q[1] + p[2] * q[2]
+
+
+def _from_scaled(fixed: list[int], denominator: int, swap_winding: bool) -> Exact:
+    """The exact values of corners ``fixed`` (A, B, C in the chosen order, 9 integers over D)."""
+    p = (fixed[0], fixed[1], fixed[2])
+    q = (fixed[3], fixed[4], fixed[5])
+    r = (fixed[6], fixed[7], fixed[8])
+    u = (q[0] - p[0], q[1] - p[1], q[2] - p[2])
+    v = (r[0] - p[0], r[1] - p[1], r[2] - p[2])
+    n = (u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0])
+    return Exact((p, q, r), swap_winding, denominator, u, v, n, _dot(n, p), _dot(n, n), _dot(u, v))
 
 
 def exact_values(
     a: RationalPoint, b: RationalPoint, c: RationalPoint, *, swap_winding: bool = False
 ) -> Exact:
     """The exact u, v and n of triangle ABC (ACB with ``swap_winding``)."""
-    tri, denominator = rational_exact(a, b, c, swap_winding=swap_winding)
-    points = (a, c, b) if swap_winding else (a, b, c)
-    square_den = denominator * denominator
-
-    def over(values: tuple[int, int, int], den: int) -> Exact3:
-        return Fraction(values[0], den), Fraction(values[1], den), Fraction(values[2], den)
-
-    return Exact(
-        points, over(tri.u, denominator), over(tri.v, denominator), over(tri.n, square_den)
-    )
+    p, q, r = (a, c, b) if swap_winding else (a, b, c)
+    values = [*p, *q, *r]
+    denominator = lcm(*(x.denominator for x in values))
+    fixed = [x.numerator * (denominator // x.denominator) for x in values]
+    return _from_scaled(fixed, denominator, swap_winding)
 
 
-def double_points(
-    a: tuple[float, float, float], b: tuple[float, float, float], c: tuple[float, float, float]
-) -> tuple[RationalPoint, RationalPoint, RationalPoint]:
-    """The exact values of three points of doubles (finite: ``Fraction(x)`` is then quick)."""
-
-    def point(p: tuple[float, float, float]) -> RationalPoint:
-        return Fraction(p[0]), Fraction(p[1]), Fraction(p[2])
-
-    return point(a), point(b), point(c)
+def double_values(triangle: ExactTriangle) -> Exact:
+    """:func:`exact_values` of a triangle of doubles, from the integers over ``2**scale`` that
+    :func:`mesh_normal.triangle.normal.exact_triangle` found (B and C are A plus u and v)."""
+    scale = triangle.scale
+    ratios = [x.as_integer_ratio() for x in triangle.points[0]]
+    # A double's denominator is a power of two, 2**(bit_length - 1), at most 2**scale.
+    px, py, pz = (num << (scale + 1 - den.bit_length()) for num, den in ratios)
+    u, v, n = triangle.u, triangle.v, triangle.n
+    q = (px + u[0], py + u[1], pz + u[2])
+    r = (px + v[0], py + v[1], pz + v[2])
+    p = (px, py, pz)
+    swapped = triangle.order == "ACB"
+    return Exact((p, q, r), swapped, 1 << scale, u, v, n, _dot(n, p), _dot(n, n), _dot(u, v))
 
 
 @dataclass(frozen=True, slots=True)
@@ -138,19 +197,32 @@ def _fits(*values: Fraction | int) -> bool:
     return True
 
 
+def _fits_over(denominator: int, *values: int) -> bool:
+    """Whether each ``value / denominator``, reduced, fits as :func:`_fits` has it."""
+    for value in values:
+        common = gcd(value, denominator)
+        if abs(value) // common >= _LIMIT or denominator // common >= _LIMIT:
+            return False
+    return True
+
+
 TOO_LONG = f"The exact forms are left out: their integers would have more than {MAX_DIGITS} digits."
 
 
-def exact_forms(
-    given: tuple[RationalPoint, RationalPoint, RationalPoint], exact: Exact
-) -> ExactForms | str:
+def exact_forms(exact: Exact) -> ExactForms | str:
     """The exact forms, or a sentence saying why they are left out (integers too long)."""
     x = exact
-    if not _fits(*given[0], *given[1], *given[2], *x.u, *x.v, *x.n, x.plane_d):
+    den = x.denominator
+    # The likeliest to be too long first (|n|² and d, of the highest powers of D).
+    if not (
+        _fits_over(den**4, x.scaled_square)
+        and _fits_over(den**3, x.scaled_d)
+        and _fits_over(den**2, *x.scaled_n)
+        and _fits_over(den, *x.scaled_u, *x.scaled_v)
+        and _fits_over(den, *x.scaled_points[0], *x.scaled_points[1], *x.scaled_points[2])
+    ):
         return TOO_LONG
     square = x.square
-    if not _fits(square):
-        return TOO_LONG
     c, r = square_root(square)
     if not _fits(c, r):
         return TOO_LONG
@@ -161,7 +233,7 @@ def exact_forms(
         if not _fits(ux.coefficient, uy.coefficient, uz.coefficient):
             return TOO_LONG
         unit = (ux, uy, uz)
-    return ExactForms(given, x, Surd(c, r), unit, Surd(c / 2, r))
+    return ExactForms(x.given, x, Surd(c, r), unit, Surd(c / 2, r))
 
 
 # --- Text and JSON ----------------------------------------------------------------------------
@@ -243,11 +315,17 @@ def equation_text(coefficients: list[str], d: str, minus: str = "-") -> str:
 
 def rounded_exact(x: Fraction) -> float | None:
     """``x`` rounded once; ``None`` beyond the double range or nonzero and below it."""
+    return rounded_over(x.numerator, x.denominator)
+
+
+def rounded_over(value: int, denominator: int) -> float | None:
+    """``value / denominator`` rounded once (``int / int`` is); ``None`` as in
+    :func:`rounded_exact`."""
     try:
-        value = x.numerator / x.denominator
+        rounded = value / denominator
     except OverflowError:
         return None
-    return None if value == 0 and x != 0 else value
+    return None if rounded == 0 and value != 0 else rounded
 
 
 # --- MathML for the result card ---------------------------------------------------------------

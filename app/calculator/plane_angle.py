@@ -19,7 +19,7 @@ from app.calculator.exact_forms import (
     equation_text,
     integer_plane,
     rational_json,
-    rounded_exact,
+    rounded_over,
 )
 from app.calculator.mathml import (
     EQUALS,
@@ -46,18 +46,17 @@ NO_PLANE = (
 
 def plane_payload(exact: Exact, *, with_exact: bool) -> tuple[dict[str, Any] | None, str | None]:
     """The plane as rounded a, b, c, d and its equation (plus exact ones), or why there is none."""
-    if not exact.square:
+    if not exact.scaled_square:
         return None, NO_PLANE
-    values = (*exact.n, exact.plane_d)
-    rounded = [rounded_exact(value) for value in values]
+    den2 = exact.denominator**2
+    a, b, c = (rounded_over(value, den2) for value in exact.scaled_n)
+    d = rounded_over(exact.scaled_d, den2 * exact.denominator)
     equation = None
-    if all(value is not None for value in rounded):
-        texts = [js_number(value) for value in rounded if value is not None]
-        equation = equation_text(texts[:3], texts[3])
-    plane: dict[str, Any] = dict(zip("abcd", rounded, strict=True))
-    plane["equation"] = equation
-    plane["exact"] = None
+    if a is not None and b is not None and c is not None and d is not None:
+        equation = equation_text([js_number(a), js_number(b), js_number(c)], js_number(d))
+    plane: dict[str, Any] = {"a": a, "b": b, "c": c, "d": d, "equation": equation, "exact": None}
     if with_exact:
+        values = (*exact.n, exact.plane_d)
         integers = [str(value) for value in integer_plane(values)]
         plane["exact"] = {
             **{key: rational_json(value) for key, value in zip("abcd", values, strict=True)},
@@ -66,28 +65,25 @@ def plane_payload(exact: Exact, *, with_exact: bool) -> tuple[dict[str, Any] | N
     return plane, None
 
 
-def _sqrt_ratio(part: Fraction, whole: Fraction) -> float:
-    """sqrt(part / whole) for 0 <= part <= whole, whole > 0, rounded once."""
-    ratio = part / whole
-    return ratio_sqrt(ratio.numerator, ratio.denominator)
-
-
-def angle_radians(square: Fraction, dot: Fraction) -> float:
+def angle_radians(square: Fraction | int, dot: Fraction | int) -> float:
     """atan2(sqrt(square), dot): only the ratio matters, so it is scaled into [0, 1] first.
 
-    ``square`` is |u × v|² and ``dot`` is u · v, exact; not both are 0. Scaling keeps the
-    result finite whatever the size of u and v (their products may be far beyond doubles).
+    ``square`` is |u × v|² and ``dot`` is u · v, exact (or integers, ``square`` over the
+    square of ``dot``'s denominator); not both are 0. Scaling keeps the result finite whatever
+    the size of u and v (their products may be far beyond doubles).
     """
-    dot_square = dot * dot
-    if square <= dot_square:
-        return atan2(_sqrt_ratio(square, dot_square), 1.0 if dot > 0 else -1.0)
-    cosine_part = _sqrt_ratio(dot_square, square)
+    # square / dot² as one ratio of integers: part / whole.
+    part = square.numerator * dot.denominator * dot.denominator
+    whole = square.denominator * dot.numerator * dot.numerator
+    if part <= whole:
+        return atan2(ratio_sqrt(part, whole), 1.0 if dot > 0 else -1.0)
+    cosine_part = ratio_sqrt(whole, part)
     return atan2(1.0, cosine_part if dot >= 0 else -cosine_part)
 
 
 def undefined_angle(exact: Exact, order: str) -> str | None:
     """Why the angle between u and v is undefined (a zero edge), or ``None`` when it is not."""
-    for name, edge, end in (("u", exact.u, order[1]), ("v", exact.v, order[2])):
+    for name, edge, end in (("u", exact.scaled_u, order[1]), ("v", exact.scaled_v, order[2])):
         if not any(edge):
             return (
                 f"{name} has zero length (points A and {end} coincide), so the angle "
@@ -101,7 +97,7 @@ def angle_payload(exact: Exact, order: str) -> tuple[dict[str, float] | None, st
     reason = undefined_angle(exact, order)
     if reason is not None:
         return None, reason
-    radians = angle_radians(exact.square, exact.dot)
+    radians = angle_radians(exact.scaled_square, exact.scaled_dot)
     return {"degrees": degrees(radians), "radians": radians}, None
 
 
@@ -120,7 +116,7 @@ def plane_math(plane: dict[str, Any], exact: Exact | None) -> dict[str, Markup]:
         terms = [(number(abs(v)), v < 0, abs(v) == 1) for v in values[:3] if v != 0]
         axes = [axis for axis, v in zip(AXES, values[:3], strict=True) if v != 0]
         out["plane"] = math(_axes_equation(terms, axes, number(values[3])))
-    if exact is not None and exact.square:
+    if exact is not None and exact.scaled_square:
         integers = integer_plane((*exact.n, exact.plane_d))
         terms = [(plain_number(str(abs(v))), v < 0, abs(v) == 1) for v in integers[:3] if v != 0]
         axes = [axis for axis, v in zip(AXES, integers[:3], strict=True) if v != 0]

@@ -24,6 +24,15 @@ def js_number(x: float) -> str:
     """
     if x == 0:
         return "0"
+    text = repr(x)
+    if "e" not in text and "n" not in text:
+        # 1e-4 <= |x| < 1e16: both write the same shortest digits without an exponent.
+        return text[:-2] if text.endswith(".0") else text
+    return _exponent_layout(x)
+
+
+def _exponent_layout(x: float) -> str:
+    """:func:`js_number` from the digits and the exponent (``x`` nonzero)."""
     sign = "-" if x < 0 else ""
     _, digit_tuple, exponent = Decimal(repr(abs(x))).normalize().as_tuple()
     digits = "".join(map(str, digit_tuple))

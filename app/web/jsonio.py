@@ -84,10 +84,12 @@ def parse_body(raw: bytes, model: type[Model]) -> Model:
     return parsed
 
 
+#: A JSON string: runs of plain characters between escapes (one step per run, not per character).
+_STRING = rb'"[^"\\]*(?:\\.[^"\\]*)*"'
 #: An object key: a string that a colon follows (in valid JSON, only a key is followed by one).
-_KEY = re.compile(rb'"(?:[^"\\]|\\.)*"\s*:')
+_KEY = re.compile(_STRING + rb"\s*:")
 #: The tokens that tell which object a key is in: the keys, other strings and the braces.
-_TOKENS = re.compile(rb'"(?:[^"\\]|\\.)*"\s*:|"(?:[^"\\]|\\.)*"|[{}]')
+_TOKENS = re.compile(_STRING + rb"\s*:|" + _STRING + rb"|[{}]")
 
 
 def refuse_duplicate_keys(raw: bytes) -> None:

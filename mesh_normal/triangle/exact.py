@@ -33,9 +33,9 @@ def to_fixed(values: list[float]) -> tuple[list[int], int]:
     The values must be finite.
     """
     ratios = [x.as_integer_ratio() for x in values]
-    shifts = [den.bit_length() - 1 for _, den in ratios]
-    scale = max(shifts)
-    return [num << (scale - shift) for (num, _), shift in zip(ratios, shifts, strict=True)], scale
+    # Each denominator is a power of two, 2**(bit_length - 1).
+    scale = max(den.bit_length() for _, den in ratios) - 1
+    return [num << (scale + 1 - den.bit_length()) for num, den in ratios], scale
 
 
 def round_scaled(value: int, exponent: int) -> float:
@@ -99,12 +99,9 @@ def ratio_sqrt(part: int, whole: int) -> float:
     deficit = max(0, whole.bit_length() - part.bit_length())
     shift = 53 + _GUARD_BITS + deficit // 2 + 1
     root = _sqrt_with_sticky(part, whole, shift)
-    try:
-        return round_scaled(root, shift + 1)
-    except OutOfRange:
-        # A unit-vector component below the smallest double: zero is its nearest double,
-        # and an absolute error under 2**-1074 on a length-1 vector is no loss.
-        return 0.0
+    # At most 1, so never beyond the doubles; below the smallest one, zero is the nearest
+    # double (an absolute error under 2**-1074 on a length-1 vector is no loss).
+    return root / (1 << (shift + 1))
 
 
 def root_over(square: int, denominator: int) -> float:

@@ -127,9 +127,9 @@ def exact_triangle(
 
 def _exact(pa: Vector, pb: Vector, pc: Vector, swap_winding: bool) -> ExactTriangle:
     p, q, r = (pa, pc, pb) if swap_winding else (pa, pb, pc)
-    fixed, k = to_fixed([*p, *q, *r])
-    ux, uy, uz = (fixed[3 + i] - fixed[i] for i in range(3))
-    vx, vy, vz = (fixed[6 + i] - fixed[i] for i in range(3))
+    (px, py, pz, qx, qy, qz, rx, ry, rz), k = to_fixed([*p, *q, *r])
+    ux, uy, uz = qx - px, qy - py, qz - pz
+    vx, vy, vz = rx - px, ry - py, rz - pz
     n = (uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx)
     order = "ACB" if swap_winding else "ABC"
     return ExactTriangle((p, q, r), order, k, (ux, uy, uz), (vx, vy, vz), n)
@@ -194,19 +194,19 @@ class _Rounder:
             target.append((name, approx))
             return None
 
-    def vector(self, name: str, values: Sequence[int], denominator: int) -> MaybeVector:
-        # The common case inline (this runs for every API request): one correctly rounded
-        # division each; anything out of range goes through value() for its message.
-        out: list[float | None] = []
-        for axis, value in zip(AXES, values, strict=True):
-            try:
-                rounded = value / denominator
-            except OverflowError:
-                rounded = 0.0
-            if rounded == 0.0 and value != 0:
-                out.append(self.value(f"{name}_{axis}", value, denominator))
-            else:
-                out.append(rounded)
+    def vector(self, name: str, values: IntVector, denominator: int) -> MaybeVector:
+        x, y, z = values
+        try:  # the common case: one correctly rounded division each, all in range
+            rx, ry, rz = x / denominator, y / denominator, z / denominator
+            if (rx or not x) and (ry or not y) and (rz or not z):  # no underflow to 0
+                return (rx, ry, rz)
+        except OverflowError:
+            pass
+        # Some value is out of range: value() rounds each again and says which.
+        out = [
+            self.value(f"{name}_{axis}", value, denominator)
+            for axis, value in zip(AXES, values, strict=True)
+        ]
         return (out[0], out[1], out[2])
 
     def message(self, lead: str | None = None) -> str | None:
@@ -303,9 +303,15 @@ def triangle_normal(
     >>> triangle_normal((0, 0, 0), (1, 0, 0), (0, 1, 0)).unit_normal
     (0.0, 0.0, 1.0)
     """
-    pa, pb, pc = _as_point("A", a), _as_point("B", b), _as_point("C", c)
-    exact = _exact(pa, pb, pc, swap_winding)
-    return _rounded((pa, pb, pc), exact.points, exact, 1 << exact.scale)
+    return rounded_normal(exact_triangle(a, b, c, swap_winding=swap_winding))
+
+
+def rounded_normal(exact: ExactTriangle) -> TriangleNormal:
+    """:func:`triangle_normal` of a triangle from :func:`exact_triangle`: its exact values,
+    each rounded once (for a caller that uses the exact values as well)."""
+    p, q, r = exact.points
+    given = (p, r, q) if exact.order == "ACB" else exact.points
+    return _rounded(given, exact.points, exact, 1 << exact.scale)
 
 
 def _rounded(

@@ -5,18 +5,38 @@ from __future__ import annotations
 import csv
 import io
 import math
+import sys
 from fractions import Fraction
 
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from app.calculator.calculation import calculation_payload, from_doubles, from_typed
-from app.calculator.exact_forms import Surd, surd_text
+from app.calculator.calculation import DOUBLES_HINT, calculation_payload, from_doubles, from_typed
+from app.calculator.exact_forms import (
+    MAX_DIGITS,
+    TOO_LONG,
+    RationalPoint,
+    Surd,
+    double_values,
+    equation_text,
+    exact_values,
+    integer_plane,
+    rational_json,
+    surd_json,
+    surd_text,
+)
 from app.calculator.params import read_triangle
 from app.calculator.payloads import CSV_COLUMNS
+from app.calculator.plane_angle import NO_PLANE
 from app.calculator.presets import COORDINATE_FIELDS
+from app.web.formatting import js_number
+from app.web.jsonio import json_bytes
+from mesh_normal.triangle.exact import ratio_sqrt, square_root
+from mesh_normal.triangle.normal import exact_triangle
 from tests.conftest import Page
+from tests.mesh_normal._reference import round_or_none
+from tests.mesh_normal.triangle.test_normal import assert_matches_reference
 
 RIGHT = {"ax": "0", "ay": "0", "az": "0", "bx": "1", "by": "0", "bz": "0", "cx": "0", "cy": "1"}
 RIGHT = {**RIGHT, "cz": "0"}
@@ -217,6 +237,152 @@ def test_exact_forms_agree_with_the_rounded_values(query: dict[str, str], swap: 
 def test_exact_surd_rounds_to_the_rounded_magnitude() -> None:
     surd = Surd(Fraction(1, 2), 286)
     assert surd.rounded() == math.sqrt(71.5) == payload_for(HALVES)["magnitude"]
+
+
+# --- The integers against plain Fractions ------------------------------------------------------
+# The exact path holds its values as integers over one denominator; here every field it feeds
+# is computed again the plain way, in Fractions (as the path once did), and must be the same
+# JSON to the last bit (the sign of zero included).
+
+TINY = 5e-324  # the smallest subnormal
+special = st.sampled_from(
+    [0.0, -0.0, TINY, -TINY, sys.float_info.min, -sys.float_info.min, sys.float_info.max, -1e300]
+)
+#: Eighths, and zeros of both signs: exact values short enough for the exact forms to be shown.
+short = st.one_of(st.integers(-64, 64).map(lambda k: k / 8), st.sampled_from([0.0, -0.0]))
+double = st.one_of(
+    st.floats(allow_nan=False, allow_infinity=False), st.floats(-1e3, 1e3), short, special
+)
+#: Triangles of short values, or of any doubles.
+triangles = st.sampled_from([short, double]).flatmap(
+    lambda values: st.lists(st.lists(values, min_size=3, max_size=3), min_size=3, max_size=3)
+)
+rational = st.fractions(min_value=-100, max_value=100, max_denominator=1000)
+rational_point = st.tuples(rational, rational, rational)
+
+
+def fits(*values: Fraction) -> bool:
+    return all(abs(x.numerator) < 10**MAX_DIGITS and x.denominator < 10**MAX_DIGITS for x in values)
+
+
+def reference_angle(square: Fraction, dot: Fraction) -> float:
+    dot_square = dot * dot
+    if square <= dot_square:
+        ratio = square / dot_square
+        return math.atan2(ratio_sqrt(ratio.numerator, ratio.denominator), 1.0 if dot > 0 else -1.0)
+    ratio = dot_square / square
+    cosine = ratio_sqrt(ratio.numerator, ratio.denominator)
+    return math.atan2(1.0, cosine if dot >= 0 else -cosine)
+
+
+def reference_fields(
+    given: tuple[RationalPoint, RationalPoint, RationalPoint], swap: bool, reason: str | None
+) -> dict:  # type: ignore[type-arg]
+    """u, v and n rounded, the plane, the angle and the exact forms of the payload, from
+    Fractions; ``reason`` is why the exact forms are left out when they are too long."""
+    a, b, c = given
+    p, q, r = (a, c, b) if swap else (a, b, c)
+    u = [q[i] - p[i] for i in range(3)]
+    v = [r[i] - p[i] for i in range(3)]
+    n = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]]
+    square = sum(x * x for x in n)
+    dot = sum(x * y for x, y in zip(u, v, strict=True))
+    d = sum(x * y for x, y in zip(n, p, strict=True))
+    out: dict = {  # type: ignore[type-arg]
+        **{
+            key: [round_or_none(x) for x in values]
+            for key, values in zip("uv", (u, v), strict=True)
+        },
+        "normal": [round_or_none(x) for x in n],
+        "plane": None,
+        "plane_reason": NO_PLANE,
+        "exact": None,
+        "exact_reason": reason,
+    }
+    forms = None
+    coefficient, radicand = square_root(square)
+    units = [x / (coefficient * radicand) for x in n] if square else []
+    if fits(*a, *b, *c, *u, *v, *n, d, square, coefficient, Fraction(radicand), *units):
+        out["exact_reason"] = None
+        forms = {
+            **{
+                key: [rational_json(x) for x in point]
+                for key, point in zip("abc", given, strict=True)
+            },
+            "u": [rational_json(x) for x in u],
+            "v": [rational_json(x) for x in v],
+            "normal": [rational_json(x) for x in n],
+            "magnitude_squared": rational_json(square),
+            "magnitude": surd_json(Surd(coefficient, radicand)),
+            "unit_normal": [surd_json(Surd(x, radicand)) for x in units] if square else None,
+            "area": surd_json(Surd(coefficient / 2, radicand)),
+        }
+        out["exact"] = forms
+    if square:
+        rounded = [round_or_none(x) for x in (*n, d)]
+        texts = [js_number(x) for x in rounded if x is not None]
+        integers = [str(x) for x in integer_plane((n[0], n[1], n[2], d))]
+        out["plane"] = {
+            **dict(zip("abcd", rounded, strict=True)),
+            "equation": equation_text(texts[:3], texts[3]) if len(texts) == 4 else None,
+            "exact": None
+            if forms is None
+            else {
+                **{key: rational_json(x) for key, x in zip("abcd", (*n, d), strict=True)},
+                "equation": equation_text(integers[:3], integers[3]),
+            },
+        }
+        out["plane_reason"] = None
+    out["angle"] = out["angle_reason"] = None
+    if not any(u) or not any(v):
+        name, end = ("u", "C" if swap else "B") if not any(u) else ("v", "B" if swap else "C")
+        out["angle_reason"] = (
+            f"{name} has zero length (points A and {end} coincide), so the angle between u and v "
+            "is undefined."
+        )
+    else:
+        radians = reference_angle(square, dot)
+        out["angle"] = {"degrees": math.degrees(radians), "radians": radians}
+    return out
+
+
+def same_fields(payload: dict, reference: dict) -> None:  # type: ignore[type-arg]
+    """The payload's fields of ``reference``, as JSON (so -0.0 is not 0.0)."""
+    assert json_bytes({key: payload[key] for key in reference}) == json_bytes(reference)
+
+
+@settings(max_examples=300, suppress_health_check=[HealthCheck.too_slow])
+@given(triangle=triangles, swap=st.booleans())
+def test_json_numbers_exact_path_is_the_fractions(triangle: list[list[float]], swap: bool) -> None:
+    a, b, c = triangle
+    calc = from_doubles(a, b, c, swap_winding=swap)
+    assert_matches_reference(calc.result, a, b, c, swap=swap)  # |n|, n̂ and the area too
+    given_points = tuple(tuple(Fraction(x) for x in point) for point in (a, b, c))
+    reference = reference_fields(given_points, swap, TOO_LONG + DOUBLES_HINT)  # type: ignore[arg-type]
+    same_fields(calculation_payload(calc), reference)
+
+
+@settings(max_examples=300, suppress_health_check=[HealthCheck.too_slow])
+@given(a=rational_point, b=rational_point, c=rational_point, swap=st.booleans())
+def test_typed_fractions_exact_path_is_the_fractions(a, b, c, swap: bool) -> None:  # type: ignore[no-untyped-def]
+    names = iter(COORDINATE_FIELDS)
+    query = {next(names): f"{x.numerator}/{x.denominator}" for point in (a, b, c) for x in point}
+    payload = payload_for({**query, **({"swap": "on"} if swap else {})})
+    same_fields(payload, reference_fields((a, b, c), swap, TOO_LONG))
+
+
+@given(triangle=triangles, swap=st.booleans())
+def test_exact_values_of_doubles_are_their_fractions(
+    triangle: list[list[float]], swap: bool
+) -> None:
+    a, b, c = triangle
+    # The doubles' integers over a power of two, and the Fractions' over their common denominator.
+    exact = double_values(exact_triangle(a, b, c, swap_winding=swap))
+    given_points = tuple(tuple(Fraction(x) for x in point) for point in (a, b, c))
+    fractions = exact_values(*given_points, swap_winding=swap)  # type: ignore[arg-type]
+    assert exact.given == fractions.given == given_points
+    for name in ("points", "u", "v", "n", "square", "dot", "plane_d"):
+        assert getattr(exact, name) == getattr(fractions, name), name
 
 
 # --- JSON, CSV and page -------------------------------------------------------------------------

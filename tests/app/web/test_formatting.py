@@ -9,10 +9,10 @@ from __future__ import annotations
 import re
 
 import pytest
-from hypothesis import given
+from hypothesis import example, given
 from hypothesis import strategies as st
 
-from app.web.formatting import js_number
+from app.web.formatting import _exponent_layout, js_number
 from app.web.templating import templates
 
 TABLE = [
@@ -75,6 +75,17 @@ def test_js_number_round_trips_and_is_shortest(value: float) -> None:
     digits = re.sub(r"e.*|[^0-9]", "", repr(abs(value))).strip("0")
     mine = re.sub(r"e.*|[^0-9]", "", text.lstrip("-")).strip("0")
     assert mine == digits or (value == 0 and text == "0")
+
+
+@given(st.floats(allow_nan=False, allow_infinity=False).filter(bool))
+@example(1e16)
+@example(9999999999999998.0)
+@example(1e-4)
+@example(9.999999999999999e-05)
+@example(-123.0)
+def test_repr_layout_is_the_digits_layout(value: float) -> None:
+    """Where ``repr`` has no exponent, its text (less ``.0``) is the layout from the digits."""
+    assert js_number(value) == _exponent_layout(value)
 
 
 def test_page_filter_says_out_of_range_for_null() -> None:
