@@ -79,8 +79,8 @@ def rmse(normals: np.ndarray, truth: np.ndarray) -> float:
 
 def estimation(n: int, repeats: int) -> None:
     points, _ = sphere(n)  # random order: the generator's
-    point_normals(points[:1000], orient="none")
-    ours, _ = best(lambda: point_normals(points, orient="none"), repeats)
+    point_normals(points[:1000], k=30, orient="none")
+    ours, _ = best(lambda: point_normals(points, k=30, orient="none"), repeats)
     theirs, _ = best(lambda: open3d_normals(points), repeats)
     OUT.print(
         f"| estimation, {n:,} points, k = 30, random order | {ours:.2f} s | {theirs:.2f} s "
@@ -90,7 +90,7 @@ def estimation(n: int, repeats: int) -> None:
 
 def accuracy(n: int) -> None:
     points, truth = sphere(n, seed=1)
-    ours = [rmse(point_normals(points + o, orient="none").normals, truth) for o in OFFSETS]
+    ours = [rmse(point_normals(points + o, k=30, orient="none").normals, truth) for o in OFFSETS]
     theirs = [rmse(open3d_normals(points + o), truth) for o in OFFSETS]
     for offset, our, their in zip(OFFSETS, ours, theirs, strict=True):
         OUT.print(
@@ -140,7 +140,7 @@ def memory(n: int, orient: str) -> None:
         f"p = np.random.default_rng(0).normal(size=({n}, 3))\n"
         "p /= np.linalg.norm(p, axis=1, keepdims=True)\n"
         "before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss\n"
-        f"r = point_normals(p, orient={orient!r})\n"
+        f"r = point_normals(p, k=30, orient={orient!r})\n"
         "peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss\n"
         "print(json.dumps([before, peak, int(r.valid.sum())]))\n"
     )

@@ -171,6 +171,9 @@ struct Row {
   double curvature;
   Index used;
   Index status;
+  double low;  // the covariance's eigenvalues, sorted
+  double middle;
+  double high;
 };
 
 // One neighbourhood's normal: the eigenvector of the smallest eigenvalue, its largest component
@@ -202,6 +205,9 @@ Row estimate(const double* points, Index n, const Index* neighbours, Index start
     high = std::max(e0, e2);
   }
   Row row{};
+  row.low = low;
+  row.middle = middle;
+  row.high = high;
   row.used = count;
   row.status = classify(low, middle, high, count, limits);
   const double trace = low + middle + high;
@@ -272,10 +278,184 @@ void neighbourhood_normals(In<double, nb::shape<-1, 3>> points, In<Index, nb::nd
 
 double dot(const double* p, const double* q) { return p[0] * q[0] + p[1] * q[1] + p[2] * q[2]; }
 
+// The spread of a PCA normal's direction from noise alone: the variance of its tilt towards each
+// other eigenvector is low * other / (count * (other - low)^2) (the first-order perturbation of
+// the eigenvector); the sum of both, square-rooted.
+double tilt(const Row& row) {
+  const double count = static_cast<double>(row.used);
+  const double a = row.middle - row.low;
+  const double b = row.high - row.low;
+  if (a <= 0.0 || b <= 0.0) {
+    return 1.0;
+  }
+  return std::sqrt(row.low / count * (row.middle / (a * a) + row.high / (b * b)));
+}
+
+// One row of multiscale_normals: the fits over the first scales[c] neighbours, and the largest
+// scale whose normal agrees with every smaller scale's to within `threshold` times the sum of
+// their spreads (Lepski's rule: a larger scale is taken while its change is explained by noise;
+// where curvature or an edge bends it, the change outgrows the spreads and the scale stops).
+Row multiscale(const double* points, Index n, const Index* list, Index start, Index stop,
+               const Index* scales, Index count, const Limits& limits, double threshold,
+               double planar) {
+  constexpr Index kMostScales = 16;
+  Row fits[kMostScales];
+  double spread[kMostScales];
+  Index fitted = 0;
+  for (Index c = 0; c < count && fitted < kMostScales; ++c) {
+    const Index end = std::min(stop, start + scales[c]);
+    fits[fitted] = estimate(points, n, list, start, end, limits);
+    spread[fitted] = tilt(fits[fitted]);
+    ++fitted;
+    if (end == stop) {
+      break;
+    }
+  }
+  Index chosen = -1;
+  for (Index c = 0; c < fitted; ++c) {
+    if (fits[c].status != kOk) {
+      if (chosen < 0) {
+        continue;
+      }
+      break;
+    }
+    bool agrees = true;
+    for (Index t = 0; t < c && agrees; ++t) {
+      // A fit whose two smallest eigenvalues are within `planar` of each other has no plane
+      // to hold a larger scale to (noise outgrows it): its spread's first order fails there.
+      if (fits[t].status != kOk || fits[t].low > planar * fits[t].middle) {
+        continue;
+      }
+      const double cosine = std::min(1.0, std::fabs(dot(fits[t].normal, fits[c].normal)));
+      const double sine = std::sqrt(1.0 - cosine * cosine);
+      agrees = sine <= threshold * (spread[t] + spread[c]);
+    }
+    if (!agrees) {
+      break;
+    }
+    chosen = c;
+  }
+  // With no scale OK, the largest fit says why (too few, duplicates, collinear, ambiguous).
+  return chosen >= 0 ? fits[chosen] : fits[fitted - 1];
+}
+
+void multiscale_normals(In<double, nb::shape<-1, 3>> points, In<Index, nb::ndim<2>> neighbours,
+                        In<Index, nb::ndim<1>> scales, double tiny, double line_ratio,
+                        double gap_ratio, double threshold, double planar,
+                        Out<double, nb::shape<-1, 3>> normals,
+                        Out<double, nb::ndim<1>> curvature, Out<double, nb::ndim<1>> residual,
+                        Out<Index, nb::ndim<1>> used, Out<Index, nb::ndim<1>> status) {
+  const Index rows = static_cast<Index>(neighbours.shape(0));
+  const Index columns = static_cast<Index>(neighbours.shape(1));
+  for (const std::size_t size : {normals.shape(0), curvature.shape(0), residual.shape(0),
+                                 used.shape(0), status.shape(0)}) {
+    if (static_cast<Index>(size) != rows) {
+      throw nb::value_error("every output needs one row per neighbour list");
+    }
+  }
+  const Index count = static_cast<Index>(scales.shape(0));
+  const Index* sizes = scales.data();
+  if (count == 0 || count > 16) {
+    throw nb::value_error("give from 1 to 16 scales");
+  }
+  for (Index c = 0; c < count; ++c) {
+    if (sizes[c] < 1 || (c > 0 && sizes[c] <= sizes[c - 1])) {
+      throw nb::value_error("the scales must be positive and increasing");
+    }
+  }
+  const double* coordinates = points.data();
+  const Index n = static_cast<Index>(points.shape(0));
+  const Index* lists = neighbours.data();
+  const Limits limits{tiny, line_ratio, gap_ratio};
+  double* normal_out = normals.data();
+  double* curvature_out = curvature.data();
+  double* residual_out = residual.data();
+  Index* used_out = used.data();
+  Index* status_out = status.data();
+  nb::gil_scoped_release release;
+  parallel_for(rows, 64, [&](Index begin, Index end) {
+    for (Index r = begin; r < end; ++r) {
+      const Row row = multiscale(coordinates, n, lists, r * columns, (r + 1) * columns, sizes,
+                                 count, limits, threshold, planar);
+      std::memcpy(normal_out + 3 * r, row.normal, sizeof row.normal);
+      curvature_out[r] = row.curvature;
+      residual_out[r] = std::sqrt(row.low);
+      used_out[r] = row.used;
+      status_out[r] = row.status;
+    }
+  });
+}
+
 // Whether `value` is in row `row` of the graph.
 bool listed(const std::int32_t* graph, Index columns, Index row, std::int32_t value) {
   const std::int32_t* list = graph + row * columns;
   return std::find(list, list + columns, value) != list + columns;
+}
+
+// Points near a sharp edge or corner: a point whose fit is much less flat than a neighbour's
+// of as many points or more,
+// and that lies on that neighbour's plane (to twice its residual), takes the flattest such
+// neighbour's normal, when that turns its own by more than the sine `turn` (a fit across an
+// edge blends both sides; the plane it lies on does not). `normals` is read and written: the
+// candidates are read from `before`, the fits of the first pass.
+void sharp_normals(In<double, nb::shape<-1, 3>> points, In<std::int32_t, nb::ndim<2>> neighbours,
+                   In<double, nb::shape<-1, 3>> before, In<double, nb::ndim<1>> curvature,
+                   In<double, nb::ndim<1>> residual, In<Index, nb::ndim<1>> used,
+                   In<Index, nb::ndim<1>> status, double ratio, double turn, double floor, Out<double, nb::shape<-1, 3>> normals,
+                   Out<bool, nb::ndim<1>> sharp) {
+  const Index n = static_cast<Index>(points.shape(0));
+  const Index columns = static_cast<Index>(neighbours.shape(1));
+  const Index rows = static_cast<Index>(neighbours.shape(0));
+  if (rows != n || static_cast<Index>(before.shape(0)) != n ||
+      static_cast<Index>(curvature.shape(0)) != n || static_cast<Index>(residual.shape(0)) != n ||
+      static_cast<Index>(status.shape(0)) != n || static_cast<Index>(used.shape(0)) != n ||
+      static_cast<Index>(normals.shape(0)) != n ||
+      static_cast<Index>(sharp.shape(0)) != n) {
+    throw nb::value_error("the points, neighbours, fits and outputs need one row per point");
+  }
+  const double* xyz = points.data();
+  const std::int32_t* lists = neighbours.data();
+  const double* fitted = before.data();
+  const double* flatness = curvature.data();
+  const double* spread = residual.data();
+  const Index* codes = status.data();
+  const Index* sizes = used.data();
+  double* out = normals.data();
+  bool* marked = sharp.data();
+  nb::gil_scoped_release release;
+  parallel_for(n, 256, [&](Index begin, Index end) {
+    for (Index i = begin; i < end; ++i) {
+      marked[i] = false;
+      if (codes[i] != kOk) {
+        continue;
+      }
+      Index best = -1;
+      double flattest = ratio * flatness[i];
+      const double* p = xyz + 3 * i;
+      for (Index c = 0; c < columns; ++c) {
+        const Index j = lists[i * columns + c];
+        // Curvature grows with the scale: only a fit as large as the point's own compares.
+        if (j < 0 || j >= n || j == i || codes[j] != kOk || sizes[j] < sizes[i] ||
+            flatness[j] >= flattest) {
+          continue;
+        }
+        const double* q = xyz + 3 * j;
+        const double step[3] = {p[0] - q[0], p[1] - q[1], p[2] - q[2]};
+        if (std::fabs(dot(fitted + 3 * j, step)) <= 2.0 * spread[j] + floor) {
+          best = j;
+          flattest = flatness[j];
+        }
+      }
+      if (best < 0) {
+        continue;
+      }
+      const double cosine = std::min(1.0, std::fabs(dot(fitted + 3 * i, fitted + 3 * best)));
+      if (std::sqrt(1.0 - cosine * cosine) > turn) {
+        std::memcpy(out + 3 * i, fitted + 3 * best, 3 * sizeof(double));
+        marked[i] = true;
+      }
+    }
+  });
 }
 
 using Edges = std::tuple<nb::ndarray<nb::numpy, std::int32_t>, nb::ndarray<nb::numpy, std::int32_t>,
@@ -472,6 +652,25 @@ void bind_points(nb::module_& m) {
         "are not rows of the points are skipped): the unit normal with its largest component "
         "positive (zero unless the status is 0), the curvature, how many points were used and "
         "the status code.");
+  m.def("multiscale_normals", &multiscale_normals, nb::arg("points").noconvert(),
+        nb::arg("neighbours").noconvert(), nb::arg("scales").noconvert(), nb::arg("tiny"),
+        nb::arg("line_ratio"), nb::arg("gap_ratio"), nb::arg("threshold"), nb::arg("planar"),
+        nb::arg("normals").noconvert(), nb::arg("curvature").noconvert(),
+        nb::arg("residual").noconvert(), nb::arg("used").noconvert(),
+        nb::arg("status").noconvert(),
+        "Row r of the outputs from the fits over the first scales[c] entries of neighbours[r] "
+        "(nearest first; entries that are not rows of the points are skipped), at the largest "
+        "scale whose normal agrees with every smaller one's (that are planar: smallest eigenvalue "
+        "at most planar times the middle one) to within threshold times their spreads from noise: as neighbourhood_normals, and the residual (the root of the smallest "
+        "eigenvalue).");
+  m.def("sharp_normals", &sharp_normals, nb::arg("points").noconvert(),
+        nb::arg("neighbours").noconvert(), nb::arg("before").noconvert(),
+        nb::arg("curvature").noconvert(), nb::arg("residual").noconvert(),
+        nb::arg("used").noconvert(), nb::arg("status").noconvert(), nb::arg("ratio"), nb::arg("turn"), nb::arg("floor"),
+        nb::arg("normals").noconvert(), nb::arg("sharp").noconvert(),
+        "Near sharp edges: a point whose curvature is over 1/ratio times a neighbour's, on whose "
+        "plane it lies, takes the flattest such neighbour's normal where that turns it by a "
+        "sine over turn; sharp marks them.");
   m.def("graph_edges", &graph_edges, nb::arg("points").noconvert(), nb::arg("normals").noconvert(),
         nb::arg("valid").noconvert(), nb::arg("graph").noconvert(), nb::arg("floor"),
         nb::arg("sine_limit"),

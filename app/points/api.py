@@ -84,8 +84,13 @@ router = APIRouter(
 )
 
 KQuery = Annotated[
-    int,
-    Query(ge=3, le=K_LIMIT, description="Neighbours in each fit, the point itself included."),
+    int | None,
+    Query(
+        ge=3,
+        le=K_LIMIT,
+        description="Neighbours in each fit, the point itself included; none given (with no "
+        "radius): each point's own scale, from 12 to 96, chosen from the noise and curvature.",
+    ),
 ]
 RadiusQuery = Annotated[
     float | None,
@@ -132,7 +137,7 @@ def parse_vector(text: str | None, name: str) -> tuple[float, float, float] | No
 
 
 def options(
-    k: int,
+    k: int | None,
     radius: float | None,
     orient: OrientMode,
     viewpoint: str | None,
@@ -190,7 +195,7 @@ def download_name(filename: str | None, suffix: str) -> dict[str, str]:
 )
 async def post_points(
     request: Request,
-    k: KQuery = 30,
+    k: KQuery = None,
     radius: RadiusQuery = None,
     orient: OrientQuery = "mst",
     viewpoint: VectorQuery = None,
@@ -227,7 +232,7 @@ async def post_points(
 )
 async def post_points_normals(
     request: Request,
-    k: KQuery = 30,
+    k: KQuery = None,
     radius: RadiusQuery = None,
     orient: OrientQuery = "mst",
     viewpoint: VectorQuery = None,

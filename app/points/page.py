@@ -57,7 +57,7 @@ def _form_context(request: Request) -> dict[str, Any]:
         "orient_modes": ORIENT_MODES,
         "orient_help": ORIENT_HELP,
         "formats": DOWNLOAD_FORMATS,
-        "values": {"k": "30", "radius": "", "orient": "mst", "viewpoint": "", "direction": ""},
+        "values": {"k": "", "radius": "", "orient": "mst", "viewpoint": "", "direction": ""},
         "report": None,
         "error": None,
     }
@@ -80,7 +80,7 @@ def _number(text: str, name: str, whole: bool) -> float:
 def form_options(values: dict[str, str]) -> work.Options:
     """The form's fields as checked options; empty fields take the API's defaults, and the
     reference a mode does not use (the form has both inputs) is ignored."""
-    k = int(_number(values["k"], "k", True)) if values["k"] else 30
+    k = int(_number(values["k"], "k", True)) if values["k"] else None
     radius = _number(values["radius"], "radius", False) if values["radius"] else None
     orient = values["orient"] or "mst"
     if orient not in ORIENT_MODES:
@@ -95,7 +95,7 @@ def form_options(values: dict[str, str]) -> work.Options:
 def _query(checked: work.Options) -> str:
     """The options as the API's query string, defaults left out."""
     query: dict[str, str] = {}
-    if checked.k != 30:
+    if checked.k is not None:
         query["k"] = str(checked.k)
     if checked.radius is not None:
         query["radius"] = repr(checked.radius)

@@ -25,7 +25,7 @@ from mesh_normal.types import BoolArray, FloatArray
 class Options:
     """The neighbourhood and orientation asked for, checked at the edge."""
 
-    k: int
+    k: int | None
     radius: float | None
     orient: OrientMode
     viewpoint: tuple[float, float, float] | None

@@ -12,7 +12,7 @@ from mesh_normal import __version__
 from mesh_normal.choices import NormalsChoice, NormalsKind, OrientMode, Weighting, Winding
 from mesh_normal.cli.common import EXIT_USAGE, Failure, Progress
 from mesh_normal.cli.mesh import FIX_FORMATS, NORMAL_SUFFIXES, analyze, export, fix, normals
-from mesh_normal.cli.points import points
+from mesh_normal.cli.points import ALL, points
 from mesh_normal.files.formats import SUFFIXES
 from mesh_normal.tolerances import ORIENT_MAX_ANGLE, WELD_LIMIT
 
@@ -45,10 +45,10 @@ def vector3(text: str) -> list[float]:
     return numbers
 
 
-def neighbour_count(text: str) -> int | None:
-    """``--k``: a whole number, at least 3 (the point and two neighbours), or ``all``."""
+def neighbour_count(text: str) -> int:
+    """``--k``: a whole number, at least 3 (the point and two neighbours), or ``all`` (ALL)."""
     if text.strip().lower() == "all":
-        return None
+        return ALL
     try:
         value = int(text)
     except ValueError:
@@ -212,10 +212,11 @@ def parser() -> argparse.ArgumentParser:
     points_parser.add_argument(
         "--k",
         type=neighbour_count,
-        default=30,
+        default=None,
         metavar="K",
-        help="the neighbourhood's size, the point included (default: %(default)s); with "
-        "--radius at most K within it, or all",
+        help="the neighbourhood's size, the point included (default: each point's own, from "
+        "12 to 96, chosen from the noise and curvature); with --radius at most K within it, "
+        "or all",
     )
     points_parser.add_argument(
         "--radius", type=positive_number, metavar="R", help="only neighbours within R"

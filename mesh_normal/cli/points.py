@@ -31,6 +31,8 @@ if TYPE_CHECKING:
 POINT_OUTPUTS = {".ply": "ply", ".xyz": "xyz", ".csv": "csv", ".npy": "npy"}
 #: Components listed by name in the text summary, and in the JSON one.
 LISTED_COMPONENTS, JSON_COMPONENTS = 5, 100
+#: ``--k all`` (every point within --radius); None, the default, is the adaptive scale.
+ALL = 0
 #: Why a point has no normal, or no side, in a few words (``PointStatus`` by name).
 STATUS_WORDS = {
     "ok": "a unit normal, oriented as asked",
@@ -40,6 +42,7 @@ STATUS_WORDS = {
     "collinear": "the neighbourhood's points lie on a line",
     "ambiguous": "two directions are equally flat (a symmetric corner)",
     "unoriented": "a unit normal whose side could not be decided",
+    "sharp": "a unit normal near a sharp edge, of the side the point lies on",
 }
 
 
@@ -48,8 +51,9 @@ def points(args: argparse.Namespace, progress: Progress) -> int:
     output_format = point_output(args.file, args.output, args.format)
     if args.json and args.output == STDOUT:
         raise Failure("--json and -o - would both write to standard output; give one", EXIT_USAGE)
-    if args.k is None and args.radius is None:
+    if args.k == ALL and args.radius is None:
         raise Failure("--k all needs --radius", EXIT_USAGE)
+    k = None if args.k == ALL else args.k
     from mesh_normal.points import point_normals
 
     cloud = load_points(args.file, progress)
@@ -58,7 +62,7 @@ def points(args: argparse.Namespace, progress: Progress) -> int:
     try:
         result = point_normals(
             cloud.points,
-            k=args.k,
+            k=k,
             radius=args.radius,
             orient=orient,
             max_angle=args.max_angle,
@@ -186,7 +190,7 @@ def points_summary(
         "points": len(cloud.points),
         "file_points": cloud.file_points,
         "notes": list(cloud.notes),
-        "neighbourhood": {"k": args.k, "radius": args.radius},
+        "neighbourhood": {"k": None if args.k == ALL else args.k, "radius": args.radius},
         "orient": orient,
         **references,
         "max_angle": args.max_angle,
@@ -264,6 +268,8 @@ def points_text(found: dict[str, Any]) -> str:
 
 def neighbourhood_words(found: dict[str, Any]) -> str:
     k, radius = found["neighbourhood"]["k"], found["neighbourhood"]["radius"]
+    if k is None and radius is None:
+        return "each point's own scale, chosen from the data"
     if radius is None:
         return f"the {k} nearest points, itself included"
     if k is None:

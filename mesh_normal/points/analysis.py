@@ -58,7 +58,7 @@ class PointAnalysis:
 def analyse_points(
     cloud: PointCloud | ArrayLike | HeldCloud,
     *,
-    k: int | None = 30,
+    k: int | None = None,
     radius: float | None = None,
     orient: OrientMode = "mst",
     viewpoint: ArrayLike | None = None,

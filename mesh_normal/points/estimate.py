@@ -59,6 +59,24 @@ from mesh_normal.types import BoolArray, FloatArray, IndexArray
 #: 31 MB of indices and as much of distances).
 QUERY_CHUNK = 2**17
 
+#: The default's scales: with neither k nor radius, each point is fitted over its nearest 12,
+#: 24, 48 and 96 (itself included), from one query of the largest.
+ADAPTIVE_SCALES = (12, 24, 48, 96)
+
+#: A larger scale is taken while its normal stays within this many times the two fits' spreads
+#: from noise of every smaller scale's (Lepski's rule; measured on benchmarks.points_accuracy).
+ADAPTIVE_AGREEMENT = 2.0
+
+#: Smaller scales whose smallest eigenvalue is over this fraction of the middle one are not
+#: held against a larger scale: noise, not the surface, shapes them.
+ADAPTIVE_PLANAR = 0.1
+
+#: Near a sharp edge: a point takes a neighbour's normal when that neighbour's curvature is
+#: under this fraction of its own, it lies on the neighbour's plane, and the normal turns by a
+#: sine over ADAPTIVE_SHARP_TURN (about 10 degrees: less is what noise turns a normal by).
+ADAPTIVE_SHARP_RATIO = 0.1
+ADAPTIVE_SHARP_TURN = 0.17
+
 
 class PointStatus(IntEnum):
     """Why a point has its normal, or has none (``PointNormals.status``, uint8).
@@ -79,6 +97,9 @@ class PointStatus(IntEnum):
         Two directions are equally flat (e.g. a symmetric corner).
     unoriented : 6
         A unit normal, but its side could not be decided; see ``components``.
+    sharp : 7
+        A unit normal, oriented as asked, near a sharp edge or corner: the normal of the flat
+        side the point lies on, not a blend of both (the default neighbourhood only).
     """
 
     ok = 0  #: a unit normal, oriented as asked
@@ -88,6 +109,7 @@ class PointStatus(IntEnum):
     collinear = 4  #: they lie on a line (to rounding, or 2**-20 of their length)
     ambiguous = 5  #: two directions are equally flat (e.g. a symmetric corner)
     unoriented = 6  #: a unit normal, but its side could not be decided; see ``components``
+    sharp = 7  #: a unit normal near a sharp edge: the flat side's the point lies on
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -105,7 +127,7 @@ class PointNormals:
         How many places the neighbourhood held (the point's own included; coincident points
         are one place).
     valid : (n,) bool
-        The point has a normal: status ``ok`` or ``unoriented``.
+        The point has a normal: status ``ok``, ``sharp`` or ``unoriented``.
     status : (n,) uint8
         A :class:`PointStatus` per point.
     orient : str
@@ -158,7 +180,7 @@ class _Frame:
 def point_normals(
     points: ArrayLike | HeldCloud,
     *,
-    k: int | None = 30,
+    k: int | None = None,
     radius: float | None = None,
     orient: OrientMode = "mst",
     viewpoint: ArrayLike | None = None,
@@ -178,7 +200,12 @@ def point_normals(
         vertices); with ``orient="file"`` and no ``stored``, its own normals are taken.
     k : int or None
         The neighbourhood's size, the point itself included (at least 3); with ``radius``, at
-        most this many within it; None with a radius: all within it.
+        most this many within it; None with a radius: all within it. With neither (the
+        default), each point's scale is chosen from the data: its nearest 12, 24, 48 or 96,
+        the largest whose normal a smaller one's agrees with to within noise (a curved or
+        noise-free place keeps a small one, a flat noisy one a large one; ``neighbours`` says
+        which), and points near a sharp edge take the normal of the side they lie on
+        (status ``sharp``).
     radius : float or None
         Only neighbours within this distance, in the points' unit.
     orient : {"mst", "riemannian", "viewpoint", "direction", "file", "none"}
@@ -219,14 +246,15 @@ def point_normals(
     if m == 0:
         return PointNormals(normals, curvature, neighbours, status == 0, status, orient, ())
     local_normals, local_curvature, used, codes, graph = _estimate(frame, k, radius, progress)
-    signs = _signs(frame, local_normals, codes == 0, graph, orient, references, max_angle)
+    has_normal = (codes == PointStatus.ok) | (codes == PointStatus.sharp)
+    signs = _signs(frame, local_normals, has_normal, graph, orient, references, max_angle)
     local_normals[signs.flip] *= -1.0
     codes[signs.unoriented] = PointStatus.unoriented
     finite, place = frame.finite, frame.place
     normals[finite], curvature[finite] = local_normals[place], local_curvature[place]
     neighbours[finite], status[finite] = used[place], codes[place]
     origin = frame.origin
-    valid = (status == PointStatus.ok) | (status == PointStatus.unoriented)
+    valid = np.isin(status, (PointStatus.ok, PointStatus.unoriented, PointStatus.sharp))
     components = tuple(
         ComponentOrientation(
             part.points,
@@ -256,8 +284,6 @@ def _checked_points(points: ArrayLike) -> FloatArray:
 
 
 def _checked_neighbourhood(k: int | None, radius: float | None) -> tuple[int | None, float | None]:
-    if k is None and radius is None:
-        raise ValueError("give k, radius or both")
     if k is not None:
         if isinstance(k, bool) or not isinstance(k, int | np.integer):
             raise ValueError(f"k must be a whole number, not {k!r}")
@@ -410,6 +436,8 @@ def _estimate(
     from scipy.spatial import cKDTree  # type: ignore[import-untyped]  # on first use: 0.5 s
 
     tree = cKDTree(frame.points, balanced_tree=False, compact_nodes=False)
+    if k is None and radius is None:
+        return _adaptive(frame, tree, progress)
     normals, curvature = np.empty((m, 3)), np.empty(m)
     used, codes = np.empty(m, dtype=np.intp), np.empty(m, dtype=np.intp)
     g = min(ORIENT_NEIGHBOURS, m if k is None else min(k, m))
@@ -433,6 +461,65 @@ def _estimate(
         if progress is not None:
             progress(stop, m)
     _degenerate_piles(frame.weight, used, codes, graph)
+    return normals, curvature, used, codes.astype(np.uint8), graph
+
+
+def _adaptive(
+    frame: _Frame, tree: Any, progress: Callable[[int, int], None] | None
+) -> tuple[FloatArray, FloatArray, IndexArray, NDArray[np.uint8], NDArray[np.int32]]:
+    """The default: each point's scale chosen among ADAPTIVE_SCALES, then the sharp pass."""
+    m = len(frame.points)
+    # A neighbourhood of over a 32nd of the cloud is a good part of its shape, not a patch.
+    largest = min(ADAPTIVE_SCALES[-1], max(ADAPTIVE_SCALES[0], m // 32), m)
+    scales = np.array([s for s in ADAPTIVE_SCALES if s < largest] + [largest], dtype=np.intp)
+    fitted, curvature, residual = np.empty((m, 3)), np.empty(m), np.empty(m)
+    used, codes = np.empty(m, dtype=np.intp), np.empty(m, dtype=np.intp)
+    g = min(ORIENT_NEIGHBOURS, largest)
+    graph = np.full((m, g), -1, dtype=np.int32)
+    # The sharp pass looks for the plane a point lies on among its nearest two smallest scales.
+    candidates = np.full((m, min(2 * ADAPTIVE_SCALES[0], largest)), -1, dtype=np.int32)
+    chunk = max(1, QUERY_CHUNK * 30 // largest)
+    for start in range(0, m, chunk):
+        stop = min(m, start + chunk)
+        _, nearest = tree.query(frame.points[start:stop], k=largest, workers=-1)
+        nearest = np.ascontiguousarray(nearest.reshape(stop - start, largest), dtype=np.intp)
+        _core.multiscale_normals(
+            frame.points,
+            nearest,
+            scales,
+            frame.tiny,
+            POINT_LINE_RATIO,
+            POINT_GAP_RATIO,
+            ADAPTIVE_AGREEMENT,
+            ADAPTIVE_PLANAR,
+            fitted[start:stop],
+            curvature[start:stop],
+            residual[start:stop],
+            used[start:stop],
+            codes[start:stop],
+        )
+        graph[start:stop] = nearest[:, :g]
+        candidates[start:stop] = nearest[:, : candidates.shape[1]]
+        if progress is not None:
+            progress(stop, m)
+    _degenerate_piles(frame.weight, used, codes, graph)
+    normals = fitted.copy()
+    sharp = np.zeros(m, dtype=bool)
+    _core.sharp_normals(
+        frame.points,
+        candidates,
+        fitted,
+        curvature,
+        residual,
+        used,
+        codes,
+        ADAPTIVE_SHARP_RATIO,
+        ADAPTIVE_SHARP_TURN,
+        math.sqrt(frame.tiny),
+        normals,
+        sharp,
+    )
+    codes[sharp] = PointStatus.sharp
     return normals, curvature, used, codes.astype(np.uint8), graph
 
 

@@ -65,7 +65,10 @@ class Spacing(Record):
 class Neighbourhood(Record):
     """The neighbourhood each normal was fitted to."""
 
-    k: int | None = described(description="At most this many points, the point itself included.")
+    k: int | None = described(
+        description="At most this many points, the point itself included; null with a null "
+        "radius: each point's own scale, chosen from the data (the default)."
+    )
     radius: Measure = described(description="Only points within this distance; null: any distance.")
 
 
@@ -80,6 +83,9 @@ class StatusCounts(Record):
     collinear: int = described(ge=0, description="The neighbourhood's points lie on a line.")
     ambiguous: int = described(ge=0, description="Two directions are equally flat.")
     unoriented: int = described(ge=0, description="A unit normal whose side was not decided.")
+    sharp: int = described(
+        ge=0, description="A unit normal near a sharp edge: the side's it lies on, not a blend."
+    )
 
 
 @dataclass(frozen=True, slots=True)
@@ -143,7 +149,7 @@ class PointReport(Record):
     spacing: Spacing | None = described(description="Nearest-neighbour distances; null under 2.")
     neighbourhood: Neighbourhood = described(description="The neighbourhood used: k and radius.")
     counts: StatusCounts = described(description="How many points got each status.")
-    with_normal: int = described(ge=0, description="Points with a normal: ok or unoriented.")
+    with_normal: int = described(ge=0, description="Points with a normal: ok, sharp or unoriented.")
     far_from_flat: int = described(
         ge=0,
         description=f"Points with a normal whose neighbourhood is far from flat (surface "

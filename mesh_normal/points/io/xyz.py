@@ -40,6 +40,9 @@ from numpy.typing import NDArray
 from mesh_normal.files.errors import MeshFileError
 from mesh_normal.points.io.cloud import PointCloud, colors_uint8, make_cloud
 
+#: How a binary Expe point set (MeshLab's samples) begins: its records are not text.
+_EXPE_BINARY = b"[Expe/PointSet/Binary/"
+
 #: Bytes of text read at once (cut at a line end): the words of one chunk are Python objects.
 _CHUNK = 1 << 20
 
@@ -75,6 +78,13 @@ class _Table:
 
 def read_xyz(data: bytes, suffix: str | None) -> PointCloud:
     """Read a text table of points (see the module docstring)."""
+    if data.lstrip()[:22].lower() == _EXPE_BINARY.lower():
+        raise MeshFileError(
+            "This is a binary Expe point set (a .pts file that starts with "
+            "[Expe/PointSet/Binary/...], as MeshLab's samples are), which is not read: save it "
+            "from MeshLab as PLY or XYZ.",
+            415,
+        )
     table = _Table()
     rows, lines = _read_table(table, data, 1)
     if table.count is not None and table.count != len(rows):

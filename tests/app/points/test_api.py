@@ -32,7 +32,7 @@ def test_report_of_a_plane(client: TestClient) -> None:
     assert report["file"]["bytes"] == len(GRID_XYZ)
     assert report["points"] == 36 and report["counts"]["ok"] == 36
     assert report["spacing"]["median"] == 0.5
-    assert report["neighbourhood"] == {"k": 30, "radius": None}
+    assert report["neighbourhood"] == {"k": None, "radius": None}
     assert report["orientation"]["mode"] == "mst"
     assert report["diagnosis"] == ["Every point has a normal, oriented as asked."]
 

@@ -64,7 +64,7 @@ def test_summary_in_words(ply: Path, capsys: pytest.CaptureFixture[str]) -> None
     assert code == 0
     lines = out.splitlines()
     assert lines[0] == f"ball.ply: {N} points (PLY), {N} with a normal, 0 without"
-    assert lines[1].startswith("neighbourhood: the 30 nearest points, itself included; ")
+    assert lines[1].startswith("neighbourhood: each point's own scale, chosen from the data; ")
     assert "oriented by mst (max angle 60 degrees)" in lines[1]
     assert f"  ok: {N} (a unit normal, oriented as asked)" in lines
     assert lines[3].startswith("orientation: 1 part; ")
@@ -82,7 +82,7 @@ def test_summary_counts_points_without_a_normal_with_reasons(
     code, out, _ = run(["points", str(path), "--radius", "0.5"], capsys)
     assert code == 0
     assert f"{N + 2} points (XYZ), {N} with a normal, 2 without" in out
-    assert "at most 30 points within 0.5, itself included" in out
+    assert "every point within 0.5" in out
     assert "  too_few_neighbours: 2 (fewer than three points in the neighbourhood" in out
     assert "the file's normals" not in out  # the file has none
 

@@ -14,6 +14,6 @@ def assert_well_formed(result: PointNormals, n: int) -> None:
     lengths = np.linalg.norm(result.normals, axis=1)
     assert np.all(lengths[~result.valid] == 0.0)
     np.testing.assert_allclose(lengths[result.valid], 1.0, rtol=0, atol=1e-15)
-    valid = (result.status == PointStatus.ok) | (result.status == PointStatus.unoriented)
+    valid = np.isin(result.status, (PointStatus.ok, PointStatus.unoriented, PointStatus.sharp))
     np.testing.assert_array_equal(result.valid, valid)
     assert np.all((result.curvature >= 0) & (result.curvature <= 1 / 3 + 1e-15))

@@ -55,8 +55,8 @@ def test_a_thin_slab_needs_the_riemannian_graph() -> None:
     # Measured: "mst" turns 15,538 of 30,000 points inward, "riemannian" 534.
     size = (1.0, 1.0, 0.02)
     points, truth = clouds.box(30_000, size=size)
-    plain = point_normals(points, orient="mst")
-    offsets = point_normals(points, orient="riemannian")
+    plain = point_normals(points, k=30, orient="mst")
+    offsets = point_normals(points, k=30, orient="riemannian")
     assert wrong(offsets.normals, truth) < 0.05 * len(points) < wrong(plain.normals, truth)
 
 

@@ -102,3 +102,10 @@ def test_broken_tables_are_refused_with_a_sentence(data: bytes, message: str) ->
         read_points(data, "scan.xyz")
     assert caught.value.status_code == 400
     assert str(caught.value).endswith(".")
+
+
+def test_a_binary_expe_point_set_is_refused_by_name() -> None:
+    data = b"[Expe/PointSet/Binary/float32/ascii]\n3 position\x00\x00\x80?\x00\x00"
+    with pytest.raises(MeshFileError, match="binary Expe point set") as caught:
+        read_points(data, "bunny.pts")
+    assert caught.value.status_code == 415
