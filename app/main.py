@@ -14,7 +14,7 @@ from typing import Any
 from fastapi import FastAPI
 
 import mesh_normal
-from app import config
+from app import config, warm
 from app.calculator import api as calculator_api
 from app.calculator import pages
 from app.mesh import api as mesh_api
@@ -118,15 +118,6 @@ def load_heavy_modules() -> None:
         importlib.import_module(name)
 
 
-def warm_workers() -> None:
-    """What a worker runs as it starts: every mesh job, then every point job, on small files."""
-    from app.mesh import warmup
-    from app.points import work as points_work
-
-    warmup.warm()
-    points_work.warm()
-
-
 def create_app(upload_limit: int | None = None, settings: config.Settings | None = None) -> FastAPI:
     """The app; ``upload_limit`` (bytes) overrides ``$MESH_UPLOAD_LIMIT_MB`` for mesh files,
     ``settings`` the environment's settings."""
@@ -156,7 +147,7 @@ def create_app(upload_limit: int | None = None, settings: config.Settings | None
     app.state.upload_limit = settings.upload_limit if upload_limit is None else upload_limit
     app.state.docs_url = settings.docs_url  # the pages' links to the guide (app.web.links)
     # The heavy mesh work: worker processes, started by the lifespan (or at the first job).
-    app.state.jobs = Jobs(settings, warm=warm_workers, preload=PRELOAD)
+    app.state.jobs = Jobs(settings, warm=warm.warm_workers, preload=PRELOAD)
     app.add_middleware(BodyLimit, upload_limit=app.state.upload_limit)
     app.add_middleware(SecurityHeaders)
     app.add_middleware(HeadAsGet)

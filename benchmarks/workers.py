@@ -31,7 +31,8 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 def server_settings() -> object:
-    from app.main import PRELOAD, warm_workers
+    from app.main import PRELOAD
+    from app.warm import warm_workers
     from app.web.workers import REFUSALS, WORKER_NICENESS
     from mesh_normal.workers import Settings
 
@@ -70,7 +71,8 @@ def starts(rounds: int) -> tuple[list[float], list[float]]:
 
 def replacement(rounds: int, spare: int) -> list[float]:
     """Seconds from a worker killed with its job to the next small job's answer."""
-    from app.main import PRELOAD, warm_workers
+    from app.main import PRELOAD
+    from app.warm import warm_workers
     from app.web.workers import WorkerPool
     from tests.app import jobhooks
 

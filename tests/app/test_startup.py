@@ -117,3 +117,14 @@ import app.preload
 print(gc.isenabled(), "app.points.work" in sys.modules, "trimesh.exchange.gltf" in sys.modules)
 """
     assert run(code) == "True True True"  # the modules after the broken one still loaded
+
+
+def test_a_worker_s_warm_up_comes_without_the_app() -> None:
+    """A worker is handed the warm-up by reference: unpickling it must not build the app."""
+    code = (
+        "import pickle, sys\n"
+        "from app import warm\n"
+        "pickle.loads(pickle.dumps(warm.warm_workers))\n"
+        "print([m for m in ('app.main', 'fastapi') if m in sys.modules])"
+    )
+    assert run(code) == "[]"
