@@ -161,15 +161,6 @@ def checked_mesh(
     return CheckedMesh(points, indices, *scaling(points, extremes))
 
 
-def as_checked(vertices: ArrayLike | HeldMesh, faces: ArrayLike | None) -> CheckedMesh:
-    """The checked mesh of what a public function of the core was given.
-
-    The ways to call the core: ``f(vertices, faces)``, ``f(checked)`` or ``f(mesh)`` for any
-    mesh that :func:`checked_mesh` takes alone.
-    """
-    return checked_mesh(vertices, faces)
-
-
 def _mesh_kind(value: object) -> str | None:
     """How a sentence names ``value`` if it is a mesh that holds its faces, else ``None``."""
     if isinstance(value, CheckedMesh):

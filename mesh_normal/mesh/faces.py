@@ -42,7 +42,6 @@ import mesh_normal._core as _core
 from mesh_normal.mesh.checks import (
     CheckedMesh,
     HeldMesh,
-    as_checked,
     checked_mesh,
     read_only,
     refuse_faces,
@@ -175,12 +174,12 @@ def face_geometry(vertices: MeshInput, faces: ArrayLike | None = None) -> FaceGe
 
 
 def checked_input(vertices: MeshInput, faces: ArrayLike | None) -> CheckedMesh | FaceGeometry:
-    """A checked mesh or geometry as given, or raw arrays checked (see :func:`as_checked`)."""
+    """A checked mesh or geometry as given, or raw arrays checked (see :func:`checked_mesh`)."""
     if isinstance(vertices, FaceGeometry):
         if faces is not None:
             raise TypeError("a face geometry holds its faces: pass it without faces.")
         return vertices
-    return as_checked(vertices, faces)
+    return checked_mesh(vertices, faces)
 
 
 def kernel_ranged_input(vertices: MeshInput, faces: ArrayLike | None) -> CheckedMesh | FaceGeometry:
