@@ -6,7 +6,8 @@ from typing import TYPE_CHECKING, Any
 
 from app.mesh.classes import face_classes
 from app.mesh.histogram import area_histogram, histogram_figure
-from app.mesh.view import build_view, up_axis
+from app.mesh.view import build_view
+from app.web.camera import up_axis
 
 if TYPE_CHECKING:
     from mesh_normal.mesh.report.analysis import MeshAnalysis

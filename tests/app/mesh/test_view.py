@@ -144,12 +144,6 @@ def test_rounding_leaves_tiny_extents_alone() -> None:
     assert np.array_equal(mesh_view._rounded(np.zeros((2, 3))), np.zeros((2, 3)))
 
 
-def test_up_axis_comes_from_the_format() -> None:
-    assert mesh_view.up_axis("glb") == mesh_view.up_axis("gltf") == "y"  # glTF: Y-up by its spec
-    assert mesh_view.up_axis("obj") == "y"
-    assert mesh_view.up_axis("stl") == mesh_view.up_axis("3mf") == "z"
-
-
 def test_camera_looks_along_the_up_axis_from_far_enough() -> None:
     vertices, faces = grid(2)
     for up in "xyz":
