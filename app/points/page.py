@@ -25,6 +25,7 @@ from app.web.links import public_url
 from app.web.middleware import size_text
 from app.web.templating import templates
 from mesh_normal.choices import OrientMode
+from mesh_normal.points.report import ALL_CLEAR, PointReport
 
 if TYPE_CHECKING:
     from app.points import work  # imported by the route that runs it (see app.mesh.api)
@@ -44,6 +45,18 @@ ORIENT_HELP = {
     "file": "agreeing with the file's normals",
     "none": "not oriented",
 }
+
+
+def verdict(report: PointReport) -> str:
+    """How the diagnosis reads, as the page's message classes: "error" when more than a tenth
+    of the points have no normal; "ok" only when nothing was found and no point lies near a
+    sharp edge (its normal is one side's, worth a look); else "warn"."""
+    missing = report.points - report.with_normal
+    if missing * 10 > report.points:
+        return "error"
+    if report.diagnosis == [ALL_CLEAR] and not missing and not report.counts.sharp:
+        return "ok"
+    return "warn"
 
 
 def _form_context(request: Request) -> dict[str, Any]:
@@ -129,6 +142,7 @@ async def points_upload(request: Request) -> HTMLResponse:
         context.update(
             await jobs.run(request, estimate(data, filename), work.page, data, filename, checked)
         )
+        context["verdict"] = verdict(context["report"])
     except ApiError as error:
         context["error"] = error
         name = "_points_error.html" if fragment else "points.html"

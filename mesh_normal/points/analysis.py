@@ -27,6 +27,7 @@ from mesh_normal.points.estimate import _checked_points as checked_points
 from mesh_normal.points.io.read import PointCloud
 from mesh_normal.points.orient import OrientMode
 from mesh_normal.points.report import (
+    ALL_CLEAR,
     FLIPPED_FRACTION,
     POINT_AGREEMENT_DEGREES,
     Neighbourhood,
@@ -253,7 +254,7 @@ def diagnose(
     if stored is not None:
         found.extend(_stored_findings(stored))
     if not found:
-        found.append("Every point has a normal, oriented as asked.")
+        found.append(ALL_CLEAR)
     return found
 
 

@@ -14,6 +14,8 @@ from mesh_normal.tolerances import POINT_FAR_FROM_FLAT
 POINT_AGREEMENT_DEGREES = 10.0
 #: Under this fraction of compared points on our side, the stored normals read as flipped.
 FLIPPED_FRACTION = 0.5
+#: The diagnosis when nothing was found: its one sentence.
+ALL_CLEAR = "Every point has a normal, oriented as asked."
 
 
 @dataclass(frozen=True, slots=True)

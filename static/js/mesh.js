@@ -368,18 +368,6 @@
   // mesh. A new report starts with the whole mesh.
   let spot = -1;
 
-  // A canvas taller than wide sees less across than up and down: the camera steps back by as
-  // much, so that the whole mesh stays framed on a phone.
-  function fitted(camera, element, figureHeight) {
-    // The figure's height is what the element gets when Plotly draws; its width, the page's.
-    const width = element ? element.clientWidth : 0;
-    const height = figureHeight || (element ? element.clientHeight : 0);
-    if (!(width > 0 && height > width)) return camera;
-    const back = height / width;
-    const eye = camera.eye;
-    return Object.assign({}, camera, { eye: { x: eye.x * back, y: eye.y * back, z: eye.z * back } });
-  }
-
   // Looking at a problem place: from its outward side, a little above, close enough to see the
   // faces around it.
   function spotCamera(place, up) {
@@ -420,7 +408,7 @@
     if (spot >= 0 && spots[spot]) {
       figure.layout.scene.camera = spotCamera(spots[spot], figure.layout.scene.camera.up);
     } else {
-      figure.layout.scene.camera = fitted(figure.layout.scene.camera, element, figure.layout.height);
+      figure.layout.scene.camera = window.NormalView3D.fitted(figure.layout.scene.camera, element, figure.layout.height);
     }
     // Rotating and zooming stay when the colours change; a new up axis or problem place starts
     // a new view.

@@ -1,8 +1,9 @@
 // The point-cloud page. Without JavaScript the form posts the file and its options and the
 // server answers with the whole page. With it, choosing or dropping a file uploads it at once
 // with a progress bar (POST /points?part=report answers with the report alone), the figures
-// are drawn from the report's JSON blocks, the colour buttons swap the points' colouring, and
-// the downloads send the file the page still holds to POST /api/points/normals.
+// are drawn from the report's JSON blocks, the view's controls swap the points' colouring, the
+// up axis (and with it the camera and the light) and the normal strokes, and the downloads
+// send the file the page still holds to POST /api/points/normals.
 "use strict";
 
 (function () {
@@ -25,7 +26,7 @@
   form.classList.add("mesh-form-js");  // choosing or dropping a file starts at once
   let file = null;      // the file the page holds, sent again by every download
   let request = null;   // the upload in flight, if any
-  let view = null;      // the 3D view's figure and its two colourings
+  let view = null;      // the 3D view's figure, its colourings and its cameras
 
   function size(bytes) {
     if (bytes >= 1048576) return (bytes / 1048576).toFixed(1) + " MB";
@@ -145,11 +146,31 @@
       .then(function () { element.dataset.drawn = String(Date.now()); });
   }
 
-  // The figure with the points coloured by `scheme`: "normal" or "curvature".
-  function colored(scheme) {
-    const figure = view.figure;
-    const points = Object.assign({}, figure.data[0], { marker: view.colors[scheme] });
-    return { data: [points].concat(figure.data.slice(1)), layout: figure.layout };
+  // The figure as the controls ask: the points coloured by the chosen scheme (the light's
+  // shading for the chosen up axis, or curvature), the strokes shown or not, and the camera
+  // for the chosen up axis, fitted to the canvas. Recolouring keeps the reader's rotation
+  // (the same uirevision); a new up axis starts from its own camera.
+  function viewFigure() {
+    const element = document.getElementById("points-view");
+    const select = document.getElementById("points-up");
+    const strokes = document.getElementById("points-strokes");
+    const up = select && view.cameras[select.value] ? select.value : view.up;
+    const scheme = element ? element.dataset.color : "light";
+    const marker = scheme === "curvature" ? view.colors.curvature : view.colors.light[up];
+    const traces = view.figure.data.map(function (trace, index) {
+      if (index === 0) return Object.assign({}, trace, { marker: marker });
+      return Object.assign({}, trace, { visible: strokes ? strokes.checked : true });
+    });
+    const layout = JSON.parse(JSON.stringify(view.figure.layout));
+    layout.scene.camera = window.NormalView3D.fitted(view.cameras[up], element, layout.height);
+    layout.uirevision = up;
+    return { data: traces, layout: layout };
+  }
+
+  function showScripted() {
+    document.querySelectorAll("#points-report-view [data-needs-js]").forEach(function (element) {
+      element.hidden = false;
+    });
   }
 
   // The 3D bundle loads only when the view scrolls into sight.
@@ -157,24 +178,29 @@
     const element = document.getElementById("points-view");
     view = data("points-view-data");
     if (!element || !view || !window.NormalView3D) return;
-    element.dataset.color = "normal";
+    showScripted();
+    element.dataset.color = "light";
     const observer = new IntersectionObserver(function (entries) {
       if (!entries.some(function (entry) { return entry.isIntersecting; })) return;
       observer.disconnect();
-      window.NormalView3D.show(element, colored(element.dataset.color));
+      window.NormalView3D.show(element, viewFigure());  // its camera fitted to the size it has now
     });
     observer.observe(element);
+  }
+
+  function redraw() {
+    const element = document.getElementById("points-view");
+    if (element && view) window.NormalView3D.update(element, viewFigure());
   }
 
   function recolor(button) {
     const element = document.getElementById("points-view");
     if (!element || !view) return;
-    const scheme = button.dataset.pointsColor;
-    element.dataset.color = scheme;
+    element.dataset.color = button.dataset.pointsColor;
     document.querySelectorAll("button[data-points-color]").forEach(function (other) {
       other.setAttribute("aria-pressed", String(other === button));
     });
-    window.NormalView3D.update(element, colored(scheme));
+    redraw();
   }
 
   function completeCurl() {
@@ -190,9 +216,13 @@
     completeCurl();
     const report = data("points-report");
     const missing = report ? report.points - report.with_normal : 0;
+    // The status line reads as the diagnosis does: a warning is not a success.
+    const diagnosis = document.getElementById("points-diagnosis");
+    const verdict = diagnosis ? diagnosis.dataset.verdict : "ok";
     say("Report ready for " + (report && report.file.name || "the file") + ": " +
         (report ? report.with_normal.toLocaleString() + " of " + report.points.toLocaleString() +
-         " points have a normal" : "done") + (missing ? "." : ", every one."), "ok");
+         " points have a normal" : "done") + (missing ? "." : ", every one.") +
+        (verdict === "ok" ? "" : " See the diagnosis."), verdict || "ok");
     const heading = document.getElementById("points-report-title");
     if (heading) heading.focus({ preventScroll: window.innerWidth >= 900 });
     drawView();
@@ -306,6 +336,10 @@
   });
   // New options analyse the file the page holds again; the direction mode waits for its
   // direction rather than answer with an error at once.
+  // The view's own controls redraw it; they are not the form's options.
+  document.addEventListener("change", function (event) {
+    if (event.target.id === "points-up" || event.target.id === "points-strokes") redraw();
+  });
   form.addEventListener("change", function (event) {
     if (event.target === input || !file || !(event.target.validity && event.target.validity.valid)) return;
     const values = fields();

@@ -127,5 +127,17 @@ window.NormalView3D = (function () {
     hint.textContent = "(drag to rotate, pinch to zoom)";
   }
 
-  return { show: show, update: update };
+  // A canvas taller than wide sees less across than up and down: the camera steps back by as
+  // much, so that the whole drawing stays framed on a phone (the server frames a square).
+  function fitted(camera, element, figureHeight) {
+    // The figure's height is what the element gets when Plotly draws; its width, the page's.
+    const width = element ? element.clientWidth : 0;
+    const height = figureHeight || (element ? element.clientHeight : 0);
+    if (!(width > 0 && height > width)) return camera;
+    const back = height / width;
+    const eye = camera.eye;
+    return Object.assign({}, camera, { eye: { x: eye.x * back, y: eye.y * back, z: eye.z * back } });
+  }
+
+  return { show: show, update: update, fitted: fitted };
 })();

@@ -1,5 +1,6 @@
-"""The point-cloud page in Chromium: upload, the diagnosis, the 3D view and its colour toggle,
-a download that sends the file again, the phone layout and the README's screenshot."""
+"""The point-cloud page in Chromium: upload, the diagnosis, the 3D view and its controls (colour,
+up axis, strokes), a download that sends the file again, the phone layout and the README's
+screenshot."""
 
 from __future__ import annotations
 
@@ -60,7 +61,7 @@ def test_uploading_a_cloud_shows_the_diagnosis_view_and_toggle(page: Page) -> No
     expect(page.locator("#points-view-caption")).to_contain_text("Showing all 289 points")
     first = wait_for_view(page)
     marker = page.evaluate(MARKER)
-    assert str(marker["color"][0]).startswith("rgb(")
+    assert isinstance(marker["color"][0], int) and marker["cmax"] == 300  # the light's codes
 
     page.get_by_role("button", name="curvature").click()
     page.wait_for_function(
@@ -69,7 +70,7 @@ def test_uploading_a_cloud_shows_the_diagnosis_view_and_toggle(page: Page) -> No
     marker = page.evaluate(MARKER)
     assert marker["colorscale"] and isinstance(marker["color"][0], (int, float))
     expect(page.get_by_role("button", name="curvature")).to_have_attribute("aria-pressed", "true")
-    expect(page.get_by_role("button", name="normal direction")).to_have_attribute(
+    expect(page.get_by_role("button", name="normal, under a light")).to_have_attribute(
         "aria-pressed", "false"
     )
 
@@ -80,6 +81,50 @@ def test_uploading_a_cloud_shows_the_diagnosis_view_and_toggle(page: Page) -> No
     rows = Path(download.path()).read_text().split("\n")
     assert len([row for row in rows if row.strip() and not row.startswith("#")]) == 289
     expect(page.locator("#points-download-status")).to_contain_text("1 point has no normal")
+
+
+CAMERA = "() => document.getElementById('points-view')._fullLayout.scene.camera"
+TRACES = "() => document.getElementById('points-view').data.map(t => [t.name, t.visible])"
+
+
+def redrawn(page: Page, before: str) -> str:
+    page.wait_for_function(
+        f"() => document.getElementById('points-view').dataset.drawn !== '{before}'"
+    )
+    return page.locator("#points-view").get_attribute("data-drawn") or ""
+
+
+def test_the_up_axis_turns_the_camera_the_strokes_toggle_and_a_warning_reads_as_one(
+    page: Page,
+) -> None:
+    upload(page, radius="0.5")  # the far point has no neighbour within 0.5: a warning
+    expect(page.locator("#points-diagnosis")).to_have_class("message warn")
+    expect(page.locator("#points-status")).to_have_class("mesh-status message warn")
+    expect(page.locator("#points-diagnosis .severity.severity-warning")).to_have_text("Check")
+    drawn = wait_for_view(page)
+    cameras = page.evaluate(
+        "() => JSON.parse(document.getElementById('points-view-data').textContent).cameras"
+    )
+    camera = page.evaluate(CAMERA)
+    assert camera["up"] == {"x": 0, "y": 0, "z": 1}  # XYZ: Z-up
+    assert camera["eye"] == pytest.approx(cameras["z"]["eye"])  # the server's fitted camera
+    expect(page.locator("#points-up")).to_be_visible()
+
+    page.select_option("#points-up", "y")
+    drawn = redrawn(page, drawn)
+    camera = page.evaluate(CAMERA)
+    assert camera["up"] == {"x": 0, "y": 1, "z": 0}
+    assert camera["eye"] == pytest.approx(cameras["y"]["eye"])
+    lit = page.evaluate(
+        "() => JSON.parse(document.getElementById('points-view-data').textContent).colors.light.y"
+    )
+    assert page.evaluate(MARKER)["color"] == lit["color"]  # the light follows the up axis
+
+    assert page.evaluate(TRACES)[1] == ["normals", True]  # strokes start shown
+    page.locator("#points-strokes").uncheck()
+    redrawn(page, drawn)
+    assert page.evaluate(TRACES)[1] == ["normals", False]
+    assert page.evaluate(CAMERA)["up"] == {"x": 0, "y": 1, "z": 0}  # the view stays as it was
 
 
 def test_phone_layout_and_desktop_screenshot(new_page: NewPage) -> None:

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from fastapi.testclient import TestClient
 
-from app.points.figures import VIEW_NORMALS, VIEW_POINTS, normal_colors, voxel_sample
+from app.points.figures import VIEW_NORMALS, VIEW_POINTS, voxel_sample
 from mesh_normal.points.io.write import write_points
 from tests.conftest import Page
 
@@ -93,13 +93,25 @@ def test_a_small_cloud_renders_the_report_and_its_json_twin(client: TestClient) 
     )
     assert html.one("link", rel="alternate")["href"] == "/api/points?k=12"
     assert html.one("a", id="points-json-link")["href"] == "/api/points?k=12"
-    # The 3D view has every point (a small cloud) and a stroke per point with a normal.
+    # The 3D view has every point (a small cloud) and, fewer than VIEW_NORMALS, a stroke for
+    # each with a normal; the light's shading for each up axis, the camera for each too.
     view = json_block(html, "points-view-data")
     points, strokes = view["figure"]["data"]
     assert len(points["x"]) == report.points
-    assert len(strokes["x"]) == 3 * report.with_normal
-    assert set(view["colors"]) == {"normal", "curvature"}
+    assert strokes["name"] == "normals" and len(strokes["x"]) == 3 * report.with_normal
+    assert set(view["colors"]) == {"light", "curvature"}
+    assert set(view["colors"]["light"]) == set(view["cameras"]) == {"x", "y", "z"}
     assert len(view["colors"]["curvature"]["color"]) == report.points
+    assert view["up"] == "z" and points["marker"] == view["colors"]["light"]["z"]
+    assert view["figure"]["layout"]["scene"]["camera"] == view["cameras"]["z"]
+    up = html.one("select", id="points-up")
+    assert up["aria-controls"] == "points-view"
+    selected = [a.get("value") for t, a in html.elements if t == "option" and "selected" in a]
+    assert "z" in selected
+    assert html.one("input", id="points-strokes")["type"] == "checkbox"
+    # Nothing was found: the diagnosis reads as a success, without a badge.
+    diagnosis = html.one("div", id="points-diagnosis")
+    assert diagnosis["class"] == "message ok" and diagnosis["data-verdict"] == "ok"
     assert json_block(html, "points-histogram-data")["data"][0]["type"] == "bar"
     buttons = {attrs.get("data-points-download") for tag, attrs in html.elements if tag == "button"}
     assert {"ply", "xyz", "csv", "npy", "json"} <= buttons
@@ -170,16 +182,6 @@ def test_voxel_sample_spreads_over_a_cloud_with_a_dense_patch() -> None:
 def test_voxel_sample_skips_points_that_are_not_finite() -> None:
     points = np.array([[0.0, 0, 0], [np.nan, 0, 0], [1, 1, 1]])
     assert voxel_sample(points, limit=10).tolist() == [0, 2]
-
-
-def test_normal_colors_map_each_axis_to_a_channel() -> None:
-    normals = np.array([[1.0, 0, 0], [0, -1.0, 0], [0, 0, 0]])
-    valid = np.array([True, True, False])
-    assert normal_colors(normals, valid) == [
-        "rgb(255,128,128)",
-        "rgb(128,0,128)",
-        "rgb(150,150,150)",
-    ]
 
 
 def test_stored_normals_get_the_angle_histogram_and_a_sentence(client: TestClient) -> None:
