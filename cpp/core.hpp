@@ -113,5 +113,6 @@ void bind_visibility(nb::module_& m);  // visibility.cpp: rays and boxes
 void bind_weld(nb::module_& m);        // weld.cpp: welding and hashing, polygon shapes
 void bind_text(nb::module_& m);        // text.cpp: text and binary parsing
 void bind_points(nb::module_& m);      // points.cpp: point neighbourhoods, PCD's LZF
+void bind_orient(nb::module_& m);      // orient.cpp: signs of point normals along a tree
 
 }  // namespace mesh_normal

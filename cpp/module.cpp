@@ -49,4 +49,5 @@ NB_MODULE(_core, m) {
   mesh_normal::bind_weld(m);
   mesh_normal::bind_text(m);
   mesh_normal::bind_points(m);
+  mesh_normal::bind_orient(m);
 }

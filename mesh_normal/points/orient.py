@@ -20,6 +20,15 @@ closed surface the extreme point along a direction has its outward normal along 
 through it holds the whole surface on one side), so a closed surface points out, and an open
 terrain up. A part with no such point is left unoriented and says so.
 
+On a closed surface the points then vote (``_outside``): on a grid of cells a few spacings
+wide, a point whose normal line has the outside (empty cells joined to the grid's corner) on one
+side and an enclosed empty cell on the other says which way it faces. The signs along the tree
+are the ones that best agree with those votes and the seed's side when changing the sign at a
+step of the tree costs ``_STEP_COST`` points (an exact pass up and down the tree), so a part the
+tree reached the wrong way, across a thin wall or where two closed parts cross, is turned back
+by its own points, and a closed part's side is its points' vote, not one seed's. An open sheet
+or terrain sees the outside on both sides: nothing votes, and the seed decides as before.
+
 ``"viewpoint"``, ``"direction"`` and ``"file"`` decide each point alone, towards a sensor, along
 a vector, or agreeing with stored normals; a point at right angles to its reference (to 2**-20)
 is left unoriented.
@@ -53,6 +62,30 @@ _SEED_DIRECTIONS = tuple(
 )
 
 
+#: The outside is seen on a grid of cells this many times the median distance from a point to
+#: its ``_CELL_NEIGHBOUR``-th nearest (the point itself is the 0th): wide enough that a surface
+#: sampled at random, or with noise, leaves no empty cell through it once grown by one cell.
+_CELL_SPACINGS = 2.5
+_CELL_NEIGHBOUR = 6
+
+#: At most this many cells in the grid (a large cloud or a far outlier widens them).
+_CELL_MOST = 2**23
+
+#: A point looks this many cells along its normal line each way, nearest first, for the outside
+#: on one side and the inside on the other.
+_PROBES = (1.5, 3.0, 5.0)
+
+#: What turning the sign against one step of the tree costs, in points that see the outside: a
+#: few points that see it wrongly (where the grid is coarse) turn nothing, a part whose side the
+#: tree carried wrongly across a thin wall or where two parts cross is turned by its own points.
+_STEP_COST = 50.0
+
+#: What the seed's side (its extreme point) counts for, in points that see the outside: it
+#: decides a part that sees no outside (an open sheet, terrain), and the points seeing the
+#: outside decide a closed one.
+_SEED_EVIDENCE = 8.0
+
+
 @dataclass(frozen=True, slots=True)
 class ComponentOrientation:
     """How one connected part of the cloud was oriented.
@@ -68,7 +101,8 @@ class ComponentOrientation:
     reason : str
         Why, in one sentence; empty when every point was oriented.
     seed : int
-        The input index of the point that decided its side (-1 when none did).
+        The input index of the tree's root, the extreme point whose side counts with the
+        votes of the points that see the outside (-1 when there is none).
     """
 
     points: int
@@ -192,13 +226,77 @@ def along_tree(
     flags = np.zeros(n, dtype=bool)
     flags[seeds[decided]] = seed_flip[decided]
     order32, parent32 = order.astype(np.int32, copy=False), parent.astype(np.int32, copy=False)
-    flip, cut = _core.propagate_signs(order32, parent32, agrees, sharp, flags)
+    _, cut = _core.propagate_signs(order32, parent32, agrees, sharp, flags)
+    # The tree's signs, overruled where the outside seen from the points says otherwise: a
+    # subtree turns against its parent when more of its points see the outside on the other
+    # side than a step costs. Below a sharp step nothing is carried (those points are cut).
+    evidence = _outside(points, normals, valid, graph) * weight.astype(np.float64)
+    evidence[seeds[decided]] += np.where(seed_flip[decided], -_SEED_EVIDENCE, _SEED_EVIDENCE)
+    carried = np.where(sharp, -1, parent32).astype(np.int32)
+    cost = np.full(n, _STEP_COST)
+    flip = _core.tree_signs(order32, carried, agrees, cost, evidence)
     unoriented = valid & (cut | ~reached)
     flip &= valid & ~unoriented
     summaries = _summaries(
         labels, count, (valid, flip, unoriented), weight, seeds, decided, max_angle
     )
     return Signs(flip, unoriented, summaries)
+
+
+def _outside(
+    points: FloatArray, normals: FloatArray, valid: BoolArray, graph: NDArray[np.int32]
+) -> FloatArray:
+    """(n,) float: +1 where a point's normal points out of the closed surface it lies on, -1
+    where it points in, 0 where that cannot be seen.
+
+    The points are put in cells a few spacings wide (``_CELL_SPACINGS`` times the median distance
+    to a point's ``_CELL_NEIGHBOUR``-th nearest), grown by one cell so that the surface leaves no
+    gap, and the empty cells joined to the grid's corner are the outside. A point decides when,
+    stepping ``_PROBES`` cells along its normal line, one side is outside and the other is an
+    empty cell the outside does not reach (within a closed surface): a thin part, an open sheet
+    or a surface whose inside the noise fills decides nothing.
+    """
+    from scipy import ndimage  # type: ignore[import-untyped]  # on first use
+
+    n = len(points)
+    evidence = np.zeros(n)
+    rows = np.flatnonzero(valid)
+    if len(rows) < 4 or graph.shape[1] < 2:
+        return evidence
+    column = graph[rows, min(_CELL_NEIGHBOUR, graph.shape[1] - 1)]
+    far = column >= 0
+    if not far.any():
+        return evidence
+    spacing = float(np.median(np.linalg.norm(points[column[far]] - points[rows[far]], axis=1)))
+    low, high = points[rows].min(axis=0), points[rows].max(axis=0)
+    # Cells a few spacings wide, or wider where the grid would hold too many (a large cloud,
+    # outliers far away); two cells of margin keep the corner outside.
+    cell = _CELL_SPACINGS * spacing
+    if not cell > 0:
+        return evidence
+    while np.prod(np.floor((high - low) / cell) + 5) > _CELL_MOST:
+        cell *= 1.25
+    low = low - 2 * cell
+    shape = np.floor((high - low) / cell).astype(np.intp) + 3
+    occupied = np.zeros(tuple(shape), dtype=bool)
+    occupied[tuple(np.floor((points[rows] - low) / cell).astype(np.intp).T)] = True
+    occupied = ndimage.binary_dilation(occupied)
+    labels, _ = ndimage.label(~occupied)
+    # 1 outside, -1 an empty cell within, 0 a cell the surface fills.
+    kind = np.where(occupied, 0, np.where(labels == labels[0, 0, 0], 1, -1)).astype(np.int8)
+
+    def seen(at: FloatArray) -> NDArray[np.int8]:
+        index = np.clip(np.floor((at - low) / cell).astype(np.intp), 0, shape - 1)
+        found: NDArray[np.int8] = kind[tuple(index.T)]
+        return found
+
+    for probe in _PROBES:
+        step = probe * cell * normals[rows]
+        ahead, behind = seen(points[rows] + step), seen(points[rows] - step)
+        open_ = evidence[rows] == 0
+        evidence[rows[open_ & (ahead == 1) & (behind == -1)]] = 1.0
+        evidence[rows[open_ & (ahead == -1) & (behind == 1)]] = -1.0
+    return evidence
 
 
 def _edges(
