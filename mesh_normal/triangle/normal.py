@@ -76,14 +76,16 @@ class TriangleNormal:
     message: str | None
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class ExactTriangle:
     """The exact u, v and n of a triangle, as integers over one power-of-two scale.
 
     With the points in the chosen order (``points``: A, B, C or A, C, B), the exact edge
     ``u = B - A`` is ``u_i * 2**-scale`` (the same for ``v``), and the exact normal
     ``n = u x v`` is ``n_i * 2**(-2 * scale)``. Nothing here is rounded: :func:`triangle_normal`
-    rounds these values once, and the calculator's worked steps show them.
+    rounds these values once, and the calculator's worked steps show them. Not frozen: a frozen
+    dataclass is made field by field through ``object.__setattr__``, several times slower, and
+    the calculator's API makes one for every request.
     """
 
     points: tuple[Vector, Vector, Vector]
@@ -354,9 +356,14 @@ def _rounded(
         area: float | None = magnitude / 2  # rounding commutes with halving above the subnormals
     else:
         area = rounder.value("area", square, 2 * den2, root=True)
-    ex, ey, ez = (_signed(ratio_sqrt(ni * ni, square), ni) for ni in n)
+    nx, ny, nz = n
+    unit = (
+        _signed(ratio_sqrt(nx * nx, square), nx),
+        _signed(ratio_sqrt(ny * ny, square), ny),
+        _signed(ratio_sqrt(nz * nz, square), nz),
+    )
     return TriangleNormal(
-        pa, pb, pc, order, u, v, normal, magnitude, (ex, ey, ez), area, False, rounder.message()
+        pa, pb, pc, order, u, v, normal, magnitude, unit, area, False, rounder.message()
     )
 
 
