@@ -135,6 +135,7 @@ def create_app(upload_limit: int | None = None, settings: config.Settings | None
         default_response_class=FastJSONResponse,
     )
     handlers.install(app)
+    calculator_api.add_post_normal(app)
     app.include_router(calculator_api.router)
     app.include_router(mesh_api.router)
     app.include_router(points_api.router)

@@ -44,9 +44,12 @@ DOUBLES_HINT = (
 )
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class Calculation:
-    """A result, the exact values it was rounded from, and the exact forms (or why not)."""
+    """A result, the exact values it was rounded from, and the exact forms (or why not).
+
+    Not frozen, as :class:`app.calculator.exact_forms.Exact` is not (the cost of making one).
+    """
 
     result: TriangleNormal
     exact: Exact
@@ -56,13 +59,15 @@ class Calculation:
     typed: Points | None = None
 
 
-def _finish(result: TriangleNormal, exact: Exact, why: str | None) -> Calculation:
-    if why is not None:
-        return Calculation(result, exact, None, why)
-    forms = exact_forms(exact)
-    if isinstance(forms, str):
-        return Calculation(result, exact, None, forms)
-    return Calculation(result, exact, forms, None)
+def _finish(result: TriangleNormal, exact: Exact, why: str | None, hint: str = "") -> Calculation:
+    """The calculation with its exact forms, or ``why`` not (or why they are too long, then
+    ``hint``)."""
+    if why is None:
+        forms = exact_forms(exact)
+        if not isinstance(forms, str):
+            return Calculation(result, exact, forms, None)
+        why = forms + hint
+    return Calculation(result, exact, None, why)
 
 
 def from_doubles(
@@ -70,10 +75,7 @@ def from_doubles(
 ) -> Calculation:
     """The calculation for JSON numbers (the exact forms are the doubles' exact values)."""
     triangle = exact_triangle(a, b, c, swap_winding=swap_winding)
-    calc = _finish(rounded_normal(triangle), double_values(triangle), None)
-    if calc.reason is None:
-        return calc
-    return Calculation(calc.result, calc.exact, None, calc.reason + DOUBLES_HINT)
+    return _finish(rounded_normal(triangle), double_values(triangle), None, DOUBLES_HINT)
 
 
 def from_typed(parsed: TriangleInput) -> Calculation:

@@ -48,13 +48,15 @@ _LIMIT = 10**MAX_DIGITS
 MAX_EXACT_EXPONENT = 30
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class Exact:
     """A triangle's exact values, with the points in the chosen order (A, B, C or A, C, B).
 
     Held as integers over one denominator D (the corners' least common one): u and v over D,
     n over D², n · A over D³, |n|² over D⁴ and u · v over D². Integer arithmetic needs no gcd
-    at each step, as Fractions do; the Fractions are made only where they are shown.
+    at each step, as Fractions do; the Fractions are made only where they are shown. Not
+    frozen: a frozen dataclass is made field by field through ``object.__setattr__``, several
+    times slower, and one is made for every request to ``POST /api/normal``.
     """
 
     #: The corners in the chosen order, over D.

@@ -49,7 +49,8 @@ def plane_payload(exact: Exact, *, with_exact: bool) -> tuple[dict[str, Any] | N
     if not exact.scaled_square:
         return None, NO_PLANE
     den2 = exact.denominator**2
-    a, b, c = (rounded_over(value, den2) for value in exact.scaled_n)
+    nx, ny, nz = exact.scaled_n
+    a, b, c = rounded_over(nx, den2), rounded_over(ny, den2), rounded_over(nz, den2)
     d = rounded_over(exact.scaled_d, den2 * exact.denominator)
     equation = None
     if a is not None and b is not None and c is not None and d is not None:

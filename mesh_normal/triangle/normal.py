@@ -29,6 +29,9 @@ IntVector = tuple[int, int, int]
 
 AXES = ("x", "y", "z")
 
+#: 2**-1021: a double from here up halves exactly, to a normal double.
+_HALVES_EXACTLY = 2.0**-1021
+
 
 @dataclass(frozen=True, slots=True)
 class TriangleNormal:
@@ -73,14 +76,16 @@ class TriangleNormal:
     message: str | None
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class ExactTriangle:
     """The exact u, v and n of a triangle, as integers over one power-of-two scale.
 
     With the points in the chosen order (``points``: A, B, C or A, C, B), the exact edge
     ``u = B - A`` is ``u_i * 2**-scale`` (the same for ``v``), and the exact normal
     ``n = u x v`` is ``n_i * 2**(-2 * scale)``. Nothing here is rounded: :func:`triangle_normal`
-    rounds these values once, and the calculator's worked steps show them.
+    rounds these values once, and the calculator's worked steps show them. Not frozen: a frozen
+    dataclass is made field by field through ``object.__setattr__``, several times slower, and
+    the calculator's API makes one for every request.
     """
 
     points: tuple[Vector, Vector, Vector]
@@ -93,12 +98,14 @@ class ExactTriangle:
     @property
     def square(self) -> int:
         """``|n|**2`` times ``2**(4 * scale)``: zero exactly when the triangle is degenerate."""
-        return sum(ni * ni for ni in self.n)
+        x, y, z = self.n
+        return x * x + y * y + z * z
 
     @property
     def dot(self) -> int:
         """``u . v`` times ``2**(2 * scale)``."""
-        return sum(ui * vi for ui, vi in zip(self.u, self.v, strict=True))
+        (ux, uy, uz), (vx, vy, vz) = self.u, self.v
+        return ux * vx + uy * vy + uz * vz
 
 
 def exact_triangle(
@@ -345,10 +352,18 @@ def _rounded(
     den2 = denominator * denominator
     normal = rounder.vector("n", n, den2)
     magnitude = rounder.value("magnitude", square, den2, root=True)
-    area = rounder.value("area", square, 2 * den2, root=True)
-    ex, ey, ez = (_signed(ratio_sqrt(ni * ni, square), ni) for ni in n)
+    if magnitude is not None and magnitude >= _HALVES_EXACTLY:
+        area: float | None = magnitude / 2  # rounding commutes with halving above the subnormals
+    else:
+        area = rounder.value("area", square, 2 * den2, root=True)
+    nx, ny, nz = n
+    unit = (
+        _signed(ratio_sqrt(nx * nx, square), nx),
+        _signed(ratio_sqrt(ny * ny, square), ny),
+        _signed(ratio_sqrt(nz * nz, square), nz),
+    )
     return TriangleNormal(
-        pa, pb, pc, order, u, v, normal, magnitude, (ex, ey, ez), area, False, rounder.message()
+        pa, pb, pc, order, u, v, normal, magnitude, unit, area, False, rounder.message()
     )
 
 

@@ -421,6 +421,15 @@ def test_swapping_the_winding_negates_the_normal(a, b, c) -> None:
         assert s.unit_normal == neg(r.unit_normal)
 
 
+@pytest.mark.parametrize("exponent", range(-515, -509))
+def test_the_area_by_the_subnormals_is_rounded_once(exponent: int) -> None:
+    # |n| = 2**(2 * exponent) * sqrt(491): the area is |n| halved above the subnormals and
+    # rounded from the exact value below them, where halving would round twice.
+    s = 2.0**exponent
+    a, b, c = (0.0, 0.0, 0.0), (s, 0.0, 3 * s), (0.0, 7 * s, s)
+    assert_matches_reference(triangle_normal(a, b, c), a, b, c)
+
+
 @given(points, points, points)
 @settings(max_examples=200, deadline=None)
 def test_magnitude_is_twice_the_area(a, b, c) -> None:
