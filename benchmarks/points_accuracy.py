@@ -86,30 +86,59 @@ def torus(n: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
     return centre + small * normals, normals
 
 
-def prism(
-    outline: np.ndarray, height: float, centre: tuple[float, float]
-) -> tuple[np.ndarray, np.ndarray]:
+def ear_clipping(outline: np.ndarray) -> list[tuple[int, int, int]]:
+    """Counter-clockwise triangles covering the simple counter-clockwise polygon ``outline``."""
+    left = list(range(len(outline)))
+    triangles = []
+
+    def cross(o: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
+        return float((a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]))
+
+    while len(left) > 3:
+        for k in range(len(left)):
+            i, j, h = left[k - 1], left[k], left[(k + 1) % len(left)]
+            a, b, c = outline[i], outline[j], outline[h]
+            if cross(a, b, c) <= 0:
+                continue  # a reflex corner is no ear
+            inside = any(
+                cross(a, b, outline[q]) >= 0
+                and cross(b, c, outline[q]) >= 0
+                and cross(c, a, outline[q]) >= 0
+                for q in left
+                if q not in (i, j, h)
+            )
+            if not inside:
+                triangles.append((i, j, h))
+                left.pop(k)
+                break
+    triangles.append(tuple(left))
+    return triangles
+
+
+def prism(outline: np.ndarray, height: float) -> tuple[np.ndarray, np.ndarray]:
     """A closed triangle mesh: the counter-clockwise polygon ``outline`` (x, y) extruded in z,
-    its caps fanned from ``centre``, from which the whole outline must be seen."""
+    its caps cut into ears."""
     m = len(outline)
     bottom = np.c_[outline, np.zeros(m)]
     top = np.c_[outline, np.full(m, height)]
-    vertices = np.vstack([bottom, top, [[*centre, 0.0]], [[*centre, height]]])
+    vertices = np.vstack([bottom, top])
     faces = []
     for i in range(m):
         j = (i + 1) % m
-        faces += [[i, j, m + j], [i, m + j, m + i], [2 * m, j, i], [2 * m + 1, m + i, m + j]]
+        faces += [[i, j, m + j], [i, m + j, m + i]]
+    for i, j, k in ear_clipping(outline):
+        faces += [[i, k, j], [m + i, m + j, m + k]]  # the bottom faces down, the top up
     return vertices, np.array(faces)
 
 
 def box(n: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
     outline = np.array([[0, 0], [2, 0], [2, 1.5], [0, 1.5]], dtype=float)
-    return sample_triangles(*prism(outline, 1.0, (1.0, 0.75)), n, rng)
+    return sample_triangles(*prism(outline, 1.0), n, rng)
 
 
 def l_prism(n: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
     outline = np.array([[0, 0], [2, 0], [2, 0.8], [0.8, 0.8], [0.8, 2], [0, 2]], dtype=float)
-    return sample_triangles(*prism(outline, 0.7, (0.4, 0.4)), n, rng)
+    return sample_triangles(*prism(outline, 0.7), n, rng)
 
 
 def fandisk_like(n: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
@@ -118,7 +147,7 @@ def fandisk_like(n: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarr
     angles = np.linspace(0, np.pi, 25)
     groove = np.c_[1.0 + 0.4 * np.cos(angles), 1.2 - 0.4 * np.sin(angles)]
     outline = np.vstack([[[0, 0], [2, 0], [2, 0.8], [1.6, 1.2]], groove, [[0, 1.2]]])
-    return sample_triangles(*prism(outline, 0.9, (1.0, 0.4)), n, rng)
+    return sample_triangles(*prism(outline, 0.9), n, rng)
 
 
 def cylinder(n: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:

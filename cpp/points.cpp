@@ -1,5 +1,6 @@
 // Point clouds: each point's normal from the covariance of its neighbourhood, the orientation
 // graph's edges and the signs carried down its spanning tree, and PCD's LZF decompression.
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -100,7 +101,7 @@ void symmetric_eigen(Matrix& a, Matrix& v) {
 // Entries that are not rows of the points (a k-d tree's "missing") are skipped; returns how many
 // points were used.
 Index covariance(const double* points, Index n, const Index* neighbours, Index start, Index stop,
-                 Matrix& a) {
+                 Matrix& a, double* mean) {
   Index count = 0;
   double mx = 0.0;
   double my = 0.0;
@@ -126,6 +127,9 @@ Index covariance(const double* points, Index n, const Index* neighbours, Index s
   mx /= used;
   my /= used;
   mz /= used;
+  mean[0] = mx;
+  mean[1] = my;
+  mean[2] = mz;
   for (Index e = start; e < stop; ++e) {
     const Index j = neighbours[e];
     if (0 <= j && j < n) {
@@ -174,16 +178,17 @@ struct Row {
   double low;  // the covariance's eigenvalues, sorted
   double middle;
   double high;
+  double centre[3];      // the mean of the points used
+  double covariance[6];  // xx, xy, xz, yy, yz, zz before the rotations
 };
 
-// One neighbourhood's normal: the eigenvector of the smallest eigenvalue, its largest component
-// positive (a canonical sign: orientation comes later), or zero where the status is not OK; the
-// curvature low / (low + middle + high), or 0 where the points coincide or are fewer than three.
-Row estimate(const double* points, Index n, const Index* neighbours, Index start, Index stop,
-             const Limits& limits) {
-  Matrix a;
+// One neighbourhood's normal from its covariance `a` (overwritten), mean and count: the
+// eigenvector of the smallest eigenvalue, its largest component positive (a canonical sign:
+// orientation comes later), or zero where the status is not OK; the curvature
+// low / (low + middle + high), or 0 where the points coincide or are fewer than three.
+Row solve(Matrix& a, const double* mean, Index count, const Limits& limits) {
+  const double entries[6] = {a[0][0], a[0][1], a[0][2], a[1][1], a[1][2], a[2][2]};
   Matrix v;
-  const Index count = covariance(points, n, neighbours, start, stop, a);
   symmetric_eigen(a, v);
   const double e0 = std::max(a[0][0], 0.0);
   const double e1 = std::max(a[1][1], 0.0);
@@ -205,6 +210,8 @@ Row estimate(const double* points, Index n, const Index* neighbours, Index start
     high = std::max(e0, e2);
   }
   Row row{};
+  std::memcpy(row.centre, mean, sizeof row.centre);
+  std::memcpy(row.covariance, entries, sizeof entries);
   row.low = low;
   row.middle = middle;
   row.high = high;
@@ -225,6 +232,15 @@ Row estimate(const double* points, Index n, const Index* neighbours, Index start
   row.normal[1] = y * scale + 0.0;
   row.normal[2] = z * scale + 0.0;
   return row;
+}
+
+// The normal of the points neighbours[start:stop] (entries that are not rows are skipped).
+Row estimate(const double* points, Index n, const Index* neighbours, Index start, Index stop,
+             const Limits& limits) {
+  Matrix a;
+  double mean[3] = {0.0, 0.0, 0.0};
+  const Index count = covariance(points, n, neighbours, start, stop, a, mean);
+  return solve(a, mean, count, limits);
 }
 
 // The CSR row pointers must run from 0 or more, never backwards, to within the neighbour list.
@@ -297,7 +313,7 @@ double tilt(const Row& row) {
 // where curvature or an edge bends it, the change outgrows the spreads and the scale stops).
 Row multiscale(const double* points, Index n, const Index* list, Index start, Index stop,
                const Index* scales, Index count, const Limits& limits, double threshold,
-               double planar) {
+               double planar, Row& smallest, Row& largest, double& spread_out) {
   constexpr Index kMostScales = 16;
   Row fits[kMostScales];
   double spread[kMostScales];
@@ -328,13 +344,18 @@ Row multiscale(const double* points, Index n, const Index* list, Index start, In
       }
       const double cosine = std::min(1.0, std::fabs(dot(fits[t].normal, fits[c].normal)));
       const double sine = std::sqrt(1.0 - cosine * cosine);
-      agrees = sine <= threshold * (spread[t] + spread[c]);
+      // More points spread a normal less: a larger scale that spreads more owes it to a
+      // curve or an edge it reaches, not to noise, and its spread says nothing.
+      agrees = sine <= threshold * (spread[t] + std::min(spread[t], spread[c]));
     }
     if (!agrees) {
       break;
     }
     chosen = c;
   }
+  smallest = fits[0];
+  largest = fits[fitted - 1];
+  spread_out = chosen >= 0 ? spread[chosen] : 1.0;
   // With no scale OK, the largest fit says why (too few, duplicates, collinear, ambiguous).
   return chosen >= 0 ? fits[chosen] : fits[fitted - 1];
 }
@@ -342,13 +363,17 @@ Row multiscale(const double* points, Index n, const Index* list, Index start, In
 void multiscale_normals(In<double, nb::shape<-1, 3>> points, In<Index, nb::ndim<2>> neighbours,
                         In<Index, nb::ndim<1>> scales, double tiny, double line_ratio,
                         double gap_ratio, double threshold, double planar,
-                        Out<double, nb::shape<-1, 3>> normals,
-                        Out<double, nb::ndim<1>> curvature, Out<double, nb::ndim<1>> residual,
-                        Out<Index, nb::ndim<1>> used, Out<Index, nb::ndim<1>> status) {
+                        Out<double, nb::shape<-1, 3>> normals, Out<double, nb::ndim<1>> curvature,
+                        Out<Index, nb::ndim<1>> used, Out<Index, nb::ndim<1>> status,
+                        Out<double, nb::ndim<1>> residual, Out<double, nb::ndim<1>> spread,
+                        Out<double, nb::shape<-1, 3>> planes, Out<double, nb::shape<-1, 3>> centres,
+                        Out<double, nb::ndim<1>> roughness, Out<double, nb::shape<-1, 10>> moments) {
   const Index rows = static_cast<Index>(neighbours.shape(0));
   const Index columns = static_cast<Index>(neighbours.shape(1));
-  for (const std::size_t size : {normals.shape(0), curvature.shape(0), residual.shape(0),
-                                 used.shape(0), status.shape(0)}) {
+  for (const std::size_t size : {normals.shape(0), curvature.shape(0), used.shape(0),
+                                 status.shape(0), residual.shape(0), spread.shape(0),
+                                 planes.shape(0), centres.shape(0), roughness.shape(0),
+                                 moments.shape(0)}) {
     if (static_cast<Index>(size) != rows) {
       throw nb::value_error("every output needs one row per neighbour list");
     }
@@ -368,20 +393,254 @@ void multiscale_normals(In<double, nb::shape<-1, 3>> points, In<Index, nb::ndim<
   const Index* lists = neighbours.data();
   const Limits limits{tiny, line_ratio, gap_ratio};
   double* normal_out = normals.data();
+  double* plane_out = planes.data();
+  double* centre_out = centres.data();
+  double* roughness_out = roughness.data();
+  double* moment_out = moments.data();
   double* curvature_out = curvature.data();
   double* residual_out = residual.data();
+  double* spread_out = spread.data();
   Index* used_out = used.data();
   Index* status_out = status.data();
   nb::gil_scoped_release release;
   parallel_for(rows, 64, [&](Index begin, Index end) {
     for (Index r = begin; r < end; ++r) {
+      Row smallest;
+      Row largest;
       const Row row = multiscale(coordinates, n, lists, r * columns, (r + 1) * columns, sizes,
-                                 count, limits, threshold, planar);
+                                 count, limits, threshold, planar, smallest, largest,
+                                 spread_out[r]);
+      double* moment = moment_out + 10 * r;
+      moment[0] = static_cast<double>(largest.used);
+      std::memcpy(moment + 1, largest.centre, sizeof largest.centre);
+      for (int e = 0; e < 6; ++e) {
+        moment[4 + e] = largest.covariance[e] * moment[0];
+      }
       std::memcpy(normal_out + 3 * r, row.normal, sizeof row.normal);
       curvature_out[r] = row.curvature;
       residual_out[r] = std::sqrt(row.low);
+      std::memcpy(plane_out + 3 * r, smallest.normal, sizeof smallest.normal);
+      std::memcpy(centre_out + 3 * r, smallest.centre, sizeof smallest.centre);
+      roughness_out[r] = std::sqrt(smallest.low);
       used_out[r] = row.used;
       status_out[r] = row.status;
+    }
+  });
+}
+
+// A neighbourhood's moments, as rows of 10: count, mean, scatter (xx, xy, xz, yy, yz, zz; the
+// sum of the outer products of the steps from the mean). Two merge by Chan et al.'s update.
+void merge(double* into, const double* other) {
+  const double a = into[0];
+  const double b = other[0];
+  const double total = a + b;
+  if (b == 0.0) {
+    return;
+  }
+  const double d[3] = {other[1] - into[1], other[2] - into[2], other[3] - into[3]};
+  const double share = b / total;
+  const double product = a * share;  // a b / (a + b)
+  into[0] = total;
+  for (int e = 0; e < 3; ++e) {
+    into[1 + e] += d[e] * share;
+  }
+  into[4] += other[4] + product * d[0] * d[0];
+  into[5] += other[5] + product * d[0] * d[1];
+  into[6] += other[6] + product * d[0] * d[2];
+  into[7] += other[7] + product * d[1] * d[1];
+  into[8] += other[8] + product * d[1] * d[2];
+  into[9] += other[9] + product * d[2] * d[2];
+}
+
+// Each point's moments merged with its neighbours': the neighbourhoods of the neighbours
+// together, a point counted once for each that holds it (a smooth, wider neighbourhood at the
+// cost of one pass).
+void widened_moments(In<double, nb::shape<-1, 10>> moments,
+                     In<std::int32_t, nb::ndim<2>> neighbours, Out<double, nb::shape<-1, 10>> out) {
+  const Index n = static_cast<Index>(moments.shape(0));
+  const Index columns = static_cast<Index>(neighbours.shape(1));
+  if (static_cast<Index>(neighbours.shape(0)) != n || static_cast<Index>(out.shape(0)) != n) {
+    throw nb::value_error("the moments, neighbours and output need one row per point");
+  }
+  const double* in = moments.data();
+  const std::int32_t* lists = neighbours.data();
+  double* result = out.data();
+  nb::gil_scoped_release release;
+  parallel_for(n, 256, [&](Index begin, Index end) {
+    for (Index i = begin; i < end; ++i) {
+      double sum[10];
+      std::memcpy(sum, in + 10 * i, sizeof sum);
+      for (Index c = 0; c < columns; ++c) {
+        const Index j = lists[i * columns + c];
+        if (0 <= j && j < n && j != i) {
+          merge(sum, in + 10 * j);
+        }
+      }
+      std::memcpy(result + 10 * i, sum, sizeof sum);
+    }
+  });
+}
+
+// The normal of each row of moments, as neighbourhood_normals, its residual and its spread from
+// noise taken as if from `effective` points (a widened neighbourhood counts points several
+// times: its count overstates what noise averages out).
+void moment_normals(In<double, nb::shape<-1, 10>> moments, double effective, double tiny,
+                    double line_ratio, double gap_ratio, Out<double, nb::shape<-1, 3>> normals,
+                    Out<double, nb::ndim<1>> curvature, Out<double, nb::ndim<1>> residual,
+                    Out<double, nb::ndim<1>> spread, Out<Index, nb::ndim<1>> status) {
+  const Index n = static_cast<Index>(moments.shape(0));
+  for (const std::size_t size : {normals.shape(0), curvature.shape(0), residual.shape(0),
+                                 spread.shape(0), status.shape(0)}) {
+    if (static_cast<Index>(size) != n) {
+      throw nb::value_error("every output needs one row per row of moments");
+    }
+  }
+  const double* in = moments.data();
+  const Limits limits{tiny, line_ratio, gap_ratio};
+  double* normal_out = normals.data();
+  double* curvature_out = curvature.data();
+  double* residual_out = residual.data();
+  double* spread_out = spread.data();
+  Index* status_out = status.data();
+  nb::gil_scoped_release release;
+  parallel_for(n, 256, [&](Index begin, Index end) {
+    for (Index r = begin; r < end; ++r) {
+      const double* m = in + 10 * r;
+      const double count = m[0] > 0.0 ? m[0] : 1.0;
+      Matrix a = {{m[4] / count, m[5] / count, m[6] / count},
+                  {m[5] / count, m[7] / count, m[8] / count},
+                  {m[6] / count, m[8] / count, m[9] / count}};
+      Row row = solve(a, m + 1, static_cast<Index>(m[0]), limits);
+      std::memcpy(normal_out + 3 * r, row.normal, sizeof row.normal);
+      curvature_out[r] = row.curvature;
+      residual_out[r] = std::sqrt(row.low);
+      row.used = static_cast<Index>(std::min(effective, m[0]));
+      spread_out[r] = tilt(row);
+      status_out[r] = row.status;
+    }
+  });
+}
+
+// Points near a sharp edge or corner. A fit across an edge blends both sides; the plane the
+// point lies on holds more of its neighbours than any other plane through it. Each neighbour's
+// smallest-scale fit (its normal through its centre) is a candidate plane; a candidate counts
+// the neighbours within `factor` times the neighbourhood's noise (the lower quartile of their
+// fits' residuals: most fits are of one side only, even at an edge; at least `floor`) of it,
+// and must hold the point itself. Where the best candidate leaves out more than `keep` of the
+// neighbours, the point is near a feature: its normal is refitted to the best candidate's
+// inliers and taken where the point's fit is over `blend` times less flat (in residual) and
+// turns by a sine over `turn` and over three times the fit's spread from noise. `normals` is written where `sharp` is set.
+void sharp_normals(In<double, nb::shape<-1, 3>> points, In<std::int32_t, nb::ndim<2>> neighbours,
+                   In<double, nb::shape<-1, 3>> fits, In<double, nb::ndim<1>> residual,
+                   In<double, nb::ndim<1>> spread, In<Index, nb::ndim<1>> status,
+                   In<double, nb::shape<-1, 3>> planes, In<double, nb::shape<-1, 3>> centres,
+                   double tiny, double line_ratio, double gap_ratio, double factor, double keep,
+                   double blend, double turn, double floor, Out<double, nb::shape<-1, 3>> normals,
+                   Out<bool, nb::ndim<1>> sharp) {
+  const Index n = static_cast<Index>(points.shape(0));
+  const Index columns = static_cast<Index>(neighbours.shape(1));
+  for (const std::size_t size :
+       {neighbours.shape(0), fits.shape(0), residual.shape(0), spread.shape(0), status.shape(0),
+        planes.shape(0), centres.shape(0), normals.shape(0), sharp.shape(0)}) {
+    if (static_cast<Index>(size) != n) {
+      throw nb::value_error("the points, neighbours, fits and outputs need one row per point");
+    }
+  }
+  constexpr Index kMostColumns = 64;
+  if (columns > kMostColumns) {
+    throw nb::value_error("give at most 64 neighbours a point");
+  }
+  const double* xyz = points.data();
+  const std::int32_t* lists = neighbours.data();
+  const double* fitted = fits.data();
+  const double* residuals = residual.data();
+  const double* spreads = spread.data();
+  const Index* codes = status.data();
+  const double* flat = planes.data();
+  const double* middle = centres.data();
+  double* out = normals.data();
+  bool* marked = sharp.data();
+  const Limits limits{tiny, line_ratio, gap_ratio};
+  nb::gil_scoped_release release;
+  parallel_for(n, 128, [&](Index begin, Index end) {
+    Index near[kMostColumns + 1];
+    Index inliers[kMostColumns + 1];
+    double noise[kMostColumns + 1];
+    for (Index i = begin; i < end; ++i) {
+      marked[i] = false;
+      if (codes[i] != kOk) {
+        continue;
+      }
+      // The neighbourhood: the point first, then its neighbours that are rows.
+      Index count = 0;
+      near[count++] = i;
+      for (Index c = 0; c < columns; ++c) {
+        const Index j = lists[i * columns + c];
+        if (0 <= j && j < n && j != i) {
+          near[count++] = j;
+        }
+      }
+      Index fitted_count = 0;
+      for (Index c = 0; c < count; ++c) {
+        if (codes[near[c]] == kOk) {
+          noise[fitted_count++] = residuals[near[c]];
+        }
+      }
+      if (count < 6) {
+        continue;
+      }
+      std::nth_element(noise, noise + fitted_count / 4, noise + fitted_count);
+      const double tolerance = factor * std::max(noise[fitted_count / 4], floor);
+      const double* p = xyz + 3 * i;
+      Index best = -1;
+      Index most = 0;
+      for (Index c = 0; c < count; ++c) {
+        const double* normal = flat + 3 * near[c];
+        const double* centre = middle + 3 * near[c];
+        const double own[3] = {p[0] - centre[0], p[1] - centre[1], p[2] - centre[2]};
+        if (dot(normal, normal) == 0.0 || std::fabs(dot(normal, own)) > tolerance) {
+          continue;  // no plane, or not the point's
+        }
+        Index held = 0;
+        for (Index e = 0; e < count; ++e) {
+          const double* q = xyz + 3 * near[e];
+          const double step[3] = {q[0] - centre[0], q[1] - centre[1], q[2] - centre[2]};
+          held += std::fabs(dot(normal, step)) <= tolerance ? 1 : 0;
+        }
+        if (held > most) {
+          best = near[c];
+          most = held;
+        }
+      }
+      if (best < 0 || static_cast<double>(most) >= keep * static_cast<double>(count)) {
+        continue;
+      }
+      const double* normal = flat + 3 * best;
+      const double* centre = middle + 3 * best;
+      Index held = 0;
+      for (Index e = 0; e < count; ++e) {
+        const double* q = xyz + 3 * near[e];
+        const double step[3] = {q[0] - centre[0], q[1] - centre[1], q[2] - centre[2]};
+        if (std::fabs(dot(normal, step)) <= tolerance) {
+          inliers[held++] = near[e];
+        }
+      }
+      const Row refit = estimate(xyz, n, inliers, 0, held, limits);
+      // A thin band of inliers can turn the refit across the band; on a curved surface the
+      // band is no flatter than the point's own fit. Only a fit that blends two sides is much
+      // less flat than the side's.
+      // A side holds a quarter of the neighbours at least (as at a corner), spread over an
+      // area, not along a line.
+      if (refit.status != kOk || 4 * held < count || refit.middle < 0.05 * refit.high ||
+          std::fabs(dot(refit.normal, normal)) < std::cos(0.3) ||
+          residuals[i] <= blend * std::sqrt(refit.low)) {
+        continue;
+      }
+      const double cosine = std::min(1.0, std::fabs(dot(fitted + 3 * i, refit.normal)));
+      if (std::sqrt(1.0 - cosine * cosine) > std::max(turn, 3.0 * spreads[i])) {
+        std::memcpy(out + 3 * i, refit.normal, 3 * sizeof(double));
+        marked[i] = true;
+      }
     }
   });
 }
@@ -390,72 +649,6 @@ void multiscale_normals(In<double, nb::shape<-1, 3>> points, In<Index, nb::ndim<
 bool listed(const std::int32_t* graph, Index columns, Index row, std::int32_t value) {
   const std::int32_t* list = graph + row * columns;
   return std::find(list, list + columns, value) != list + columns;
-}
-
-// Points near a sharp edge or corner: a point whose fit is much less flat than a neighbour's
-// of as many points or more,
-// and that lies on that neighbour's plane (to twice its residual), takes the flattest such
-// neighbour's normal, when that turns its own by more than the sine `turn` (a fit across an
-// edge blends both sides; the plane it lies on does not). `normals` is read and written: the
-// candidates are read from `before`, the fits of the first pass.
-void sharp_normals(In<double, nb::shape<-1, 3>> points, In<std::int32_t, nb::ndim<2>> neighbours,
-                   In<double, nb::shape<-1, 3>> before, In<double, nb::ndim<1>> curvature,
-                   In<double, nb::ndim<1>> residual, In<Index, nb::ndim<1>> used,
-                   In<Index, nb::ndim<1>> status, double ratio, double turn, double floor, Out<double, nb::shape<-1, 3>> normals,
-                   Out<bool, nb::ndim<1>> sharp) {
-  const Index n = static_cast<Index>(points.shape(0));
-  const Index columns = static_cast<Index>(neighbours.shape(1));
-  const Index rows = static_cast<Index>(neighbours.shape(0));
-  if (rows != n || static_cast<Index>(before.shape(0)) != n ||
-      static_cast<Index>(curvature.shape(0)) != n || static_cast<Index>(residual.shape(0)) != n ||
-      static_cast<Index>(status.shape(0)) != n || static_cast<Index>(used.shape(0)) != n ||
-      static_cast<Index>(normals.shape(0)) != n ||
-      static_cast<Index>(sharp.shape(0)) != n) {
-    throw nb::value_error("the points, neighbours, fits and outputs need one row per point");
-  }
-  const double* xyz = points.data();
-  const std::int32_t* lists = neighbours.data();
-  const double* fitted = before.data();
-  const double* flatness = curvature.data();
-  const double* spread = residual.data();
-  const Index* codes = status.data();
-  const Index* sizes = used.data();
-  double* out = normals.data();
-  bool* marked = sharp.data();
-  nb::gil_scoped_release release;
-  parallel_for(n, 256, [&](Index begin, Index end) {
-    for (Index i = begin; i < end; ++i) {
-      marked[i] = false;
-      if (codes[i] != kOk) {
-        continue;
-      }
-      Index best = -1;
-      double flattest = ratio * flatness[i];
-      const double* p = xyz + 3 * i;
-      for (Index c = 0; c < columns; ++c) {
-        const Index j = lists[i * columns + c];
-        // Curvature grows with the scale: only a fit as large as the point's own compares.
-        if (j < 0 || j >= n || j == i || codes[j] != kOk || sizes[j] < sizes[i] ||
-            flatness[j] >= flattest) {
-          continue;
-        }
-        const double* q = xyz + 3 * j;
-        const double step[3] = {p[0] - q[0], p[1] - q[1], p[2] - q[2]};
-        if (std::fabs(dot(fitted + 3 * j, step)) <= 2.0 * spread[j] + floor) {
-          best = j;
-          flattest = flatness[j];
-        }
-      }
-      if (best < 0) {
-        continue;
-      }
-      const double cosine = std::min(1.0, std::fabs(dot(fitted + 3 * i, fitted + 3 * best)));
-      if (std::sqrt(1.0 - cosine * cosine) > turn) {
-        std::memcpy(out + 3 * i, fitted + 3 * best, 3 * sizeof(double));
-        marked[i] = true;
-      }
-    }
-  });
 }
 
 using Edges = std::tuple<nb::ndarray<nb::numpy, std::int32_t>, nb::ndarray<nb::numpy, std::int32_t>,
@@ -656,21 +849,41 @@ void bind_points(nb::module_& m) {
         nb::arg("neighbours").noconvert(), nb::arg("scales").noconvert(), nb::arg("tiny"),
         nb::arg("line_ratio"), nb::arg("gap_ratio"), nb::arg("threshold"), nb::arg("planar"),
         nb::arg("normals").noconvert(), nb::arg("curvature").noconvert(),
-        nb::arg("residual").noconvert(), nb::arg("used").noconvert(),
-        nb::arg("status").noconvert(),
+        nb::arg("used").noconvert(), nb::arg("status").noconvert(),
+        nb::arg("residual").noconvert(), nb::arg("spread").noconvert(),
+        nb::arg("planes").noconvert(), nb::arg("centres").noconvert(),
+        nb::arg("roughness").noconvert(), nb::arg("moments").noconvert(),
         "Row r of the outputs from the fits over the first scales[c] entries of neighbours[r] "
         "(nearest first; entries that are not rows of the points are skipped), at the largest "
         "scale whose normal agrees with every smaller one's (that are planar: smallest eigenvalue "
-        "at most planar times the middle one) to within threshold times their spreads from noise: as neighbourhood_normals, and the residual (the root of the smallest "
-        "eigenvalue).");
+        "at most planar times the middle one) to within threshold times their spreads from "
+        "noise: as neighbourhood_normals, its residual (the root of the smallest eigenvalue) and "
+        "spread from noise; the smallest scale's normal (zero where it has none), centre and "
+        "residual; and the largest scale's moments (count, mean, scatter xx xy xz yy yz zz).");
+  m.def("widened_moments", &widened_moments, nb::arg("moments").noconvert(),
+        nb::arg("neighbours").noconvert(), nb::arg("out").noconvert(),
+        "Each row of moments (count, mean, scatter xx xy xz yy yz zz) merged with those of its "
+        "neighbours (entries that are not rows are skipped).");
+  m.def("moment_normals", &moment_normals, nb::arg("moments").noconvert(), nb::arg("effective"),
+        nb::arg("tiny"), nb::arg("line_ratio"), nb::arg("gap_ratio"),
+        nb::arg("normals").noconvert(), nb::arg("curvature").noconvert(),
+        nb::arg("residual").noconvert(), nb::arg("spread").noconvert(),
+        nb::arg("status").noconvert(),
+        "The normal of each row of moments as neighbourhood_normals, its residual, and its "
+        "spread from noise as if from at most `effective` points.");
   m.def("sharp_normals", &sharp_normals, nb::arg("points").noconvert(),
-        nb::arg("neighbours").noconvert(), nb::arg("before").noconvert(),
-        nb::arg("curvature").noconvert(), nb::arg("residual").noconvert(),
-        nb::arg("used").noconvert(), nb::arg("status").noconvert(), nb::arg("ratio"), nb::arg("turn"), nb::arg("floor"),
-        nb::arg("normals").noconvert(), nb::arg("sharp").noconvert(),
-        "Near sharp edges: a point whose curvature is over 1/ratio times a neighbour's, on whose "
-        "plane it lies, takes the flattest such neighbour's normal where that turns it by a "
-        "sine over turn; sharp marks them.");
+        nb::arg("neighbours").noconvert(), nb::arg("fits").noconvert(),
+        nb::arg("residual").noconvert(), nb::arg("spread").noconvert(),
+        nb::arg("status").noconvert(), nb::arg("planes").noconvert(),
+        nb::arg("centres").noconvert(), nb::arg("tiny"), nb::arg("line_ratio"),
+        nb::arg("gap_ratio"), nb::arg("factor"), nb::arg("keep"), nb::arg("blend"), nb::arg("turn"),
+        nb::arg("floor"), nb::arg("normals").noconvert(), nb::arg("sharp").noconvert(),
+        "Near sharp edges: the plane through a point that holds the most of its neighbours "
+        "(within factor times their fits' residuals' lower quartile), among its neighbours' "
+        "planes (normals through centres; a zero normal: none); where it leaves out more than "
+        "keep of them, the normal refitted to those it holds, taken where the fit's residual is "
+        "over blend times the refit's and it turns the fit by a sine over turn and three times "
+        "its spread; sharp marks them.");
   m.def("graph_edges", &graph_edges, nb::arg("points").noconvert(), nb::arg("normals").noconvert(),
         nb::arg("valid").noconvert(), nb::arg("graph").noconvert(), nb::arg("floor"),
         nb::arg("sine_limit"),

@@ -65,17 +65,43 @@ ADAPTIVE_SCALES = (12, 24, 48, 96)
 
 #: A larger scale is taken while its normal stays within this many times the two fits' spreads
 #: from noise of every smaller scale's (Lepski's rule; measured on benchmarks.points_accuracy).
-ADAPTIVE_AGREEMENT = 2.0
+ADAPTIVE_AGREEMENT = 3.0
 
 #: Smaller scales whose smallest eigenvalue is over this fraction of the middle one are not
 #: held against a larger scale: noise, not the surface, shapes them.
 ADAPTIVE_PLANAR = 0.1
 
-#: Near a sharp edge: a point takes a neighbour's normal when that neighbour's curvature is
-#: under this fraction of its own, it lies on the neighbour's plane, and the normal turns by a
-#: sine over ADAPTIVE_SHARP_TURN (about 10 degrees: less is what noise turns a normal by).
-ADAPTIVE_SHARP_RATIO = 0.1
-ADAPTIVE_SHARP_TURN = 0.17
+
+#: Wider scales for flat noisy places, without a larger query: the largest scale's moments
+#: merged with those of the ADAPTIVE_SHARP_NEIGHBOURS nearest, once and twice, reach about
+#: these many points (the area of the largest scale's radius plus one and two of the
+#: neighbours'), counting as ADAPTIVE_WIDE_EFFECTIVE against noise.
+ADAPTIVE_WIDE = (240, 440)
+ADAPTIVE_WIDE_EFFECTIVE = (160.0, 280.0)
+
+#: A wider scale is taken only where its residual is at most this many times the scale's
+#: before: noise keeps the residual level (a curve raises it as the square of the radius).
+ADAPTIVE_WIDE_GROWTH = 1.2
+
+#: Only a point whose largest query scale is at most this many times as rough (in residual)
+#: as its smallest is widened: noise is as rough at every scale (a few points' residual
+#: underestimates it), a thin part's two sides or a curve are not.
+ADAPTIVE_WIDE_ROUGHNESS = 5.0
+
+#: Near a sharp edge: among the planes of a point's nearest ADAPTIVE_SHARP_NEIGHBOURS' fits, the
+#: one through the point that holds the most of them (within ADAPTIVE_SHARP_FACTOR times their
+#: median residual) is the side it lies on; where it leaves out more than ADAPTIVE_SHARP_KEEP of
+#: them, the normal is refitted to it, and taken where the point's own fit is over
+#: ADAPTIVE_SHARP_BLEND times less flat (a blend of two sides; on a curved surface the side's
+#: band is no flatter) and the refit turns it by a sine over ADAPTIVE_SHARP_TURN (less is what
+#: noise turns a normal by).
+#: A cloud too small for that many neighbours a point (about 1,000 points) is not searched for
+#: edges: its neighbourhoods are too coarse to tell an edge from a curve.
+ADAPTIVE_SHARP_NEIGHBOURS = 32
+ADAPTIVE_SHARP_FACTOR = 3.0
+ADAPTIVE_SHARP_KEEP = 0.9
+ADAPTIVE_SHARP_BLEND = 1.5
+ADAPTIVE_SHARP_TURN = 0.05
 
 
 class PointStatus(IntEnum):
@@ -467,17 +493,19 @@ def _estimate(
 def _adaptive(
     frame: _Frame, tree: Any, progress: Callable[[int, int], None] | None
 ) -> tuple[FloatArray, FloatArray, IndexArray, NDArray[np.uint8], NDArray[np.int32]]:
-    """The default: each point's scale chosen among ADAPTIVE_SCALES, then the sharp pass."""
+    """The default: each point's scale chosen among ADAPTIVE_SCALES and, where the largest
+    holds, ADAPTIVE_WIDE; then the sharp pass."""
     m = len(frame.points)
     # A neighbourhood of over a 32nd of the cloud is a good part of its shape, not a patch.
     largest = min(ADAPTIVE_SCALES[-1], max(ADAPTIVE_SCALES[0], m // 32), m)
     scales = np.array([s for s in ADAPTIVE_SCALES if s < largest] + [largest], dtype=np.intp)
-    fitted, curvature, residual = np.empty((m, 3)), np.empty(m), np.empty(m)
+    fitted, curvature, residual, spread = np.empty((m, 3)), np.empty(m), np.empty(m), np.empty(m)
+    planes, centres, moments = np.empty((m, 3)), np.empty((m, 3)), np.empty((m, 10))
+    roughness = np.empty(m)
     used, codes = np.empty(m, dtype=np.intp), np.empty(m, dtype=np.intp)
     g = min(ORIENT_NEIGHBOURS, largest)
     graph = np.full((m, g), -1, dtype=np.int32)
-    # The sharp pass looks for the plane a point lies on among its nearest two smallest scales.
-    candidates = np.full((m, min(2 * ADAPTIVE_SCALES[0], largest)), -1, dtype=np.int32)
+    candidates = np.full((m, min(ADAPTIVE_SHARP_NEIGHBOURS, largest)), -1, dtype=np.int32)
     chunk = max(1, QUERY_CHUNK * 30 // largest)
     for start in range(0, m, chunk):
         stop = min(m, start + chunk)
@@ -494,26 +522,45 @@ def _adaptive(
             ADAPTIVE_PLANAR,
             fitted[start:stop],
             curvature[start:stop],
-            residual[start:stop],
             used[start:stop],
             codes[start:stop],
+            residual[start:stop],
+            spread[start:stop],
+            planes[start:stop],
+            centres[start:stop],
+            roughness[start:stop],
+            moments[start:stop],
         )
         graph[start:stop] = nearest[:, :g]
         candidates[start:stop] = nearest[:, : candidates.shape[1]]
         if progress is not None:
             progress(stop, m)
     _degenerate_piles(frame.weight, used, codes, graph)
+    if largest == ADAPTIVE_SCALES[-1]:
+        grow = (used == largest) & (codes == PointStatus.ok)
+        # Noise is as rough at every scale; a thin part's two sides, or a curve, make the
+        # largest scale much rougher than the smallest.
+        grow &= residual <= ADAPTIVE_WIDE_ROUGHNESS * roughness
+        _widened(frame, moments, candidates, grow, fitted, curvature, residual, spread, used)
     normals = fitted.copy()
     sharp = np.zeros(m, dtype=bool)
+    if candidates.shape[1] < ADAPTIVE_SHARP_NEIGHBOURS:  # a small cloud: no edges to tell
+        return normals, curvature, used, codes.astype(np.uint8), graph
     _core.sharp_normals(
         frame.points,
         candidates,
         fitted,
-        curvature,
         residual,
-        used,
+        spread,
         codes,
-        ADAPTIVE_SHARP_RATIO,
+        planes,
+        centres,
+        frame.tiny,
+        POINT_LINE_RATIO,
+        POINT_GAP_RATIO,
+        ADAPTIVE_SHARP_FACTOR,
+        ADAPTIVE_SHARP_KEEP,
+        ADAPTIVE_SHARP_BLEND,
         ADAPTIVE_SHARP_TURN,
         math.sqrt(frame.tiny),
         normals,
@@ -521,6 +568,58 @@ def _adaptive(
     )
     codes[sharp] = PointStatus.sharp
     return normals, curvature, used, codes.astype(np.uint8), graph
+
+
+def _widened(
+    frame: _Frame,
+    moments: FloatArray,
+    neighbours: NDArray[np.int32],
+    grow: BoolArray,
+    fitted: FloatArray,
+    curvature: FloatArray,
+    residual: FloatArray,
+    spread: FloatArray,
+    used: IndexArray,
+) -> None:
+    """Scales past the largest query, for flat noisy places: each point's largest-scale
+    moments merged with its neighbours', once and twice (about ADAPTIVE_WIDE points); a point
+    of ``grow`` takes a wider one while Lepski's rule holds and its residual stays level. The
+    arrays are updated in place."""
+    m = len(moments)
+    grow = grow.copy()
+    held = [(fitted.copy(), spread.copy())]  # the fits a wider one must agree with
+    level = residual.copy()  # the residual of the scale before
+    merged = moments
+    for size, effective in zip(ADAPTIVE_WIDE, ADAPTIVE_WIDE_EFFECTIVE, strict=True):
+        wider = np.empty_like(moments)
+        _core.widened_moments(merged, neighbours, wider)
+        merged = wider
+        normals, bent, rms, spreads = np.empty((m, 3)), np.empty(m), np.empty(m), np.empty(m)
+        status = np.empty(m, dtype=np.intp)
+        _core.moment_normals(
+            merged,
+            effective,
+            frame.tiny,
+            POINT_LINE_RATIO,
+            POINT_GAP_RATIO,
+            normals,
+            bent,
+            rms,
+            spreads,
+            status,
+        )
+        grow &= (status == PointStatus.ok) & (rms <= ADAPTIVE_WIDE_GROWTH * level)
+        for before, before_spread in held:
+            cosine = np.minimum(1.0, np.abs(np.einsum("ij,ij->i", before, normals)))
+            sine = np.sqrt(1.0 - cosine * cosine)
+            limit = ADAPTIVE_AGREEMENT * (before_spread + np.minimum(before_spread, spreads))
+            grow &= sine <= limit
+        if not grow.any():
+            return
+        fitted[grow], curvature[grow], residual[grow] = normals[grow], bent[grow], rms[grow]
+        spread[grow], used[grow] = spreads[grow], size
+        held.append((normals, spreads))
+        level = rms
 
 
 def _degenerate_piles(
