@@ -497,6 +497,7 @@ void moment_normals(In<double, nb::shape<-1, 10>> moments, double effective, dou
   }
   const double* in = moments.data();
   const Limits limits{tiny, line_ratio, gap_ratio};
+  const double most = std::isfinite(effective) && effective > 0.0 ? effective : 0.0;
   double* normal_out = normals.data();
   double* curvature_out = curvature.data();
   double* residual_out = residual.data();
@@ -506,15 +507,17 @@ void moment_normals(In<double, nb::shape<-1, 10>> moments, double effective, dou
   parallel_for(n, 256, [&](Index begin, Index end) {
     for (Index r = begin; r < end; ++r) {
       const double* m = in + 10 * r;
-      const double count = m[0] > 0.0 ? m[0] : 1.0;
+      // A count that is not a count (negative, NaN, past any cloud) is no points.
+      const double held = std::isfinite(m[0]) && m[0] >= 1.0 ? std::min(m[0], 1e15) : 0.0;
+      const double count = held > 0.0 ? held : 1.0;
       Matrix a = {{m[4] / count, m[5] / count, m[6] / count},
                   {m[5] / count, m[7] / count, m[8] / count},
                   {m[6] / count, m[8] / count, m[9] / count}};
-      Row row = solve(a, m + 1, static_cast<Index>(m[0]), limits);
+      Row row = solve(a, m + 1, static_cast<Index>(held), limits);
       std::memcpy(normal_out + 3 * r, row.normal, sizeof row.normal);
       curvature_out[r] = row.curvature;
       residual_out[r] = std::sqrt(row.low);
-      row.used = static_cast<Index>(std::min(effective, m[0]));
+      row.used = static_cast<Index>(std::min(most, held));
       spread_out[r] = tilt(row);
       status_out[r] = row.status;
     }

@@ -165,6 +165,11 @@ def test_moment_normals_fit_the_moments_plane() -> None:
     np.testing.assert_allclose(np.abs(normals[0]), [0, 0.8, 0.6], atol=1e-12)
     assert status[0] == PointStatus.ok and residual[0] < 1e-7 and spread[0] < 1e-6
     assert status[1] == PointStatus.too_few_neighbours and not normals[1].any()
+    moments[:, 0] = [np.nan, -5.0]  # counts that are not counts: no points
+    _core.moment_normals(
+        moments, 20.0, 0.0, 2.0**-20, 2.0**-20, normals, curvature, residual, spread, status
+    )
+    assert list(status) == [PointStatus.too_few_neighbours] * 2
 
 
 def test_the_sharp_kernel_checks_its_rows_and_neighbours() -> None:
