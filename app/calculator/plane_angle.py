@@ -17,8 +17,7 @@ from markupsafe import Markup
 from app.calculator.exact_forms import (
     Exact,
     equation_text,
-    integer_plane,
-    rational_json,
+    ratio_json,
     rounded_over,
 )
 from app.calculator.mathml import (
@@ -57,10 +56,11 @@ def plane_payload(exact: Exact, *, with_exact: bool) -> tuple[dict[str, Any] | N
         equation = equation_text([js_number(a), js_number(b), js_number(c)], js_number(d))
     plane: dict[str, Any] = {"a": a, "b": b, "c": c, "d": d, "equation": equation, "exact": None}
     if with_exact:
-        values = (*exact.n, exact.plane_d)
-        integers = [str(value) for value in integer_plane(values)]
+        den = exact.denominator
+        values = (*((value, den2) for value in exact.scaled_n), (exact.scaled_d, den2 * den))
+        integers = [str(value) for value in exact.integer_plane()]
         plane["exact"] = {
-            **{key: rational_json(value) for key, value in zip("abcd", values, strict=True)},
+            **{key: ratio_json(*value) for key, value in zip("abcd", values, strict=True)},
             "equation": equation_text(integers[:3], integers[3]),
         }
     return plane, None
@@ -118,7 +118,7 @@ def plane_math(plane: dict[str, Any], exact: Exact | None) -> dict[str, Markup]:
         axes = [axis for axis, v in zip(AXES, values[:3], strict=True) if v != 0]
         out["plane"] = math(_axes_equation(terms, axes, number(values[3])))
     if exact is not None and exact.scaled_square:
-        integers = integer_plane((*exact.n, exact.plane_d))
+        integers = exact.integer_plane()
         terms = [(plain_number(str(abs(v))), v < 0, abs(v) == 1) for v in integers[:3] if v != 0]
         axes = [axis for axis, v in zip(AXES, integers[:3], strict=True) if v != 0]
         d = integers[3]

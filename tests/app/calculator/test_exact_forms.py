@@ -7,6 +7,7 @@ import io
 import math
 import sys
 from fractions import Fraction
+from math import gcd, lcm
 
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -21,7 +22,6 @@ from app.calculator.exact_forms import (
     double_values,
     equation_text,
     exact_values,
-    integer_plane,
     rational_json,
     surd_json,
     surd_text,
@@ -43,6 +43,14 @@ RIGHT = {**RIGHT, "cz": "0"}
 #: n = (-9/2, -13/2, 3), |n|² = 71.5, |n| = √71.5 = √286 / 2.
 HALVES = {"ax": "0", "ay": "0", "az": "0", "bx": "1", "by": "0", "bz": "1.5", "cx": "0"}
 HALVES = {**HALVES, "cy": "3", "cz": "6.5"}
+
+
+def integer_plane(coefficients: tuple[Fraction, Fraction, Fraction, Fraction]) -> list[int]:
+    """The oracle: a, b, c, d scaled by one positive factor to coprime integers."""
+    scale = lcm(*(value.denominator for value in coefficients))
+    integers = [int(value * scale) for value in coefficients]
+    common = gcd(*integers)
+    return [value // common for value in integers]
 
 
 def payload_for(query: dict[str, str]) -> dict:  # type: ignore[type-arg]
