@@ -189,9 +189,8 @@ class Surd:
 
 @dataclass(frozen=True, slots=True)
 class ExactForms:
-    """Everything the result shows exactly; ``given`` is A, B, C as typed (not reordered)."""
+    """Everything the result shows exactly (A, B, C as typed are ``exact.given``)."""
 
-    given: tuple[RationalPoint, RationalPoint, RationalPoint]
     exact: Exact
     magnitude: Surd
     unit: tuple[Surd, Surd, Surd] | None
@@ -244,7 +243,7 @@ def exact_forms(exact: Exact) -> ExactForms | str:
         if not _fits(ux.coefficient, uy.coefficient, uz.coefficient):
             return TOO_LONG
         unit = (ux, uy, uz)
-    return ExactForms(x.given, x, Surd(c, r), unit, Surd(c / 2, r))
+    return ExactForms(x, Surd(c, r), unit, Surd(c / 2, r))
 
 
 # --- Text and JSON ----------------------------------------------------------------------------
