@@ -71,7 +71,6 @@ ADAPTIVE_AGREEMENT = 3.0
 #: held against a larger scale: noise, not the surface, shapes them.
 ADAPTIVE_PLANAR = 0.1
 
-
 #: Wider scales for flat noisy places, without a larger query: the largest scale's moments
 #: merged with those of the ADAPTIVE_SHARP_NEIGHBOURS nearest, once and twice, reach about
 #: these many points (the area of the largest scale's radius plus one and two of the
@@ -88,15 +87,15 @@ ADAPTIVE_WIDE_GROWTH = 1.2
 #: underestimates it), a thin part's two sides or a curve are not.
 ADAPTIVE_WIDE_ROUGHNESS = 5.0
 
-#: Near a sharp edge: among the planes of a point's nearest ADAPTIVE_SHARP_NEIGHBOURS' fits, the
-#: one through the point that holds the most of them (within ADAPTIVE_SHARP_FACTOR times their
-#: median residual) is the side it lies on; where it leaves out more than ADAPTIVE_SHARP_KEEP of
-#: them, the normal is refitted to it, and taken where the point's own fit is over
-#: ADAPTIVE_SHARP_BLEND times less flat (a blend of two sides; on a curved surface the side's
-#: band is no flatter) and the refit turns it by a sine over ADAPTIVE_SHARP_TURN (less is what
-#: noise turns a normal by).
-#: A cloud too small for that many neighbours a point (about 1,000 points) is not searched for
-#: edges: its neighbourhoods are too coarse to tell an edge from a curve.
+#: Near a sharp edge: among the planes of a point's nearest ADAPTIVE_SHARP_NEIGHBOURS' fits,
+#: the one through the point that holds the most of them (within ADAPTIVE_SHARP_FACTOR times
+#: the lower quartile of their residuals) is the side it lies on; where it leaves out more than
+#: ADAPTIVE_SHARP_KEEP of them, the normal is refitted to it, and taken where the point's own
+#: fit is over ADAPTIVE_SHARP_BLEND times less flat (a blend of two sides; on a curved surface
+#: the side's band is no flatter) and the refit turns it by a sine over ADAPTIVE_SHARP_TURN
+#: (less is what noise turns a normal by). A cloud too small for that many neighbours a point
+#: (about 1,000 points) is not searched for edges: its neighbourhoods are too coarse to tell an
+#: edge from a curve.
 ADAPTIVE_SHARP_NEIGHBOURS = 32
 ADAPTIVE_SHARP_FACTOR = 3.0
 ADAPTIVE_SHARP_KEEP = 0.9
@@ -227,11 +226,11 @@ def point_normals(
     k : int or None
         The neighbourhood's size, the point itself included (at least 3); with ``radius``, at
         most this many within it; None with a radius: all within it. With neither (the
-        default), each point's scale is chosen from the data: its nearest 12, 24, 48 or 96,
-        the largest whose normal a smaller one's agrees with to within noise (a curved or
-        noise-free place keeps a small one, a flat noisy one a large one; ``neighbours`` says
-        which), and points near a sharp edge take the normal of the side they lie on
-        (status ``sharp``).
+        default), each point's scale is chosen from the data: its nearest 12, 24, 48 or 96, or
+        about 240 or 440 from merged neighbourhoods, the largest whose normal a smaller one's
+        agrees with to within noise (a curved or noise-free place keeps a small one, a flat
+        noisy one a large one; ``neighbours`` says which), and points near a sharp edge take
+        the normal of the side they lie on (status ``sharp``).
     radius : float or None
         Only neighbours within this distance, in the points' unit.
     orient : {"mst", "riemannian", "viewpoint", "direction", "file", "none"}
