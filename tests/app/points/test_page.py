@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 from typing import Any
 
 import numpy as np
@@ -211,3 +212,19 @@ def test_a_large_cloud_is_drawn_as_a_capped_even_sample(client: TestClient) -> N
     figure = json_block(html, "points-view-data")["figure"]
     assert len(figure["data"][0]["x"]) == view["shown"]
     assert len(figure["data"][1]["x"]) == 3 * view["strokes"]
+
+
+@pytest.mark.parametrize(
+    ("fields", "shown"),
+    [
+        ({}, "Neighbourhood chosen per point"),
+        ({"k": "12"}, "Neighbourhood k = 12"),
+        ({"radius": "0.5"}, "Neighbourhood within 0.5"),
+        ({"k": "12", "radius": "0.5"}, "Neighbourhood k = 12, within 0.5"),
+    ],
+)
+def test_the_report_says_which_neighbourhood(
+    client: TestClient, fields: dict[str, str], shown: str
+) -> None:
+    response, _ = post(client, cylinder_xyz(), **fields)
+    assert shown in " ".join(re.sub(r"<[^>]+>", " ", response.text).split())
