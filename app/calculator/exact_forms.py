@@ -264,14 +264,10 @@ def surd_text(s: Surd) -> str:
     return head if q == 1 else f"{head} / {q}"
 
 
-def rational_json(x: Fraction) -> dict[str, str]:
-    return ratio_json(x.numerator, x.denominator)
-
-
 def ratio_json(numerator: int, denominator: int) -> dict[str, str]:
-    """The JSON of ``numerator / denominator`` (``denominator > 0``), reduced as a Fraction is:
-    the exact values are held as integers over powers of D, and making Fractions of them
-    only to print them was a tenth of a request to ``POST /api/normal``."""
+    """The JSON of ``numerator / denominator`` (``denominator > 0``), reduced as a Fraction is,
+    its text as :func:`rational_text` writes it: the exact values are held as integers over
+    powers of D, and one gcd reduces each without making a Fraction only to print it."""
     common = gcd(numerator, denominator)
     top, bottom = str(numerator // common), str(denominator // common)
     return {

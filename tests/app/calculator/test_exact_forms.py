@@ -22,7 +22,6 @@ from app.calculator.exact_forms import (
     double_values,
     equation_text,
     exact_values,
-    rational_json,
     surd_json,
     surd_text,
 )
@@ -43,6 +42,11 @@ RIGHT = {**RIGHT, "cz": "0"}
 #: n = (-9/2, -13/2, 3), |n|² = 71.5, |n| = √71.5 = √286 / 2.
 HALVES = {"ax": "0", "ay": "0", "az": "0", "bx": "1", "by": "0", "bz": "1.5", "cx": "0"}
 HALVES = {**HALVES, "cy": "3", "cz": "6.5"}
+
+
+def rational_json(x: Fraction) -> dict[str, str]:
+    """The oracle: a Fraction's own reduction and text."""
+    return {"text": str(x), "numerator": str(x.numerator), "denominator": str(x.denominator)}
 
 
 def integer_plane(coefficients: tuple[Fraction, Fraction, Fraction, Fraction]) -> list[int]:
