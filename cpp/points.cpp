@@ -594,21 +594,22 @@ void sharp_normals(In<double, nb::shape<-1, 3>> points, In<std::int32_t, nb::ndi
       }
       std::nth_element(noise, noise + fitted_count / 4, noise + fitted_count);
       const double tolerance = factor * std::max(noise[fitted_count / 4], floor);
-      const double* p = xyz + 3 * i;
+      // Whether point q lies on the plane of candidate j.
+      const auto on_plane = [&](Index j, Index q) {
+        const double* centre = middle + 3 * j;
+        const double* at = xyz + 3 * q;
+        const double step[3] = {at[0] - centre[0], at[1] - centre[1], at[2] - centre[2]};
+        return std::fabs(dot(flat + 3 * j, step)) <= tolerance;
+      };
       Index best = -1;
       Index most = 0;
       for (Index c = 0; c < count; ++c) {
-        const double* normal = flat + 3 * near[c];
-        const double* centre = middle + 3 * near[c];
-        const double own[3] = {p[0] - centre[0], p[1] - centre[1], p[2] - centre[2]};
-        if (dot(normal, normal) == 0.0 || std::fabs(dot(normal, own)) > tolerance) {
+        if (dot(flat + 3 * near[c], flat + 3 * near[c]) == 0.0 || !on_plane(near[c], i)) {
           continue;  // no plane, or not the point's
         }
         Index held = 0;
         for (Index e = 0; e < count; ++e) {
-          const double* q = xyz + 3 * near[e];
-          const double step[3] = {q[0] - centre[0], q[1] - centre[1], q[2] - centre[2]};
-          held += std::fabs(dot(normal, step)) <= tolerance ? 1 : 0;
+          held += on_plane(near[c], near[e]) ? 1 : 0;
         }
         if (held > most) {
           best = near[c];
@@ -618,24 +619,19 @@ void sharp_normals(In<double, nb::shape<-1, 3>> points, In<std::int32_t, nb::ndi
       if (best < 0 || static_cast<double>(most) >= keep * static_cast<double>(count)) {
         continue;
       }
-      const double* normal = flat + 3 * best;
-      const double* centre = middle + 3 * best;
       Index held = 0;
       for (Index e = 0; e < count; ++e) {
-        const double* q = xyz + 3 * near[e];
-        const double step[3] = {q[0] - centre[0], q[1] - centre[1], q[2] - centre[2]};
-        if (std::fabs(dot(normal, step)) <= tolerance) {
+        if (on_plane(best, near[e])) {
           inliers[held++] = near[e];
         }
       }
       const Row refit = estimate(xyz, n, inliers, 0, held, limits);
-      // A thin band of inliers can turn the refit across the band; on a curved surface the
-      // band is no flatter than the point's own fit. Only a fit that blends two sides is much
-      // less flat than the side's.
       // A side holds a quarter of the neighbours at least (as at a corner), spread over an
-      // area, not along a line.
+      // area, not along a line; a thin band of inliers can turn the refit across the band.
+      // On a curved surface the band is no flatter than the point's own fit: only a fit that
+      // blends two sides is much less flat than the side's.
       if (refit.status != kOk || 4 * held < count || refit.middle < 0.05 * refit.high ||
-          std::fabs(dot(refit.normal, normal)) < std::cos(0.3) ||
+          std::fabs(dot(refit.normal, flat + 3 * best)) < std::cos(0.3) ||
           residuals[i] <= blend * std::sqrt(refit.low)) {
         continue;
       }
