@@ -102,7 +102,9 @@ def from_typed(parsed: TriangleInput) -> Calculation:
 def calculation_payload(calc: Calculation) -> dict[str, Any]:
     """The API's answer for one triangle: the rounded result, plane, angle and exact forms."""
     payload = normal_payload(calc.result)
-    plane, plane_reason = plane_payload(calc.exact, with_exact=calc.forms is not None)
+    plane, plane_reason = plane_payload(
+        calc.exact, calc.result.normal, with_exact=calc.forms is not None
+    )
     angle, angle_reason = angle_payload(calc.exact, calc.result.order)
     payload.update(
         {

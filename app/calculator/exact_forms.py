@@ -161,16 +161,13 @@ def exact_values(
 def double_values(triangle: ExactTriangle) -> Exact:
     """:func:`exact_values` of a triangle of doubles, from the integers over ``2**scale`` that
     :func:`mesh_normal.triangle.normal.exact_triangle` found (B and C are A plus u and v)."""
-    scale = triangle.scale
-    ratios = [x.as_integer_ratio() for x in triangle.points[0]]
-    # A double's denominator is a power of two, 2**(bit_length - 1), at most 2**scale.
-    px, py, pz = (num << (scale + 1 - den.bit_length()) for num, den in ratios)
-    u, v, n = triangle.u, triangle.v, triangle.n
-    q = (px + u[0], py + u[1], pz + u[2])
-    r = (px + v[0], py + v[1], pz + v[2])
-    p = (px, py, pz)
+    p, u, v, n = triangle.origin, triangle.u, triangle.v, triangle.n
+    q = (p[0] + u[0], p[1] + u[1], p[2] + u[2])
+    r = (p[0] + v[0], p[1] + v[1], p[2] + v[2])
     swapped = triangle.order == "ACB"
-    return Exact((p, q, r), swapped, 1 << scale, u, v, n, _dot(n, p), _dot(n, n), _dot(u, v))
+    return Exact(
+        (p, q, r), swapped, 1 << triangle.scale, u, v, n, _dot(n, p), _dot(n, n), _dot(u, v)
+    )
 
 
 @dataclass(frozen=True, slots=True)

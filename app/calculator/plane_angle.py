@@ -35,7 +35,7 @@ from app.calculator.mathml import (
 )
 from app.web.formatting import js_number
 from mesh_normal.triangle.exact import ratio_sqrt
-from mesh_normal.triangle.normal import AXES
+from mesh_normal.triangle.normal import AXES, MaybeVector
 
 NO_PLANE = (
     "There is no plane: points on one line (or repeated points) do not fix a single plane, "
@@ -43,13 +43,16 @@ NO_PLANE = (
 )
 
 
-def plane_payload(exact: Exact, *, with_exact: bool) -> tuple[dict[str, Any] | None, str | None]:
-    """The plane as rounded a, b, c, d and its equation (plus exact ones), or why there is none."""
+def plane_payload(
+    exact: Exact, normal: MaybeVector, *, with_exact: bool
+) -> tuple[dict[str, Any] | None, str | None]:
+    """The plane as rounded a, b, c, d and its equation (plus exact ones), or why there is none.
+
+    ``normal`` is the result's rounded n, which (a, b, c) is."""
     if not exact.scaled_square:
         return None, NO_PLANE
     den2 = exact.denominator**2
-    nx, ny, nz = exact.scaled_n
-    a, b, c = rounded_over(nx, den2), rounded_over(ny, den2), rounded_over(nz, den2)
+    a, b, c = normal
     d = rounded_over(exact.scaled_d, den2 * exact.denominator)
     equation = None
     if a is not None and b is not None and c is not None and d is not None:

@@ -104,6 +104,59 @@ def ratio_sqrt(part: int, whole: int) -> float:
     return root / (1 << (shift + 1))
 
 
+def root_bracket(square: int) -> tuple[int, int]:
+    """``(root, shift)`` with ``sqrt(square) * 2**shift`` in ``[root, root + 1)`` and ``root`` of
+    at least ``53 + _GUARD_BITS`` bits (``square > 0``): one integer square root from which
+    :func:`bracketed` rounds ``|n|`` and :func:`unit_vector` each ``n_i / |n|``."""
+    shift = max(0, 53 + _GUARD_BITS - square.bit_length() // 2)
+    return isqrt(square << (2 * shift)), shift
+
+
+def bracketed(low: int, denominator: int) -> float | None:
+    """The double nearest every value in ``[low, low + 1) / denominator``, when one double is
+    (nonzero and finite); else ``None``: the interval holds a rounding boundary (an exact tie,
+    or about once in ``2**_GUARD_BITS`` for a ``low`` from :func:`root_bracket`) or is out of
+    range, and the caller rounds exactly."""
+    try:
+        value = low / denominator
+        if value and (low + 1) / denominator == value:  # rounding is monotonic
+            return value
+    except OverflowError:
+        pass
+    return None
+
+
+def unit_vector(
+    n: tuple[int, int, int], square: int, root: int, shift: int
+) -> tuple[float, float, float]:
+    """Correctly rounded ``n / |n|`` for integers ``n`` with ``square = n . n > 0``, from
+    :func:`root_bracket`'s ``root`` and ``shift``.
+
+    ``|n_i| / |n|`` lies between ``|n_i| * 2**shift`` over ``root + 1`` and over ``root``, two
+    quotients that differ beyond a double's precision by ``_GUARD_BITS`` bits. Where both round
+    to the same double, that is the correctly rounded value; where they do not (an exact tie,
+    or about once in ``2**_GUARD_BITS``), :func:`ratio_sqrt` decides. A component below the
+    smallest double is 0, as there.
+    """
+    x, y, z = n
+    return (
+        _unit_part(x, square, shift, root),
+        _unit_part(y, square, shift, root),
+        _unit_part(z, square, shift, root),
+    )
+
+
+def _unit_part(value: int, square: int, shift: int, root: int) -> float:
+    """One component of :func:`unit_vector`."""
+    if value == 0:
+        return 0.0
+    top = abs(value) << shift
+    high = top / root
+    if top / (root + 1) != high:
+        high = ratio_sqrt(value * value, square)
+    return -high if value < 0 else high
+
+
 def root_over(square: int, denominator: int) -> float:
     """Correctly rounded ``sqrt(square) / denominator`` (``square >= 0``, ``denominator > 0``).
 

@@ -21,7 +21,14 @@ from math import isfinite, lcm
 from numbers import Real
 
 from mesh_normal.tolerances import LARGEST_DOUBLE_TEXT
-from mesh_normal.triangle.exact import OutOfRange, ratio_sqrt, root_over, to_fixed
+from mesh_normal.triangle.exact import (
+    OutOfRange,
+    bracketed,
+    root_bracket,
+    root_over,
+    to_fixed,
+    unit_vector,
+)
 
 Vector = tuple[float, float, float]  # not mesh_normal.types: this module needs no NumPy
 MaybeVector = tuple[float | None, float | None, float | None]
@@ -91,6 +98,8 @@ class ExactTriangle:
     points: tuple[Vector, Vector, Vector]
     order: str
     scale: int
+    #: The first point, A, as integers over the scale (B is ``origin + u``, C ``origin + v``).
+    origin: IntVector
     u: IntVector
     v: IntVector
     n: IntVector
@@ -139,7 +148,7 @@ def _exact(pa: Vector, pb: Vector, pc: Vector, swap_winding: bool) -> ExactTrian
     vx, vy, vz = rx - px, ry - py, rz - pz
     n = (uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx)
     order = "ACB" if swap_winding else "ABC"
-    return ExactTriangle((p, q, r), order, k, (ux, uy, uz), (vx, vy, vz), n)
+    return ExactTriangle((p, q, r), order, k, (px, py, pz), (ux, uy, uz), (vx, vy, vz), n)
 
 
 def _as_point(name: str, point: Sequence[float]) -> Vector:
@@ -318,7 +327,13 @@ def rounded_normal(exact: ExactTriangle) -> TriangleNormal:
     each rounded once (for a caller that uses the exact values as well)."""
     p, q, r = exact.points
     given = (p, r, q) if exact.order == "ACB" else exact.points
-    return _rounded(given, exact.points, exact, 1 << exact.scale)
+    # A double subtraction is the exact difference rounded once (IEEE 754), so u and v need
+    # no integer division unless one overflows (a difference is never rounded to zero); + 0.0
+    # makes the -0.0 of -0.0 - 0.0 the exact zero's 0.0.
+    u = (q[0] - p[0] + 0.0, q[1] - p[1] + 0.0, q[2] - p[2] + 0.0)
+    v = (r[0] - p[0] + 0.0, r[1] - p[1] + 0.0, r[2] - p[2] + 0.0)
+    finite = isfinite(u[0] + u[1] + u[2] + v[0] + v[1] + v[2])
+    return _rounded(given, exact.points, exact, 1 << exact.scale, (u, v) if finite else None)
 
 
 def _rounded(
@@ -326,14 +341,19 @@ def _rounded(
     ordered: tuple[Sequence[object], Sequence[object], Sequence[object]],
     exact: ExactTriangle,
     denominator: int,
+    edges: tuple[MaybeVector, MaybeVector] | None = None,
 ) -> TriangleNormal:
-    """Round an exact triangle once; its u and v are integers over ``denominator``."""
+    """Round an exact triangle once; its u and v are integers over ``denominator`` (``edges``:
+    u and v already rounded)."""
     pa, pb, pc = given
     order, n, square = exact.order, exact.n, exact.square
     p, q, r = ordered
     rounder = _Rounder()
-    u = rounder.vector("u", exact.u, denominator)
-    v = rounder.vector("v", exact.v, denominator)
+    if edges is None:
+        u = rounder.vector("u", exact.u, denominator)
+        v = rounder.vector("v", exact.v, denominator)
+    else:
+        u, v = edges
     if square == 0:
         return TriangleNormal(
             pa,
@@ -351,17 +371,15 @@ def _rounded(
         )
     den2 = denominator * denominator
     normal = rounder.vector("n", n, den2)
-    magnitude = rounder.value("magnitude", square, den2, root=True)
+    root, shift = root_bracket(square)
+    magnitude = bracketed(root, den2 << shift)
+    if magnitude is None:  # out of range, or a rounding boundary in the bracket
+        magnitude = rounder.value("magnitude", square, den2, root=True)
     if magnitude is not None and magnitude >= _HALVES_EXACTLY:
         area: float | None = magnitude / 2  # rounding commutes with halving above the subnormals
     else:
         area = rounder.value("area", square, 2 * den2, root=True)
-    nx, ny, nz = n
-    unit = (
-        _signed(ratio_sqrt(nx * nx, square), nx),
-        _signed(ratio_sqrt(ny * ny, square), ny),
-        _signed(ratio_sqrt(nz * nz, square), nz),
-    )
+    unit = unit_vector(n, square, root, shift)
     return TriangleNormal(
         pa, pb, pc, order, u, v, normal, magnitude, unit, area, False, rounder.message()
     )
@@ -387,8 +405,9 @@ def rational_exact(
     n = (uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx)
     points = tuple((float(x), float(y), float(z)) for x, y, z in (p, q, r))
     order = "ACB" if swap_winding else "ABC"
+    origin = (fixed[0], fixed[1], fixed[2])
     exact = ExactTriangle(
-        (points[0], points[1], points[2]), order, 0, (ux, uy, uz), (vx, vy, vz), n
+        (points[0], points[1], points[2]), order, 0, origin, (ux, uy, uz), (vx, vy, vz), n
     )
     return exact, denominator
 
@@ -412,7 +431,3 @@ def rational_triangle_normal(
     given = ((pa[0], pa[1], pa[2]), (pb[0], pb[1], pb[2]), (pc[0], pc[1], pc[2]))
     p, q, r = (a, c, b) if swap_winding else (a, b, c)
     return _rounded(given, (p, q, r), exact, denominator)
-
-
-def _signed(value: float, sign_of: int) -> float:
-    return -value if sign_of < 0 else value

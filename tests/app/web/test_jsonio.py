@@ -11,10 +11,11 @@ from fastapi import FastAPI
 from fastapi.testclient import TestClient
 from hypothesis import given
 from hypothesis import strategies as st
+from pydantic import BaseModel, ConfigDict
 
 from app.main import create_app
 from app.web.errors import ApiError
-from app.web.jsonio import FastJSONResponse, json_bytes, refuse_duplicate_keys
+from app.web.jsonio import FastJSONResponse, json_bytes, parse_body, refuse_duplicate_keys
 from app.web.templating import json_script
 
 
@@ -99,3 +100,43 @@ def test_duplicate_keys_in_nested_objects_and_strings_that_look_like_keys() -> N
     refuse_duplicate_keys(b'{"a": {"a": 1}, "b": [{"a": 1}, {"a": 2}], "c": "\\"a\\": 1"}')
     with pytest.raises(ApiError, match=r"^x is given twice"):
         refuse_duplicate_keys(b'{"a": [{"x": 1, "y": {"x": 2}, "x": 3}]}')
+
+
+class _Fields(BaseModel):
+    """A body of numbers and flags only, as the calculator's: its keys are its only strings."""
+
+    model_config = ConfigDict(extra="forbid")
+    a: list[float] = []
+    b: bool = False
+    note: str = ""
+
+
+_FIELD_VALUES = {"a": "[1, 2.5]", "b": "true", "note": '"x"'}
+
+
+@given(
+    st.lists(st.sampled_from(sorted(_FIELD_VALUES)), min_size=1, max_size=5),
+    st.booleans(),
+    st.booleans(),
+)
+def test_parse_body_refuses_a_key_given_twice_however_written(
+    keys: list[str], escaped: bool, spaced: bool
+) -> None:
+    """The count of quotes that lets a valid body skip the key scan never hides a repeat."""
+    written = [
+        f'"\\u{ord(key[0]):04x}{key[1:]}"' if escaped and i else f'"{key}"'
+        for i, key in enumerate(keys)
+    ]
+    colon = " : " if spaced else ":"
+    raw = (
+        "{"
+        + ", ".join(f"{w}{colon}{_FIELD_VALUES[k]}" for w, k in zip(written, keys, strict=True))
+        + "}"
+    ).encode()
+    if len(set(keys)) == len(keys):
+        assert parse_body(raw, _Fields).model_fields_set == set(keys)
+    else:
+        with pytest.raises(ApiError) as raised:
+            parse_body(raw, _Fields)
+        assert raised.value.status_code == 422
+        assert "given twice" in raised.value.error

@@ -13,12 +13,16 @@ from hypothesis import strategies as st
 
 from mesh_normal.triangle.exact import (
     OutOfRange,
+    bracketed,
     ratio_sqrt,
+    root_bracket,
+    root_over,
     round_scaled,
     split_square,
     sqrt_scaled,
     square_root,
     to_fixed,
+    unit_vector,
 )
 from tests.mesh_normal._reference import (
     MAX,
@@ -321,6 +325,45 @@ def test_ratio_sqrt_unit_vector_components_have_length_one() -> None:
         unit = [ratio_sqrt(x * x, square) for x in n]
         length_squared = sum(Fraction(x) ** 2 for x in unit)
         assert abs(length_squared - 1) <= Fraction(8, 2**53)
+
+
+# --- One root for |n| and n / |n| ----------------------------------------------------------
+
+
+def unit_by_ratios(n: tuple[int, int, int], square: int) -> tuple[float, ...]:
+    return tuple(math.copysign(ratio_sqrt(x * x, square), x) if x else 0.0 for x in n)
+
+
+@given(st.tuples(*[st.integers(-(2**700), 2**700)] * 3), st.integers(0, 3))
+@settings(max_examples=300)
+def test_one_root_rounds_as_a_root_each(n: tuple[int, int, int], scale: int) -> None:
+    """unit_vector and bracketed from root_bracket agree with the exact roots taken one by one."""
+    square = n[0] ** 2 + n[1] ** 2 + n[2] ** 2
+    if square == 0:
+        return
+    root, shift = root_bracket(square)
+    assert root**2 <= square << (2 * shift) < (root + 1) ** 2
+    assert unit_vector(n, square, root, shift) == unit_by_ratios(n, square)
+    denominator = 1 << (60 * scale)
+    magnitude = bracketed(root, denominator << shift)
+    if magnitude is not None:
+        assert magnitude == root_over(square, denominator)
+
+
+def test_one_root_at_exact_ties_and_whole_numbers() -> None:
+    for n in [(3, 4, 0), (0, 0, -5), (1, 1, 0), (2, -3, 6), (1, 2**600, 0), (2**53 + 1, 0, 0)]:
+        square = sum(x * x for x in n)
+        root, shift = root_bracket(square)
+        assert unit_vector(n, square, root, shift) == unit_by_ratios(n, square)
+    # |n| exactly a whole number: the bracket [root, root + 1) starts on it.
+    root, shift = root_bracket(49)
+    assert bracketed(root, 1 << shift) == 7.0
+    # sqrt(2**2150) = 2**1075 over 2**2150: the tie below the smallest double is left to the
+    # exact rounding (None), as is a value beyond the largest double.
+    root, shift = root_bracket(1)
+    assert bracketed(root, 1 << (shift + 1075)) is None
+    root, shift = root_bracket(4**1100)
+    assert bracketed(root, 1 << shift) is None
 
 
 # --- Squares out of a radicand ------------------------------------------------------------------
