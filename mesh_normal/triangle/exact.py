@@ -34,7 +34,7 @@ def to_fixed(values: list[float]) -> tuple[list[int], int]:
     """
     ratios = [x.as_integer_ratio() for x in values]
     # Each denominator is a power of two, 2**(bit_length - 1).
-    scale = max(den.bit_length() for _, den in ratios) - 1
+    scale = max([den for _, den in ratios]).bit_length() - 1
     return [num << (scale + 1 - den.bit_length()) for num, den in ratios], scale
 
 
