@@ -26,8 +26,10 @@ side and an enclosed empty cell on the other says which way it faces. The signs 
 are the ones that best agree with those votes and the seed's side when changing the sign at a
 step of the tree costs ``_STEP_COST`` points (an exact pass up and down the tree), so a part the
 tree reached the wrong way, across a thin wall or where two closed parts cross, is turned back
-by its own points, and a closed part's side is its points' vote, not one seed's. An open sheet
-or terrain sees the outside on both sides: nothing votes, and the seed decides as before.
+by its own points, and a closed part's side is its points' vote, not one seed's. A piece reached
+only across a sharp step is oriented by its own votes too, and left unoriented only when none
+of its points sees the outside. An open sheet or terrain sees the outside on both sides:
+nothing votes, and the seed decides as before.
 
 ``"viewpoint"``, ``"direction"`` and ``"file"`` decide each point alone, towards a sensor, along
 a vector, or agreeing with stored normals; a point at right angles to its reference (to 2**-20)
@@ -235,7 +237,13 @@ def along_tree(
     carried = np.where(sharp, -1, parent32).astype(np.int32)
     cost = np.full(n, _STEP_COST)
     flip = _core.tree_signs(order32, carried, agrees, cost, evidence)
-    unoriented = valid & (cut | ~reached)
+    # A piece below a sharp step is oriented when its own points see the outside (or hold a
+    # seed); one that sees nothing keeps its canonical sign and is reported.
+    linked = np.flatnonzero(carried >= 0)
+    pieces = coo_matrix((np.ones(len(linked)), (linked, carried[linked])), shape=(n, n))
+    _, piece = connected_components(pieces, directed=False)
+    seen = np.bincount(piece, weights=np.abs(evidence)) > 0
+    unoriented = valid & ((cut & ~seen[piece]) | ~reached)
     flip &= valid & ~unoriented
     summaries = _summaries(
         labels, count, (valid, flip, unoriented), weight, seeds, decided, max_angle
