@@ -161,20 +161,29 @@ def test_an_outlier_above_a_closed_cloud_does_not_seed_it() -> None:
     assert result.unoriented <= 1  # the outlier at most
 
 
-@pytest.mark.parametrize(("name", "n", "most"), [("ant", 20_000, 0.35), ("cow", 50_000, 0.03)])
+@pytest.mark.parametrize(("name", "n", "most"), [("ant", 20_000, 0.15), ("cow", 50_000, 0.02)])
 def test_parts_turned_by_the_tree_are_turned_back_by_the_outside(
     name: str, n: int, most: float
 ) -> None:
     # The ant's legs and antennae are thin closed parts crossing its body; the spanning tree
     # reaches the body from an antenna's tip across them and turned the whole body inward
     # (60% of the points inward at 20,000 points), as it turned the cow's tail and ears (4.2%
-    # at 50,000). The points that see the outside along their normal line now turn them back.
+    # at 50,000). The points that see the outside along their normal line now turn them back,
+    # and on parts too thin for that (legs, antennae, ears) the side their mass lies on: 11.4%
+    # and 1.7% inward.
     from benchmarks.points_accuracy import SHAPES, noisy
 
     (shape,) = (s for s in SHAPES if s.name == name)
     points, truth = noisy(shape, n, 0.0, 0)
     result = point_normals(points)
     assert wrong(result.normals, truth) < most * n
+
+
+def test_a_thin_closed_plate_points_out_by_the_side_its_mass_lies_on() -> None:
+    # 1 x 1 x 0.02: no empty cell inside for the outside to be seen against, and the tree
+    # crosses the plate between its faces (14,976 of 30,000 points inward by the tree alone).
+    points, truth = clouds.box(30_000, size=(1.0, 1.0, 0.02))
+    assert wrong(point_normals(points).normals, truth) < 0.05 * len(points)
 
 
 def test_an_open_sheet_sees_no_outside_and_keeps_its_seed() -> None:
