@@ -61,15 +61,26 @@ def test_a_thin_slab_needs_the_riemannian_graph() -> None:
 
 
 def test_signs_stop_at_sharp_edges_and_the_points_are_reported() -> None:
-    points, _ = clouds.sphere(2_000)
-    # Neighbours on this sphere are 2 to 5 degrees apart: a 1-degree limit stops nearly all.
+    # An open terrain sees no outside: a 1-degree limit stops the signs at most steps, and the
+    # points reached only across one are left unoriented.
+    points, _ = clouds.terrain(2_000, seed=5)
     result = point_normals(points, max_angle=1.0)
     (part,) = result.components
-    assert part.unoriented > 1_900 and part.unoriented == result.unoriented
+    assert part.unoriented > 1_500 and part.unoriented == result.unoriented
     assert part.reason == "reached only across edges sharper than 1 degrees"
     left = result.status == PointStatus.unoriented
     assert left.sum() == part.unoriented and result.valid.all()
     assert not left[part.seed] and result.counts()["unoriented"] == part.unoriented
+
+
+def test_pieces_beyond_sharp_edges_that_see_the_outside_are_oriented() -> None:
+    # Neighbours on this sphere are 2 to 5 degrees apart: a 1-degree limit stops nearly every
+    # step, but each piece's own points see the outside and decide its side.
+    points, truth = clouds.sphere(2_000)
+    result = point_normals(points, max_angle=1.0)
+    left = result.status == PointStatus.unoriented
+    assert left.sum() == result.unoriented < 20
+    assert wrong(result.normals[~left], truth[~left]) == 0
 
 
 def test_a_viewpoint_inside_turns_a_sphere_inward() -> None:
@@ -150,20 +161,29 @@ def test_an_outlier_above_a_closed_cloud_does_not_seed_it() -> None:
     assert result.unoriented <= 1  # the outlier at most
 
 
-@pytest.mark.parametrize(("name", "n", "most"), [("ant", 20_000, 0.35), ("cow", 50_000, 0.03)])
+@pytest.mark.parametrize(("name", "n", "most"), [("ant", 20_000, 0.15), ("cow", 50_000, 0.02)])
 def test_parts_turned_by_the_tree_are_turned_back_by_the_outside(
     name: str, n: int, most: float
 ) -> None:
     # The ant's legs and antennae are thin closed parts crossing its body; the spanning tree
     # reaches the body from an antenna's tip across them and turned the whole body inward
     # (60% of the points inward at 20,000 points), as it turned the cow's tail and ears (4.2%
-    # at 50,000). The points that see the outside along their normal line now turn them back.
+    # at 50,000). The points that see the outside along their normal line now turn them back,
+    # and on parts too thin for that (legs, antennae, ears) the side their mass lies on: 11.4%
+    # and 1.7% inward.
     from benchmarks.points_accuracy import SHAPES, noisy
 
     (shape,) = (s for s in SHAPES if s.name == name)
     points, truth = noisy(shape, n, 0.0, 0)
     result = point_normals(points)
     assert wrong(result.normals, truth) < most * n
+
+
+def test_a_thin_closed_plate_points_out_by_the_side_its_mass_lies_on() -> None:
+    # 1 x 1 x 0.02: no empty cell inside for the outside to be seen against, and the tree
+    # crosses the plate between its faces (14,976 of 30,000 points inward by the tree alone).
+    points, truth = clouds.box(30_000, size=(1.0, 1.0, 0.02))
+    assert wrong(point_normals(points).normals, truth) < 0.05 * len(points)
 
 
 def test_an_open_sheet_sees_no_outside_and_keeps_its_seed() -> None:
