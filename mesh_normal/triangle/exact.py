@@ -140,13 +140,13 @@ def unit_vector(
     """
     x, y, z = n
     return (
-        _unit_part(x, square, shift, root),
-        _unit_part(y, square, shift, root),
-        _unit_part(z, square, shift, root),
+        _unit_part(x, square, root, shift),
+        _unit_part(y, square, root, shift),
+        _unit_part(z, square, root, shift),
     )
 
 
-def _unit_part(value: int, square: int, shift: int, root: int) -> float:
+def _unit_part(value: int, square: int, root: int, shift: int) -> float:
     """One component of :func:`unit_vector`."""
     if value == 0:
         return 0.0
