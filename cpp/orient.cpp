@@ -1,5 +1,4 @@
 // Signs of point normals along a tree that exterior evidence may overrule (points/orient.py).
-#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <tuple>
@@ -85,71 +84,6 @@ nb::ndarray<nb::numpy, bool> tree_signs(In<std::int32_t, nb::ndim<1>> order,
   return owned(std::move(flip), static_cast<std::size_t>(n));
 }
 
-// Per point, which side of its tangent plane its neighbourhood's mass lies on: the offset
-// along its normal from the centroid of its `small` nearest (itself first, so that its own
-// noise cancels) to the centroid of all its listed neighbours (-1 ends a row), over their mean
-// distance from the small centroid. On a thin closed part the far side lies behind the outward
-// normal (negative); zero where a row has too few neighbours or a normal is not finite.
-nb::ndarray<nb::numpy, double> mass_sides(In<double, nb::shape<-1, 3>> points,
-                                          In<double, nb::shape<-1, 3>> normals,
-                                          In<std::int32_t, nb::ndim<2>> nearest,
-                                          std::int64_t small) {
-  const Index n = static_cast<Index>(points.shape(0));
-  const Index k = static_cast<Index>(nearest.shape(1));
-  if (static_cast<Index>(normals.shape(0)) != n || static_cast<Index>(nearest.shape(0)) != n) {
-    throw nb::value_error("the points, normals and neighbours need one row per point");
-  }
-  if (small < 1 || small >= k) {
-    throw nb::value_error("the small neighbourhood must hold at least one and fewer than all");
-  }
-  const double* at = points.data();
-  const double* normal = normals.data();
-  const std::int32_t* list = nearest.data();
-  for (Index i = 0; i < n * k; ++i) {
-    if (list[i] >= n) {
-      throw nb::index_error("a neighbour is not one of the points");
-    }
-  }
-  std::unique_ptr<double[]> side(new double[static_cast<std::size_t>(n)]());
-  {
-    nb::gil_scoped_release release;
-    for (Index i = 0; i < n; ++i) {
-      const std::int32_t* row = list + i * k;
-      double near[3] = {0, 0, 0}, all[3] = {0, 0, 0};
-      Index count = 0;
-      for (; count < k && row[count] >= 0; ++count) {
-        const double* q = at + 3 * static_cast<Index>(row[count]);
-        for (int a = 0; a < 3; ++a) {
-          all[a] += q[a];
-          near[a] += count < small ? q[a] : 0.0;
-        }
-      }
-      if (count <= small) {
-        continue;
-      }
-      double spread = 0, offset = 0;
-      for (int a = 0; a < 3; ++a) {
-        near[a] /= static_cast<double>(small);
-        all[a] /= static_cast<double>(count);
-        offset += (all[a] - near[a]) * normal[3 * i + a];
-      }
-      for (Index j = 0; j < count; ++j) {
-        const double* q = at + 3 * static_cast<Index>(row[j]);
-        double squared = 0;
-        for (int a = 0; a < 3; ++a) {
-          squared += (q[a] - near[a]) * (q[a] - near[a]);
-        }
-        spread += std::sqrt(squared);
-      }
-      spread /= static_cast<double>(count);
-      if (spread > 0 && std::isfinite(offset)) {
-        side[i] = offset / spread;
-      }
-    }
-  }
-  return owned(std::move(side), static_cast<std::size_t>(n));
-}
-
 }  // namespace
 
 void bind_orient(nb::module_& m) {
@@ -159,10 +93,6 @@ void bind_orient(nb::module_& m) {
         "The flips along a tree (parent -1 at roots, order breadth first) that best agree with "
         "the evidence (positive: keep), each step that does not carry the sign as agrees says "
         "costing that child's cost: exact, ties keep the carried sign.");
-  m.def("mass_sides", &mass_sides, nb::arg("points").noconvert(),
-        nb::arg("normals").noconvert(), nb::arg("nearest").noconvert(), nb::arg("small"),
-        "Per point: the offset along its normal from the centroid of its `small` nearest to "
-        "that of all its neighbours, over their mean distance (0 where it cannot be told).");
 }
 
 }  // namespace mesh_normal

@@ -113,10 +113,6 @@ POINT_GAP_RATIO = 2.0**-40
 #: (CGAL's ``mst_orient_normals`` uses 18; Open3D's consistent tangent plane takes k).
 ORIENT_NEIGHBOURS = 12
 
-#: The default estimate hands the orientation up to this many nearest neighbours per point
-#: (the first ``ORIENT_NEIGHBOURS`` make its graph): the side a thin part's mass lies on.
-ORIENT_SIDE_NEIGHBOURS = 32
-
 #: The MST orientation does not carry a sign across two neighbours whose normal lines are
 #: further apart than this, in degrees; points reached only that way are left unoriented.
 ORIENT_MAX_ANGLE = 60.0

@@ -49,7 +49,6 @@ from mesh_normal.tolerances import (
     EPSILON,
     ORIENT_MAX_ANGLE,
     ORIENT_NEIGHBOURS,
-    ORIENT_SIDE_NEIGHBOURS,
     POINT_GAP_RATIO,
     POINT_LINE_RATIO,
     POINT_ROUNDING_FACTOR,
@@ -503,7 +502,7 @@ def _adaptive(
     planes, centres, moments = np.empty((m, 3)), np.empty((m, 3)), np.empty((m, 10))
     roughness = np.empty(m)
     used, codes = np.empty(m, dtype=np.intp), np.empty(m, dtype=np.intp)
-    g = min(ORIENT_SIDE_NEIGHBOURS, largest)
+    g = min(ORIENT_NEIGHBOURS, largest)
     graph = np.full((m, g), -1, dtype=np.int32)
     candidates = np.full((m, min(ADAPTIVE_SHARP_NEIGHBOURS, largest)), -1, dtype=np.int32)
     chunk = max(1, QUERY_CHUNK * 30 // largest)

@@ -23,9 +23,7 @@ terrain up. A part with no such point is left unoriented and says so.
 
 On a closed surface the points then vote (``_outside``): on a grid of cells a few spacings
 wide, a point whose normal line has the outside (empty cells joined to the grid's corner) on one
-side and an enclosed empty cell on the other says which way it faces; a point on a part too
-thin for the grid to see inside (a leg, an ear) votes for the side away from its
-neighbourhood's mass (``_mass_side``), where the part's far side lies. The signs along the tree
+side and an enclosed empty cell on the other says which way it faces. The signs along the tree
 are the ones that best agree with those votes and the seed's side when changing the sign at a
 step of the tree costs ``_STEP_COST`` points (an exact pass up and down the tree), so a part the
 tree reached the wrong way, across a thin wall or where two closed parts cross, is turned back
@@ -50,7 +48,7 @@ from numpy.typing import NDArray
 
 import mesh_normal._core as _core
 from mesh_normal.choices import OrientMode as OrientMode
-from mesh_normal.tolerances import ORIENT_NEIGHBOURS, ORIENT_POINT_COSINE, ORIENT_SEED_COSINE
+from mesh_normal.tolerances import ORIENT_POINT_COSINE, ORIENT_SEED_COSINE
 from mesh_normal.types import BoolArray, FloatArray, IndexArray
 
 ORIENT_MODES: tuple[OrientMode, ...] = get_args(OrientMode)
@@ -84,15 +82,6 @@ _PROBES = (1.5, 3.0, 5.0)
 #: few points that see it wrongly (where the grid is coarse) turn nothing, a part whose side the
 #: tree carried wrongly across a thin wall or where two parts cross is turned by its own points.
 _STEP_COST = 50.0
-
-#: Where the outside decides nothing, a point votes for the side away from its neighbourhood's
-#: mass (``_mass_side``) when the centroid of its neighbours (up to
-#: ``ORIENT_SIDE_NEIGHBOURS``) lies off that of its ``_MASS_SMALL`` nearest, along its normal, by
-#: over this fraction of their mean distance. Under heavy noise (0.012 of the diagonal) a lower
-#: bar lets noise vote: at 0.1 the nut of ``tests/data`` had 5.7% of its normals inward, at 0.2
-#: 0.3%, with the ant's and cow's thin parts (the reason for these votes) decided as well.
-_MASS_SIDE = 0.2
-_MASS_SMALL = 8
 
 #: What the seed's side (its extreme point) counts for, in points that see the outside: it
 #: decides a part that sees no outside (an open sheet, terrain), and the points seeing the
@@ -206,8 +195,7 @@ def along_tree(
 
     n = len(points)
     sharp_cosine = math.cos(math.radians(max_angle))
-    nearest = np.ascontiguousarray(graph[:, :ORIENT_NEIGHBOURS])
-    rows, cols, weights = _edges(points, normals, valid, nearest, offsets, sharp_cosine)
+    rows, cols, weights = _edges(points, normals, valid, graph, offsets, sharp_cosine)
     graph_matrix = coo_matrix((weights, (rows, cols)), shape=(n, n)).tocsr()
     del rows, cols, weights
     tree = minimum_spanning_tree(graph_matrix, overwrite=True)
@@ -245,9 +233,7 @@ def along_tree(
     # The tree's signs, overruled where the outside seen from the points says otherwise: a
     # subtree turns against its parent when more of its points see the outside on the other
     # side than a step costs. Below a sharp step nothing is carried (those points are cut).
-    evidence = _outside(points, normals, valid, nearest)
-    evidence = np.where(evidence == 0, _mass_side(points, normals, valid, graph), evidence)
-    evidence *= weight
+    evidence = _outside(points, normals, valid, graph) * weight.astype(np.float64)
     evidence[seeds[decided]] += np.where(seed_flip[decided], -_SEED_EVIDENCE, _SEED_EVIDENCE)
     carried = np.where(sharp, -1, parent32).astype(np.int32)
     cost = np.full(n, _STEP_COST)
@@ -320,24 +306,6 @@ def _outside(
         evidence[rows[open_ & (ahead == 1) & (behind == -1)]] = 1.0
         evidence[rows[open_ & (ahead == -1) & (behind == 1)]] = -1.0
     return evidence
-
-
-def _mass_side(
-    points: FloatArray, normals: FloatArray, valid: BoolArray, graph: NDArray[np.int32]
-) -> FloatArray:
-    """(n,) float: +1 where a point's neighbourhood lies clearly behind its normal, -1 where in
-    front, 0 where neither (``_MASS_SIDE``) or it has too few neighbours.
-
-    A thin closed part (a leg, an ear, an antenna) leaves no empty cell inside for ``_outside``
-    to see, but its far side is among a point's nearest and lies behind its outward normal; a
-    thick part curves away behind a convex point and ahead of a concave one, and mostly votes
-    below the threshold or where the grid has already voted.
-    """
-    if graph.shape[1] <= _MASS_SMALL:
-        return np.zeros(len(points))
-    side = _core.mass_sides(points, normals, graph, _MASS_SMALL)
-    votes: FloatArray = np.where(valid & (np.abs(side) > _MASS_SIDE), -np.sign(side), 0.0)
-    return votes
 
 
 def _edges(

@@ -154,29 +154,6 @@ def test_signs_refuse_points_that_are_not_there() -> None:
         _core.propagate_signs(np.array([0, 1], np.int32), np.array([-1, 5], np.int32), *[flags] * 3)
 
 
-def test_the_mass_side_is_behind_a_thin_slab_s_outward_normal() -> None:
-    # Two sheets 0.1 apart: from the top one, the bottom one lies below, behind +z.
-    grid = np.stack(np.meshgrid(np.arange(6.0), np.arange(6.0)), axis=-1).reshape(-1, 2) * 0.05
-    points = np.vstack([np.c_[grid, np.full(36, 0.1)], np.c_[grid, np.zeros(36)]])
-    normals = np.tile([0.0, 0.0, 1.0], (72, 1))
-    distances = np.linalg.norm(points[:, None] - points[None], axis=2)
-    nearest = np.argsort(distances, axis=1)[:, :32].astype(np.int32)
-    side = _core.mass_sides(points, normals, nearest, 8)
-    assert (side[:36] < -0.1).all() and (side[36:] > 0.1).all()
-    sheet = np.arange(72) // 36
-    distances[sheet[:, None] != sheet[None]] = np.inf  # each point's own sheet only
-    nearest = np.argsort(distances, axis=1)[:, :32].astype(np.int32)
-    assert np.abs(_core.mass_sides(points, normals, nearest, 8)).max() < 1e-12
-    nearest[:, 9:] = -1
-    with pytest.raises(ValueError, match="small neighbourhood"):
-        _core.mass_sides(points, normals, nearest, 32)
-    with pytest.raises(ValueError, match="one row per point"):
-        _core.mass_sides(points, normals[:5], nearest, 8)
-    nearest[0, 0] = 72
-    with pytest.raises(IndexError, match="not one of the points"):
-        _core.mass_sides(points, normals, nearest, 8)
-
-
 def test_mutated_and_cut_lzf_is_unpacked_or_refused_in_one_sentence() -> None:
     raw = bytes(RNG.integers(0, 3, size=3000).astype(np.uint8))
     packed = lzf_compress(raw)

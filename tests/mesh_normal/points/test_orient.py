@@ -161,29 +161,20 @@ def test_an_outlier_above_a_closed_cloud_does_not_seed_it() -> None:
     assert result.unoriented <= 1  # the outlier at most
 
 
-@pytest.mark.parametrize(("name", "n", "most"), [("ant", 20_000, 0.15), ("cow", 50_000, 0.025)])
+@pytest.mark.parametrize(("name", "n", "most"), [("ant", 20_000, 0.35), ("cow", 50_000, 0.03)])
 def test_parts_turned_by_the_tree_are_turned_back_by_the_outside(
     name: str, n: int, most: float
 ) -> None:
     # The ant's legs and antennae are thin closed parts crossing its body; the spanning tree
     # reaches the body from an antenna's tip across them and turned the whole body inward
     # (60% of the points inward at 20,000 points), as it turned the cow's tail and ears (4.2%
-    # at 50,000). The points that see the outside along their normal line now turn them back,
-    # and on parts too thin for that (legs, antennae, ears) the side their mass lies on: 13.5%
-    # and 2.0% inward.
+    # at 50,000). The points that see the outside along their normal line now turn them back.
     from benchmarks.points_accuracy import SHAPES, noisy
 
     (shape,) = (s for s in SHAPES if s.name == name)
     points, truth = noisy(shape, n, 0.0, 0)
     result = point_normals(points)
     assert wrong(result.normals, truth) < most * n
-
-
-def test_a_thin_closed_plate_points_out_by_the_side_its_mass_lies_on() -> None:
-    # 1 x 1 x 0.02: no empty cell inside for the outside to be seen against, and the tree
-    # crosses the plate between its faces (14,976 of 30,000 points inward by the tree alone).
-    points, truth = clouds.box(30_000, size=(1.0, 1.0, 0.02))
-    assert wrong(point_normals(points).normals, truth) < 0.05 * len(points)
 
 
 def test_an_open_sheet_sees_no_outside_and_keeps_its_seed() -> None:
@@ -193,3 +184,15 @@ def test_an_open_sheet_sees_no_outside_and_keeps_its_seed() -> None:
     for turn in (1.0, -1.0):
         result = point_normals(points * [1.0, 1.0, turn])
         assert wrong(result.normals, truth * [1.0, 1.0, turn] * turn) == 0
+
+
+def test_a_thick_part_under_heavy_noise_keeps_its_side() -> None:
+    # The nut's bore is concave: its neighbourhoods' mass lies in front of the outward normal,
+    # and under noise of 0.012 of the diagonal no empty cell is seen inside. A vote by the side
+    # of a neighbourhood's mass turned the bore and more inward (28% of 30,000 points); the
+    # tree and the outside keep it at 0.03%.
+    from benchmarks.points_accuracy import SHAPES, noisy
+
+    (shape,) = (s for s in SHAPES if s.name == "nut")
+    points, truth = noisy(shape, 30_000, 0.012, 0)
+    assert wrong(point_normals(points).normals, truth) < 0.01 * len(points)
