@@ -327,13 +327,7 @@ def rounded_normal(exact: ExactTriangle) -> TriangleNormal:
     each rounded once (for a caller that uses the exact values as well)."""
     p, q, r = exact.points
     given = (p, r, q) if exact.order == "ACB" else exact.points
-    # A double subtraction is the exact difference rounded once (IEEE 754), so u and v need
-    # no integer division unless one overflows (a difference is never rounded to zero); + 0.0
-    # makes the -0.0 of -0.0 - 0.0 the exact zero's 0.0.
-    u = (q[0] - p[0] + 0.0, q[1] - p[1] + 0.0, q[2] - p[2] + 0.0)
-    v = (r[0] - p[0] + 0.0, r[1] - p[1] + 0.0, r[2] - p[2] + 0.0)
-    finite = isfinite(u[0] + u[1] + u[2] + v[0] + v[1] + v[2])
-    return _rounded(given, exact.points, exact, 1 << exact.scale, (u, v) if finite else None)
+    return _rounded(given, exact.points, exact, 1 << exact.scale)
 
 
 def _rounded(
@@ -341,19 +335,14 @@ def _rounded(
     ordered: tuple[Sequence[object], Sequence[object], Sequence[object]],
     exact: ExactTriangle,
     denominator: int,
-    edges: tuple[MaybeVector, MaybeVector] | None = None,
 ) -> TriangleNormal:
-    """Round an exact triangle once; its u and v are integers over ``denominator`` (``edges``:
-    u and v already rounded)."""
+    """Round an exact triangle once; its u and v are integers over ``denominator``."""
     pa, pb, pc = given
     order, n, square = exact.order, exact.n, exact.square
     p, q, r = ordered
     rounder = _Rounder()
-    if edges is None:
-        u = rounder.vector("u", exact.u, denominator)
-        v = rounder.vector("v", exact.v, denominator)
-    else:
-        u, v = edges
+    u = rounder.vector("u", exact.u, denominator)
+    v = rounder.vector("v", exact.v, denominator)
     if square == 0:
         return TriangleNormal(
             pa,
