@@ -204,7 +204,7 @@ def along_tree(
     # Seeds come from each part's largest piece between sharp edges of its tree, and from the
     # whole part only where that piece has no point to decide: an outlier above a scan is its
     # highest point, but seeded there the sign would reach the scan only across a sharp edge.
-    main = _main_pieces(tree, normals, valid, weight, labels, sharp_cosine)
+    main, piece = _main_pieces(tree, normals, valid, weight, labels, sharp_cosine)
     seeds, seed_flip, decided = _seeds(points, normals, main, labels, count)
     if not decided.all():
         more = _seeds(points, normals, valid, labels, count)
@@ -238,11 +238,9 @@ def along_tree(
     carried = np.where(sharp, -1, parent32).astype(np.int32)
     cost = np.full(n, _STEP_COST)
     flip = _core.tree_signs(order32, carried, agrees, cost, evidence)
-    # A piece below a sharp step is oriented when its own points see the outside (or hold a
-    # seed); one that sees nothing keeps its canonical sign and is reported.
-    linked = np.flatnonzero(carried >= 0)
-    pieces = coo_matrix((np.ones(len(linked)), (linked, carried[linked])), shape=(n, n))
-    _, piece = connected_components(pieces, directed=False)
+    # A piece below a sharp step (the tree's edges there are its steps) is oriented when its
+    # own points see the outside (or hold a seed); one that sees nothing keeps its canonical
+    # sign and is reported.
     seen = np.bincount(piece, weights=np.abs(evidence)) > 0
     unoriented = valid & ((cut & ~seen[piece]) | ~reached)
     flip &= valid & ~unoriented
@@ -329,9 +327,10 @@ def _main_pieces(
     weight: IndexArray,
     labels: IndexArray,
     sharp_cosine: float,
-) -> BoolArray:
+) -> tuple[BoolArray, IndexArray]:
     """(n,) bool: the valid points of each part's largest piece (in points, ``weight`` each)
-    once its tree's sharp edges are cut (the first such piece where two are as large)."""
+    once its tree's sharp edges are cut (the first such piece where two are as large); and
+    (n,) the piece of every point."""
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
@@ -351,7 +350,7 @@ def _main_pieces(
     main = np.zeros(count, dtype=bool)
     main[largest] = True
     chosen: BoolArray = valid & main[piece]
-    return chosen
+    return chosen, piece
 
 
 def _seeds(
