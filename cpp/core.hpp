@@ -114,5 +114,6 @@ void bind_weld(nb::module_& m);        // weld.cpp: welding and hashing, polygon
 void bind_text(nb::module_& m);        // text.cpp: text and binary parsing
 void bind_points(nb::module_& m);      // points.cpp: point neighbourhoods, PCD's LZF
 void bind_orient(nb::module_& m);      // orient.cpp: signs of point normals along a tree
+void bind_nearest(nb::module_& m);     // nearest.cpp: a k-d tree's k nearest neighbours
 
 }  // namespace mesh_normal

@@ -50,4 +50,5 @@ NB_MODULE(_core, m) {
   mesh_normal::bind_text(m);
   mesh_normal::bind_points(m);
   mesh_normal::bind_orient(m);
+  mesh_normal::bind_nearest(m);
 }

@@ -4,9 +4,11 @@ Points at exactly the same place are estimated once (:func:`coincident_groups`) 
 the normal of its place: a k-d tree cannot split a pile of equal points, so its queries would
 take time quadratic in the pile's size, and copies of a point say nothing of the surface.
 Neighbourhoods are of places: each place's neighbours (its k nearest, those within a radius,
-or at most k within a radius, itself included) come from scipy's ``cKDTree``, built and
-queried with the places in Morton (Z-curve) order, so that neighbouring queries touch
-neighbouring memory; the results go back to input order. Coordinates are first moved so that
+or at most k within a radius, itself included) come from a k-d tree built and queried with the
+places in Morton (Z-curve) order, so that neighbouring queries touch neighbouring memory; the
+results go back to input order. The k nearest come from the compiled core's own tree
+(``mesh_normal._core.PointTree``, ``cpp/nearest.cpp``; nearest first, equal distances by
+index), those within a radius from scipy's ``cKDTree``. Coordinates are first moved so that
 the bounding box is centred on the origin and scaled by a power of two (exact) into [-1, 1]:
 the normals do not depend on where the cloud sits or its unit. The compiled kernel
 (``mesh_normal._core.neighbourhood_normals``, ``cpp/points.cpp``) centres each neighbourhood on
@@ -30,7 +32,6 @@ import math
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from enum import IntEnum
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -458,17 +459,14 @@ def _estimate(
 ) -> tuple[FloatArray, FloatArray, IndexArray, NDArray[np.uint8], NDArray[np.int32]]:
     """Normals, curvature, counts, codes and the orientation graph, in the frame's order."""
     m = len(frame.points)
-    from scipy.spatial import cKDTree  # type: ignore[import-untyped]  # on first use: 0.5 s
-
-    tree = cKDTree(frame.points, balanced_tree=False, compact_nodes=False)
     if k is None and radius is None:
-        return _adaptive(frame, tree, progress)
+        return _adaptive(frame, progress)
     normals, curvature = np.empty((m, 3)), np.empty(m)
     used, codes = np.empty(m, dtype=np.intp), np.empty(m, dtype=np.intp)
     g = min(ORIENT_NEIGHBOURS, m if k is None else min(k, m))
     graph = np.full((m, g), -1, dtype=np.int32)
     bound = math.inf if radius is None else np.nextafter(radius / frame.scale, math.inf)
-    for start, indptr, indices, nearest in _neighbourhoods(tree, k, bound, g):
+    for start, indptr, indices, nearest in _neighbourhoods(frame.points, k, bound, g):
         stop = start + len(indptr) - 1
         _core.neighbourhood_normals(
             frame.points,
@@ -490,7 +488,7 @@ def _estimate(
 
 
 def _adaptive(
-    frame: _Frame, tree: Any, progress: Callable[[int, int], None] | None
+    frame: _Frame, progress: Callable[[int, int], None] | None
 ) -> tuple[FloatArray, FloatArray, IndexArray, NDArray[np.uint8], NDArray[np.int32]]:
     """The default: each point's scale chosen among ADAPTIVE_SCALES and, where the largest
     holds, ADAPTIVE_WIDE; then the sharp pass."""
@@ -506,10 +504,12 @@ def _adaptive(
     graph = np.full((m, g), -1, dtype=np.int32)
     candidates = np.full((m, min(ADAPTIVE_SHARP_NEIGHBOURS, largest)), -1, dtype=np.int32)
     chunk = max(1, QUERY_CHUNK * 30 // largest)
+    tree = _core.PointTree(frame.points)
+    lists = np.empty((min(chunk, m), largest), dtype=np.intp)
     for start in range(0, m, chunk):
         stop = min(m, start + chunk)
-        _, nearest = tree.query(frame.points[start:stop], k=largest, workers=-1)
-        nearest = np.ascontiguousarray(nearest.reshape(stop - start, largest), dtype=np.intp)
+        nearest = lists[: stop - start]
+        tree.nearest(start, stop, largest, nearest)
         _core.multiscale_normals(
             frame.points,
             nearest,
@@ -638,11 +638,16 @@ def _degenerate_piles(
 
 
 def _neighbourhoods(
-    tree: Any, k: int | None, bound: float, g: int
+    points: FloatArray, k: int | None, bound: float, g: int
 ) -> Iterator[tuple[int, IndexArray, IndexArray, IndexArray]]:
     """Per chunk of queries: its start, the neighbour lists as CSR, and the g nearest."""
-    points: FloatArray = tree.data
     m = len(points)
+    if k is not None and bound == math.inf:
+        yield from _nearest(points, min(k, m), g)
+        return
+    from scipy.spatial import cKDTree  # type: ignore[import-untyped]  # on first use: 0.5 s
+
+    tree = cKDTree(points, balanced_tree=False, compact_nodes=False)
     for start in range(0, m, QUERY_CHUNK):
         queries = points[start : start + QUERY_CHUNK]
         if k is not None:
@@ -658,6 +663,20 @@ def _neighbourhoods(
             indices = np.concatenate([np.asarray(x, dtype=np.intp) for x in lists])
             _, nearest = tree.query(queries, k=g, distance_upper_bound=bound, workers=-1)
             yield start, indptr, indices, nearest.reshape(len(queries), g)
+
+
+def _nearest(
+    points: FloatArray, k: int, g: int
+) -> Iterator[tuple[int, IndexArray, IndexArray, IndexArray]]:
+    """As _neighbourhoods, for the k nearest without a radius (the compiled tree)."""
+    m = len(points)
+    tree = _core.PointTree(points)
+    for start in range(0, m, QUERY_CHUNK):
+        stop = min(m, start + QUERY_CHUNK)
+        nearest = np.empty((stop - start, k), dtype=np.intp)
+        tree.nearest(start, stop, k, nearest)
+        indptr = np.arange(stop - start + 1, dtype=np.intp) * k
+        yield start, indptr, nearest.ravel(), nearest[:, :g]
 
 
 def _signs(
