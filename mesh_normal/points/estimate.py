@@ -73,10 +73,11 @@ ADAPTIVE_AGREEMENT = 3.0
 ADAPTIVE_PLANAR = 0.1
 
 #: Wider scales for flat noisy places, without a larger query: the largest scale's moments
-#: merged with those of the ADAPTIVE_SHARP_NEIGHBOURS nearest, once and twice, reach about
+#: merged with those of the ADAPTIVE_WIDE_NEIGHBOURS nearest, once and twice, reach about
 #: these many points (the area of the largest scale's radius plus one and two of the
 #: neighbours'), counting as ADAPTIVE_WIDE_EFFECTIVE against noise.
 ADAPTIVE_WIDE = (240, 440)
+ADAPTIVE_WIDE_NEIGHBOURS = 32
 ADAPTIVE_WIDE_EFFECTIVE = (160.0, 280.0)
 
 #: A wider scale is taken only where its residual is at most this many times the scale's
@@ -94,10 +95,12 @@ ADAPTIVE_WIDE_ROUGHNESS = 5.0
 #: ADAPTIVE_SHARP_KEEP of them, the normal is refitted to it, and taken where the point's own
 #: fit is over ADAPTIVE_SHARP_BLEND times less flat (a blend of two sides; on a curved surface
 #: the side's band is no flatter) and the refit turns it by a sine over ADAPTIVE_SHARP_TURN
-#: (less is what noise turns a normal by). A cloud too small for that many neighbours a point
-#: (about 1,000 points) is not searched for edges: its neighbourhoods are too coarse to tell an
-#: edge from a curve.
-ADAPTIVE_SHARP_NEIGHBOURS = 32
+#: (less is what noise turns a normal by). Fewer where the largest scale is smaller; a cloud
+#: too small for ADAPTIVE_SHARP_LEAST neighbours a point (about 1,000 points) is not searched
+#: for edges: its neighbourhoods are too coarse to tell an edge from a curve. A point whose
+#: chosen scale reaches past an edge its nearest 32 do not is found among its nearest 64.
+ADAPTIVE_SHARP_NEIGHBOURS = 64
+ADAPTIVE_SHARP_LEAST = 32
 ADAPTIVE_SHARP_FACTOR = 3.0
 ADAPTIVE_SHARP_KEEP = 0.9
 ADAPTIVE_SHARP_BLEND = 1.5
@@ -502,7 +505,11 @@ def _adaptive(
     used, codes = np.empty(m, dtype=np.intp), np.empty(m, dtype=np.intp)
     g = min(ORIENT_NEIGHBOURS, largest)
     graph = np.full((m, g), -1, dtype=np.int32)
-    candidates = np.full((m, min(ADAPTIVE_SHARP_NEIGHBOURS, largest)), -1, dtype=np.int32)
+    # The sharp pass's neighbourhood stays within a 64th of the cloud: wider, a curve's
+    # neighbourhood holds bands that look like sides (a 2,000-point sphere got false edges).
+    sides = min(ADAPTIVE_SHARP_NEIGHBOURS, largest, max(ADAPTIVE_SHARP_LEAST, m // 64))
+    candidates = np.full((m, sides), -1, dtype=np.int32)
+    beside = min(ADAPTIVE_WIDE_NEIGHBOURS, largest)  # whose moments a widened scale merges
     chunk = max(1, QUERY_CHUNK * 30 // largest)
     tree = _core.PointTree(frame.points)
     lists = np.empty((min(chunk, m), largest), dtype=np.intp)
@@ -540,10 +547,11 @@ def _adaptive(
         # Noise is as rough at every scale; a thin part's two sides, or a curve, make the
         # largest scale much rougher than the smallest.
         grow &= residual <= ADAPTIVE_WIDE_ROUGHNESS * roughness
-        _widened(frame, moments, candidates, grow, fitted, curvature, residual, spread, used)
+        neighbours = np.ascontiguousarray(candidates[:, :beside])
+        _widened(frame, moments, neighbours, grow, fitted, curvature, residual, spread, used)
     normals = fitted.copy()
     sharp = np.zeros(m, dtype=bool)
-    if candidates.shape[1] < ADAPTIVE_SHARP_NEIGHBOURS:  # a small cloud: no edges to tell
+    if candidates.shape[1] < ADAPTIVE_SHARP_LEAST:  # a small cloud: no edges to tell
         return normals, curvature, used, codes.astype(np.uint8), graph
     _core.sharp_normals(
         frame.points,
