@@ -506,7 +506,8 @@ def _adaptive(
     g = min(ORIENT_NEIGHBOURS, largest)
     graph = np.full((m, g), -1, dtype=np.int32)
     # The sharp pass's neighbourhood stays within a 64th of the cloud: wider, a curve's
-    # neighbourhood holds bands that look like sides (a 2,000-point sphere got false edges).
+    # neighbourhood holds bands that look like sides (62 neighbours mark false edges on a
+    # 2,000-point sphere).
     sides = min(ADAPTIVE_SHARP_NEIGHBOURS, largest, max(ADAPTIVE_SHARP_LEAST, m // 64))
     candidates = np.full((m, sides), -1, dtype=np.int32)
     beside = min(ADAPTIVE_WIDE_NEIGHBOURS, largest)  # whose moments a widened scale merges
