@@ -169,7 +169,7 @@ def test_parts_turned_by_the_tree_are_turned_back_by_the_outside(
     # ears thin parts on it; the spanning tree carries signs across them. Points that see the
     # outside along their normal line turn them back: the body's by an enclosed cell on the
     # other side (29% of the ant's points and 2.8% of the cow's inward with that alone), a thin
-    # part's by its filled inside (7.9% and 1.9%).
+    # part's by its filled inside (7.5% and 2.2%).
     from benchmarks.points_accuracy import SHAPES, noisy
 
     (shape,) = (s for s in SHAPES if s.name == name)
